@@ -1,0 +1,120 @@
+"""The object catalogue: named objects with shape, mass and extents.
+
+Primitives carry their extents; mesh objects name a mesh shipped with
+pybullet_data and a scale, and their box extents are computed from the mesh's
+vertices. The catalogue is a sorted registry of frozen `CatalogueEntry`s.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from cell.errors import InvalidInput, MissingDependency
+from cell.model.objects import ObjectParams
+
+__all__ = ["CatalogueEntry", "catalogue", "get_object", "mesh_path", "mesh_vertices"]
+
+
+@dataclass(frozen=True)
+class CatalogueEntry:
+    """One catalogue object.
+
+    Attributes:
+        params: the object's parameters η_o (extents in the object frame [m]).
+        set: which group it belongs to (thesis14, fig33, unseen).
+        mesh_scale: scale applied to the mesh's vertices (mesh objects only).
+    """
+
+    params: ObjectParams
+    set: str
+    mesh_scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    @property
+    def name(self) -> str:
+        """Catalogue id."""
+        return self.params.name
+
+
+def mesh_path(mesh: str) -> Path:
+    """Absolute path of a mesh: absolute as given, else inside pybullet_data.
+
+    Raises:
+        MissingDependency: pybullet is not installed.
+        InvalidInput: the file does not exist.
+    """
+    p = Path(mesh)
+    if not p.is_absolute():
+        try:
+            import pybullet_data
+        except ImportError:
+            raise MissingDependency(
+                "mesh objects need pybullet_data: pip install pybullet"
+            ) from None
+        p = Path(pybullet_data.getDataPath()) / mesh
+    if not p.is_file():
+        raise InvalidInput(f"mesh file {p} does not exist")
+    return p
+
+
+@functools.lru_cache(maxsize=64)
+def mesh_vertices(mesh: str, scale: tuple[float, float, float]) -> np.ndarray:
+    """Vertices of an OBJ mesh, scaled and centred on their box centre [m], shape (n, 3)."""
+    verts = []
+    with open(mesh_path(mesh)) as fh:
+        for line in fh:
+            if line.startswith("v "):
+                verts.append([float(v) for v in line.split()[1:4]])
+    if not verts:
+        raise InvalidInput(f"mesh {mesh} has no vertices")
+    v = np.asarray(verts) * np.asarray(scale)
+    return v - (v.max(axis=0) + v.min(axis=0)) / 2
+
+
+def _entry(name: str, spec: dict, where: str) -> CatalogueEntry:
+    valid = {"shape", "mass_kg", "size_m", "mesh", "mesh_scale", "set"}
+    unknown = set(spec) - valid
+    if unknown:
+        raise InvalidInput(
+            f"{where}: object {name}: unknown key(s) {sorted(unknown)}; valid: {sorted(valid)}"
+        )
+    mesh = str(spec.get("mesh", ""))
+    scale = tuple(float(s) for s in spec.get("mesh_scale", (1.0, 1.0, 1.0)))
+    if spec.get("shape") == "mesh" and "size_m" not in spec:
+        ext = np.ptp(mesh_vertices(mesh, scale), axis=0)  # type: ignore[arg-type]
+        size = tuple(round(float(e), 4) for e in ext)
+    else:
+        size = tuple(float(s) for s in spec.get("size_m", ()))
+    params = ObjectParams(
+        shape=str(spec.get("shape")),
+        mass=float(spec.get("mass_kg", float("nan"))),
+        size=size,  # type: ignore[arg-type]
+        name=name,
+        mesh=mesh,
+    )
+    return CatalogueEntry(params=params, set=str(spec.get("set", "")), mesh_scale=scale)  # type: ignore[arg-type]
+
+
+@functools.lru_cache(maxsize=1)
+def catalogue() -> dict[str, CatalogueEntry]:
+    """The shipped catalogue, sorted by id."""
+    text = resources.files("cell.data").joinpath("catalogue.yaml").read_text()
+    raw = yaml.safe_load(text)["objects"]
+    return {name: _entry(name, raw[name], "catalogue.yaml") for name in sorted(raw)}
+
+
+def get_object(name: str) -> ObjectParams:
+    """The catalogue object with this id.
+
+    Raises:
+        InvalidInput: an unknown id, listing the valid ones.
+    """
+    cat = catalogue()
+    if name not in cat:
+        raise InvalidInput(f"unknown object id {name!r}; the catalogue has: {', '.join(cat)}")
+    return cat[name].params

@@ -1,0 +1,79 @@
+"""The `cell` command line: one module per subcommand in this package.
+
+Each subcommand module defines `register(subparsers)`, adding its parser with
+`set_defaults(func=...)`; `func(args) -> int` is the exit status. The CLI owns
+logging configuration and progress bars; the library does neither.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+
+from cell.errors import CellError
+
+__all__ = ["main", "COMMANDS"]
+
+# Subcommand modules, in the order `cell --help` lists them.
+COMMANDS = (
+    "run",
+    "throw",
+    "plan",
+    "predict",
+    "reach",
+    "identify",
+    "learn",
+    "gap",
+    "synth",
+    "calibrate",
+    "log",
+    "ee",
+    "study",
+    "bench",
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every available subcommand."""
+    parser = argparse.ArgumentParser(
+        prog="cell",
+        description="A pick-and-throw robot cell with an elastic slingshot end-effector.",
+    )
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        try:
+            mod = importlib.import_module(f"cell.cli.cmd_{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"cell.cli.cmd_{name}":
+                continue  # not built yet
+            raise
+        mod.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `cell` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args.func(args) or 0)
+    except CellError as exc:
+        print(f"cell {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"cell {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

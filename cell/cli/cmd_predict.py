@@ -1,0 +1,57 @@
+"""`cell predict`: predicted landings for every row of a throw log."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from cell.errors import LogFormatError
+from cell.log import read_throws_csv, write_throws_csv
+from cell.model import predict_landing
+from cell.params import load_params
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("predict", help="add predicted landings to a throw log (THROW_LOG.md)")
+    p.add_argument("throws", help="throws.csv")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="output CSV: the log plus pred_x_m, pred_y_m, pred_t_flight_s",
+    )
+    p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference values)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    table = read_throws_csv(args.throws)
+    mp = load_params(args.params)
+    batch = table.to_batch(objects=mp.objects)
+    bad = batch.stroke_out_of_range(mp.ee)
+    if bad.size:
+        i = int(bad[0])
+        raise LogFormatError(
+            args.throws,
+            i + 1,
+            "stroke_m",
+            f"L_s = {batch.stroke[i]} m is outside the end-effector's range "
+            f"{mp.ee.stroke_min} … {mp.ee.stroke_max} m",
+        )
+    land = predict_landing(batch, mp.ee, strict=False, check_stroke=False)
+    if not land.landed.all():
+        i = int(np.flatnonzero(~land.landed)[0])
+        raise LogFormatError(
+            args.throws,
+            i + 1,
+            "land_z_m",
+            f"throw {table.data['throw_id'][i]} never crosses its landing plane "
+            f"z = {batch.land_z[i]} m while descending (released at z = {batch.position[i, 2]} m)",
+        )
+    out = table.with_columns(
+        {"pred_x_m": land.x, "pred_y_m": land.y, "pred_t_flight_s": land.t_flight}
+    )
+    write_throws_csv(out, args.output)
+    print(f"predicted {len(table)} throws -> {args.output}")
+    return 0

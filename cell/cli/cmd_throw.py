@@ -1,0 +1,105 @@
+"""`cell throw`: one throw with the model, from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from cell.catalogue import catalogue
+from cell.cli.common import add_object_args, object_from_args, print_json
+from cell.model import ThrowBatch, band_state, predict_landing
+from cell.params import load_params
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "throw", help="predict one throw: landing, flight time, launch speed, energy"
+    )
+    add_object_args(p)
+    p.add_argument("--list", action="store_true", help="list the catalogue objects and exit")
+    p.add_argument("--stroke", type=float, default=0.06, metavar="M", help="stroke L_s [m] (0.06)")
+    p.add_argument(
+        "--at",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.6),
+        metavar=("X", "Y", "Z"),
+        help="release grip centre in the world frame [m] (0 0 0.6)",
+    )
+    p.add_argument(
+        "--elevation",
+        type=float,
+        default=math.radians(30),
+        metavar="RAD",
+        help="throw-axis elevation [rad] (0.5236 = 30°)",
+    )
+    p.add_argument("--azimuth", type=float, default=0.0, metavar="RAD", help="azimuth [rad] (0)")
+    p.add_argument(
+        "--base-velocity",
+        type=float,
+        nargs=3,
+        default=(0.0, 0.0, 0.0),
+        metavar=("VX", "VY", "VZ"),
+        help="end-effector velocity at release [m/s]",
+    )
+    p.add_argument(
+        "--land-z", type=float, default=0.0, metavar="M", help="landing plane height [m]"
+    )
+    p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference values)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.list:
+        for name, e in catalogue().items():
+            o = e.params
+            print(
+                f"{name:16s} {o.shape:9s} {o.mass:6.3f} kg  "
+                f"{o.size[0]:.3f} x {o.size[1]:.3f} x {o.size[2]:.3f} m  [{e.set}]"
+            )
+        return 0
+    obj = object_from_args(args)
+    mp = load_params(args.params)
+    batch = ThrowBatch.single(
+        obj,
+        stroke=args.stroke,
+        position=tuple(args.at),
+        elevation=args.elevation,
+        azimuth=args.azimuth,
+        base_velocity=tuple(args.base_velocity),
+        land_z=args.land_z,
+    )
+    land = predict_landing(batch, mp.ee)
+    band = band_state(args.stroke, obj.width, mp.ee)
+    out = {
+        "object": obj.name or obj.shape,
+        "stroke_m": args.stroke,
+        "landed_x_m": float(land.x[0]),
+        "landed_y_m": float(land.y[0]),
+        "land_z_m": args.land_z,
+        "t_flight_s": float(land.t_flight[0]),
+        "launch_speed_mps": float(np.linalg.norm(land.launch_velocity[0])),
+        "band_stretch_m": float(band.stretch),
+        "push_force_n": float(band.push),
+        "grip_force_n": float(band.grip),
+        "stored_energy_j": float(band.energy),
+    }
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"object        {out['object']}  ({obj.mass:.3f} kg, {obj.shape})")
+    print(
+        f"lands at      x = {out['landed_x_m']:.4f} m, y = {out['landed_y_m']:.4f} m "
+        f"on z = {args.land_z:.3f} m (world frame)"
+    )
+    print(f"flight time   {out['t_flight_s']:.4f} s (from the start of the push)")
+    print(f"launch speed  {out['launch_speed_mps']:.3f} m/s")
+    print(
+        f"band          stretch ΔL = {out['band_stretch_m']:.5f} m, push f_o = "
+        f"{out['push_force_n']:.3f} N, grip f_g = {out['grip_force_n']:.3f} N"
+    )
+    print(f"stored energy {out['stored_energy_j']:.4f} J (both band halves)")
+    return 0

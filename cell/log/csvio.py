@@ -1,0 +1,310 @@
+"""Read and write throw logs in the THROW_LOG.md format.
+
+`ThrowTable` is columnar: numeric columns are float arrays (an empty cell is
+NaN where the format allows it), text columns are lists of str, and columns
+the format does not know are kept as text in their original order.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cell.errors import LogFormatError
+from cell.model.objects import SHAPES, shape_code
+from cell.model.throw import ThrowBatch
+
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "NUMERIC_COLUMNS",
+    "PLATFORMS",
+    "ThrowTable",
+    "read_throws_csv",
+    "write_throws_csv",
+    "read_tracks_csv",
+]
+
+REQUIRED_COLUMNS = (
+    "throw_id",
+    "object_id",
+    "shape",
+    "mass_kg",
+    "size_x_m",
+    "size_y_m",
+    "size_z_m",
+    "stroke_m",
+    "x_m",
+    "y_m",
+    "z_m",
+    "elevation_rad",
+    "azimuth_rad",
+    "roll_rad",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "platform",
+    "rotor_rpm",
+    "land_z_m",
+    "landed_x_m",
+    "landed_y_m",
+)
+OPTIONAL_NUMERIC = ("time_s", "t_flight_s")
+NUMERIC_COLUMNS = (
+    tuple(c for c in REQUIRED_COLUMNS if c not in ("throw_id", "object_id", "shape", "platform"))
+    + OPTIONAL_NUMERIC
+)
+# Columns whose cells may be empty (read as NaN).
+NULLABLE = ("stroke_m", "landed_x_m", "landed_y_m") + OPTIONAL_NUMERIC
+PLATFORMS = ("arm", "mobile", "drone")
+NONNEGATIVE = ("mass_kg", "size_x_m", "size_y_m", "size_z_m", "rotor_rpm")
+
+
+@dataclass
+class ThrowTable:
+    """A throw log in memory.
+
+    Attributes:
+        columns: column names in order (required first, then the others).
+        data: column name -> float array (numeric) or list of str (text).
+        path: where it was read from, for messages ("" if built in memory).
+    """
+
+    columns: list[str]
+    data: dict[str, Any]
+    path: str = ""
+    _index: dict[str, int] = field(default_factory=dict, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.data["throw_id"])
+
+    def num(self, column: str) -> np.ndarray:
+        """A numeric column as a float array."""
+        return np.asarray(self.data[column], dtype=float)
+
+    def text(self, column: str) -> list[str]:
+        """A text column as a list of str."""
+        return list(self.data[column])
+
+    @property
+    def landed(self) -> np.ndarray:
+        """Observed landing points [m, W], shape (n, 2) (NaN where not logged)."""
+        return np.stack([self.num("landed_x_m"), self.num("landed_y_m")], axis=-1)
+
+    def take(self, idx: np.ndarray | list[int]) -> ThrowTable:
+        """The rows at these indices (or boolean mask), as a new table."""
+        ii = np.arange(len(self))[np.asarray(idx)]
+        data: dict[str, Any] = {}
+        for c in self.columns:
+            col = self.data[c]
+            data[c] = col[ii] if isinstance(col, np.ndarray) else [col[i] for i in ii]
+        return ThrowTable(columns=list(self.columns), data=data, path=self.path)
+
+    def with_columns(self, extra: dict[str, Any]) -> ThrowTable:
+        """A copy with columns added or replaced (added ones go last)."""
+        cols = list(self.columns) + [c for c in extra if c not in self.columns]
+        data = dict(self.data)
+        data.update(extra)
+        return ThrowTable(columns=cols, data=data, path=self.path)
+
+    def to_batch(self, *, objects: dict[str, Any] | None = None) -> ThrowBatch:
+        """The throws as a model batch.
+
+        Args:
+            objects: optional per-object_id overrides {object_id: ObjectParams}
+                (identified η_o); rows of other objects use their logged values.
+
+        Raises:
+            LogFormatError: a row with no stroke (another launcher's throw).
+        """
+        stroke = self.num("stroke_m")
+        if np.any(np.isnan(stroke)):
+            i = int(np.flatnonzero(np.isnan(stroke))[0])
+            raise LogFormatError(
+                self.path, i + 1, "stroke_m", "empty: the model needs the stroke of every throw"
+            )
+        mass = self.num("mass_kg")
+        size = np.stack([self.num("size_x_m"), self.num("size_y_m"), self.num("size_z_m")], -1)
+        codes = np.array([SHAPES.index(s) for s in self.data["shape"]], dtype=int)
+        if objects:
+            for j, oid in enumerate(self.data["object_id"]):
+                o = objects.get(oid)
+                if o is not None:
+                    mass[j] = o.mass
+                    size[j] = o.size
+        return ThrowBatch.build(
+            stroke=stroke,
+            position=np.stack([self.num("x_m"), self.num("y_m"), self.num("z_m")], -1),
+            elevation=self.num("elevation_rad"),
+            azimuth=self.num("azimuth_rad"),
+            roll=self.num("roll_rad"),
+            base_velocity=np.stack(
+                [self.num("vx_mps"), self.num("vy_mps"), self.num("vz_mps")], -1
+            ),
+            land_z=self.num("land_z_m"),
+            shape=codes,
+            mass=mass,
+            size=size,
+        )
+
+    @classmethod
+    def from_records(cls, records: list[dict[str, Any]], path: str = "") -> ThrowTable:
+        """Build and validate a table from dicts (values as numbers or strings)."""
+        header = list(REQUIRED_COLUMNS)
+        for r in records:
+            for k in r:
+                if k not in header:
+                    header.append(k)
+        rows = [[_cell(r.get(c, "")) for c in header] for r in records]
+        return _parse(header, rows, path)
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(v)
+    return str(v)
+
+
+def _parse(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise LogFormatError(
+            path, None, missing[0], f"required column missing (all missing: {', '.join(missing)})"
+        )
+    dup = [c for c in header if header.count(c) > 1]
+    if dup:
+        raise LogFormatError(path, None, dup[0], "column appears twice in the header")
+    pos = {c: i for i, c in enumerate(header)}
+    n = len(rows)
+    data: dict[str, Any] = {}
+    for r, row in enumerate(rows, start=1):
+        if len(row) != len(header):
+            raise LogFormatError(
+                path, r, None, f"has {len(row)} cells; the header has {len(header)}"
+            )
+    for c in header:
+        cells = [row[pos[c]].strip() for row in rows]
+        if c in NUMERIC_COLUMNS:
+            arr = np.empty(n)
+            for r, s in enumerate(cells, start=1):
+                if s == "":
+                    if c in NULLABLE:
+                        arr[r - 1] = np.nan
+                        continue
+                    raise LogFormatError(path, r, c, "is empty; a number is required")
+                try:
+                    v = float(s)
+                except ValueError:
+                    raise LogFormatError(path, r, c, f"{s!r} is not a number") from None
+                if not math.isfinite(v):
+                    raise LogFormatError(path, r, c, f"{s!r} is not a finite number")
+                if c in NONNEGATIVE and v < 0:
+                    raise LogFormatError(path, r, c, f"{v} is negative; must be ≥ 0")
+                arr[r - 1] = v
+            data[c] = arr
+        else:
+            data[c] = cells
+    for c in ("mass_kg", "size_x_m", "size_y_m", "size_z_m"):
+        bad = np.flatnonzero(data[c] <= 0)
+        if bad.size:
+            raise LogFormatError(path, int(bad[0]) + 1, c, f"{data[c][bad[0]]} must be > 0")
+    for r, s in enumerate(data["shape"], start=1):
+        if s not in SHAPES:
+            raise LogFormatError(
+                path, r, "shape", f"unknown shape {s!r}; valid: {', '.join(SHAPES)}"
+            )
+        shape_code(s)
+    for r, s in enumerate(data["platform"], start=1):
+        if s not in PLATFORMS:
+            raise LogFormatError(
+                path, r, "platform", f"unknown platform {s!r}; valid: {', '.join(PLATFORMS)}"
+            )
+    seen: dict[str, int] = {}
+    for r, s in enumerate(data["throw_id"], start=1):
+        if s == "":
+            raise LogFormatError(path, r, "throw_id", "is empty; a unique id is required")
+        if s in seen:
+            raise LogFormatError(
+                path, r, "throw_id", f"duplicate id {s!r} (first at row {seen[s]})"
+            )
+        seen[s] = r
+    for r, s in enumerate(data["object_id"], start=1):
+        if s == "":
+            raise LogFormatError(path, r, "object_id", "is empty; an object id is required")
+    ordered = list(REQUIRED_COLUMNS) + [c for c in header if c not in REQUIRED_COLUMNS]
+    return ThrowTable(columns=ordered, data=data, path=path)
+
+
+def read_throws_csv(path: str | Path) -> ThrowTable:
+    """Read and validate a throws.csv.
+
+    Raises:
+        LogFormatError: naming the file, the row (1 = first data row) and the column.
+    """
+    p = str(path)
+    try:
+        with open(p, newline="") as fh:
+            reader = csv.reader(fh)
+            try:
+                header = [h.strip() for h in next(reader)]
+            except StopIteration:
+                raise LogFormatError(p, None, None, "is empty; a header row is required") from None
+            rows = [row for row in reader if any(cell.strip() for cell in row)]
+    except FileNotFoundError:
+        raise LogFormatError(p, None, None, "no such file") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
+    return _parse(header, rows, p)
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, (float, np.floating)):
+        return "" if math.isnan(float(v)) else repr(float(v))
+    return str(v)
+
+
+def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
+    """Write a table in the THROW_LOG.md format (floats at full precision, NaN as empty)."""
+    tmp = Path(str(path) + ".tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(table.columns)
+        cols = [table.data[c] for c in table.columns]
+        for i in range(len(table)):
+            w.writerow([_fmt(col[i]) for col in cols])
+    tmp.replace(path)
+
+
+def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
+    """Read a tracks.csv into {throw_id: array (k, 4) of t_s, x_m, y_m, z_m}, sorted by time.
+
+    Raises:
+        LogFormatError: a missing column or a non-numeric cell.
+    """
+    p = str(path)
+    need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
+    try:
+        with open(p, newline="") as fh:
+            reader = csv.DictReader(fh)
+            header = reader.fieldnames or []
+            for c in need:
+                if c not in header:
+                    raise LogFormatError(p, None, c, "required column missing")
+            out: dict[str, list[list[float]]] = {}
+            for r, row in enumerate(reader, start=1):
+                vals = []
+                for c in need[1:]:
+                    try:
+                        vals.append(float(row[c]))
+                    except (TypeError, ValueError):
+                        raise LogFormatError(p, r, c, f"{row[c]!r} is not a number") from None
+                out.setdefault(row["throw_id"], []).append(vals)
+    except FileNotFoundError:
+        raise LogFormatError(p, None, None, "no such file") from None
+    return {k: np.asarray(sorted(v)) for k, v in out.items()}

@@ -1,0 +1,142 @@
+"""Object parameters η_o: shape class, mass, box extents, and what follows
+from them (inertia, drag coefficient, mean projected area).
+
+Extents are in the object frame O: x across the band (the grip width), z along
+the throw axis. All SI.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cell.errors import InvalidParameter
+
+__all__ = [
+    "SHAPES",
+    "DRAG_COEFFICIENT",
+    "ObjectParams",
+    "shape_code",
+    "drag_area",
+    "drag_coefficient",
+    "inertia_diagonal",
+]
+
+SHAPES = ("cube", "cuboid", "cylinder", "sphere", "mesh")
+DRAG_COEFFICIENT = {"cube": 1.05, "cuboid": 1.05, "cylinder": 0.82, "sphere": 0.47, "mesh": 1.0}
+_CD_BY_CODE = np.array([DRAG_COEFFICIENT[s] for s in SHAPES])
+
+
+def shape_code(shape: str, *, where: str = "shape") -> int:
+    """The index of a shape name in SHAPES.
+
+    Raises:
+        InvalidParameter: for an unknown shape, listing the valid ones.
+    """
+    try:
+        return SHAPES.index(shape)
+    except ValueError:
+        raise InvalidParameter(
+            f"{where}: unknown shape {shape!r}; valid: {', '.join(SHAPES)}"
+        ) from None
+
+
+def drag_coefficient(codes: np.ndarray) -> np.ndarray:
+    """C_d per shape code (MODEL.md)."""
+    return _CD_BY_CODE[np.asarray(codes, dtype=int)]
+
+
+def drag_area(codes: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """Mean projected area A = surface / 4 [m^2] (Cauchy), per MODEL.md.
+
+    Args:
+        codes: shape codes, shape (n,).
+        size: box extents (size_x, size_y, size_z) [m], shape (n, 3).
+    """
+    codes = np.asarray(codes, dtype=int)
+    size = np.asarray(size, dtype=float).reshape(-1, 3)
+    x, y, z = size[:, 0], size[:, 1], size[:, 2]
+    box = (x * y + y * z + z * x) / 2
+    sphere = math.pi * x**2 / 4
+    r = x / 2
+    cyl = (2 * math.pi * r**2 + 2 * math.pi * r * z) / 4
+    return np.where(
+        codes == SHAPES.index("sphere"),
+        sphere,
+        np.where(codes == SHAPES.index("cylinder"), cyl, box),
+    )
+
+
+def inertia_diagonal(code: int, mass: float, size: np.ndarray) -> np.ndarray:
+    """Principal inertia (I_xx, I_yy, I_zz) [kg m^2] about the centre of mass, object frame.
+
+    Solid primitives; a mesh is treated as its solid bounding box.
+    """
+    x, y, z = (float(v) for v in np.asarray(size, float))
+    shape = SHAPES[code]
+    if shape == "sphere":
+        i = 2 / 5 * mass * (x / 2) ** 2
+        return np.array([i, i, i])
+    if shape == "cylinder":
+        r = x / 2
+        ixx = mass * (3 * r**2 + z**2) / 12
+        return np.array([ixx, ixx, mass * r**2 / 2])
+    return mass / 12 * np.array([y**2 + z**2, x**2 + z**2, x**2 + y**2])
+
+
+@dataclass(frozen=True)
+class ObjectParams:
+    """One object's parameters η_o.
+
+    Attributes:
+        shape: one of SHAPES.
+        mass: [kg], > 0.
+        size: box extents (size_x, size_y, size_z) [m], each > 0. A cylinder has
+            size_x = size_y = diameter, size_z = height; a sphere all = diameter.
+        name: catalogue id, or "" for an ad-hoc object.
+        mesh: a mesh file for shape "mesh" (pybullet_data relative or absolute), or "".
+    """
+
+    shape: str
+    mass: float
+    size: tuple[float, float, float]
+    name: str = ""
+    mesh: str = ""
+
+    def __post_init__(self) -> None:
+        shape_code(self.shape, where=f"object {self.name or '(ad hoc)'}")
+        if not (math.isfinite(self.mass) and self.mass > 0):
+            raise InvalidParameter(
+                f"object {self.name or '(ad hoc)'}: mass {self.mass} kg must be > 0"
+            )
+        if len(self.size) != 3 or not all(math.isfinite(s) and s > 0 for s in self.size):
+            raise InvalidParameter(
+                f"object {self.name or '(ad hoc)'}: size {self.size} m must be three extents > 0"
+            )
+
+    @property
+    def code(self) -> int:
+        """Shape code (index in SHAPES)."""
+        return SHAPES.index(self.shape)
+
+    @property
+    def width(self) -> float:
+        """Grip width a = size_x [m]."""
+        return self.size[0]
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """Principal inertia about the centre of mass [kg m^2], shape (3,)."""
+        return inertia_diagonal(self.code, self.mass, np.array(self.size))
+
+    @property
+    def area(self) -> float:
+        """Mean projected area [m^2]."""
+        return float(drag_area(np.array([self.code]), np.array([self.size]))[0])
+
+    @property
+    def cd(self) -> float:
+        """Drag coefficient."""
+        return DRAG_COEFFICIENT[self.shape]

@@ -1,0 +1,103 @@
+"""End-effector parameters η_ee (MODEL.md reference defaults).
+
+All lengths in [m], forces in [N], times in [s], angles in [rad].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
+
+from cell.errors import InvalidParameter
+
+__all__ = ["EndEffectorParams", "G", "RHO_AIR", "DEFAULT_EE"]
+
+G = 9.81  # [m/s^2] gravity magnitude; world frame W has z up
+RHO_AIR = 1.225  # [kg/m^3] air density
+
+
+@dataclass(frozen=True)
+class EndEffectorParams:
+    """The end-effector's parameters η_ee.
+
+    Attributes:
+        r_r: roller radius [m].
+        l1: clamp to roller tangent [m].
+        phi: band wrap angle on the roller [rad].
+        d: hoop width [m].
+        L_t: base plate to band origin [m].
+        L0: free half-length of the band [m].
+        Ke3: cubic band coefficient [N/m^3].
+        Ke2: quadratic band coefficient [N/m^2].
+        Ke1: linear band coefficient [N/m].
+        C: band force offset [N].
+        dt: duration of the launch push [s].
+        stroke_min: smallest allowed stroke L_s [m].
+        stroke_max: largest allowed stroke L_s [m].
+    """
+
+    r_r: float = 0.010
+    l1: float = 0.030
+    phi: float = math.pi / 2
+    d: float = 0.020
+    L_t: float = 0.160
+    L0: float = 0.095
+    Ke3: float = 400.0
+    Ke2: float = 150.0
+    Ke1: float = 114.6
+    C: float = 0.0
+    dt: float = 0.012
+    stroke_min: float = 0.03
+    stroke_max: float = 0.11
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+                raise InvalidParameter(
+                    f"end-effector parameter {f.name}={v!r} must be a finite number"
+                )
+        positive = ("r_r", "l1", "d", "L_t", "L0", "dt")
+        for name in positive:
+            if getattr(self, name) <= 0:
+                raise InvalidParameter(
+                    f"end-effector parameter {name}={getattr(self, name)} must be > 0"
+                )
+        if not 0 <= self.phi <= math.pi:
+            raise InvalidParameter(f"end-effector parameter phi={self.phi} must be in [0, pi] rad")
+        if not 0 < self.stroke_min < self.stroke_max < self.L_t:
+            raise InvalidParameter(
+                f"stroke range [{self.stroke_min}, {self.stroke_max}] m must satisfy "
+                f"0 < stroke_min < stroke_max < L_t={self.L_t}"
+            )
+
+    def as_dict(self) -> dict[str, float]:
+        """The parameters as a plain dict of floats."""
+        return {k: float(v) for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any], *, where: str = "parameters") -> EndEffectorParams:
+        """Build from a dict, naming any unknown key and the valid ones.
+
+        Raises:
+            InvalidParameter: on an unknown key or a bad value.
+        """
+        valid = {f.name for f in fields(cls)}
+        unknown = sorted(set(values) - valid)
+        if unknown:
+            raise InvalidParameter(
+                f"{where}: unknown end-effector parameter(s) {unknown}; valid: {sorted(valid)}"
+            )
+        try:
+            return replace(cls(), **{k: float(v) for k, v in values.items()})
+        except (TypeError, ValueError) as exc:
+            if isinstance(exc, InvalidParameter):
+                raise InvalidParameter(f"{where}: {exc}") from None
+            raise InvalidParameter(f"{where}: {exc}") from None
+
+    # Parameters stage 1 of identification may change (thesis Algorithm 1).
+    IDENTIFIABLE = ("Ke3", "Ke2", "Ke1", "C", "r_r", "l1", "phi", "dt")
+
+
+DEFAULT_EE = EndEffectorParams()

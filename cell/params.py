@@ -1,0 +1,99 @@
+"""Parameter files: the end-effector's η_ee, identified objects' η_o, and
+switched-on model effects, as YAML.
+
+    end_effector: {Ke1: 114.6, ...}      # any subset; the rest are defaults
+    objects:                              # optional identified η_o by object id
+      cube50: {shape: cube, mass_kg: 0.06, size_m: [0.05, 0.05, 0.05]}
+    effects: {band_mass: {mass_kg: 0.01}} # optional (see cell.model.effects)
+    note: free text on how the file was made
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cell.errors import InvalidInput, InvalidParameter
+from cell.model.objects import ObjectParams
+from cell.model.params import EndEffectorParams
+
+__all__ = ["ModelParams", "load_params", "save_params"]
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """Everything a parameter file holds.
+
+    Attributes:
+        ee: end-effector parameters.
+        objects: identified object parameters by object id.
+        effects: effect name -> its parameters (empty = nominal model).
+        note: how the file was made.
+    """
+
+    ee: EndEffectorParams = field(default_factory=EndEffectorParams)
+    objects: dict[str, ObjectParams] = field(default_factory=dict)
+    effects: dict[str, dict[str, float]] = field(default_factory=dict)
+    note: str = ""
+
+
+def load_params(path: str | Path | None) -> ModelParams:
+    """Read a parameter file; None gives the reference defaults.
+
+    Raises:
+        InvalidInput: unreadable file, unknown top-level key, bad value (naming the field).
+    """
+    if path is None:
+        return ModelParams()
+    p = str(path)
+    try:
+        with open(p) as fh:
+            raw = yaml.safe_load(fh) or {}
+    except FileNotFoundError:
+        raise InvalidInput(f"{p}: no such parameter file") from None
+    except yaml.YAMLError as exc:
+        raise InvalidInput(f"{p}: not valid YAML ({exc})") from None
+    if not isinstance(raw, dict):
+        raise InvalidInput(f"{p}: must be a mapping with keys end_effector, objects, effects, note")
+    valid = {"end_effector", "objects", "effects", "note"}
+    unknown = sorted(set(raw) - valid)
+    if unknown:
+        raise InvalidInput(f"{p}: unknown key(s) {unknown}; valid: {sorted(valid)}")
+    ee = EndEffectorParams.from_dict(raw.get("end_effector") or {}, where=f"{p}: end_effector")
+    objects: dict[str, ObjectParams] = {}
+    for oid, spec in (raw.get("objects") or {}).items():
+        try:
+            objects[str(oid)] = ObjectParams(
+                shape=str(spec["shape"]),
+                mass=float(spec["mass_kg"]),
+                size=tuple(float(s) for s in spec["size_m"]),  # type: ignore[arg-type]
+                name=str(oid),
+            )
+        except (KeyError, TypeError, ValueError, InvalidParameter) as exc:
+            raise InvalidInput(
+                f"{p}: objects.{oid}: {exc}; each object needs shape, mass_kg, size_m [3 numbers]"
+            ) from None
+    effects = raw.get("effects") or {}
+    if not isinstance(effects, dict):
+        raise InvalidInput(f"{p}: effects must be a mapping of effect name to parameters")
+    return ModelParams(ee=ee, objects=objects, effects=effects, note=str(raw.get("note", "")))
+
+
+def save_params(params: ModelParams, path: str | Path) -> None:
+    """Write a parameter file (atomically)."""
+    doc: dict[str, Any] = {"end_effector": params.ee.as_dict()}
+    if params.objects:
+        doc["objects"] = {
+            k: {"shape": o.shape, "mass_kg": float(o.mass), "size_m": [float(s) for s in o.size]}
+            for k, o in sorted(params.objects.items())
+        }
+    if params.effects:
+        doc["effects"] = params.effects
+    if params.note:
+        doc["note"] = params.note
+    tmp = Path(str(path) + ".tmp")
+    tmp.write_text(yaml.safe_dump(doc, sort_keys=False))
+    tmp.replace(path)
