@@ -45,7 +45,7 @@ __all__ = [
     "no_landing_error",
 ]
 
-_PUSH_STEPS = 4  # RK4 steps across the ~12 ms push
+_PUSH_STEPS = 2  # RK4 steps across the ~12 ms push (drag changes little in it)
 _FLIGHT_STEP = 0.05  # [s] largest planar RK4 step after the push
 _DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per step small
 
@@ -263,29 +263,34 @@ def launch_state(
     f_o = push_force(batch.stroke, batch.size[:, 0], ee) if push is None else push
     m_push = batch.mass if push_mass is None else push_mass
     u = throw_axis(batch.elevation, batch.azimuth) if axis is None else axis
-    k = drag_constant(batch.shape, batch.mass, batch.size)
-    # drag force acts on the object alone; the push drives m_push
-    a_push = u * (np.asarray(f_o) / m_push)[:, None]
-    a_push[:, 2] -= G
-    kk = (k * batch.mass / m_push)[:, None]
-    p = batch.position.copy()
-    v = batch.base_velocity.copy()
+    # drag acts on the object alone; the push drives m_push
+    kk = drag_constant(batch.shape, batch.mass, batch.size) * batch.mass / m_push
+    scale = np.asarray(f_o) / m_push
+    ax, ay, az = u[:, 0] * scale, u[:, 1] * scale, u[:, 2] * scale - G
+    px, py, pz = (batch.position[:, j].copy() for j in range(3))
+    vx, vy, vz = (batch.base_velocity[:, j].copy() for j in range(3))
     h = ee.dt / steps
 
-    def acc(vel: np.ndarray) -> np.ndarray:
-        return a_push - kk * np.linalg.norm(vel, axis=1, keepdims=True) * vel
+    def acc(wx: np.ndarray, wy: np.ndarray, wz: np.ndarray) -> tuple[np.ndarray, ...]:
+        c = kk * np.sqrt(wx * wx + wy * wy + wz * wz)
+        return ax - c * wx, ay - c * wy, az - c * wz
 
+    # Component arrays rather than (n, 3): several times faster in NumPy.
     for _ in range(steps):
-        k1 = acc(v)
-        v2 = v + 0.5 * h * k1
-        k2 = acc(v2)
-        v3 = v + 0.5 * h * k2
-        k3 = acc(v3)
-        v4 = v + h * k3
-        k4 = acc(v4)
-        p = p + h / 6 * (v + 2 * v2 + 2 * v3 + v4)
-        v = v + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return p, v
+        k1 = acc(vx, vy, vz)
+        v2 = (vx + 0.5 * h * k1[0], vy + 0.5 * h * k1[1], vz + 0.5 * h * k1[2])
+        k2 = acc(*v2)
+        v3 = (vx + 0.5 * h * k2[0], vy + 0.5 * h * k2[1], vz + 0.5 * h * k2[2])
+        k3 = acc(*v3)
+        v4 = (vx + h * k3[0], vy + h * k3[1], vz + h * k3[2])
+        k4 = acc(*v4)
+        px = px + h / 6 * (vx + 2 * v2[0] + 2 * v3[0] + v4[0])
+        py = py + h / 6 * (vy + 2 * v2[1] + 2 * v3[1] + v4[1])
+        pz = pz + h / 6 * (vz + 2 * v2[2] + 2 * v3[2] + v4[2])
+        vx = vx + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        vy = vy + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+        vz = vz + h / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+    return np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
 
 
 def _hermite_root(
@@ -307,7 +312,7 @@ def _hermite_root(
         df = (3 * a * s + 2 * b) * s + c
         with np.errstate(divide="ignore", invalid="ignore"):
             s_new = s - f / df
-        bad = ~np.isfinite(s_new) | (s_new <= lo) | (s_new >= hi)
+        bad = ~np.isfinite(s_new) | (s_new < lo) | (s_new > hi)
         s = np.where(bad, 0.5 * (lo + hi), s_new)
     return s
 

@@ -1,0 +1,241 @@
+"""The full rigid-body state of a thrown object (eq. 3.10 with Euler's equations).
+
+State: position p [m, W], unit quaternion q (w, x, y, z) rotating the object
+frame O into W, linear velocity v [m/s, W], angular velocity ω [rad/s, O].
+Translation: push f_o u for t < Δt, gravity, quadratic drag. Rotation:
+torque-free Euler equations I ω̇ + ω × I ω = 0; the quaternion is advanced on
+the rotation group (q ← q ⊗ exp(ω h / 2)), so its norm is kept by
+construction rather than by renormalising.
+
+This is the slow, complete path (time series of the whole state); landing
+points in bulk come from `cell.model.throw.predict_landing`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cell.errors import NoLanding
+from cell.model.band import push_force
+from cell.model.objects import ObjectParams
+from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.throw import throw_axis
+
+__all__ = ["RigidTrajectory", "release_orientation", "simulate_rigid", "quat_to_matrix"]
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a unit quaternion (w, x, y, z), shape (3, 3)."""
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _matrix_to_quat(r: np.ndarray) -> np.ndarray:
+    tr = np.trace(r)
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    else:
+        i = int(np.argmax(np.diag(r)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k]) * 2
+        q = [0.0, 0.0, 0.0, 0.0]
+        q[0] = (r[k, j] - r[j, k]) / s
+        q[1 + i] = 0.25 * s
+        q[1 + j] = (r[j, i] + r[i, j]) / s
+        q[1 + k] = (r[k, i] + r[i, k]) / s
+    qa = np.array(q)
+    return qa / np.linalg.norm(qa)
+
+
+def release_orientation(elevation: float, azimuth: float, roll: float) -> np.ndarray:
+    """Quaternion (w, x, y, z) of the object frame O at release.
+
+    O's z axis is the throw axis u; with zero roll its x axis (across the band)
+    is horizontal, pointing left of the throw direction; roll turns x and y
+    about u.
+    """
+    z = throw_axis(np.array(elevation), np.array(azimuth)).reshape(3)
+    x0 = np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
+    y0 = np.cross(z, x0)
+    c, s = math.cos(roll), math.sin(roll)
+    x = c * x0 + s * y0
+    y = np.cross(z, x)
+    return _matrix_to_quat(np.column_stack([x, y, z]))
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array(
+        [
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        ]
+    )
+
+
+def _quat_exp(omega: np.ndarray, h: float) -> np.ndarray:
+    angle = float(np.linalg.norm(omega)) * h
+    if angle < 1e-12:
+        return np.array([1.0, *(0.5 * h * omega)])
+    axis = omega / np.linalg.norm(omega)
+    return np.array([math.cos(angle / 2), *(math.sin(angle / 2) * axis)])
+
+
+@dataclass(frozen=True)
+class RigidTrajectory:
+    """Sampled full state of one throw, from the start of the push to the landing.
+
+    Attributes:
+        t: times [s], shape (k,).
+        position: centre of mass [m, W], shape (k, 3).
+        quaternion: orientation O→W (w, x, y, z), shape (k, 4).
+        velocity: [m/s, W], shape (k, 3).
+        omega: angular velocity [rad/s, O], shape (k, 3).
+        landing: landing point on the plane [m, W], shape (3,).
+        t_flight: time of the plane crossing [s].
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    quaternion: np.ndarray
+    velocity: np.ndarray
+    omega: np.ndarray
+    landing: np.ndarray
+    t_flight: float
+
+
+def simulate_rigid(
+    obj: ObjectParams,
+    ee: EndEffectorParams,
+    *,
+    stroke: float,
+    position: tuple[float, float, float] | np.ndarray,
+    elevation: float,
+    azimuth: float,
+    roll: float = 0.0,
+    base_velocity: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
+    omega0: tuple[float, float, float] | np.ndarray = (0.0, 0.0, 0.0),
+    land_z: float = 0.0,
+    step: float = 5e-4,
+    t_max: float = 30.0,
+) -> RigidTrajectory:
+    """Integrate one throw's full rigid-body state until it lands.
+
+    Args:
+        obj: the object.
+        ee: end-effector parameters.
+        stroke: L_s [m].
+        position: release grip centre [m, W].
+        elevation, azimuth, roll: throw axis and roll about it [rad].
+        base_velocity: end-effector velocity at release [m/s, W].
+        omega0: initial angular velocity [rad/s, O] (the nominal model has none).
+        land_z: landing plane height [m].
+        step: integration step [s]; the push end falls on a step boundary.
+        t_max: give up after this flight time [s].
+
+    Raises:
+        NoLanding: the object never crosses the landing plane while descending.
+    """
+    u = throw_axis(np.array(elevation), np.array(azimuth)).reshape(3)
+    f_push = float(push_force(stroke, obj.width, ee)) * u
+    k = 0.5 * RHO_AIR * obj.cd * obj.area / obj.mass
+    inertia = obj.inertia
+    n_push = max(1, math.ceil(ee.dt / step))
+    h_push = ee.dt / n_push
+    g = np.array([0.0, 0.0, -G])
+
+    def acc(v: np.ndarray, pushing: bool) -> np.ndarray:
+        a = g - k * np.linalg.norm(v) * v
+        return a + f_push / obj.mass if pushing else a
+
+    def alpha(w: np.ndarray) -> np.ndarray:
+        return -np.cross(w, inertia * w) / inertia
+
+    p = np.asarray(position, float).copy()
+    v = np.asarray(base_velocity, float).copy()
+    w = np.asarray(omega0, float).copy()
+    q = release_orientation(elevation, azimuth, roll)
+    ts, ps, qs, vs, ws = [0.0], [p], [q], [v], [w]
+    t = 0.0
+    i = 0
+    while t < t_max:
+        pushing = i < n_push
+        h = h_push if pushing else step
+        a1 = acc(v, pushing)
+        a2 = acc(v + 0.5 * h * a1, pushing)
+        a3 = acc(v + 0.5 * h * a2, pushing)
+        a4 = acc(v + h * a3, pushing)
+        p_new = p + h / 6 * (v + 2 * (v + 0.5 * h * a1) + 2 * (v + 0.5 * h * a2) + (v + h * a3))
+        v_new = v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        b1 = alpha(w)
+        b2 = alpha(w + 0.5 * h * b1)
+        b3 = alpha(w + 0.5 * h * b2)
+        b4 = alpha(w + h * b3)
+        w_new = w + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+        q_new = _quat_mul(q, _quat_exp(0.5 * (w + w_new), h))
+        t_new = t + h
+        if not pushing and p[2] > land_z >= p_new[2]:
+            # linear-in-step location of the crossing, refined on the cubic Hermite
+            s = (p[2] - land_z) / (p[2] - p_new[2])
+            for _ in range(6):
+                s2, s3 = s * s, s * s * s
+                hz = (
+                    (2 * s3 - 3 * s2 + 1) * p[2]
+                    + (s3 - 2 * s2 + s) * h * v[2]
+                    + (-2 * s3 + 3 * s2) * p_new[2]
+                    + (s3 - s2) * h * v_new[2]
+                ) - land_z
+                dz = (
+                    (6 * s2 - 6 * s) * p[2]
+                    + (3 * s2 - 4 * s + 1) * h * v[2]
+                    + (-6 * s2 + 6 * s) * p_new[2]
+                    + (3 * s2 - 2 * s) * h * v_new[2]
+                )
+                s = min(1.0, max(0.0, s - hz / dz)) if dz != 0 else s
+            s2, s3 = s * s, s * s * s
+            landing = (
+                (2 * s3 - 3 * s2 + 1) * p
+                + (s3 - 2 * s2 + s) * h * v
+                + (-2 * s3 + 3 * s2) * p_new
+                + (s3 - s2) * h * v_new
+            )
+            ts.append(t_new)
+            ps.append(p_new)
+            qs.append(q_new)
+            vs.append(v_new)
+            ws.append(w_new)
+            return RigidTrajectory(
+                t=np.array(ts),
+                position=np.array(ps),
+                quaternion=np.array(qs),
+                velocity=np.array(vs),
+                omega=np.array(ws),
+                landing=landing,
+                t_flight=t + s * h,
+            )
+        if not pushing and p_new[2] <= land_z and v_new[2] < 0:
+            break
+        p, v, w, q, t = p_new, v_new, w_new, q_new, t_new
+        i += 1
+        ts.append(t)
+        ps.append(p)
+        qs.append(q)
+        vs.append(v)
+        ws.append(w)
+    raise NoLanding(
+        f"the throw never crosses its landing plane z = {land_z:.3f} m while descending "
+        f"(released at z = {float(np.asarray(position)[2]):.3f} m)"
+    )
