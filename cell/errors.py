@@ -20,6 +20,10 @@ __all__ = [
     "CellTimeoutError",
     "MissingDependency",
     "SimulationError",
+    "NoReply",
+    "CorruptReply",
+    "ServoFault",
+    "SafetyRefusal",
 ]
 
 
@@ -90,3 +94,29 @@ class SimulationError(CellError, RuntimeError):
 
 class MissingDependency(CellError, ImportError):
     """An optional dependency is not installed; the message names what to install."""
+
+
+class NoReply(HardwareError):
+    """A servo did not answer (power, cable, baud rate or ID)."""
+
+
+class CorruptReply(HardwareError):
+    """A servo's reply failed its CRC or was cut short (cable, termination, noise)."""
+
+
+class ServoFault(HardwareError):
+    """A servo reports a hardware error (overload, overheating, voltage, ...).
+
+    Attributes:
+        servo_id: the servo's bus ID.
+        bits: its Hardware Error Status register.
+    """
+
+    def __init__(self, message: str, servo_id: int = -1, bits: int = 0) -> None:
+        super().__init__(message)
+        self.servo_id = servo_id
+        self.bits = bits
+
+
+class SafetyRefusal(HardwareError):
+    """The end-effector refused an action that would not be safe in its current state."""

@@ -1,0 +1,234 @@
+"""The end-effector in the PyBullet cell (cell.sim), behind the EndEffector interface.
+
+* `grasp(L_s)`: the item is moved from the pick station into the open grip
+  (the approach is kinematic), the spool winds the carriage to L_s with the
+  latch engaged, and the fingers close on the item by contact with the band's
+  grip force f_g.
+* `set_stroke(L_s)`: the spool winds or unwinds at `spool_speed_mps`.
+* `throw()`: the latch lets go; the band law drives the carriage, which pushes
+  the item (sub-stepped at the scene's launch step) until the carriage hits its
+  end stop; the item flies on. Its launch velocity is never set.
+* `place()`: the spool unwinds slowly; the carriage lowers the item until it
+  touches something, then the fingers open. Hold the item's lowest point
+  less than `place_travel_m()` above the surface.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from cell.endeffector.base import EndEffector, EndEffectorStatus
+from cell.errors import InvalidInput, InvalidParameter, SimulationError
+from cell.sim.band import FINGER_LEFT, FINGER_RIGHT, BandReading
+from cell.sim.items import Item
+
+__all__ = ["PyBulletEndEffector"]
+
+log = logging.getLogger(__name__)
+
+
+class PyBulletEndEffector(EndEffector):
+    """The simulated end-effector of a `cell.sim.CellScene`.
+
+    Args:
+        scene: the scene whose end-effector this drives.
+        spool_speed_mps: carriage speed when winding or unwinding [m/s].
+        place_speed_mps: carriage speed while placing [m/s].
+        close_time_s: time given to the fingers to close [s].
+    """
+
+    def __init__(
+        self,
+        scene: object,
+        *,
+        spool_speed_mps: float = 0.1,
+        place_speed_mps: float = 0.04,
+        close_time_s: float = 0.15,
+    ) -> None:
+        from cell.sim.scene import CellScene
+
+        if not isinstance(scene, CellScene):
+            raise InvalidInput("PyBulletEndEffector needs a cell.sim.CellScene")
+        for name, v in (("spool_speed_mps", spool_speed_mps), ("place_speed_mps", place_speed_mps)):
+            if not v > 0:
+                raise InvalidParameter(f"{name}={v} must be > 0 m/s")
+        self.scene = scene
+        self.band = scene.band
+        self.spool_speed_mps = spool_speed_mps
+        self.place_speed_mps = place_speed_mps
+        self.close_time_s = close_time_s
+        self.item: Item | None = None
+        self.last_released: Item | None = None
+
+    # -- helpers ---------------------------------------------------------------
+    def _check_stroke(self, stroke_m: float) -> None:
+        ee = self.band.ee
+        if not (ee.stroke_min - 1e-9 <= stroke_m <= ee.stroke_max + 1e-9):
+            raise InvalidParameter(
+                f"stroke {stroke_m:.4f} m outside the end-effector's range "
+                f"{ee.stroke_min:.3f} … {ee.stroke_max:.3f} m"
+            )
+
+    def _wind_to(self, stroke_m: float, speed_mps: float) -> None:
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        s = self.band.stroke_cmd_m
+        n = max(1, int(abs(stroke_m - s) / (speed_mps * sc.dt_s)))
+        for k in range(1, n + 1):
+            self.band.stroke_cmd_m = s + (stroke_m - s) * k / n
+            sc.step()
+
+    def reading(self) -> BandReading:
+        """The band now: stretch, forces, latch (law at the current configuration)."""
+        return self.band.reading()
+
+    def place_travel_m(self) -> float:
+        """How far `place` can lower the item from the current stroke [m]."""
+        return self.scene.geometry.end_stop_m - 0.002 - self.band.position()
+
+    def pick_candidate(self) -> Item:
+        """The item to grasp: the newest item resting on the pick station.
+
+        Raises:
+            InvalidInput: none is there.
+        """
+        sc = self.scene
+        x0, y0 = sc.pick_station_xy
+        for it in reversed(sc.items):
+            p, _ = sc.client.getBasePositionAndOrientation(it.body)
+            on_top = abs(p[0] - x0) < 0.15 and abs(p[1] - y0) < 0.15
+            if on_top and sc.pick_station_height < p[2] < sc.pick_station_height + 0.25:
+                return it
+        raise InvalidInput("no item on the pick station to grasp (spawn one first)")
+
+    # -- the interface ---------------------------------------------------------
+    def grasp(self, stroke_m: float, item: Item | None = None) -> None:
+        """Take `item` (default: the one on the pick station) into the grip at stroke L_s [m].
+
+        Raises:
+            InvalidParameter: stroke out of range.
+            InvalidInput: already holding an item, or nothing to grasp.
+            SimulationError: the fingers did not close on the item.
+        """
+        self._check_stroke(stroke_m)
+        if self.item is not None:
+            raise InvalidInput("already holding an item: place or throw it first")
+        it = item if item is not None else self.pick_candidate()
+        sc, cl = self.scene, self.scene.client
+        sc.set_timestep(sc.dt_s)
+        self.band.reset(stroke_m, it.obj.width / 2 + 0.003)
+        self.band.fingers_closing = False
+        e_pos, e_orn = cl.getBasePositionAndOrientation(sc.ee_body)
+        centre = stroke_m + it.obj.size[2] / 2 + 5e-4
+        pos, orn = cl.multiplyTransforms(e_pos, e_orn, [0, 0, centre], [0, 0, 0, 1])
+        cl.resetBasePositionAndOrientation(it.body, pos, orn)
+        self.band.fingers_closing = True
+        sc.run_for(self.close_time_s)
+        if not self._in_grip(it, stroke_m):
+            raise SimulationError(
+                f"the fingers did not close on item {it.obj.name or it.body} "
+                f"(width {it.obj.width:.3f} m)"
+            )
+        self.item = it
+
+    def _in_grip(self, it: Item, stroke_m: float) -> bool:
+        """The fingers stopped on the item and its centre is between them."""
+        cl, ee = self.scene.client, self.scene.ee_body
+        e_p, e_o = cl.getBasePositionAndOrientation(ee)
+        inv = cl.invertTransform(e_p, e_o)
+        p, _ = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(it.body))
+        half = it.obj.width / 2
+        opening = [cl.getJointState(ee, j)[0] for j in (FINGER_LEFT, FINGER_RIGHT)]
+        return (
+            min(opening) > 0.5 * half
+            and abs(p[0]) < half
+            and abs(p[1]) < half
+            and stroke_m < p[2] < stroke_m + it.obj.size[2]
+        )
+
+    def set_stroke(self, stroke_m: float) -> None:
+        """Wind or unwind the spool to L_s [m] with the latch engaged.
+
+        Raises:
+            InvalidParameter: stroke out of range.
+        """
+        self._check_stroke(stroke_m)
+        if not self.band.latched:
+            self.band.reset(self.band.position(), self.band.width() / 2)
+        self._wind_to(stroke_m, self.spool_speed_mps)
+
+    def throw(self) -> None:
+        """Disengage the latch; returns once the carriage has hit its end stop.
+
+        Raises:
+            InvalidInput: no item in the grip.
+        """
+        if self.item is None:
+            raise InvalidInput("throw: no item in the grip")
+        sc = self.scene
+        sc.set_timestep(sc.launch_dt_s)
+        sc.track(self.item)
+        self.band.latched = False
+        stop = sc.geometry.end_stop_m - 1e-3
+        t_end = sc.t + 0.2
+        while sc.t < t_end and self.band.position() < stop:
+            sc.step()
+        sc.run_for(0.01)  # let the carriage settle on its stop and the item clear the pads
+        sc.set_timestep(sc.dt_s)
+        self.last_released, self.item = self.item, None
+
+    def place(self) -> None:
+        """Unwind slowly; the fingers open once the item touches down.
+
+        Raises:
+            InvalidInput: no item in the grip.
+        """
+        if self.item is None:
+            raise InvalidInput("place: no item in the grip")
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        tr = sc.track(self.item)
+        end = sc.geometry.end_stop_m - 0.002
+        step_m = self.place_speed_mps * sc.dt_s
+        while self.band.stroke_cmd_m < end and tr.touchdown is None:
+            self.band.stroke_cmd_m = min(end, self.band.stroke_cmd_m + step_m)
+            sc.step()
+        if tr.touchdown is None:
+            log.warning("place: the item had not touched down at the end of the stroke")
+        self.band.stroke_cmd_m = self.band.position()
+        self.band.fingers_closing = False
+        sc.run_for(0.1)
+        self.last_released, self.item = self.item, None
+
+    def stroke(self) -> float:
+        """The carriage position, i.e. the measured stroke L_s [m]."""
+        return self.band.position()
+
+    def status(self) -> EndEffectorStatus:
+        """Stroke, latch, holding, and the band's forces in `detail`."""
+        r = self.band.reading()
+        return EndEffectorStatus(
+            stroke_m=r.position_m,
+            latch_engaged=r.latched,
+            holding=self.item is not None,
+            detail=(
+                f"stretch {r.stretch_m:.4f} m, push {r.push_n:.3f} N, grip {r.grip_n:.3f} N, "
+                f"width {r.width_m:.4f} m"
+            ),
+        )
+
+    def held_offset_m(self) -> np.ndarray:
+        """Held item's centre of mass in the end-effector frame E [m], shape (3,).
+
+        Raises:
+            InvalidInput: no item held.
+        """
+        if self.item is None:
+            raise InvalidInput("no item held")
+        cl = self.scene.client
+        e_p, e_o = cl.getBasePositionAndOrientation(self.scene.ee_body)
+        inv = cl.invertTransform(e_p, e_o)
+        p, _ = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(self.item.body))
+        return np.asarray(p)

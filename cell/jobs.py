@@ -1,0 +1,343 @@
+"""Sort jobs: the YAML schema, loaded safely and validated with line numbers.
+
+    cell:                      # the cell
+      robot: panda             # panda | ur5
+      ee: pybullet             # pybullet | dynamixel (end-effector back-end)
+      ee_config: robots/throwing_ee/dynamixel.yaml   # for dynamixel
+      params: robots/cell_scene/ee_params.yaml       # model parameter file (optional)
+      residual: residual.joblib                       # learned ΔL_s model (optional)
+    pick_station: {position_m: [0.45, -0.35, 0.0]}   # where items appear (optional)
+    bins:
+      - {id: near, position_m: [0.55, 0.35], size_m: [0.3, 0.3], rim_height_m: 0.12}
+    items:
+      - {object: cube50, count: 3, bin: near}         # catalogue id ...
+      - {shape: cube, mass_kg: 0.05, size_m: [0.05, 0.05, 0.05], count: 1}  # ... or ad hoc
+    routing: {cube: near, sphere: far}  # shape class -> bin, for items with no `bin`
+    policy: auto               # auto (place within reach, else throw) | place | throw
+    seed: 0
+    limits: {place_reach_m: 0.75, max_items: 100, item_time_limit_s: 20}
+
+Loading uses yaml's safe composer (no tags are ever executed) and keeps the
+line of every node, so an error names the file, the line and the field path
+and says what would be valid.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cell.catalogue import catalogue
+from cell.errors import JobError
+from cell.model.objects import SHAPES, ObjectParams
+
+__all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
+
+ROBOTS = ("panda", "ur5")
+EE_BACKENDS = ("pybullet", "dynamixel")
+POLICIES = ("auto", "place", "throw")
+ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+
+
+@dataclass(frozen=True)
+class BinSpec:
+    """An open bin on the floor.
+
+    Attributes:
+        id: its name.
+        position: centre of its floor [m, W], (x, y).
+        size: inner extents (x, y) [m].
+        rim_height: height of its rim above the floor [m]: the landing plane.
+    """
+
+    id: str
+    position: tuple[float, float]
+    size: tuple[float, float]
+    rim_height: float
+
+
+@dataclass(frozen=True)
+class ItemSpec:
+    """Items of one kind to sort.
+
+    Attributes:
+        obj: the object's parameters.
+        count: how many.
+        bin: destination bin id.
+        line: the line of the job file that asked for it.
+    """
+
+    obj: ObjectParams
+    count: int
+    bin: str
+    line: int
+
+
+@dataclass(frozen=True)
+class Job:
+    """A validated sort job."""
+
+    path: str
+    robot: str
+    ee: str
+    ee_config: str
+    params: str
+    residual: str
+    pick_position: tuple[float, float, float]
+    bins: tuple[BinSpec, ...]
+    items: tuple[ItemSpec, ...]
+    policy: str
+    seed: int
+    place_reach_m: float
+    max_items: int
+    item_time_limit_s: float
+    extras: dict[str, Any] = field(default_factory=dict)
+
+    def bin(self, bin_id: str) -> BinSpec:
+        """The bin with this id."""
+        for b in self.bins:
+            if b.id == bin_id:
+                return b
+        raise JobError(f"{self.path}: no bin {bin_id!r}; bins: {[b.id for b in self.bins]}")
+
+    def expanded_items(self) -> list[ItemSpec]:
+        """One entry per item, in job order, capped at max_items."""
+        out: list[ItemSpec] = []
+        for it in self.items:
+            out.extend([it] * it.count)
+        return out[: self.max_items]
+
+
+class _Node:
+    """A YAML value with its line, for error messages."""
+
+    def __init__(self, value: Any, line: int) -> None:
+        self.value = value
+        self.line = line
+
+
+_SAFE_TAGS = frozenset(t for t in yaml.SafeLoader.yaml_constructors if t)
+
+
+def _to_tree(node: yaml.Node, path: str) -> _Node:
+    line = node.start_mark.line + 1
+    if node.tag not in _SAFE_TAGS:
+        raise JobError(f"{path}, line {line}: YAML tag {node.tag} is not allowed in a job file "
+                       "(plain mappings, lists, text and numbers only)")
+    if isinstance(node, yaml.MappingNode):
+        out: dict[str, _Node] = {}
+        for k, v in node.value:
+            key = yaml.safe_load(yaml.serialize(k)) if not isinstance(k, yaml.ScalarNode) else k.value
+            if str(key) in out:
+                raise JobError(f"{path}, line {k.start_mark.line + 1}: key {key!r} appears twice")
+            out[str(key)] = _to_tree(v, path)
+        return _Node(out, line)
+    if isinstance(node, yaml.SequenceNode):
+        return _Node([_to_tree(v, path) for v in node.value], line)
+    # resolve the scalar with the safe constructor alone
+    value = yaml.SafeLoader("").construct_object(node, deep=True)  # type: ignore[no-untyped-call]
+    return _Node(value, line)
+
+
+class _Checker:
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def fail(self, node: _Node, field_path: str, msg: str) -> JobError:
+        return JobError(f"{self.path}, line {node.line}, {field_path}: {msg}")
+
+    def mapping(self, node: _Node, fp: str, allowed: dict[str, str]) -> dict[str, _Node]:
+        if not isinstance(node.value, dict):
+            raise self.fail(node, fp, f"must be a mapping with keys {sorted(allowed)}")
+        for k, v in node.value.items():
+            if k not in allowed:
+                raise self.fail(v, f"{fp}.{k}" if fp else k,
+                                f"unknown key {k!r}; valid keys here: {', '.join(sorted(allowed))}")
+        return node.value
+
+    def number(self, node: _Node, fp: str, *, lo: float | None = None, hi: float | None = None,
+               strict_lo: bool = False) -> float:
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+            raise self.fail(node, fp, f"{v!r} must be a number")
+        v = float(v)
+        if lo is not None and (v <= lo if strict_lo else v < lo):
+            raise self.fail(node, fp, f"{v} must be {'>' if strict_lo else '≥'} {lo}")
+        if hi is not None and v > hi:
+            raise self.fail(node, fp, f"{v} must be ≤ {hi}")
+        return v
+
+    def integer(self, node: _Node, fp: str, lo: int) -> int:
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise self.fail(node, fp, f"{v!r} must be a whole number ≥ {lo}")
+        return int(v)
+
+    def text(self, node: _Node, fp: str, choices: tuple[str, ...] | None = None) -> str:
+        v = node.value
+        if not isinstance(v, str) or not v:
+            raise self.fail(node, fp, f"{v!r} must be a non-empty text")
+        if choices and v not in choices:
+            raise self.fail(node, fp, f"{v!r} is not valid; choose one of {', '.join(choices)}")
+        return v
+
+    def vector(self, node: _Node, fp: str, n: int, *, positive: bool = False) -> tuple[float, ...]:
+        if not isinstance(node.value, list) or len(node.value) != n:
+            raise self.fail(node, fp, f"must be a list of {n} numbers")
+        return tuple(
+            self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
+            for i, x in enumerate(node.value)
+        )
+
+
+def parse_job(text: str, path: str = "<job>") -> Job:
+    """Validate a job given as YAML text.
+
+    Raises:
+        JobError: naming the file, the line and the field path, and what is valid.
+    """
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError as exc:
+        raise JobError(f"{path}: not valid YAML: {exc}") from None
+    if root is None:
+        raise JobError(f"{path}: the job file is empty; it needs at least bins and items")
+    tree = _to_tree(root, path)
+    c = _Checker(path)
+    top = c.mapping(tree, "", {k: "" for k in (
+        "cell", "pick_station", "bins", "items", "routing", "policy", "seed", "limits", "name",
+        "description")})
+    for req in ("bins", "items"):
+        if req not in top:
+            raise JobError(f"{path}, line {tree.line}: the job needs a '{req}' list")
+
+    cell = c.mapping(top["cell"], "cell", dict.fromkeys(
+        ("robot", "ee", "ee_config", "params", "residual"), "")) if "cell" in top else {}
+    robot = c.text(cell["robot"], "cell.robot", ROBOTS) if "robot" in cell else "panda"
+    ee = c.text(cell["ee"], "cell.ee", EE_BACKENDS) if "ee" in cell else "pybullet"
+    base = Path(path).parent if path != "<job>" else Path(".")
+
+    def rel(key: str) -> str:
+        if key not in cell:
+            return ""
+        p = Path(c.text(cell[key], f"cell.{key}"))
+        full = p if p.is_absolute() or p.exists() else base / p
+        if not full.exists():
+            raise c.fail(cell[key], f"cell.{key}", f"file {p} does not exist (relative to the "
+                         f"current folder or to {base})")
+        return str(full)
+
+    ee_config, params, residual = rel("ee_config"), rel("params"), rel("residual")
+    if ee == "dynamixel" and not ee_config:
+        raise c.fail(cell.get("ee", tree), "cell.ee_config",
+                     "the dynamixel back-end needs ee_config (e.g. robots/throwing_ee/dynamixel.yaml)")
+
+    pick = (0.45, -0.35, 0.0)
+    if "pick_station" in top:
+        ps = c.mapping(top["pick_station"], "pick_station", {"position_m": ""})
+        if "position_m" in ps:
+            pick = c.vector(ps["position_m"], "pick_station.position_m", 3)  # type: ignore[assignment]
+
+    bins_node = top["bins"]
+    if not isinstance(bins_node.value, list) or not bins_node.value:
+        raise c.fail(bins_node, "bins", "must be a non-empty list of bins")
+    bins: list[BinSpec] = []
+    for i, bn in enumerate(bins_node.value):
+        fp = f"bins[{i}]"
+        b = c.mapping(bn, fp, dict.fromkeys(("id", "position_m", "size_m", "rim_height_m"), ""))
+        for req in ("id", "position_m", "size_m", "rim_height_m"):
+            if req not in b:
+                raise c.fail(bn, fp, f"missing '{req}' (a bin needs id, position_m [x, y], "
+                             "size_m [x, y], rim_height_m)")
+        bid = c.text(b["id"], f"{fp}.id")
+        if any(x.id == bid for x in bins):
+            raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
+        pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
+        size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
+        rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", lo=0.0, hi=1.0, strict_lo=True)
+        near = math.hypot(*pos) - math.hypot(size[0] / 2, size[1] / 2)
+        if near < ROBOT_BASE_CLEARANCE_M:
+            raise c.fail(b["position_m"], f"{fp}.position_m",
+                         f"the bin reaches within {max(near, 0):.2f} m of the robot base at the "
+                         f"origin; keep every bin at least {ROBOT_BASE_CLEARANCE_M} m away")
+        bins.append(BinSpec(bid, pos, size, rim))  # type: ignore[arg-type]
+    bin_ids = [b.id for b in bins]
+
+    routing: dict[str, str] = {}
+    if "routing" in top:
+        rt = c.mapping(top["routing"], "routing", dict.fromkeys(SHAPES, ""))
+        for shape, node in rt.items():
+            routing[shape] = c.text(node, f"routing.{shape}", tuple(bin_ids))
+
+    items_node = top["items"]
+    if not isinstance(items_node.value, list) or not items_node.value:
+        raise c.fail(items_node, "items", "must be a non-empty list of items")
+    cat = catalogue()
+    items: list[ItemSpec] = []
+    for i, itn in enumerate(items_node.value):
+        fp = f"items[{i}]"
+        it = c.mapping(itn, fp, dict.fromkeys(
+            ("object", "shape", "mass_kg", "size_m", "count", "bin"), ""))
+        if "object" in it:
+            if any(k in it for k in ("shape", "mass_kg", "size_m")):
+                raise c.fail(itn, fp, "give either object (a catalogue id) or shape, mass_kg and "
+                             "size_m, not both")
+            oid = c.text(it["object"], f"{fp}.object")
+            if oid not in cat:
+                raise c.fail(it["object"], f"{fp}.object",
+                             f"unknown catalogue id {oid!r}; valid: {', '.join(cat)}")
+            obj = cat[oid].params
+        else:
+            for req in ("shape", "mass_kg", "size_m"):
+                if req not in it:
+                    raise c.fail(itn, fp, f"missing '{req}': an item needs object (a catalogue id) "
+                                 "or shape, mass_kg and size_m")
+            shape = c.text(it["shape"], f"{fp}.shape", SHAPES[:4])
+            mass = c.number(it["mass_kg"], f"{fp}.mass_kg", lo=0.0, hi=2.0, strict_lo=True)
+            size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
+            if max(size) > 0.25:
+                raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
+            obj = ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
+        count = c.integer(it["count"], f"{fp}.count", 1) if "count" in it else 1
+        if "bin" in it:
+            dest = c.text(it["bin"], f"{fp}.bin", tuple(bin_ids))
+        elif obj.shape in routing:
+            dest = routing[obj.shape]
+        else:
+            raise c.fail(itn, fp, f"no destination: give 'bin' (one of {', '.join(bin_ids)}) or a "
+                         f"routing rule for shape {obj.shape!r}")
+        items.append(ItemSpec(obj, count, dest, itn.line))
+
+    policy = c.text(top["policy"], "policy", POLICIES) if "policy" in top else "auto"
+    seed = c.integer(top["seed"], "seed", 0) if "seed" in top else 0
+    lim = c.mapping(top["limits"], "limits", dict.fromkeys(
+        ("place_reach_m", "max_items", "item_time_limit_s"), "")) if "limits" in top else {}
+    reach = c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2) \
+        if "place_reach_m" in lim else 0.75
+    max_items = c.integer(lim["max_items"], "limits.max_items", 1) if "max_items" in lim else 1000
+    tlim = c.number(lim["item_time_limit_s"], "limits.item_time_limit_s", lo=1.0) \
+        if "item_time_limit_s" in lim else 20.0
+    return Job(path=path, robot=robot, ee=ee, ee_config=ee_config, params=params,
+               residual=residual, pick_position=pick, bins=tuple(bins), items=tuple(items),
+               policy=policy, seed=seed, place_reach_m=reach, max_items=max_items,
+               item_time_limit_s=tlim)
+
+
+def load_job(path: str | Path) -> Job:
+    """Read and validate a job file.
+
+    Raises:
+        JobError: missing or unreadable file, or any invalid field (file, line, field path).
+    """
+    p = str(path)
+    try:
+        text = Path(p).read_text()
+    except FileNotFoundError:
+        raise JobError(f"{p}: no such job file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise JobError(f"{p}: cannot be read ({exc})") from None
+    return parse_job(text, p)
