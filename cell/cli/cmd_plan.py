@@ -1,0 +1,142 @@
+"""`cell plan`: the release state σ* that lands an object on a target."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from cell.cli.common import add_object_args, object_from_args, print_json
+from cell.errors import InvalidInput, InvalidParameter
+from cell.params import load_params
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "plan",
+        help="plan a throw: target in, release pose, velocity and stroke out",
+        description=(
+            "Find the release state σ* (grip centre, base velocity, roll, elevation, azimuth, "
+            "stroke) within the bounds that lands the object on the target, with the least "
+            "stored band energy. Target z is the landing plane (a bin's rim height)."
+        ),
+    )
+    p.add_argument(
+        "--target",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="goal in the world frame [m]; Z is the landing plane's height",
+    )
+    add_object_args(p)
+    p.add_argument(
+        "--method",
+        choices=("auto", "fast", "nlp"),
+        default="auto",
+        help="fast inverse, full NLP, or fast with the NLP as fallback (auto)",
+    )
+    p.add_argument(
+        "--current",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="current grip centre [m]: the fast path releases there",
+    )
+    p.add_argument(
+        "--base-velocity",
+        type=float,
+        nargs=3,
+        metavar=("VX", "VY", "VZ"),
+        help="a known base velocity at release [m/s] (default: fixed base)",
+    )
+    p.add_argument(
+        "--moving-base",
+        type=float,
+        metavar="VMAX",
+        help="let the NLP choose a base velocity with |v| ≤ VMAX per axis [m/s]",
+    )
+    p.add_argument(
+        "--box",
+        type=float,
+        nargs=6,
+        metavar=("XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"),
+        help="release-point box [m] (0.2 -0.4 0.4 0.6 0.4 0.9)",
+    )
+    p.add_argument(
+        "--elevation-range",
+        type=float,
+        nargs=2,
+        metavar=("MIN", "MAX"),
+        help="throw-axis elevation range [rad] (0 1.1345 = 0…65°)",
+    )
+    p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference values)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=run)
+
+
+def _bounds(args: argparse.Namespace):
+    from dataclasses import replace
+
+    from cell.optimize import DEFAULT_BOUNDS
+
+    b = DEFAULT_BOUNDS
+    try:
+        if args.box is not None:
+            b = replace(b, position_min=tuple(args.box[:3]), position_max=tuple(args.box[3:]))
+        if args.elevation_range is not None:
+            b = replace(
+                b, elevation_min=args.elevation_range[0], elevation_max=args.elevation_range[1]
+            )
+        if args.moving_base is not None:
+            b = b.with_base_velocity(args.moving_base)
+    except InvalidParameter as exc:
+        raise InvalidInput(str(exc)) from None
+    return b
+
+
+def run(args: argparse.Namespace) -> int:
+    from cell.optimize import plan_throw
+
+    obj = object_from_args(args)
+    mp = load_params(args.params)
+    if args.base_velocity is not None and args.moving_base is not None:
+        raise InvalidInput("give either --base-velocity or --moving-base, not both")
+    try:
+        plan = plan_throw(
+            obj,
+            tuple(args.target),
+            mp.ee,
+            _bounds(args),
+            current=args.current,
+            base_velocity=args.base_velocity,
+            method=args.method,
+        )
+    except InvalidParameter as exc:
+        raise InvalidInput(str(exc)) from None
+    if args.json:
+        print_json(plan.as_dict())
+        return 0
+    d = plan.as_dict()
+    print(f"object        {d['object_id']}  ({obj.mass:.3f} kg, {obj.shape})")
+    print(
+        f"target        x = {plan.target_x_m:.4f} m, y = {plan.target_y_m:.4f} m "
+        f"on z = {plan.land_z_m:.3f} m (world frame)"
+    )
+    print(
+        f"release at    x = {plan.x_m:.4f}, y = {plan.y_m:.4f}, z = {plan.z_m:.4f} m; "
+        f"base velocity ({plan.vx_mps:.3f}, {plan.vy_mps:.3f}, {plan.vz_mps:.3f}) m/s"
+    )
+    print(
+        f"throw axis    elevation {plan.elevation_rad:.4f} rad ({math.degrees(plan.elevation_rad):.1f}°), "
+        f"azimuth {plan.azimuth_rad:.4f} rad ({math.degrees(plan.azimuth_rad):.1f}°), "
+        f"roll {plan.roll_rad:.4f} rad"
+    )
+    print(f"stroke        L_s = {plan.stroke_m:.5f} m")
+    print(
+        f"predicted     lands at x = {plan.pred_x_m:.4f} m, y = {plan.pred_y_m:.4f} m; "
+        f"miss {plan.miss_m * 1e3:.3f} mm"
+    )
+    print(f"flight time   {plan.t_flight_s:.4f} s (from the start of the push)")
+    print(f"stored energy {plan.energy_j:.4f} J (both band halves)")
+    print(f"method        {plan.method}")
+    return 0
