@@ -6,7 +6,10 @@
       ee_config: robots/throwing_ee/dynamixel.yaml   # for dynamixel
       params: robots/cell_scene/ee_params.yaml       # model parameter file (optional)
       residual: residual.joblib                       # learned ΔL_s model (optional)
-    pick_station: {position_m: [0.45, -0.35, 0.0]}   # where items appear (optional)
+      platform: arm            # arm | drone | mobile
+      drone: {hover_height_m: 2.0, rotor_rpm: 8900}   # platform drone only
+      mobile: {speed_mps: 0.5}                        # platform mobile: base speed at release
+    pick_station: {position_m: [0.45, -0.40, 0.20]}  # top centre of the pick table (optional)
     bins:
       - {id: near, position_m: [0.55, 0.35], size_m: [0.3, 0.3], rim_height_m: 0.12}
     items:
@@ -38,6 +41,7 @@ from cell.model.objects import SHAPES, ObjectParams
 __all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
 
 ROBOTS = ("panda", "ur5")
+PLATFORMS = ("arm", "drone", "mobile")
 EE_BACKENDS = ("pybullet", "dynamixel")
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
@@ -95,6 +99,10 @@ class Job:
     place_reach_m: float
     max_items: int
     item_time_limit_s: float
+    platform: str = "arm"
+    hover_height_m: float = 2.0
+    rotor_rpm: float = 0.0
+    base_speed_mps: float = 0.0
     extras: dict[str, Any] = field(default_factory=dict)
 
     def bin(self, bin_id: str) -> BinSpec:
@@ -126,12 +134,16 @@ _SAFE_TAGS = frozenset(t for t in yaml.SafeLoader.yaml_constructors if t)
 def _to_tree(node: yaml.Node, path: str) -> _Node:
     line = node.start_mark.line + 1
     if node.tag not in _SAFE_TAGS:
-        raise JobError(f"{path}, line {line}: YAML tag {node.tag} is not allowed in a job file "
-                       "(plain mappings, lists, text and numbers only)")
+        raise JobError(
+            f"{path}, line {line}: YAML tag {node.tag} is not allowed in a job file "
+            "(plain mappings, lists, text and numbers only)"
+        )
     if isinstance(node, yaml.MappingNode):
         out: dict[str, _Node] = {}
         for k, v in node.value:
-            key = yaml.safe_load(yaml.serialize(k)) if not isinstance(k, yaml.ScalarNode) else k.value
+            key = (
+                yaml.safe_load(yaml.serialize(k)) if not isinstance(k, yaml.ScalarNode) else k.value
+            )
             if str(key) in out:
                 raise JobError(f"{path}, line {k.start_mark.line + 1}: key {key!r} appears twice")
             out[str(key)] = _to_tree(v, path)
@@ -155,12 +167,22 @@ class _Checker:
             raise self.fail(node, fp, f"must be a mapping with keys {sorted(allowed)}")
         for k, v in node.value.items():
             if k not in allowed:
-                raise self.fail(v, f"{fp}.{k}" if fp else k,
-                                f"unknown key {k!r}; valid keys here: {', '.join(sorted(allowed))}")
+                raise self.fail(
+                    v,
+                    f"{fp}.{k}" if fp else k,
+                    f"unknown key {k!r}; valid keys here: {', '.join(sorted(allowed))}",
+                )
         return node.value
 
-    def number(self, node: _Node, fp: str, *, lo: float | None = None, hi: float | None = None,
-               strict_lo: bool = False) -> float:
+    def number(
+        self,
+        node: _Node,
+        fp: str,
+        *,
+        lo: float | None = None,
+        hi: float | None = None,
+        strict_lo: bool = False,
+    ) -> float:
         v = node.value
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
             raise self.fail(node, fp, f"{v!r} must be a number")
@@ -208,15 +230,59 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         raise JobError(f"{path}: the job file is empty; it needs at least bins and items")
     tree = _to_tree(root, path)
     c = _Checker(path)
-    top = c.mapping(tree, "", {k: "" for k in (
-        "cell", "pick_station", "bins", "items", "routing", "policy", "seed", "limits", "name",
-        "description")})
+    top = c.mapping(
+        tree,
+        "",
+        {
+            k: ""
+            for k in (
+                "cell",
+                "pick_station",
+                "bins",
+                "items",
+                "routing",
+                "policy",
+                "seed",
+                "limits",
+                "name",
+                "description",
+            )
+        },
+    )
     for req in ("bins", "items"):
         if req not in top:
             raise JobError(f"{path}, line {tree.line}: the job needs a '{req}' list")
 
-    cell = c.mapping(top["cell"], "cell", dict.fromkeys(
-        ("robot", "ee", "ee_config", "params", "residual"), "")) if "cell" in top else {}
+    cell = (
+        c.mapping(
+            top["cell"],
+            "cell",
+            dict.fromkeys(
+                ("robot", "ee", "ee_config", "params", "residual", "platform", "drone", "mobile"),
+                "",
+            ),
+        )
+        if "cell" in top
+        else {}
+    )
+    platform = c.text(cell["platform"], "cell.platform", PLATFORMS) if "platform" in cell else "arm"
+    hover, rpm, speed = 2.0, 0.0, 0.0
+    if "drone" in cell:
+        if platform != "drone":
+            raise c.fail(cell["drone"], "cell.drone", "only for platform: drone")
+        dr = c.mapping(
+            cell["drone"], "cell.drone", dict.fromkeys(("hover_height_m", "rotor_rpm"), "")
+        )
+        if "hover_height_m" in dr:
+            hover = c.number(dr["hover_height_m"], "cell.drone.hover_height_m", lo=0.5, hi=10.0)
+        if "rotor_rpm" in dr:
+            rpm = c.number(dr["rotor_rpm"], "cell.drone.rotor_rpm", lo=0.0, hi=30000.0)
+    if "mobile" in cell:
+        if platform != "mobile":
+            raise c.fail(cell["mobile"], "cell.mobile", "only for platform: mobile")
+        mb = c.mapping(cell["mobile"], "cell.mobile", {"speed_mps": ""})
+        if "speed_mps" in mb:
+            speed = c.number(mb["speed_mps"], "cell.mobile.speed_mps", lo=0.0, hi=2.0)
     robot = c.text(cell["robot"], "cell.robot", ROBOTS) if "robot" in cell else "panda"
     ee = c.text(cell["ee"], "cell.ee", EE_BACKENDS) if "ee" in cell else "pybullet"
     base = Path(path).parent if path != "<job>" else Path(".")
@@ -227,16 +293,22 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         p = Path(c.text(cell[key], f"cell.{key}"))
         full = p if p.is_absolute() or p.exists() else base / p
         if not full.exists():
-            raise c.fail(cell[key], f"cell.{key}", f"file {p} does not exist (relative to the "
-                         f"current folder or to {base})")
+            raise c.fail(
+                cell[key],
+                f"cell.{key}",
+                f"file {p} does not exist (relative to the current folder or to {base})",
+            )
         return str(full)
 
     ee_config, params, residual = rel("ee_config"), rel("params"), rel("residual")
     if ee == "dynamixel" and not ee_config:
-        raise c.fail(cell.get("ee", tree), "cell.ee_config",
-                     "the dynamixel back-end needs ee_config (e.g. robots/throwing_ee/dynamixel.yaml)")
+        raise c.fail(
+            cell.get("ee", tree),
+            "cell.ee_config",
+            "the dynamixel back-end needs ee_config (e.g. robots/throwing_ee/dynamixel.yaml)",
+        )
 
-    pick = (0.45, -0.35, 0.0)
+    pick = (0.45, -0.40, 0.20)
     if "pick_station" in top:
         ps = c.mapping(top["pick_station"], "pick_station", {"position_m": ""})
         if "position_m" in ps:
@@ -251,8 +323,12 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         b = c.mapping(bn, fp, dict.fromkeys(("id", "position_m", "size_m", "rim_height_m"), ""))
         for req in ("id", "position_m", "size_m", "rim_height_m"):
             if req not in b:
-                raise c.fail(bn, fp, f"missing '{req}' (a bin needs id, position_m [x, y], "
-                             "size_m [x, y], rim_height_m)")
+                raise c.fail(
+                    bn,
+                    fp,
+                    f"missing '{req}' (a bin needs id, position_m [x, y], "
+                    "size_m [x, y], rim_height_m)",
+                )
         bid = c.text(b["id"], f"{fp}.id")
         if any(x.id == bid for x in bins):
             raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
@@ -261,9 +337,12 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", lo=0.0, hi=1.0, strict_lo=True)
         near = math.hypot(*pos) - math.hypot(size[0] / 2, size[1] / 2)
         if near < ROBOT_BASE_CLEARANCE_M:
-            raise c.fail(b["position_m"], f"{fp}.position_m",
-                         f"the bin reaches within {max(near, 0):.2f} m of the robot base at the "
-                         f"origin; keep every bin at least {ROBOT_BASE_CLEARANCE_M} m away")
+            raise c.fail(
+                b["position_m"],
+                f"{fp}.position_m",
+                f"the bin reaches within {max(near, 0):.2f} m of the robot base at the "
+                f"origin; keep every bin at least {ROBOT_BASE_CLEARANCE_M} m away",
+            )
         bins.append(BinSpec(bid, pos, size, rim))  # type: ignore[arg-type]
     bin_ids = [b.id for b in bins]
 
@@ -280,27 +359,40 @@ def parse_job(text: str, path: str = "<job>") -> Job:
     items: list[ItemSpec] = []
     for i, itn in enumerate(items_node.value):
         fp = f"items[{i}]"
-        it = c.mapping(itn, fp, dict.fromkeys(
-            ("object", "shape", "mass_kg", "size_m", "count", "bin"), ""))
+        it = c.mapping(
+            itn, fp, dict.fromkeys(("object", "shape", "mass_kg", "size_m", "count", "bin"), "")
+        )
         if "object" in it:
             if any(k in it for k in ("shape", "mass_kg", "size_m")):
-                raise c.fail(itn, fp, "give either object (a catalogue id) or shape, mass_kg and "
-                             "size_m, not both")
+                raise c.fail(
+                    itn,
+                    fp,
+                    "give either object (a catalogue id) or shape, mass_kg and size_m, not both",
+                )
             oid = c.text(it["object"], f"{fp}.object")
             if oid not in cat:
-                raise c.fail(it["object"], f"{fp}.object",
-                             f"unknown catalogue id {oid!r}; valid: {', '.join(cat)}")
+                raise c.fail(
+                    it["object"],
+                    f"{fp}.object",
+                    f"unknown catalogue id {oid!r}; valid: {', '.join(cat)}",
+                )
             obj = cat[oid].params
         else:
             for req in ("shape", "mass_kg", "size_m"):
                 if req not in it:
-                    raise c.fail(itn, fp, f"missing '{req}': an item needs object (a catalogue id) "
-                                 "or shape, mass_kg and size_m")
+                    raise c.fail(
+                        itn,
+                        fp,
+                        f"missing '{req}': an item needs object (a catalogue id) "
+                        "or shape, mass_kg and size_m",
+                    )
             shape = c.text(it["shape"], f"{fp}.shape", SHAPES[:4])
             mass = c.number(it["mass_kg"], f"{fp}.mass_kg", lo=0.0, hi=2.0, strict_lo=True)
             size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
             if max(size) > 0.25:
-                raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
+                raise c.fail(
+                    it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip"
+                )
             obj = ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
         count = c.integer(it["count"], f"{fp}.count", 1) if "count" in it else 1
         if "bin" in it:
@@ -308,23 +400,56 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         elif obj.shape in routing:
             dest = routing[obj.shape]
         else:
-            raise c.fail(itn, fp, f"no destination: give 'bin' (one of {', '.join(bin_ids)}) or a "
-                         f"routing rule for shape {obj.shape!r}")
+            raise c.fail(
+                itn,
+                fp,
+                f"no destination: give 'bin' (one of {', '.join(bin_ids)}) or a "
+                f"routing rule for shape {obj.shape!r}",
+            )
         items.append(ItemSpec(obj, count, dest, itn.line))
 
     policy = c.text(top["policy"], "policy", POLICIES) if "policy" in top else "auto"
     seed = c.integer(top["seed"], "seed", 0) if "seed" in top else 0
-    lim = c.mapping(top["limits"], "limits", dict.fromkeys(
-        ("place_reach_m", "max_items", "item_time_limit_s"), "")) if "limits" in top else {}
-    reach = c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2) \
-        if "place_reach_m" in lim else 0.75
+    lim = (
+        c.mapping(
+            top["limits"],
+            "limits",
+            dict.fromkeys(("place_reach_m", "max_items", "item_time_limit_s"), ""),
+        )
+        if "limits" in top
+        else {}
+    )
+    reach = (
+        c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2)
+        if "place_reach_m" in lim
+        else 0.75
+    )
     max_items = c.integer(lim["max_items"], "limits.max_items", 1) if "max_items" in lim else 1000
-    tlim = c.number(lim["item_time_limit_s"], "limits.item_time_limit_s", lo=1.0) \
-        if "item_time_limit_s" in lim else 20.0
-    return Job(path=path, robot=robot, ee=ee, ee_config=ee_config, params=params,
-               residual=residual, pick_position=pick, bins=tuple(bins), items=tuple(items),
-               policy=policy, seed=seed, place_reach_m=reach, max_items=max_items,
-               item_time_limit_s=tlim)
+    tlim = (
+        c.number(lim["item_time_limit_s"], "limits.item_time_limit_s", lo=1.0)
+        if "item_time_limit_s" in lim
+        else 20.0
+    )
+    return Job(
+        path=path,
+        robot=robot,
+        ee=ee,
+        ee_config=ee_config,
+        params=params,
+        residual=residual,
+        pick_position=pick,
+        bins=tuple(bins),
+        items=tuple(items),
+        policy=policy,
+        seed=seed,
+        place_reach_m=reach,
+        max_items=max_items,
+        item_time_limit_s=tlim,
+        platform=platform,
+        hover_height_m=hover,
+        rotor_rpm=rpm,
+        base_speed_mps=speed,
+    )
 
 
 def load_job(path: str | Path) -> Job:

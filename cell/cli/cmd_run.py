@@ -1,18 +1,102 @@
-"""`cell run JOB.yaml`: a sort job in the cell."""
+"""`cell run JOB.yaml`: a sort job in the PyBullet cell, with a progress bar and a closing table."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import os
+import sys
+from pathlib import Path
+
+from cell.cli.common import to_jsonable
+from cell.jobs import load_job
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a sort job (YAML) in the cell")
     p.add_argument("job", help="job file, e.g. tasks/bins.yaml")
+    p.add_argument("--gui", action="store_true", help="show the PyBullet GUI")
+    p.add_argument("--json", metavar="OUT.json", help="write the summary as JSON")
+    p.add_argument("--snapshot", metavar="OUT.png", help="render the scene at the end (headless)")
+    p.add_argument("--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)")
+    p.add_argument("--no-log", action="store_true", help="do not record the throws")
+    p.add_argument("--ee", choices=("pybullet", "dynamixel"), help="end-effector back-end (overrides the job)")
+    p.add_argument("--ee-config", metavar="YAML", help="Dynamixel configuration (robots/throwing_ee/dynamixel.yaml)")
+    p.add_argument("--port", help="serial port of the Dynamixel bus (overrides the configuration)")
+    p.add_argument("--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)")
     p.set_defaults(func=run)
 
 
+def _store(args: argparse.Namespace):  # type: ignore[no-untyped-def]
+    if args.no_log:
+        return None
+    from cell.log.store import ThrowStore
+
+    return ThrowStore(args.db)
+
+
 def run(args: argparse.Namespace) -> int:
-    print(
-        f"cell run {args.job}: the sort orchestrator is not yet built (the model is: try `cell throw --object cube50`)"
-    )
+    from tqdm import tqdm
+
+    from cell.orchestrator import Orchestrator
+
+    job = load_job(args.job)
+    kind = args.ee or job.ee
+    hardware = None
+    if kind == "dynamixel":
+        from cell.endeffector.factory import make_end_effector
+
+        cfg = args.ee_config or job.ee_config or str(Path("robots/throwing_ee/dynamixel.yaml"))
+        hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
+    store = _store(args)
+    orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware)
+    bar = tqdm(total=len(job.expanded_items()), desc=f"sorting {Path(args.job).name}", unit="item",
+               file=sys.stderr, disable=None)
+    try:
+        def progress(r):  # type: ignore[no-untyped-def]
+            bar.update(1)
+            bar.set_postfix_str(f"{r.object_id}: {r.action} -> {r.bin_id or '-'}")
+
+        summary = orch.run(progress)
+        if args.snapshot:
+            orch.scene.snapshot(args.snapshot)
+    finally:
+        bar.close()
+        orch.close()
+        if store is not None:
+            store.close()
+    _table(summary, job.path, store)
+    if args.json:
+        d = summary.as_dict()
+        Path(args.json).write_text(json.dumps(to_jsonable(d), indent=2))
     return 0
+
+
+def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
+    return "n/a" if not math.isfinite(v) else f"{v:.{digits}f}{unit}"
+
+
+def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
+    print(f"\nsort job {path}")
+    print(f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} {'stroke':>8}  note")
+    for r in s.results:
+        print(f"{r.index:4d} {r.object_id:14} {r.action:7} {r.target_bin:9} {r.bin_id or '-':9} "
+              f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.reason[:60]}")
+    print()
+    rows = [
+        ("items", f"{s.items}"),
+        ("placed", f"{s.placed}"),
+        ("thrown", f"{s.thrown}"),
+        ("failed", f"{s.failed}"),
+        ("in the right bin", f"{s.in_bin} ({100 * s.in_bin_rate:.1f} %)"),
+        ("landing error mean", _fmt(s.mean_landing_error_m, " m")),
+        ("landing error p95", _fmt(s.p95_landing_error_m, " m")),
+        ("mean cycle time", _fmt(s.mean_cycle_time_s, " s (simulated)", 2)),
+        ("items per hour", f"{s.items_per_hour:.0f} (simulated time)"),
+        ("wall time", _fmt(s.wall_time_s, " s", 1)),
+    ]
+    if store is not None:
+        rows.append(("throw log", f"{store.path}"))
+    for k, v in rows:
+        print(f"  {k:20s} {v}")

@@ -1,0 +1,364 @@
+"""The sort loop: pick, decide, plan, move, release, observe, record.
+
+For each item of a job the orchestrator spawns it at the pick station, moves
+the arm over it (Pinocchio IK + a toppra path), grasps it, decides to place
+(bin within reach) or throw (beyond), plans the release (throw optimisation
+plus the learned ΔL_s when a residual model is given), moves to the release
+configuration (toppra through pick → lift → release), commands the
+end-effector, watches the item to rest in the PyBullet plant, scores it and
+appends the throw to the log store, each in its own transaction.
+
+A failure on one item (no IK solution, unreachable bin, item dropped) is
+recorded with its reason and the run goes on.
+
+Time accounting: `cycle_time_s` is simulated arm time from the start of an
+item's pick motion to its release, plus the end-effector's actions; the
+flight and settling after release are not counted, because the arm is free
+then and the next pick motion starts from the release configuration.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cell.errors import CellError, InvalidInput
+from cell.jobs import ItemSpec, Job
+from cell.model.objects import ObjectParams
+from cell.params import ModelParams, load_params
+
+__all__ = ["ItemResult", "RunSummary", "Orchestrator", "summarise"]
+
+log = logging.getLogger(__name__)
+
+PICK_STROKE_M = 0.06  # [m] stroke while carrying: grip force enough to hold items through arm moves
+LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
+PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
+ARM_SPEED_SCALE = 0.8  # fraction of the joint velocity/acceleration limits used
+
+
+@dataclass(frozen=True)
+class ItemResult:
+    """What became of one item.
+
+    Attributes:
+        index: item number in the job (0-based).
+        object_id: catalogue id (or ad-hoc name).
+        target_bin: where the job wanted it.
+        action: "place", "throw" or "failed".
+        reason: why it failed ("" when it did not).
+        bin_id: the bin it came to rest in ("" for none).
+        in_bin: True when that is the target bin.
+        landing_error_m: throws: distance of the crossing of the rim plane from the
+            bin centre; places: distance of the rest point from the bin centre [m].
+        stroke_m: commanded stroke at release [m] (NaN for failures before planning).
+        delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
+        cycle_time_s: simulated arm time for this item [s].
+        throw_id: the log id of the throw ("" for places and failures).
+    """
+
+    index: int
+    object_id: str
+    target_bin: str
+    action: str
+    reason: str = ""
+    bin_id: str = ""
+    in_bin: bool = False
+    landing_error_m: float = math.nan
+    stroke_m: float = math.nan
+    delta_stroke_m: float = 0.0
+    cycle_time_s: float = 0.0
+    throw_id: str = ""
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """The closing table of a run (JSON keys as `cell run --json`)."""
+
+    items: int
+    placed: int
+    thrown: int
+    failed: int
+    in_bin: int
+    in_bin_rate: float
+    mean_landing_error_m: float
+    p95_landing_error_m: float
+    mean_cycle_time_s: float
+    items_per_hour: float
+    sim_time_s: float
+    wall_time_s: float
+    results: list[ItemResult] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values, item results as a list of dicts."""
+        d = asdict(self)
+        d["results"] = [asdict(r) for r in self.results]
+        return d
+
+
+def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
+    """The closing figures of a list of item results."""
+    n = len(results)
+    errs = np.array([r.landing_error_m for r in results if np.isfinite(r.landing_error_m)])
+    cyc = np.array([r.cycle_time_s for r in results if r.action != "failed"])
+    sim_time = float(np.sum([r.cycle_time_s for r in results]))
+    in_bin = sum(r.in_bin for r in results)
+    return RunSummary(
+        items=n,
+        placed=sum(r.action == "place" for r in results),
+        thrown=sum(r.action == "throw" for r in results),
+        failed=sum(r.action == "failed" for r in results),
+        in_bin=in_bin,
+        in_bin_rate=in_bin / n if n else 0.0,
+        mean_landing_error_m=float(errs.mean()) if errs.size else math.nan,
+        p95_landing_error_m=float(np.percentile(errs, 95)) if errs.size else math.nan,
+        mean_cycle_time_s=float(cyc.mean()) if cyc.size else math.nan,
+        items_per_hour=3600.0 * n / sim_time if sim_time > 0 else 0.0,
+        sim_time_s=sim_time,
+        wall_time_s=wall_time_s,
+        results=list(results),
+    )
+
+
+def scene_params_path() -> str | None:
+    """The scene's calibrated parameter file (robots/cell_scene/ee_params.yaml), if present."""
+    from cell.robot.paths import robots_dir
+
+    p = robots_dir() / "cell_scene" / "ee_params.yaml"
+    return str(p) if p.is_file() else None
+
+
+class Orchestrator:
+    """Runs a sort job in the PyBullet cell.
+
+    Args:
+        job: the validated job.
+        gui: show PyBullet's GUI.
+        store: a throw-log store with `append(record)` (None: do not record).
+        session: the session id written with every throw.
+        params: model parameters for planning; default: the job's `cell.params`,
+            else the scene's calibrated parameter file.
+        end_effector: "pybullet" (the simulated one) or a ready EndEffector
+            (e.g. the Dynamixel back-end): then the hardware end-effector is
+            commanded in step with the simulated one.
+    """
+
+    def __init__(
+        self,
+        job: Job,
+        *,
+        gui: bool = False,
+        store: Any = None,
+        session: str = "",
+        params: ModelParams | None = None,
+        end_effector: Any = None,
+    ) -> None:
+        from cell.endeffector.pybullet_backend import PyBulletEndEffector
+        from cell.optimize.bounds import ThrowBounds
+        from cell.robot.model import load_robot
+        from cell.sim import BinSpec, CellScene
+
+        self.job = job
+        if job.robot != "panda":
+            raise InvalidInput(f"{job.path}: cell.robot {job.robot!r}: the simulated cell has the panda")
+        self.params = params or load_params(job.params or scene_params_path())
+        self.store = store
+        self.session = session or f"run-{uuid.uuid4().hex[:8]}"
+        self.robot = load_robot(job.robot)
+        bins = [BinSpec(b.id, b.position, b.size, b.rim_height) for b in job.bins]
+        self.scene = CellScene(
+            "panda", bins, gui=gui, pick_station_xy=job.pick_position[:2],
+            pick_station_height=job.pick_position[2],
+        )
+        self.ee = PyBulletEndEffector(self.scene)
+        self.hardware = end_effector
+        self.bounds = ThrowBounds()
+        self.residual = None
+        if job.residual:
+            from cell.residual.model import ResidualModel
+
+            self.residual = ResidualModel.load(job.residual)
+        self.q = np.asarray(self.scene_ready_q(), float)
+        self.rng = np.random.default_rng(job.seed)
+
+    @staticmethod
+    def scene_ready_q() -> tuple[float, ...]:
+        from cell.sim import PANDA_READY
+
+        return PANDA_READY
+
+    # -- motion ----------------------------------------------------------------
+    def _tcp_for_item_centre(
+        self, centre: np.ndarray, elevation: float, azimuth: float, stroke: float, obj: ObjectParams
+    ) -> np.ndarray:
+        """TCP position [m, W] that puts the gripped item's centre at `centre`."""
+        from cell.sim import EE_TO_TCP_M
+        from cell.sim.scene import release_orientation
+
+        u = release_orientation(elevation, azimuth)[:, 2]
+        return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke - obj.size[2] / 2)
+
+    def _ik(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        pose = ReleasePose.from_angles(tcp, elevation, azimuth)
+        return solve_ik(self.robot, pose, self.q).q
+
+    def _move(self, waypoints: list[np.ndarray]) -> float:
+        """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
+        from cell.robot.motion import plan_path
+
+        traj = plan_path([self.q, *waypoints], self.robot, velocity_scale=ARM_SPEED_SCALE,
+                         acceleration_scale=ARM_SPEED_SCALE)
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
+        qs, _, _ = traj.sample_many(ts)
+        for q in qs:
+            sc.set_arm(q)
+            sc.step()
+        self.q = np.asarray(waypoints[-1], float)
+        return float(traj.duration)
+
+    # -- one item --------------------------------------------------------------
+    def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
+        """Pick, decide, plan, move, release, observe and record one item."""
+        obj = spec.obj
+        target = self.job.bin(spec.bin)
+        sc = self.scene
+        t0 = sc.t
+        item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
+        sc.run_for(0.05)  # let it settle on the station
+        base = dict(index=index, object_id=obj.name or obj.shape, target_bin=spec.bin)
+        try:
+            # pick: approach from above with the throw axis pointing down
+            p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
+            down = (-math.pi / 2, 0.0)
+            q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, PICK_STROKE_M, obj), *down)
+            lift = p_item + np.array([0, 0, LIFT_M])
+            q_lift = self._ik(self._tcp_for_item_centre(lift, *down, PICK_STROKE_M, obj), *down)
+            self._move([q_lift, q_pick])
+            self.ee.grasp(PICK_STROKE_M, item)
+            if self.hardware is not None:
+                self.hardware.grasp(PICK_STROKE_M)
+            dist = math.hypot(*target.position)
+            place = self.job.policy == "place" or (
+                self.job.policy == "auto" and dist <= self.job.place_reach_m
+            )
+            if place:
+                return self._place(base, item, obj, target, q_lift, t0)
+            return self._throw(base, item, obj, target, q_lift, t0)
+        except CellError as exc:
+            log.info("item %d (%s) failed: %s", index, obj.name, exc)
+            if self.ee.item is not None:
+                self.ee.item = None
+            return ItemResult(**base, action="failed", reason=f"{type(exc).__name__}: {exc}",
+                              cycle_time_s=sc.t - t0)
+        finally:
+            sc.remove_item(item)
+
+    def _place(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
+               t0: float) -> ItemResult:
+        sc = self.scene
+        down = (-math.pi / 2, 0.0)
+        bx, by = target.position
+        centre = np.array([bx, by, obj.size[2] / 2 + PLACE_CLEARANCE_M + 0.01])
+        above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
+        q_above = self._ik(self._tcp_for_item_centre(above, *down, PICK_STROKE_M, obj), *down)
+        q_down = self._ik(self._tcp_for_item_centre(centre, *down, PICK_STROKE_M, obj), *down)
+        self._move([q_lift, q_above, q_down])
+        self.ee.place()
+        if self.hardware is not None:
+            self.hardware.place()
+        t_release = sc.t
+        out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
+        err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
+        cyc = t_release - t0
+        self._move([q_above])
+        return ItemResult(**base, action="place", bin_id=out.bin_id or "",
+                          in_bin=out.bin_id == target.id, landing_error_m=err,
+                          stroke_m=PICK_STROKE_M, cycle_time_s=cyc)
+
+    def _throw(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
+               t0: float) -> ItemResult:
+        from cell.optimize.plan import plan_throw
+
+        sc = self.scene
+        bx, by = target.position
+        goal = (bx, by, target.rim_height)
+        # identified η_o where the parameter file has them (seen objects), else the catalogue's
+        model_obj = self.params.objects.get(obj.name, obj)
+        plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
+        delta = 0.0
+        if self.residual is not None:
+            delta, clipped = self.residual.delta_stroke_for_plan(obj, plan, self.params.ee)
+            if clipped:
+                log.warning("item %d: stroke + ΔL_s clipped to the stroke range", base["index"])
+        stroke = float(np.clip(plan.stroke_m + delta, self.params.ee.stroke_min,
+                               self.params.ee.stroke_max))
+        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+        q_rel = self._ik(
+            self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj),
+            plan.elevation_rad, plan.azimuth_rad,
+        )
+        t_move = self._move([q_lift, q_rel])
+        self.ee.set_stroke(stroke)
+        if self.hardware is not None:
+            self.hardware.set_stroke(stroke)
+            self.hardware.throw()
+        released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
+        self.ee.throw()
+        t_release = sc.t
+        tr = sc.tracker(item) if hasattr(sc, "tracker") else None
+        out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
+        cross = out.crossing(target.rim_height)
+        err = math.hypot(cross[0] - bx, cross[1] - by)
+        throw_id = f"{self.session}-{base['index']:04d}"
+        if self.store is not None:
+            self.store.append(self._record(throw_id, obj, plan, stroke, released_at, target,
+                                           out, cross))
+        del tr, t_move
+        return ItemResult(**base, action="throw", bin_id=out.bin_id or "",
+                          in_bin=out.bin_id == target.id, landing_error_m=err, stroke_m=stroke,
+                          delta_stroke_m=delta, cycle_time_s=t_release - t0, throw_id=throw_id)
+
+    def _record(self, throw_id: str, obj: ObjectParams, plan: Any, stroke: float,
+                released_at: np.ndarray, target: Any, out: Any, cross: Any) -> dict[str, Any]:
+        """A THROW_LOG.md row for this throw (the release state as commanded and observed)."""
+        return {
+            "throw_id": throw_id, "object_id": obj.name or obj.shape, "shape": obj.shape,
+            "mass_kg": obj.mass, "size_x_m": obj.size[0], "size_y_m": obj.size[1],
+            "size_z_m": obj.size[2], "stroke_m": stroke,
+            "x_m": float(released_at[0]), "y_m": float(released_at[1]), "z_m": float(released_at[2]),
+            "elevation_rad": plan.elevation_rad, "azimuth_rad": plan.azimuth_rad,
+            "roll_rad": plan.roll_rad, "vx_mps": 0.0, "vy_mps": 0.0, "vz_mps": 0.0,
+            "platform": "arm", "rotor_rpm": 0.0, "land_z_m": target.rim_height,
+            "landed_x_m": float(cross[0]), "landed_y_m": float(cross[1]),
+            "session": self.session, "time_s": time.time(), "t_flight_s": float(cross[2]),
+            "target_bin": target.id, "bin_id": out.bin_id or "",
+        }
+
+    # -- the run ---------------------------------------------------------------
+    def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
+        """Sort every item of the job; `on_item` is called after each (progress)."""
+        t_wall = time.perf_counter()
+        results: list[ItemResult] = []
+        for i, spec in enumerate(self.job.expanded_items()):
+            res = self.run_item(i, spec)
+            results.append(res)
+            if on_item is not None:
+                on_item(res)
+        return summarise(results, time.perf_counter() - t_wall)
+
+    def close(self) -> None:
+        """Close the scene and any hardware end-effector."""
+        self.scene.close()
+        if self.hardware is not None:
+            self.hardware.close()
