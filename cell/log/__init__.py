@@ -9,12 +9,16 @@ from cell.log.csvio import (
     read_tracks_csv,
     write_throws_csv,
 )
+from cell.log.store import DEFAULT_DB, ThrowStore, default_db_path
 
 __all__ = [
+    "DEFAULT_DB",
     "NUMERIC_COLUMNS",
     "PLATFORMS",
     "REQUIRED_COLUMNS",
+    "ThrowStore",
     "ThrowTable",
+    "default_db_path",
     "read_throws_csv",
     "read_tracks_csv",
     "write_throws_csv",

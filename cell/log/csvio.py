@@ -166,8 +166,11 @@ class ThrowTable:
 def _cell(v: Any) -> str:
     if v is None:
         return ""
-    if isinstance(v, float):
-        return "" if math.isnan(v) else repr(v)
+    if isinstance(v, (float, np.floating)):  # NumPy scalars: repr would name the type
+        f = float(v)
+        return "" if math.isnan(f) else repr(f)
+    if isinstance(v, np.integer):
+        return str(int(v))
     return str(v)
 
 

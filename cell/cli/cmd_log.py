@@ -1,0 +1,92 @@
+"""`cell log`: the durable throw store: import, export and show."""
+
+from __future__ import annotations
+
+import argparse
+
+from cell.cli.common import print_json
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "log",
+        help="the throw-log store (SQLite): import, export, show",
+        description="The store is --db PATH, else $CELL_LOG_DB, else ./cell_log.sqlite.",
+    )
+    p.add_argument("--db", metavar="PATH", help="store file")
+    lsub = p.add_subparsers(dest="log_command", metavar="ACTION", required=True)
+    imp = lsub.add_parser("import", help="add a throws.csv (all rows or none)")
+    imp.add_argument("file", help="throws.csv (THROW_LOG.md)")
+    imp.add_argument("--tracks", metavar="TRACKS.csv", help="observed flight samples")
+    imp.set_defaults(func=run_import)
+    exp = lsub.add_parser("export", help="write the stored throws as a throws.csv")
+    exp.add_argument("-o", "--output", required=True, help="throws.csv to write")
+    exp.add_argument("--tracks", metavar="TRACKS.csv", help="also write the tracks")
+    exp.add_argument("--object", metavar="ID", help="only this object's throws")
+    exp.add_argument("--session", metavar="ID", help="only this session's throws")
+    exp.set_defaults(func=run_export)
+    show = lsub.add_parser("show", help="counts per object, platform and session")
+    show.add_argument("--json", action="store_true", help="print the counts as JSON")
+    show.set_defaults(func=run_show)
+    for sp in (imp, exp, show):  # --db also after the action; SUPPRESS keeps the parent's value
+        sp.add_argument("--db", metavar="PATH", default=argparse.SUPPRESS, help="store file")
+
+
+def run_import(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from cell.log import ThrowStore, read_throws_csv, read_tracks_csv
+
+    table = read_throws_csv(args.file)
+    tracks = read_tracks_csv(args.tracks) if args.tracks else {}
+    with (
+        ThrowStore(args.db) as store,
+        tqdm(total=len(table), desc="import", unit="throw", leave=False) as bar,
+    ):
+        n = store.import_table(
+            table, tracks, tracks_path=args.tracks or "", progress=lambda k: bar.update(k - bar.n)
+        )
+        total = len(store)
+        path = store.path
+    print(
+        f"imported {n} throws ({len(tracks)} tracks) from {args.file} into {path}; {total} in all"
+    )
+    return 0
+
+
+def run_export(args: argparse.Namespace) -> int:
+    import csv
+
+    from cell.log import ThrowStore, write_throws_csv
+
+    with ThrowStore(args.db) as store:
+        table = store.table(object_id=args.object, session=args.session)
+        tracks = store.tracks(table.text("throw_id")) if args.tracks else {}
+        path = store.path
+    write_throws_csv(table, args.output)
+    if args.tracks:
+        with open(args.tracks, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+            for tid, arr in tracks.items():
+                for row in arr:
+                    w.writerow([tid, *(repr(float(v)) for v in row)])
+    print(f"exported {len(table)} throws ({len(tracks)} tracks) from {path} to {args.output}")
+    return 0
+
+
+def run_show(args: argparse.Namespace) -> int:
+    from cell.log import ThrowStore
+
+    with ThrowStore(args.db) as store:
+        counts = store.counts()
+        path = store.path
+    if args.json:
+        print_json({"store": str(path), **counts})
+        return 0
+    print(f"{path}: {counts['throws']} throws, {counts['tracks']} with a track")
+    for key, title in (("object_id", "object"), ("platform", "platform"), ("session", "session")):
+        print(f"\nper {title}:")
+        for k, v in counts[key].items():
+            print(f"  {k or '(none)':24s} {v:6d}")
+    return 0

@@ -1,0 +1,341 @@
+"""The durable throw-log store: every throw the cell makes, in one SQLite file.
+
+Each `append` is its own transaction, so a crash, a SIGKILL or a Ctrl-C in the
+middle of a run loses no throw already appended. `import_table` validates the
+whole table first and then writes it in one transaction: an import is either
+all in the store or not at all. The file is in WAL mode with full
+synchronisation, so readers (`cell log show`) never block the writer.
+
+Every THROW_LOG.md column is kept: the required ones and the known optional
+ones (`mesh`, `time_s`, `session`, `t_flight_s`) as typed SQL columns (an empty
+cell is NULL), any other column as text in a JSON object per row. The column
+order of the logs that went in is remembered, so an export has the columns in
+the order they came.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import sqlite3
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cell.errors import InvalidInput, LogFormatError
+from cell.log.csvio import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
+
+__all__ = ["DEFAULT_DB", "ThrowStore", "default_db_path"]
+
+log = logging.getLogger(__name__)
+
+DEFAULT_DB = "cell_log.sqlite"
+_ENV = "CELL_LOG_DB"
+_SCHEMA_VERSION = "1"
+OPTIONAL_TEXT = ("mesh", "session")
+OPTIONAL_NUM = ("time_s", "t_flight_s")
+_TYPED = REQUIRED_COLUMNS + OPTIONAL_TEXT + OPTIONAL_NUM
+_NOT_NULL_TEXT = ("throw_id", "object_id", "shape", "platform")
+
+
+def default_db_path(path: str | Path | None = None) -> Path:
+    """The store file: `path` if given, else $CELL_LOG_DB, else ./cell_log.sqlite."""
+    if path:
+        return Path(path)
+    return Path(os.environ.get(_ENV) or DEFAULT_DB)
+
+
+def _sql_type(col: str) -> str:
+    if col in NUMERIC_COLUMNS:
+        nullable = col not in REQUIRED_COLUMNS or col in ("stroke_m", "landed_x_m", "landed_y_m")
+        return "REAL" if nullable else "REAL NOT NULL"
+    return "TEXT NOT NULL" if col in _NOT_NULL_TEXT else "TEXT"
+
+
+_CREATE = [
+    "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)",
+    "CREATE TABLE IF NOT EXISTS throws (seq INTEGER PRIMARY KEY AUTOINCREMENT, "
+    + ", ".join(f'"{c}" {_sql_type(c)}' + (" UNIQUE" if c == "throw_id" else "") for c in _TYPED)
+    + ", extras TEXT NOT NULL DEFAULT '{}', source TEXT NOT NULL DEFAULT '')",
+    "CREATE TABLE IF NOT EXISTS columns (name TEXT PRIMARY KEY, pos INTEGER NOT NULL)",
+    "CREATE TABLE IF NOT EXISTS tracks (throw_id TEXT NOT NULL REFERENCES throws(throw_id), "
+    "t_s REAL NOT NULL, x_m REAL NOT NULL, y_m REAL NOT NULL, z_m REAL NOT NULL)",
+    "CREATE INDEX IF NOT EXISTS tracks_throw ON tracks(throw_id)",
+    "CREATE INDEX IF NOT EXISTS throws_object ON throws(object_id)",
+]
+_INSERT = (
+    "INSERT INTO throws ("
+    + ", ".join(f'"{c}"' for c in _TYPED)
+    + ", extras, source) VALUES ("
+    + ", ".join("?" for _ in _TYPED)
+    + ", ?, ?)"
+)
+
+
+def _num(v: Any) -> float | None:
+    f = float(v)
+    return None if math.isnan(f) else f
+
+
+class ThrowStore:
+    """A throw log in an SQLite file.
+
+    Args:
+        path: the file (created with its tables if missing); None = `default_db_path()`.
+
+    Raises:
+        InvalidInput: the file exists but is not a throw store (or not SQLite).
+    """
+
+    def __init__(self, path: str | Path | None = None) -> None:
+        self.path = default_db_path(path)
+        try:
+            self._conn = sqlite3.connect(str(self.path), isolation_level=None, timeout=30.0)
+            self._conn.execute("PRAGMA journal_mode=WAL")
+            self._conn.execute("PRAGMA synchronous=FULL")
+            self._conn.execute("PRAGMA foreign_keys=ON")
+            with self._transaction():
+                for stmt in _CREATE:
+                    self._conn.execute(stmt)
+                self._conn.execute(
+                    "INSERT OR IGNORE INTO meta VALUES ('schema_version', ?)", (_SCHEMA_VERSION,)
+                )
+        except sqlite3.DatabaseError as exc:
+            raise InvalidInput(f"{self.path}: not a throw-log store ({exc})") from None
+        version = self._conn.execute(
+            "SELECT value FROM meta WHERE key = 'schema_version'"
+        ).fetchone()
+        if version is None or version[0] != _SCHEMA_VERSION:
+            raise InvalidInput(
+                f"{self.path}: store schema version {version and version[0]!r}; "
+                f"this cell reads version {_SCHEMA_VERSION}"
+            )
+
+    # -- plumbing -----------------------------------------------------------------
+    def close(self) -> None:
+        """Close the connection (everything appended is already committed)."""
+        self._conn.close()
+
+    def __enter__(self) -> ThrowStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        self._conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield self._conn
+        except BaseException:
+            self._conn.execute("ROLLBACK")
+            raise
+        self._conn.execute("COMMIT")
+
+    def _existing_ids(self, ids: list[str]) -> set[str]:
+        found: set[str] = set()
+        for k in range(0, len(ids), 500):
+            chunk = ids[k : k + 500]
+            marks = ",".join("?" * len(chunk))
+            q = f"SELECT throw_id FROM throws WHERE throw_id IN ({marks})"
+            found.update(r[0] for r in self._conn.execute(q, chunk))
+        return found
+
+    def _rows(self, table: ThrowTable, source: str) -> Iterator[tuple[Any, ...]]:
+        extra_cols = [c for c in table.columns if c not in _TYPED]
+        cols = {c: table.data[c] for c in table.columns}
+        n = len(table)
+        for i in range(n):
+            vals: list[Any] = []
+            for c in _TYPED:
+                col = cols.get(c)
+                if col is None:
+                    vals.append(None)
+                elif c in NUMERIC_COLUMNS:
+                    vals.append(_num(col[i]))
+                else:
+                    vals.append(col[i] if (col[i] != "" or c in _NOT_NULL_TEXT) else None)
+            extras = {c: str(cols[c][i]) for c in extra_cols}
+            vals.append(json.dumps(extras, ensure_ascii=False))
+            vals.append(source)
+            yield tuple(vals)
+
+    def _remember_columns(self, columns: list[str]) -> None:
+        pos = self._conn.execute("SELECT COALESCE(MAX(pos), -1) FROM columns").fetchone()[0]
+        for c in columns:
+            if c in REQUIRED_COLUMNS:
+                continue
+            cur = self._conn.execute(
+                "INSERT OR IGNORE INTO columns VALUES (?, ?)", (c, int(pos) + 1)
+            )
+            if cur.rowcount:
+                pos += 1
+
+    # -- writing ------------------------------------------------------------------
+    def append(self, record: dict[str, Any], *, track: np.ndarray | None = None) -> None:
+        """Validate one throw and commit it in its own transaction.
+
+        Args:
+            record: column -> value (THROW_LOG.md columns; numbers or strings;
+                None or NaN for an empty cell; unknown columns are kept as text).
+            track: optional observed flight samples, shape (k, 4): t_s, x_m, y_m, z_m.
+
+        Raises:
+            LogFormatError: a bad value (naming the store, row 1 and the column) or a
+                throw_id already in the store; nothing is written then.
+        """
+        where = f"{self.path} (append)"
+        table = ThrowTable.from_records([record], path=where)
+        tid = table.data["throw_id"][0]
+        tracks = {tid: np.asarray(track, float).reshape(-1, 4)} if track is not None else {}
+        if tracks and not np.all(np.isfinite(tracks[tid])):
+            raise LogFormatError(where, 1, "track", "track samples must be finite numbers")
+        self._write(table, tracks, where, source="append")
+
+    def import_table(
+        self,
+        table: ThrowTable,
+        tracks: dict[str, np.ndarray] | None = None,
+        *,
+        tracks_path: str = "",
+        progress: Callable[[int], None] | None = None,
+    ) -> int:
+        """Add a whole (validated) table, and its tracks, in one transaction.
+
+        Args:
+            table: the throws (e.g. from `read_throws_csv`).
+            tracks: {throw_id: (k, 4) array of t_s, x_m, y_m, z_m}; every throw_id
+                must be in `table` or already in the store.
+            tracks_path: the tracks file, for messages.
+            progress: called with the number of rows written so far, inside the
+                transaction (for a progress bar).
+
+        Returns:
+            The number of throws added.
+
+        Raises:
+            LogFormatError: a throw_id already in the store, or a track of an unknown
+                throw; the store is unchanged then.
+        """
+        return self._write(
+            table, tracks or {}, tracks_path, source=table.path or "import", progress=progress
+        )
+
+    def _write(
+        self,
+        table: ThrowTable,
+        tracks: dict[str, np.ndarray],
+        tracks_path: str,
+        *,
+        source: str,
+        progress: Callable[[int], None] | None = None,
+    ) -> int:
+        ids = table.text("throw_id")
+        known = self._existing_ids(ids)
+        if known:
+            r = next(i for i, t in enumerate(ids, start=1) if t in known)
+            raise LogFormatError(
+                table.path, r, "throw_id", f"duplicate id {ids[r - 1]!r}: already in {self.path}"
+            )
+        id_set = set(ids)
+        unknown = [t for t in tracks if t not in id_set]
+        if unknown:
+            unknown = sorted(set(unknown) - self._existing_ids(unknown))
+        if unknown:
+            raise LogFormatError(
+                tracks_path or table.path,
+                None,
+                "throw_id",
+                f"track of throw {unknown[0]!r}, which is neither in the log nor in the store",
+            )
+        n = len(table)
+        with self._transaction() as conn:
+            self._remember_columns(table.columns)
+            rows = self._rows(table, source)
+            done = 0
+            while done < n:
+                chunk = [next(rows) for _ in range(min(1000, n - done))]
+                try:
+                    conn.executemany(_INSERT, chunk)
+                except sqlite3.IntegrityError as exc:  # a concurrent writer took an id
+                    raise LogFormatError(table.path, None, "throw_id", str(exc)) from None
+                done += len(chunk)
+                if progress is not None:
+                    progress(done)
+            for tid, arr in tracks.items():
+                conn.executemany(
+                    "INSERT INTO tracks VALUES (?, ?, ?, ?, ?)",
+                    [(tid, *map(float, row)) for row in np.asarray(arr, float).reshape(-1, 4)],
+                )
+        log.info("%s: %d throw(s) committed from %s", self.path, n, source)
+        return n
+
+    # -- reading ------------------------------------------------------------------
+    def __len__(self) -> int:
+        return int(self._conn.execute("SELECT COUNT(*) FROM throws").fetchone()[0])
+
+    def table(self, *, object_id: str | None = None, session: str | None = None) -> ThrowTable:
+        """The stored throws (optionally of one object and/or session), in the order added."""
+        where, args = [], []
+        if object_id is not None:
+            where.append("object_id = ?")
+            args.append(object_id)
+        if session is not None:
+            where.append("session = ?")
+            args.append(session)
+        q = (
+            "SELECT "
+            + ", ".join(f'"{c}"' for c in _TYPED)
+            + ", extras FROM throws"
+            + (" WHERE " + " AND ".join(where) if where else "")
+            + " ORDER BY seq"
+        )
+        rows = self._conn.execute(q, args).fetchall()
+        order = [r[0] for r in self._conn.execute("SELECT name FROM columns ORDER BY pos")]
+        extras = [json.loads(r[-1]) for r in rows]
+        data: dict[str, Any] = {}
+        for j, c in enumerate(_TYPED):
+            vals = [r[j] for r in rows]
+            if c in NUMERIC_COLUMNS:
+                data[c] = np.array([np.nan if v is None else v for v in vals], dtype=float)
+            else:
+                data[c] = ["" if v is None else str(v) for v in vals]
+        for c in order:
+            if c not in _TYPED:
+                data[c] = [str(e.get(c, "")) for e in extras]
+        columns = list(REQUIRED_COLUMNS) + [c for c in order if c not in REQUIRED_COLUMNS]
+        data = {c: data[c] for c in columns}
+        return ThrowTable(columns=columns, data=data, path=str(self.path))
+
+    def tracks(self, throw_ids: list[str] | None = None) -> dict[str, np.ndarray]:
+        """Observed flight samples {throw_id: (k, 4) array of t_s, x_m, y_m, z_m}, by time."""
+        rows = self._conn.execute(
+            "SELECT throw_id, t_s, x_m, y_m, z_m FROM tracks ORDER BY throw_id, t_s"
+        ).fetchall()
+        keep = set(throw_ids) if throw_ids is not None else None
+        out: dict[str, list[tuple[float, ...]]] = {}
+        for tid, *vals in rows:
+            if keep is None or tid in keep:
+                out.setdefault(tid, []).append(tuple(vals))
+        return {k: np.asarray(v, float) for k, v in out.items()}
+
+    def counts(self) -> dict[str, Any]:
+        """How many throws there are, in all and per object, platform and session.
+
+        Returns:
+            {"throws": n, "tracks": throws with a track, "object_id": {id: n},
+            "platform": {name: n}, "session": {id: n}} (a missing session is "").
+        """
+        out: dict[str, Any] = {"throws": len(self)}
+        out["tracks"] = int(
+            self._conn.execute("SELECT COUNT(DISTINCT throw_id) FROM tracks").fetchone()[0]
+        )
+        for col in ("object_id", "platform", "session"):
+            q = f"SELECT COALESCE(\"{col}\", ''), COUNT(*) FROM throws GROUP BY 1 ORDER BY 1"
+            out[col] = {str(k): int(v) for k, v in self._conn.execute(q)}
+        return out
