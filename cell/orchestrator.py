@@ -38,7 +38,8 @@ __all__ = ["ItemResult", "RunSummary", "Orchestrator", "summarise"]
 
 log = logging.getLogger(__name__)
 
-PICK_STROKE_M = 0.06  # [m] stroke while carrying: grip force enough to hold items through arm moves
+PICK_STROKE_M = 0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
+SETTLE_S = 0.15  # [s] wait after a move so the end-effector and item come to rest
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 ARM_SPEED_SCALE = 0.8  # fraction of the joint velocity/acceleration limits used
@@ -224,8 +225,9 @@ class Orchestrator:
         for q in qs:
             sc.set_arm(q)
             sc.step()
+        sc.run_for(SETTLE_S)
         self.q = np.asarray(waypoints[-1], float)
-        return float(traj.duration)
+        return float(traj.duration) + SETTLE_S
 
     # -- one item --------------------------------------------------------------
     def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
@@ -238,23 +240,26 @@ class Orchestrator:
         sc.run_for(0.05)  # let it settle on the station
         base = dict(index=index, object_id=obj.name or obj.shape, target_bin=spec.bin)
         try:
-            # pick: approach from above with the throw axis pointing down
-            p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
-            down = (-math.pi / 2, 0.0)
-            q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, PICK_STROKE_M, obj), *down)
-            lift = p_item + np.array([0, 0, LIFT_M])
-            q_lift = self._ik(self._tcp_for_item_centre(lift, *down, PICK_STROKE_M, obj), *down)
-            self._move([q_lift, q_pick])
-            self.ee.grasp(PICK_STROKE_M, item)
-            if self.hardware is not None:
-                self.hardware.grasp(PICK_STROKE_M)
             dist = math.hypot(*target.position)
             place = self.job.policy == "place" or (
                 self.job.policy == "auto" and dist <= self.job.place_reach_m
             )
-            if place:
+            # Plan before the pick: the end-effector grasps at the stroke it will throw
+            # with, so the item sits on the band carriage as the plan assumes.
+            plan, delta = (None, 0.0) if place else self._plan(obj, target, index)
+            stroke = PICK_STROKE_M if plan is None else plan.stroke_m + delta
+            p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
+            down = (-math.pi / 2, 0.0)
+            q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, stroke, obj), *down)
+            lift = p_item + np.array([0, 0, LIFT_M])
+            q_lift = self._ik(self._tcp_for_item_centre(lift, *down, stroke, obj), *down)
+            self._move([q_lift, q_pick])
+            self.ee.grasp(stroke, item)
+            if self.hardware is not None:
+                self.hardware.grasp(stroke)
+            if plan is None:
                 return self._place(base, item, obj, target, q_lift, t0)
-            return self._throw(base, item, obj, target, q_lift, t0)
+            return self._throw(base, item, obj, target, q_lift, t0, plan, delta)
         except CellError as exc:
             log.info("item %d (%s) failed: %s", index, obj.name, exc)
             if self.ee.item is not None:
@@ -286,13 +291,11 @@ class Orchestrator:
                           in_bin=out.bin_id == target.id, landing_error_m=err,
                           stroke_m=PICK_STROKE_M, cycle_time_s=cyc)
 
-    def _throw(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
-               t0: float) -> ItemResult:
+    def _plan(self, obj: ObjectParams, target: Any, index: int) -> tuple[Any, float]:
+        """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget."""
         from cell.optimize.plan import plan_throw
 
-        sc = self.scene
-        bx, by = target.position
-        goal = (bx, by, target.rim_height)
+        goal = (*target.position, target.rim_height)
         # identified η_o where the parameter file has them (seen objects), else the catalogue's
         model_obj = self.params.objects.get(obj.name, obj)
         plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
@@ -300,31 +303,36 @@ class Orchestrator:
         if self.residual is not None:
             delta, clipped = self.residual.delta_stroke_for_plan(obj, plan, self.params.ee)
             if clipped:
-                log.warning("item %d: stroke + ΔL_s clipped to the stroke range", base["index"])
-        stroke = float(np.clip(plan.stroke_m + delta, self.params.ee.stroke_min,
-                               self.params.ee.stroke_max))
+                log.warning("item %d: stroke + ΔL_s clipped to the stroke range", index)
+        ee = self.params.ee
+        delta = float(np.clip(plan.stroke_m + delta, ee.stroke_min, ee.stroke_max) - plan.stroke_m)
+        return plan, delta
+
+    def _throw(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
+               t0: float, plan: Any, delta: float) -> ItemResult:
+        sc = self.scene
+        bx, by = target.position
+        stroke = plan.stroke_m + delta
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         q_rel = self._ik(
             self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj),
             plan.elevation_rad, plan.azimuth_rad,
         )
-        t_move = self._move([q_lift, q_rel])
-        self.ee.set_stroke(stroke)
+        self._move([q_lift, q_rel])
         if self.hardware is not None:
-            self.hardware.set_stroke(stroke)
             self.hardware.throw()
         released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
         self.ee.throw()
         t_release = sc.t
-        tr = sc.tracker(item) if hasattr(sc, "tracker") else None
         out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
         cross = out.crossing(target.rim_height)
         err = math.hypot(cross[0] - bx, cross[1] - by)
         throw_id = f"{self.session}-{base['index']:04d}"
         if self.store is not None:
-            self.store.append(self._record(throw_id, obj, plan, stroke, released_at, target,
-                                           out, cross))
-        del tr, t_move
+            self.store.append(
+                self._record(throw_id, obj, plan, stroke, released_at, target, out, cross),
+                track=out.track,
+            )
         return ItemResult(**base, action="throw", bin_id=out.bin_id or "",
                           in_bin=out.bin_id == target.id, landing_error_m=err, stroke_m=stroke,
                           delta_stroke_m=delta, cycle_time_s=t_release - t0, throw_id=throw_id)
