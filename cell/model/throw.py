@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -330,6 +331,66 @@ def _hermite(
     )
 
 
+def _rk4_planar(h: Any, z: Any, vh: Any, vz: Any, k: Any, step: float, sqrt: Any) -> tuple:
+    """One RK4 step of the planar flight (h, z, vh, vz) under gravity and drag -k|v|v.
+
+    Written once for arrays (sqrt = np.sqrt) and for Python floats (math.sqrt).
+    """
+    speed = sqrt(vh * vh + vz * vz)
+    a1h = -k * speed * vh
+    a1z = -k * speed * vz - G
+    vh2 = vh + 0.5 * step * a1h
+    vz2 = vz + 0.5 * step * a1z
+    s2 = sqrt(vh2 * vh2 + vz2 * vz2)
+    a2h = -k * s2 * vh2
+    a2z = -k * s2 * vz2 - G
+    vh3 = vh + 0.5 * step * a2h
+    vz3 = vz + 0.5 * step * a2z
+    s3 = sqrt(vh3 * vh3 + vz3 * vz3)
+    a3h = -k * s3 * vh3
+    a3z = -k * s3 * vz3 - G
+    vh4 = vh + step * a3h
+    vz4 = vz + step * a3z
+    s4 = sqrt(vh4 * vh4 + vz4 * vz4)
+    a4h = -k * s4 * vh4
+    a4z = -k * s4 * vz4 - G
+    return (
+        h + step / 6 * (vh + 2 * vh2 + 2 * vh3 + vh4),
+        z + step / 6 * (vz + 2 * vz2 + 2 * vz3 + vz4),
+        vh + step / 6 * (a1h + 2 * a2h + 2 * a3h + a4h),
+        vz + step / 6 * (a1z + 2 * a2z + 2 * a3z + a4z),
+    )
+
+
+def _flight_planar_one(
+    z: float, vh: float, vz: float, k: float, lz: float, max_step: float, t_max: float = 30.0
+) -> tuple[float, float, bool, float, float]:
+    """`_flight_planar` for a single throw in Python floats: the same steps and arithmetic,
+    without NumPy's per-call overhead (a planner verifies one throw at a time)."""
+    h, t = 0.0, 0.0
+    nan = math.nan
+    while t < t_max:
+        step = min(max_step, _DRAG_STEP_SCALE / max(k * math.sqrt(vh * vh + vz * vz), 1e-9))
+        h1, z1, vh1, vz1 = _rk4_planar(h, z, vh, vz, k, step, math.sqrt)
+        if z > lz >= z1:
+            s = float(
+                _hermite_root(*(np.array([v]) for v in (z, z1, step * vz, step * vz1, lz)))[0]
+            )
+            s2, s3 = s * s, s * s * s
+            dist = (
+                (2 * s3 - 3 * s2 + 1) * h
+                + (s3 - 2 * s2 + s) * (step * vh)
+                + (-2 * s3 + 3 * s2) * h1
+                + (s3 - s2) * (step * vh1)
+            )
+            return dist, t + s * step, True, vh + (vh1 - vh) * s, vz + (vz1 - vz) * s
+        if z1 <= lz and vz1 < 0:
+            break
+        h, z, vh, vz = h1, z1, vh1, vz1
+        t += step
+    return nan, nan, False, nan, nan
+
+
 def _flight_planar(
     z: np.ndarray,
     vh: np.ndarray,
@@ -357,30 +418,10 @@ def _flight_planar(
     k = k.copy()
     lz = land_z.copy()
     while idx.size and t < t_max:
-        speed = np.sqrt(vh * vh + vz * vz)
-        step = min(max_step, float(_DRAG_STEP_SCALE / max(np.max(k * speed), 1e-9)))
-        # RK4 on (h, z, vh, vz); drag acceleration -k|v|v, gravity -G in z.
-        a1h = -k * speed * vh
-        a1z = -k * speed * vz - G
-        vh2 = vh + 0.5 * step * a1h
-        vz2 = vz + 0.5 * step * a1z
-        s2 = np.sqrt(vh2 * vh2 + vz2 * vz2)
-        a2h = -k * s2 * vh2
-        a2z = -k * s2 * vz2 - G
-        vh3 = vh + 0.5 * step * a2h
-        vz3 = vz + 0.5 * step * a2z
-        s3 = np.sqrt(vh3 * vh3 + vz3 * vz3)
-        a3h = -k * s3 * vh3
-        a3z = -k * s3 * vz3 - G
-        vh4 = vh + step * a3h
-        vz4 = vz + step * a3z
-        s4 = np.sqrt(vh4 * vh4 + vz4 * vz4)
-        a4h = -k * s4 * vh4
-        a4z = -k * s4 * vz4 - G
-        h1 = h_pos + step / 6 * (vh + 2 * vh2 + 2 * vh3 + vh4)
-        z1 = z + step / 6 * (vz + 2 * vz2 + 2 * vz3 + vz4)
-        vh1 = vh + step / 6 * (a1h + 2 * a2h + 2 * a3h + a4h)
-        vz1 = vz + step / 6 * (a1z + 2 * a2z + 2 * a3z + a4z)
+        step = min(
+            max_step, float(_DRAG_STEP_SCALE / max(np.max(k * np.sqrt(vh * vh + vz * vz)), 1e-9))
+        )
+        h1, z1, vh1, vz1 = _rk4_planar(h_pos, z, vh, vz, k, step, np.sqrt)
         cross = (z > lz) & (z1 <= lz)
         if np.any(cross):
             c = cross
@@ -439,9 +480,21 @@ def predict_landing(
     with np.errstate(invalid="ignore", divide="ignore"):
         dirx = np.where(vh > 0, v1[:, 0] / vh, 1.0)
         diry = np.where(vh > 0, v1[:, 1] / vh, 0.0)
-    dist, t, landed, vhi, vzi = _flight_planar(
-        p1[:, 2], vh, v1[:, 2], k, batch.land_z, _FLIGHT_STEP
-    )
+    if len(batch) == 1:
+        one = _flight_planar_one(
+            float(p1[0, 2]),
+            float(vh[0]),
+            float(v1[0, 2]),
+            float(k[0]),
+            float(batch.land_z[0]),
+            _FLIGHT_STEP,
+        )
+        dist, t, vhi, vzi = (np.array([one[i]], dtype=float) for i in (0, 1, 3, 4))
+        landed = np.array([one[2]])
+    else:
+        dist, t, landed, vhi, vzi = _flight_planar(
+            p1[:, 2], vh, v1[:, 2], k, batch.land_z, _FLIGHT_STEP
+        )
     result = Landing(
         x=p1[:, 0] + dist * dirx,
         y=p1[:, 1] + dist * diry,
