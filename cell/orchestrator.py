@@ -38,7 +38,9 @@ __all__ = ["ItemResult", "RunSummary", "Orchestrator", "summarise"]
 
 log = logging.getLogger(__name__)
 
-PICK_STROKE_M = 0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
+PICK_STROKE_M = (
+    0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
+)
 SETTLE_S = 0.15  # [s] wait after a move so the end-effector and item come to rest
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
@@ -168,14 +170,19 @@ class Orchestrator:
 
         self.job = job
         if job.robot != "panda":
-            raise InvalidInput(f"{job.path}: cell.robot {job.robot!r}: the simulated cell has the panda")
+            raise InvalidInput(
+                f"{job.path}: cell.robot {job.robot!r}: the simulated cell has the panda"
+            )
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
         self.session = session or f"run-{uuid.uuid4().hex[:8]}"
         self.robot = load_robot(job.robot)
         bins = [BinSpec(b.id, b.position, b.size, b.rim_height) for b in job.bins]
         self.scene = CellScene(
-            "panda", bins, gui=gui, pick_station_xy=job.pick_position[:2],
+            "panda",
+            bins,
+            gui=gui,
+            pick_station_xy=job.pick_position[:2],
             pick_station_height=job.pick_position[2],
         )
         self.ee = PyBulletEndEffector(self.scene)
@@ -216,8 +223,12 @@ class Orchestrator:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
         from cell.robot.motion import plan_path
 
-        traj = plan_path([self.q, *waypoints], self.robot, velocity_scale=ARM_SPEED_SCALE,
-                         acceleration_scale=ARM_SPEED_SCALE)
+        traj = plan_path(
+            [self.q, *waypoints],
+            self.robot,
+            velocity_scale=ARM_SPEED_SCALE,
+            acceleration_scale=ARM_SPEED_SCALE,
+        )
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
@@ -238,7 +249,9 @@ class Orchestrator:
         t0 = sc.t
         item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
         sc.run_for(0.05)  # let it settle on the station
-        base = dict(index=index, object_id=obj.name or obj.shape, target_bin=spec.bin)
+        base: dict[str, Any] = dict(
+            index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
+        )
         try:
             dist = math.hypot(*target.position)
             place = self.job.policy == "place" or (
@@ -264,13 +277,18 @@ class Orchestrator:
             log.info("item %d (%s) failed: %s", index, obj.name, exc)
             if self.ee.item is not None:
                 self.ee.item = None
-            return ItemResult(**base, action="failed", reason=f"{type(exc).__name__}: {exc}",
-                              cycle_time_s=sc.t - t0)
+            return ItemResult(
+                **base,
+                action="failed",
+                reason=f"{type(exc).__name__}: {exc}",
+                cycle_time_s=sc.t - t0,
+            )
         finally:
             sc.remove_item(item)
 
-    def _place(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
-               t0: float) -> ItemResult:
+    def _place(
+        self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray, t0: float
+    ) -> ItemResult:
         sc = self.scene
         down = (-math.pi / 2, 0.0)
         bx, by = target.position
@@ -287,9 +305,15 @@ class Orchestrator:
         err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
         cyc = t_release - t0
         self._move([q_above])
-        return ItemResult(**base, action="place", bin_id=out.bin_id or "",
-                          in_bin=out.bin_id == target.id, landing_error_m=err,
-                          stroke_m=PICK_STROKE_M, cycle_time_s=cyc)
+        return ItemResult(
+            **base,
+            action="place",
+            bin_id=out.bin_id or "",
+            in_bin=out.bin_id == target.id,
+            landing_error_m=err,
+            stroke_m=PICK_STROKE_M,
+            cycle_time_s=cyc,
+        )
 
     def _plan(self, obj: ObjectParams, target: Any, index: int) -> tuple[Any, float]:
         """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget."""
@@ -299,24 +323,32 @@ class Orchestrator:
         # identified η_o where the parameter file has them (seen objects), else the catalogue's
         model_obj = self.params.objects.get(obj.name, obj)
         plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
-        delta = 0.0
-        if self.residual is not None:
-            delta, clipped = self.residual.delta_stroke_for_plan(obj, plan, self.params.ee)
-            if clipped:
-                log.warning("item %d: stroke + ΔL_s clipped to the stroke range", index)
-        ee = self.params.ee
-        delta = float(np.clip(plan.stroke_m + delta, ee.stroke_min, ee.stroke_max) - plan.stroke_m)
-        return plan, delta
+        if self.residual is None:
+            return plan, 0.0
+        from cell.residual.model import residual_for_plan
 
-    def _throw(self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray,
-               t0: float, plan: Any, delta: float) -> ItemResult:
+        corrected = residual_for_plan(self.residual, obj, plan)  # clipping is logged there
+        return plan, corrected.stroke_m - plan.stroke_m
+
+    def _throw(
+        self,
+        base: dict,
+        item: Any,
+        obj: ObjectParams,
+        target: Any,
+        q_lift: np.ndarray,
+        t0: float,
+        plan: Any,
+        delta: float,
+    ) -> ItemResult:
         sc = self.scene
         bx, by = target.position
         stroke = plan.stroke_m + delta
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         q_rel = self._ik(
             self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj),
-            plan.elevation_rad, plan.azimuth_rad,
+            plan.elevation_rad,
+            plan.azimuth_rad,
         )
         self._move([q_lift, q_rel])
         if self.hardware is not None:
@@ -333,24 +365,58 @@ class Orchestrator:
                 self._record(throw_id, obj, plan, stroke, released_at, target, out, cross),
                 track=out.track,
             )
-        return ItemResult(**base, action="throw", bin_id=out.bin_id or "",
-                          in_bin=out.bin_id == target.id, landing_error_m=err, stroke_m=stroke,
-                          delta_stroke_m=delta, cycle_time_s=t_release - t0, throw_id=throw_id)
+        return ItemResult(
+            **base,
+            action="throw",
+            bin_id=out.bin_id or "",
+            in_bin=out.bin_id == target.id,
+            landing_error_m=err,
+            stroke_m=stroke,
+            delta_stroke_m=delta,
+            cycle_time_s=t_release - t0,
+            throw_id=throw_id,
+        )
 
-    def _record(self, throw_id: str, obj: ObjectParams, plan: Any, stroke: float,
-                released_at: np.ndarray, target: Any, out: Any, cross: Any) -> dict[str, Any]:
+    def _record(
+        self,
+        throw_id: str,
+        obj: ObjectParams,
+        plan: Any,
+        stroke: float,
+        released_at: np.ndarray,
+        target: Any,
+        out: Any,
+        cross: Any,
+    ) -> dict[str, Any]:
         """A THROW_LOG.md row for this throw (the release state as commanded and observed)."""
         return {
-            "throw_id": throw_id, "object_id": obj.name or obj.shape, "shape": obj.shape,
-            "mass_kg": obj.mass, "size_x_m": obj.size[0], "size_y_m": obj.size[1],
-            "size_z_m": obj.size[2], "stroke_m": stroke,
-            "x_m": float(released_at[0]), "y_m": float(released_at[1]), "z_m": float(released_at[2]),
-            "elevation_rad": plan.elevation_rad, "azimuth_rad": plan.azimuth_rad,
-            "roll_rad": plan.roll_rad, "vx_mps": 0.0, "vy_mps": 0.0, "vz_mps": 0.0,
-            "platform": "arm", "rotor_rpm": 0.0, "land_z_m": target.rim_height,
-            "landed_x_m": float(cross[0]), "landed_y_m": float(cross[1]),
-            "session": self.session, "time_s": time.time(), "t_flight_s": float(cross[2]),
-            "target_bin": target.id, "bin_id": out.bin_id or "",
+            "throw_id": throw_id,
+            "object_id": obj.name or obj.shape,
+            "shape": obj.shape,
+            "mass_kg": obj.mass,
+            "size_x_m": obj.size[0],
+            "size_y_m": obj.size[1],
+            "size_z_m": obj.size[2],
+            "stroke_m": stroke,
+            "x_m": float(released_at[0]),
+            "y_m": float(released_at[1]),
+            "z_m": float(released_at[2]),
+            "elevation_rad": plan.elevation_rad,
+            "azimuth_rad": plan.azimuth_rad,
+            "roll_rad": plan.roll_rad,
+            "vx_mps": 0.0,
+            "vy_mps": 0.0,
+            "vz_mps": 0.0,
+            "platform": "arm",
+            "rotor_rpm": 0.0,
+            "land_z_m": target.rim_height,
+            "landed_x_m": float(cross[0]),
+            "landed_y_m": float(cross[1]),
+            "session": self.session,
+            "time_s": time.time(),
+            "t_flight_s": float(cross[2]),
+            "target_bin": target.id,
+            "bin_id": out.bin_id or "",
         }
 
     # -- the run ---------------------------------------------------------------

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 from pathlib import Path
+from typing import Any
 
 from cell.cli.common import to_jsonable
 from cell.jobs import load_job
@@ -19,12 +19,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gui", action="store_true", help="show the PyBullet GUI")
     p.add_argument("--json", metavar="OUT.json", help="write the summary as JSON")
     p.add_argument("--snapshot", metavar="OUT.png", help="render the scene at the end (headless)")
-    p.add_argument("--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)")
+    p.add_argument(
+        "--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)"
+    )
     p.add_argument("--no-log", action="store_true", help="do not record the throws")
-    p.add_argument("--ee", choices=("pybullet", "dynamixel"), help="end-effector back-end (overrides the job)")
-    p.add_argument("--ee-config", metavar="YAML", help="Dynamixel configuration (robots/throwing_ee/dynamixel.yaml)")
+    p.add_argument(
+        "--ee", choices=("pybullet", "dynamixel"), help="end-effector back-end (overrides the job)"
+    )
+    p.add_argument(
+        "--ee-config",
+        metavar="YAML",
+        help="Dynamixel configuration (robots/throwing_ee/dynamixel.yaml)",
+    )
     p.add_argument("--port", help="serial port of the Dynamixel bus (overrides the configuration)")
-    p.add_argument("--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)")
+    p.add_argument(
+        "--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)"
+    )
     p.set_defaults(func=run)
 
 
@@ -50,10 +60,22 @@ def run(args: argparse.Namespace) -> int:
         cfg = args.ee_config or job.ee_config or str(Path("robots/throwing_ee/dynamixel.yaml"))
         hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
     store = _store(args)
-    orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware)
-    bar = tqdm(total=len(job.expanded_items()), desc=f"sorting {Path(args.job).name}", unit="item",
-               file=sys.stderr, disable=None)
+    orch: Any
+    if job.platform != "arm":
+        from cell.platforms.runner import PlatformRunner
+
+        orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
+    else:
+        orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware)
+    bar = tqdm(
+        total=len(job.expanded_items()),
+        desc=f"sorting {Path(args.job).name}",
+        unit="item",
+        file=sys.stderr,
+        disable=None,
+    )
     try:
+
         def progress(r):  # type: ignore[no-untyped-def]
             bar.update(1)
             bar.set_postfix_str(f"{r.object_id}: {r.action} -> {r.bin_id or '-'}")
@@ -79,10 +101,14 @@ def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
 
 def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
     print(f"\nsort job {path}")
-    print(f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} {'stroke':>8}  note")
+    print(
+        f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} {'stroke':>8}  note"
+    )
     for r in s.results:
-        print(f"{r.index:4d} {r.object_id:14} {r.action:7} {r.target_bin:9} {r.bin_id or '-':9} "
-              f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.reason[:60]}")
+        print(
+            f"{r.index:4d} {r.object_id:14} {r.action:7} {r.target_bin:9} {r.bin_id or '-':9} "
+            f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.reason[:60]}"
+        )
     print()
     rows = [
         ("items", f"{s.items}"),
