@@ -1,0 +1,84 @@
+"""`cell reach`: the joint solution for a release pose, and the time to get there."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from cell.cli.common import print_json
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "reach", help="inverse kinematics to a release pose, and the move time from home"
+    )
+    p.add_argument("--robot", default="panda", choices=("panda", "ur5"), help="arm (panda)")
+    p.add_argument(
+        "--at",
+        type=float,
+        nargs=3,
+        required=True,
+        metavar=("X", "Y", "Z"),
+        help="grip centre in the arm's base frame [m]",
+    )
+    p.add_argument(
+        "--elevation",
+        type=float,
+        default=math.radians(30),
+        metavar="RAD",
+        help="throw-axis elevation [rad] (0.5236 = 30°)",
+    )
+    p.add_argument("--azimuth", type=float, default=0.0, metavar="RAD", help="azimuth [rad] (0)")
+    p.add_argument(
+        "--roll",
+        type=float,
+        default=None,
+        metavar="RAD",
+        help="fix the roll about the throw axis [rad] (default: free)",
+    )
+    p.add_argument(
+        "--from",
+        dest="q_from",
+        type=float,
+        nargs="+",
+        metavar="Q",
+        help="current configuration [rad] (default: home)",
+    )
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from cell.robot.ik import ReleasePose, solve_ik
+    from cell.robot.model import load_robot
+    from cell.robot.motion import move_time
+
+    robot = load_robot(args.robot)
+    q0 = robot.home if args.q_from is None else np.asarray(args.q_from, dtype=float)
+    pose = ReleasePose.from_angles(tuple(args.at), args.elevation, args.azimuth, args.roll)
+    res = solve_ik(robot, pose, q0)
+    t_move = move_time(q0, res.q, robot)
+    out = {
+        "robot": args.robot,
+        "q": res.q,
+        "position_error_m": res.position_error_m,
+        "axis_error_rad": res.axis_error_rad,
+        "roll_error_rad": res.roll_error_rad if args.roll is not None else None,
+        "move_time_s": t_move,
+        "from_q": q0,
+    }
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"robot           {args.robot}")
+    print("q [rad]         " + " ".join(f"{v:+.4f}" for v in res.q))
+    print(f"position error  {res.position_error_m * 1e3:.3f} mm")
+    print(f"axis error      {math.degrees(res.axis_error_rad):.3f}°")
+    if args.roll is not None:
+        print(f"roll error      {math.degrees(res.roll_error_rad):.3f}°")
+    print(
+        f"move time       {t_move:.3f} s (jerk-limited, from {'home' if args.q_from is None else 'the given q'})"
+    )
+    return 0

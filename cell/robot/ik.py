@@ -1,0 +1,416 @@
+"""Inverse kinematics of the release pose: damped least squares over several seeds.
+
+A release pose is a grip-centre position p [m, W] and a throw axis u (the +z axis of
+`ee_tcp`); the roll about u is free (a 5-D task) or fixed (6-D). Each seed is iterated with
+damped least squares, joint limits clamped at every step and a null-space pull towards the
+current configuration (redundant arms). The converged solution nearest the current
+configuration wins; if none converges the call raises IKFailed with the best residual.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from cell.errors import IKFailed, InvalidInput
+from cell.robot.model import Robot, axis_frame
+
+__all__ = [
+    "AXIS_TOL_RAD",
+    "POSITION_TOL_M",
+    "IKNoSolution",
+    "IKResult",
+    "ReleasePose",
+    "pose_error",
+    "solve_ik",
+]
+
+POSITION_TOL_M = 1e-3
+"""Success tolerance on the grip-centre position [m]."""
+
+AXIS_TOL_RAD = math.radians(0.5)
+"""Success tolerance on the throw axis (and the roll, when fixed) [rad]."""
+
+
+class IKNoSolution(IKFailed):
+    """No seed reached the pose; carries the best residual found.
+
+    Attributes:
+        position_error_m: best position error [m].
+        axis_error_rad: axis error of that attempt [rad].
+        q_best: the configuration of that attempt [rad].
+    """
+
+    def __init__(
+        self, message: str, position_error_m: float, axis_error_rad: float, q_best: np.ndarray
+    ) -> None:
+        super().__init__(message)
+        self.position_error_m = position_error_m
+        self.axis_error_rad = axis_error_rad
+        self.q_best = q_best
+
+
+@dataclass(frozen=True)
+class ReleasePose:
+    """Where the grip centre must be and where the throw axis must point.
+
+    Attributes:
+        position: grip centre p in W [m], shape (3,).
+        axis: throw axis u in W (unit), shape (3,).
+        roll: rotation about u [rad] of ee_tcp relative to `axis_frame(e, a, 0)`, or None
+            to leave it free.
+    """
+
+    position: np.ndarray
+    axis: np.ndarray
+    roll: float | None = None
+
+    def __post_init__(self) -> None:
+        p = np.asarray(self.position, dtype=float).reshape(-1)
+        u = np.asarray(self.axis, dtype=float).reshape(-1)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise InvalidInput(f"release position must be 3 finite numbers [m], got {p!r}")
+        n = float(np.linalg.norm(u)) if u.shape == (3,) else 0.0
+        if not (math.isfinite(n) and n > 1e-9):
+            raise InvalidInput(f"throw axis must be a nonzero 3-vector, got {u!r}")
+        if self.roll is not None and not math.isfinite(self.roll):
+            raise InvalidInput(f"roll must be finite [rad] or None, got {self.roll!r}")
+        object.__setattr__(self, "position", p)
+        object.__setattr__(self, "axis", u / n)
+
+    @classmethod
+    def from_angles(
+        cls,
+        position: np.ndarray | tuple[float, float, float],
+        elevation: float,
+        azimuth: float,
+        roll: float | None = None,
+    ) -> ReleasePose:
+        """The pose from MODEL.md's elevation e and azimuth a [rad]:
+        u = (cos e cos a, cos e sin a, sin e)."""
+        u = axis_frame(elevation, azimuth)[:, 2]
+        return cls(np.asarray(position, dtype=float), u, roll)
+
+    @property
+    def elevation(self) -> float:
+        """e = asin(u_z) [rad]."""
+        return math.asin(max(-1.0, min(1.0, float(self.axis[2]))))
+
+    @property
+    def azimuth(self) -> float:
+        """a = atan2(u_y, u_x) [rad] (0 for a vertical axis)."""
+        if math.hypot(self.axis[0], self.axis[1]) < 1e-12:
+            return 0.0
+        return math.atan2(float(self.axis[1]), float(self.axis[0]))
+
+    def rotation(self) -> np.ndarray:
+        """The full target orientation of ee_tcp (roll 0 when free), shape (3, 3)."""
+        return axis_frame(self.elevation, self.azimuth, self.roll or 0.0)
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """A converged IK solution.
+
+    Attributes:
+        q: arm configuration [rad], shape (n,).
+        position_error_m: |p(q) - p| [m].
+        axis_error_rad: angle between ee_tcp's z and u [rad].
+        roll_error_rad: roll error [rad] (0 when the roll is free).
+        iterations: DLS iterations spent over all seeds.
+        seeds_tried: seeds started.
+    """
+
+    q: np.ndarray
+    position_error_m: float
+    axis_error_rad: float
+    roll_error_rad: float
+    iterations: int
+    seeds_tried: int
+
+
+def _log3(r: np.ndarray) -> np.ndarray:
+    """Rotation vector of a rotation matrix [rad], shape (3,)."""
+    c = max(-1.0, min(1.0, (float(np.trace(r)) - 1.0) / 2.0))
+    th = math.acos(c)
+    v = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    if th < 1e-8:
+        return 0.5 * v
+    if math.pi - th < 1e-6:
+        # Near π the antisymmetric part vanishes: take the axis from the symmetric part.
+        b = (r + np.eye(3)) / 2.0
+        k = int(np.argmax(np.diag(b)))
+        ax = b[:, k] / math.sqrt(max(b[k, k], 1e-12))
+        return th * ax / np.linalg.norm(ax)
+    return th / (2.0 * math.sin(th)) * v
+
+
+def _axis_error(z: np.ndarray, u: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float]:
+    """Rotation vector that turns z onto u (perpendicular to both) and its angle [rad]."""
+    c = np.array([z[1] * u[2] - z[2] * u[1], z[2] * u[0] - z[0] * u[2], z[0] * u[1] - z[1] * u[0]])
+    s = math.sqrt(float(c @ c))
+    th = math.atan2(s, float(z @ u))
+    if s > 1e-12:
+        return th * c / s, th
+    return (th * x if th > 1.0 else np.zeros(3)), th
+
+
+def pose_error(robot: Robot, q: np.ndarray, pose: ReleasePose) -> tuple[float, float, float]:
+    """How far configuration q puts the grip centre from a release pose.
+
+    Args:
+        robot: the arm.
+        q: configuration [rad], shape (n,).
+        pose: the target.
+
+    Returns:
+        (position error [m], axis error [rad], roll error [rad]; 0 when the roll is free).
+    """
+    p, r = robot.tcp_pose(q)
+    ep = float(np.linalg.norm(pose.position - p))
+    _, th = _axis_error(r[:, 2], pose.axis, r[:, 0])
+    roll = 0.0
+    if pose.roll is not None:
+        roll = float(np.linalg.norm(_log3(pose.rotation() @ r.T)))
+    return ep, th, roll
+
+
+_AXIS_LEVER_M = 0.3  # [m] weighs axis errors against position errors in the bounded solve
+
+
+def _bounded_solve(robot: Robot, pose: ReleasePose, q0: np.ndarray) -> np.ndarray:
+    """Bounded least squares (scipy TRF) on position and axis (and roll) from q0."""
+    from scipy.optimize import least_squares
+
+    lim = robot.limits
+    six = pose.roll is not None
+    r_des = pose.rotation()
+
+    def parts(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        p, r = robot.tcp_pose(q)
+        jac = robot.tcp_jacobian(q)
+        cols = (2,) if not six else (0, 1, 2)
+        res = [p - pose.position]
+        jrows = [jac[:3]]
+        for c in cols:
+            # d(column c)/dq_i = ω_i × column c.
+            res.append(_AXIS_LEVER_M * (r[:, c] - r_des[:, c]))
+            jrows.append(_AXIS_LEVER_M * np.cross(jac[3:].T, r[:, c]).T)
+        return np.concatenate(res), np.concatenate(jrows)
+
+    x0 = np.clip(q0, lim.lower + 1e-9, lim.upper - 1e-9)
+    sol = least_squares(
+        lambda q: parts(q)[0],
+        x0,
+        jac=lambda q: parts(q)[1],
+        bounds=(lim.lower, lim.upper),
+        method="trf",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=60,
+    )
+    return np.clip(np.asarray(sol.x, dtype=float), lim.lower, lim.upper)
+
+
+def _wrap_near(q: np.ndarray, ref: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Shift joints by multiples of 2π towards ref while staying within the limits."""
+    out = q.copy()
+    k = np.round((ref - q) / (2 * math.pi))
+    cand = q + 2 * math.pi * k
+    ok = (cand >= lo) & (cand <= hi)
+    out[ok] = cand[ok]
+    return out
+
+
+def solve_ik(
+    robot: Robot,
+    pose: ReleasePose,
+    q_current: np.ndarray | None = None,
+    *,
+    tol_position_m: float = POSITION_TOL_M,
+    tol_axis_rad: float = AXIS_TOL_RAD,
+    max_iterations: int = 80,
+    random_seeds: int = 30,
+    solutions: int = 3,
+    damping: float = 3e-3,
+    null_gain: float = 0.05,
+    polish: int = 3,
+    rng: np.random.Generator | None = None,
+) -> IKResult:
+    """Joint configuration that puts the grip centre at a release pose.
+
+    Seeds are tried in order: the current configuration, home, then `random_seeds` random
+    configurations. If the current configuration converges, its solution is returned at once
+    (it is the one the arm reaches by moving continuously). Otherwise the search stops once
+    `solutions` seeds have converged, and the converged configuration nearest the current
+    one (after 2π shifts within the limits) is returned.
+
+    Args:
+        robot: the arm (see `load_robot`).
+        pose: the release pose (position, throw axis, optional roll).
+        q_current: the current configuration [rad], shape (n,); home if None.
+        tol_position_m: success tolerance on the position [m].
+        tol_axis_rad: success tolerance on the axis and roll [rad].
+        max_iterations: DLS iterations per seed.
+        random_seeds: random seeds after the current and home configurations.
+        solutions: converged solutions to collect before choosing the nearest, when the
+            current configuration itself does not converge.
+        damping: DLS damping λ (λ² added to J Jᵀ, plus a term growing with the error).
+        null_gain: null-space pull towards the current configuration per iteration.
+        polish: if no seed converges, this many of the closest attempts are refined with a
+            bounded trust-region least-squares solve (scipy) before giving up.
+        rng: random generator for the random seeds (a fixed seed if None: repeatable).
+
+    Uses `robot.data` as scratch space: one Robot per thread.
+
+    Returns:
+        The IKResult of the chosen solution.
+
+    Raises:
+        InvalidInput: q_current has the wrong shape or is outside the limits, or a solver
+            setting is out of range.
+        IKNoSolution (an IKFailed): no seed converged; carries the best residual.
+    """
+    import pinocchio as pin
+
+    for name, v in (
+        ("tol_position_m", tol_position_m),
+        ("tol_axis_rad", tol_axis_rad),
+        ("damping", damping),
+    ):
+        if not (math.isfinite(v) and v > 0.0):
+            raise InvalidInput(f"{name} must be a positive number, got {v!r}")
+    if max_iterations < 1 or random_seeds < 0 or solutions < 1 or not (0.0 <= null_gain < 1.0):
+        raise InvalidInput(
+            "need max_iterations >= 1, random_seeds >= 0, solutions >= 1 and "
+            f"0 <= null_gain < 1; got {max_iterations}, {random_seeds}, {solutions}, {null_gain}"
+        )
+    lim = robot.limits
+    q_cur = robot.home.copy() if q_current is None else np.asarray(q_current, dtype=float)
+    lim.check_position(q_cur, name="q_current", tol=1e-6)
+    q_cur = np.clip(q_cur, lim.lower, lim.upper)
+    model, data, fid = robot.model, robot.data, robot.tcp_frame
+    six = pose.roll is not None
+    r_des = pose.rotation()
+    u = pose.axis
+    p_des = pose.position
+    # Stop tighter than the tolerance: DLS converges fast near the solution.
+    stop_p, stop_a = 0.05 * tol_position_m, 0.05 * tol_axis_rad
+    eye_m = np.eye(6 if six else 5)
+    half = max_iterations // 2
+    lam2 = damping * damping
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+    def seeds() -> Iterator[np.ndarray]:
+        yield q_cur
+        if not np.allclose(robot.home, q_cur):
+            yield robot.home
+        g = rng if rng is not None else np.random.default_rng(0)
+        rand = robot.random_configuration(g, random_seeds)
+        # Every other random seed turns the base joint so the arm faces the target: the
+        # base yaw is the one joint whose right value is known in advance.
+        p_home = robot.tcp_pose(robot.home)[0]
+        turn = math.atan2(p_des[1], p_des[0]) - math.atan2(p_home[1], p_home[0])
+        q0 = (robot.home[0] + turn + math.pi) % (2 * math.pi) - math.pi
+        rand[::2, 0] = np.clip(
+            q0 + g.normal(0.0, 0.2, rand[::2].shape[0]), lim.lower[0], lim.upper[0]
+        )
+        yield from rand
+
+    found: list[tuple[float, np.ndarray, float, float, float]] = []
+    ends: list[tuple[float, np.ndarray]] = []
+    best = (math.inf, math.inf, math.inf, q_cur)  # (score, position error, axis error, q)
+    iters = 0
+    tried = 0
+    for seed in seeds():
+        tried += 1
+        q = np.array(seed, dtype=float)
+        seed_best = (math.inf, q)
+        for k in range(max_iterations):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacement(model, data, fid)
+            oMf = data.oMf[fid]
+            r = oMf.rotation
+            e_p = p_des - oMf.translation
+            if six:
+                w = _log3(r_des @ r.T)
+                th = _axis_error(r[:, 2], u, r[:, 0])[1]
+                ang = math.sqrt(float(w @ w))
+            else:
+                w, th = _axis_error(r[:, 2], u, r[:, 0])
+                ang = th
+            ep = math.sqrt(float(e_p @ e_p))
+            score = ep / tol_position_m + ang / tol_axis_rad
+            if score < seed_best[0]:
+                seed_best = (score, q)
+            if score < best[0]:
+                best = (score, ep, th, q)
+            if ep < stop_p and ang < stop_a:
+                break
+            if k == half and score > 100.0:
+                break  # far off after half the budget: a new seed is a better bet
+            iters += 1
+            jac = pin.getFrameJacobian(model, data, fid, world)
+            if six:
+                jt = jac
+                err = np.concatenate([e_p, w])
+            else:
+                # Only rotations about axes perpendicular to z move the throw axis.
+                jt = np.concatenate([jac[:3], r[:, :2].T @ jac[3:]])
+                err = np.concatenate([e_p, r[:, :2].T @ w])
+            a = jt @ jt.T + (lam2 + 0.01 * float(err @ err)) * eye_m
+            if k < half:
+                # J⁺e + (I - J⁺J) z = z + J⁺(e - J z), with J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹. The
+                # pull stops halfway: at a joint limit it can fight the clamp.
+                z0 = null_gain * (q_cur - q)
+                dq = z0 + jt.T @ np.linalg.solve(a, err - jt @ z0)
+            else:
+                dq = jt.T @ np.linalg.solve(a, err)
+            step = float(np.max(np.abs(dq)))
+            if step > 0.5:
+                dq *= 0.5 / step
+            q = np.clip(q + dq, lim.lower, lim.upper)
+        ends.append(seed_best)
+        if seed_best[0] > 2.0:
+            continue
+        q = _wrap_near(seed_best[1], q_cur, lim.lower, lim.upper)
+        ep, th, roll = pose_error(robot, q, pose)
+        if ep <= tol_position_m and th <= tol_axis_rad and roll <= tol_axis_rad:
+            found.append((float(np.linalg.norm(q - q_cur)), q, ep, th, roll))
+            if tried == 1 or len(found) >= solutions:
+                break
+    if not found and polish > 0:
+        # DLS with clamping stalls where the solution lies on a joint limit; a bounded
+        # trust-region solve from the closest ends handles the limits as constraints.
+        # Ends far off (score > 200: ~0.2 m or ~100°) are not worth it: the pose is out of reach.
+        for _, q_end in [e for e in sorted(ends, key=lambda e: e[0]) if e[0] < 200.0][:polish]:
+            q = _wrap_near(_bounded_solve(robot, pose, q_end), q_cur, lim.lower, lim.upper)
+            ep, th, roll = pose_error(robot, q, pose)
+            if ep <= tol_position_m and th <= tol_axis_rad and roll <= tol_axis_rad:
+                found.append((float(np.linalg.norm(q - q_cur)), q, ep, th, roll))
+            elif ep / tol_position_m + max(th, roll) / tol_axis_rad < best[0]:
+                best = (ep / tol_position_m + max(th, roll) / tol_axis_rad, ep, th, q)
+    if not found:
+        raise IKNoSolution(
+            f"IK failed for position {np.round(p_des, 4).tolist()} m, axis "
+            f"{np.round(u, 4).tolist()}{'' if not six else f', roll {pose.roll:.4f} rad'}: "
+            f"best residual {best[1] * 1e3:.2f} mm, {math.degrees(best[2]):.2f}° after "
+            f"{tried} seeds (tolerance {tol_position_m * 1e3:.2f} mm, "
+            f"{math.degrees(tol_axis_rad):.2f}°)",
+            position_error_m=best[1],
+            axis_error_rad=best[2],
+            q_best=best[3],
+        )
+    _, q, ep, th, roll = min(found, key=lambda f: f[0])
+    return IKResult(
+        q=q,
+        position_error_m=ep,
+        axis_error_rad=th,
+        roll_error_rad=roll,
+        iterations=iters,
+        seeds_tried=tried,
+    )

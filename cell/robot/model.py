@@ -1,0 +1,194 @@
+"""The arm with the end-effector as a Pinocchio model, reduced to the arm joints.
+
+The world frame W of this module is the arm's base frame (z up, origin at the base link);
+a scene that places the arm elsewhere transforms poses into it first.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+from cell.errors import InvalidInput, MissingDependency
+from cell.robot.composite import MOUNTS, MountSpec, composite_urdf, load_mount
+from cell.robot.limits import JointLimits
+
+__all__ = [
+    "EE_JOINTS",
+    "TCP_FRAME",
+    "Robot",
+    "axis_frame",
+    "load_robot",
+]
+
+TCP_FRAME = "ee_tcp"
+"""The grip centre frame; its +z axis is the throw axis."""
+
+EE_JOINTS = ("ee_finger_left_joint", "ee_finger_right_joint", "ee_band_joint")
+"""The end-effector's moving joints (locked in the arm model)."""
+
+
+def axis_frame(elevation: float, azimuth: float, roll: float = 0.0) -> np.ndarray:
+    """The orientation whose +z is the throw axis u(elevation, azimuth), rolled about u.
+
+    R = Rz(azimuth) · Ry(π/2 − elevation) · Rz(roll); its third column is
+    u = (cos e cos a, cos e sin a, sin e), as in `cell.model.throw_axis`.
+
+    Args:
+        elevation: e [rad].
+        azimuth: a [rad].
+        roll: rotation about u [rad].
+
+    Returns:
+        Rotation matrix, shape (3, 3), frame in W.
+    """
+
+    def rz(t: float) -> np.ndarray:
+        c, s = math.cos(t), math.sin(t)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    b = math.pi / 2 - elevation
+    c, s = math.cos(b), math.sin(b)
+    ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return rz(azimuth) @ ry @ rz(roll)
+
+
+class Robot:
+    """An arm with the throwing end-effector: Pinocchio model of the arm joints, limits, home.
+
+    Attributes:
+        name: robot name.
+        spec: the MountSpec (robots/<mount>/mount.yaml).
+        urdf: the composite URDF file.
+        model: pinocchio.Model reduced to the arm joints (end-effector joints locked).
+        data: a pinocchio.Data for `model` (not thread-safe; one Robot per thread).
+        tcp_frame: frame index of `ee_tcp` in `model`.
+        limits: JointLimits of the arm joints.
+        home: home configuration [rad], shape (n,).
+    """
+
+    def __init__(self, spec: MountSpec) -> None:
+        try:
+            import pinocchio as pin
+        except ImportError as exc:  # pragma: no cover - pin is a core dependency
+            raise MissingDependency("Pinocchio is missing: pip install pin") from exc
+        self.name = spec.name
+        self.spec = spec
+        self.urdf = composite_urdf(spec.name)
+        full = pin.buildModelFromUrdf(str(self.urdf))
+        names = list(full.names)
+        missing = [j for j in spec.arm_joints if j not in names]
+        if missing:
+            raise InvalidInput(f"{self.urdf}: arm joint(s) {missing} not in the description")
+        lock = [full.getJointId(n) for n in names[1:] if n not in spec.arm_joints]
+        q_ref = pin.neutral(full)
+        self.model: Any = pin.buildReducedModel(full, lock, q_ref) if lock else full
+        self.data: Any = self.model.createData()
+        if not self.model.existFrame(TCP_FRAME):
+            raise InvalidInput(f"{self.urdf}: no frame {TCP_FRAME!r}")
+        self.tcp_frame = int(self.model.getFrameId(TCP_FRAME))
+        if list(self.model.names)[1:] != list(spec.arm_joints) or self.model.nq != self.model.nv:
+            raise InvalidInput(
+                f"{self.urdf}: the reduced model's joints {list(self.model.names)[1:]} are not "
+                f"the mount's arm_joints {list(spec.arm_joints)} in order, each with one DoF"
+            )
+        acc = np.array(spec.acceleration_limits, dtype=float)
+        jerk = np.array(spec.jerk_limits, dtype=float)
+        self.limits = JointLimits(
+            lower=np.array(self.model.lowerPositionLimit, dtype=float),
+            upper=np.array(self.model.upperPositionLimit, dtype=float),
+            velocity=np.array(self.model.velocityLimit, dtype=float),
+            acceleration=acc,
+            jerk=jerk,
+        )
+        self.home = np.array(spec.home, dtype=float)
+        self.limits.check_position(self.home, name=f"{spec.name} home")
+
+    @property
+    def dof(self) -> int:
+        """Number of arm joints."""
+        return int(self.model.nq)
+
+    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics of the grip centre.
+
+        Args:
+            q: arm configuration [rad], shape (n,).
+
+        Returns:
+            (position [m] in W, shape (3,); rotation of ee_tcp in W, shape (3, 3)).
+        """
+        import pinocchio as pin
+
+        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        oMf = self.data.oMf[self.tcp_frame]
+        return np.array(oMf.translation), np.array(oMf.rotation)
+
+    def throw_axis(self, q: np.ndarray) -> np.ndarray:
+        """The throw axis u (ee_tcp's +z) in W at configuration q, shape (3,)."""
+        return self.tcp_pose(q)[1][:, 2]
+
+    def tcp_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The grip centre's Jacobian, world-aligned (linear rows first), shape (6, n).
+
+        Args:
+            q: arm configuration [rad], shape (n,).
+
+        Returns:
+            J with [v; ω] = J q̇, v the TCP velocity [m/s] and ω the angular velocity [rad/s]
+            of ee_tcp, both in W.
+        """
+        import pinocchio as pin
+
+        q = np.asarray(q, dtype=float)
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.updateFramePlacements(self.model, self.data)
+        return np.array(
+            pin.getFrameJacobian(
+                self.model, self.data, self.tcp_frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+            )
+        )
+
+    def tcp_velocity(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """Linear velocity of the grip centre in W [m/s], shape (3,)."""
+        return self.tcp_jacobian(q)[:3] @ np.asarray(dq, dtype=float)
+
+    def random_configuration(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
+        """Uniform random configurations within the joint limits (±π for wider ranges).
+
+        Args:
+            rng: random generator.
+            n: how many.
+
+        Returns:
+            Array (n, dof) [rad].
+        """
+        lo = np.maximum(self.limits.lower, -math.pi)
+        hi = np.minimum(self.limits.upper, math.pi)
+        return rng.uniform(lo, hi, size=(n, self.dof))
+
+
+@cache
+def _load(name: str) -> Robot:
+    return Robot(load_mount(name))
+
+
+def load_robot(name: str) -> Robot:
+    """The arm with the end-effector, by name (cached per process).
+
+    Args:
+        name: "panda" or "ur5".
+
+    Returns:
+        The shared Robot instance of that name (its `data` is scratch space).
+
+    Raises:
+        InvalidInput: unknown robot.
+        MissingDependency: Pinocchio, example-robot-data or robots/ is missing.
+    """
+    if name not in MOUNTS:
+        raise InvalidInput(f"unknown robot {name!r}; valid: {', '.join(sorted(MOUNTS))}")
+    return _load(name)

@@ -1,0 +1,383 @@
+"""Joint trajectories: toppra along a geometric path, ruckig for jerk-limited moves.
+
+Two planners, one result type:
+
+- `plan_path` (toppra 0.6): the time-optimal parameterisation of a cubic spline through
+  joint waypoints (pick → lift → pre-release), at rest at both ends, under the joint
+  velocity and acceleration limits.
+- `plan_move` (ruckig 0.19): a jerk-limited, time-optimal move from one joint state to
+  another, which may end with a nonzero joint velocity (a release while moving: the
+  thesis §4.2's secondary trajectory reaching the gripper's pose with nonzero velocity).
+
+Limits come from the robot description (`Robot.limits`: URDF position and velocity limits,
+acceleration and jerk limits from robots/<mount>/mount.yaml). Both planners check the result
+against the position limits and raise TrajectoryError rather than return something unsafe:
+a spline may overshoot between waypoints, and ruckig 0.19.4 ignores position limits (its
+own `position_extrema` is unreliable too, so the extrema are searched on samples).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from cell.errors import InvalidInput, TrajectoryError
+from cell.robot.model import Robot
+from cell.robot.trajectory import (
+    POSITION_TOL_RAD,
+    RuckigTrajectory,
+    ToppraTrajectory,
+    Trajectory,
+    as_robot,
+    check_limits,
+    joint_vector,
+)
+
+__all__ = [
+    "Trajectory",
+    "check_limits",
+    "move_time",
+    "plan_move",
+    "plan_path",
+    "plan_stop",
+    "release_joint_velocity",
+]
+
+log = logging.getLogger(__name__)
+
+
+def plan_path(
+    waypoints_q: Sequence[np.ndarray] | np.ndarray,
+    robot: Robot | str,
+    *,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+) -> Trajectory:
+    """Time-optimal trajectory along a spline through joint waypoints, at rest at both ends.
+
+    The path is toppra's cubic spline through the waypoints, with the path parameter at
+    each waypoint proportional to the cumulative joint-space distance. Limits are scaled by
+    `*_scale`, then tightened by 2 % (toppra's constant-acceleration parameterisation
+    overshoots slightly); the result is sampled and, if it still exceeds a limit, planned
+    again with tighter margins.
+
+    Args:
+        waypoints_q: k ≥ 2 configurations [rad], each shape (dof,).
+        robot: the robot (or its name).
+        velocity_scale: fraction of the velocity limits to use, in (0, 1].
+        acceleration_scale: fraction of the acceleration limits to use, in (0, 1].
+
+    Returns:
+        A Trajectory starting at the first waypoint and stopping at the last.
+
+    Raises:
+        InvalidInput: fewer than two waypoints, a bad shape, a waypoint outside the joint
+            limits, or a scale outside (0, 1].
+        TrajectoryError: toppra found no parameterisation, or the spline leaves the joint
+            limits between waypoints.
+    """
+    import toppra as ta
+    import toppra.algorithm as algo
+    import toppra.constraint as constraint
+
+    rb = as_robot(robot)
+    for name, s in (("velocity_scale", velocity_scale), ("acceleration_scale", acceleration_scale)):
+        if not (0.0 < s <= 1.0):
+            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    wps = [joint_vector(rb, w, f"waypoint {i}") for i, w in enumerate(waypoints_q)]
+    if len(wps) < 2:
+        raise InvalidInput(f"plan_path needs at least 2 waypoints, got {len(wps)}")
+    for i, w in enumerate(wps):
+        rb.limits.check_position(w, name=f"waypoint {i}", tol=POSITION_TOL_RAD)
+    # Drop repeated waypoints: a zero-length segment has no path parameter.
+    keep = [wps[0]] + [
+        w for a, w in zip(wps, wps[1:], strict=False) if np.linalg.norm(w - a) > 1e-9
+    ]
+    q_start = wps[0]
+    if len(keep) < 2:
+        raise InvalidInput("plan_path waypoints are all the same configuration: nothing to do")
+    way = np.array(keep)
+    seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
+    ss = np.concatenate([[0.0], np.cumsum(seg)])
+    ss /= ss[-1]
+    path = ta.SplineInterpolator(ss, way)
+    # Sample the geometric path itself: a spline may overshoot a joint limit.
+    qs = path(np.linspace(0.0, 1.0, 400))
+    lo = np.min(qs - rb.limits.lower)
+    hi = np.min(rb.limits.upper - qs)
+    if min(lo, hi) < -POSITION_TOL_RAD:
+        raise TrajectoryError(
+            f"the spline through the {len(keep)} waypoints leaves the joint limits by "
+            f"{-min(lo, hi):.4f} rad between waypoints; add intermediate waypoints"
+        )
+    vmax = rb.limits.velocity * velocity_scale
+    amax = rb.limits.acceleration * acceleration_scale
+    for margin in (0.98, 0.95, 0.9, 0.8):
+        pc_vel = constraint.JointVelocityConstraint(np.c_[-vmax * margin, vmax * margin])
+        pc_acc = constraint.JointAccelerationConstraint(
+            np.c_[-amax * margin, amax * margin],
+            discretization_scheme=constraint.DiscretizationType.Interpolation,
+        )
+        inst = algo.TOPPRA(
+            [pc_vel, pc_acc], path, parametrizer="ParametrizeConstAccel", gridpt_min_nb_points=100
+        )
+        raw = inst.compute_trajectory(0.0, 0.0)
+        if raw is None:
+            raise TrajectoryError(
+                f"toppra found no time parameterisation through {len(keep)} waypoints "
+                f"(from {np.round(q_start, 3).tolist()} rad); the path may pass a point where "
+                "the limits admit no motion"
+            )
+        traj = ToppraTrajectory(raw, rb.dof)
+        use = check_limits(traj, rb, n=501)
+        if use["velocity"] <= velocity_scale * (1 + 1e-6) and use[
+            "acceleration"
+        ] <= acceleration_scale * (1 + 1e-6):
+            return traj
+        log.debug("toppra margin %.2f exceeded the limits (%s); retrying", margin, use)
+    raise TrajectoryError(f"toppra's trajectory exceeded the limits even at 80 % of them: {use}")
+
+
+def plan_move(
+    q0: np.ndarray | Sequence[float],
+    dq0: np.ndarray | Sequence[float] | None,
+    q1: np.ndarray | Sequence[float],
+    dq1: np.ndarray | Sequence[float] | None,
+    robot: Robot | str,
+    *,
+    ddq0: np.ndarray | Sequence[float] | None = None,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+    jerk_scale: float = 1.0,
+) -> Trajectory:
+    """Jerk-limited, time-optimal move between joint states (ruckig), all joints in sync.
+
+    Args:
+        q0: start configuration [rad], shape (dof,).
+        dq0: start joint velocity [rad/s] (None: at rest).
+        q1: target configuration [rad], shape (dof,).
+        dq1: target joint velocity [rad/s] (None: at rest); nonzero for a release while
+            moving. Must be within the (scaled) velocity limits.
+        robot: the robot (or its name).
+        ddq0: start joint acceleration [rad/s²] (None: zero). The target acceleration is 0.
+        velocity_scale: fraction of the velocity limits to use, in (0, 1].
+        acceleration_scale: fraction of the acceleration limits, in (0, 1].
+        jerk_scale: fraction of the jerk limits, in (0, 1].
+
+    Returns:
+        A Trajectory that ends exactly at (q1, dq1) with zero acceleration.
+
+    Raises:
+        InvalidInput: bad shapes, a configuration outside the limits, a velocity above its
+            limit, or a scale outside (0, 1].
+        TrajectoryError: ruckig found no trajectory, or the move would pass a joint's
+            position limit (checked from the exact position extrema).
+    """
+    rb = as_robot(robot)
+    n = rb.dof
+    for name, s in (
+        ("velocity_scale", velocity_scale),
+        ("acceleration_scale", acceleration_scale),
+        ("jerk_scale", jerk_scale),
+    ):
+        if not (0.0 < s <= 1.0):
+            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    zero = np.zeros(n)
+    p0 = joint_vector(rb, q0, "q0")
+    p1 = joint_vector(rb, q1, "q1")
+    v0 = zero if dq0 is None else joint_vector(rb, dq0, "dq0")
+    v1 = zero if dq1 is None else joint_vector(rb, dq1, "dq1")
+    a0 = zero if ddq0 is None else joint_vector(rb, ddq0, "ddq0")
+    lim = rb.limits
+    lim.check_position(p0, "q0", tol=POSITION_TOL_RAD)
+    lim.check_position(p1, "q1", tol=POSITION_TOL_RAD)
+    vmax = lim.velocity * velocity_scale
+    amax = lim.acceleration * acceleration_scale
+    jmax = lim.jerk * jerk_scale
+    for name, v in (("dq0", v0), ("dq1", v1)):
+        bad = np.flatnonzero(np.abs(v) > vmax * (1 + 1e-9))
+        if bad.size:
+            i = int(bad[0])
+            raise InvalidInput(
+                f"{name}[{i}] = {v[i]:.4f} rad/s exceeds joint {i + 1}'s velocity limit "
+                f"{vmax[i]:.4f} rad/s"
+            )
+    return _ruckig(rb, p0, v0, a0, p1, v1, vmax, amax, jmax, velocity_interface=False)
+
+
+def _ruckig(
+    rb: Robot,
+    p0: np.ndarray,
+    v0: np.ndarray,
+    a0: np.ndarray,
+    p1: np.ndarray,
+    v1: np.ndarray,
+    vmax: np.ndarray,
+    amax: np.ndarray,
+    jmax: np.ndarray,
+    *,
+    velocity_interface: bool,
+) -> Trajectory:
+    from ruckig import ControlInterface, InputParameter, Result, Ruckig
+    from ruckig import Trajectory as RTrajectory
+
+    n = rb.dof
+    lim = rb.limits
+    inp = InputParameter(n)
+    if velocity_interface:
+        inp.control_interface = ControlInterface.Velocity
+    inp.current_position = p0.tolist()
+    inp.current_velocity = v0.tolist()
+    inp.current_acceleration = a0.tolist()
+    inp.target_position = p1.tolist()
+    inp.target_velocity = v1.tolist()
+    inp.target_acceleration = [0.0] * n
+    inp.max_velocity = vmax.tolist()
+    inp.max_acceleration = amax.tolist()
+    inp.max_jerk = jmax.tolist()
+    raw = RTrajectory(n)
+    try:
+        result = Ruckig(n).calculate(inp, raw)
+    except RuntimeError as exc:
+        raise TrajectoryError(f"ruckig rejected the move: {exc}") from None
+    if result != Result.Working and result != Result.Finished:
+        raise TrajectoryError(f"ruckig found no trajectory (result {result})")
+    traj = RuckigTrajectory(raw, n)
+    lo, hi = traj.position_bounds(amax)
+    bad = np.flatnonzero((lo < lim.lower - POSITION_TOL_RAD) | (hi > lim.upper + POSITION_TOL_RAD))
+    if bad.size:
+        i = int(bad[0])
+        raise TrajectoryError(
+            f"the jerk-limited move passes joint {i + 1}'s position limit: it spans "
+            f"[{lo[i]:.4f}, {hi[i]:.4f}] rad, the range is [{lim.lower[i]:.4f}, "
+            f"{lim.upper[i]:.4f}] rad (start velocity {v0[i]:.3f}, target velocity "
+            f"{v1[i]:.3f} rad/s): lower the velocities or move the target inwards"
+        )
+    if not math.isfinite(traj.duration):
+        raise TrajectoryError("ruckig returned a trajectory of infinite duration")
+    return traj
+
+
+def plan_stop(
+    q0: np.ndarray | Sequence[float],
+    dq0: np.ndarray | Sequence[float],
+    robot: Robot | str,
+    *,
+    ddq0: np.ndarray | Sequence[float] | None = None,
+    acceleration_scale: float = 1.0,
+    jerk_scale: float = 1.0,
+) -> Trajectory:
+    """Jerk-limited, time-optimal stop from a moving state (ruckig's velocity interface).
+
+    The follow-up of a release while moving: the arm brakes to rest wherever the limits
+    let it, all joints reaching zero velocity together.
+
+    Args:
+        q0: configuration at the start of the stop [rad], shape (dof,).
+        dq0: joint velocity [rad/s] (within the velocity limits).
+        robot: the robot (or its name).
+        ddq0: joint acceleration [rad/s²] (None: zero).
+        acceleration_scale: fraction of the acceleration limits, in (0, 1].
+        jerk_scale: fraction of the jerk limits, in (0, 1].
+
+    Returns:
+        A Trajectory ending at rest.
+
+    Raises:
+        InvalidInput: bad shapes, a configuration outside the limits, a velocity above its
+            limit, or a scale outside (0, 1].
+        TrajectoryError: the stop would pass a joint's position limit.
+    """
+    rb = as_robot(robot)
+    for name, s in (("acceleration_scale", acceleration_scale), ("jerk_scale", jerk_scale)):
+        if not (0.0 < s <= 1.0):
+            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    zero = np.zeros(rb.dof)
+    p0 = joint_vector(rb, q0, "q0")
+    v0 = joint_vector(rb, dq0, "dq0")
+    a0 = zero if ddq0 is None else joint_vector(rb, ddq0, "ddq0")
+    rb.limits.check_position(p0, "q0", tol=POSITION_TOL_RAD)
+    rb.limits.check_velocity(v0, "dq0")
+    lim = rb.limits
+    return _ruckig(
+        rb,
+        p0,
+        v0,
+        a0,
+        p0,
+        zero,
+        lim.velocity,
+        lim.acceleration * acceleration_scale,
+        lim.jerk * jerk_scale,
+        velocity_interface=True,
+    )
+
+
+def release_joint_velocity(
+    q: np.ndarray | Sequence[float],
+    v_tcp: np.ndarray | Sequence[float],
+    robot: Robot | str,
+    *,
+    omega: np.ndarray | Sequence[float] | None = None,
+    rtol: float = 1e-6,
+) -> np.ndarray:
+    """Joint velocity that moves the grip centre at a given velocity (the release velocity).
+
+    Solves J(q) dq = [v; ω] in the least-squares, minimum-norm sense (the Panda has one
+    redundant joint), with the angular velocity ω zero by default so the throw axis does not
+    turn at release.
+
+    Args:
+        q: release configuration [rad], shape (dof,).
+        v_tcp: grip-centre velocity in W [m/s], shape (3,).
+        robot: the robot (or its name).
+        omega: angular velocity of ee_tcp in W [rad/s], shape (3,) (None: zero).
+        rtol: admissible twist residual relative to max(1, |twist|).
+
+    Returns:
+        dq [rad/s], shape (dof,).
+
+    Raises:
+        InvalidInput: bad shapes or q outside the limits.
+        TrajectoryError: the twist is not achievable at q (singular), or it needs a joint
+            faster than its velocity limit (the message names the joint and the factor).
+    """
+    rb = as_robot(robot)
+    qa = joint_vector(rb, q, "q")
+    rb.limits.check_position(qa, "q", tol=POSITION_TOL_RAD)
+    v = np.asarray(v_tcp, dtype=float).reshape(-1)
+    w = np.zeros(3) if omega is None else np.asarray(omega, dtype=float).reshape(-1)
+    if v.shape != (3,) or w.shape != (3,) or not np.all(np.isfinite(np.r_[v, w])):
+        raise InvalidInput(f"v_tcp and omega must be 3 finite numbers each, got {v!r}, {w!r}")
+    twist = np.concatenate([v, w])
+    jac = rb.tcp_jacobian(qa)
+    dq = np.linalg.lstsq(jac, twist, rcond=1e-10)[0]
+    res = float(np.linalg.norm(jac @ dq - twist))
+    if res > rtol * max(1.0, float(np.linalg.norm(twist))):
+        raise TrajectoryError(
+            f"the release twist {np.round(twist, 4).tolist()} is not achievable at this "
+            f"configuration (residual {res:.3g}; the arm is near a singularity)"
+        )
+    ratio = np.abs(dq) / rb.limits.velocity
+    i = int(np.argmax(ratio))
+    if ratio[i] > 1.0:
+        raise TrajectoryError(
+            f"a grip-centre velocity of {np.linalg.norm(v):.3f} m/s needs joint {i + 1} at "
+            f"{dq[i]:.3f} rad/s, {ratio[i]:.2f}x its limit {rb.limits.velocity[i]:.3f} rad/s"
+        )
+    return dq
+
+
+def move_time(
+    q0: np.ndarray | Sequence[float], q1: np.ndarray | Sequence[float], robot: Robot | str
+) -> float:
+    """Duration of a jerk-limited rest-to-rest move [s] (ruckig, full limits).
+
+    Raises:
+        InvalidInput: see plan_move.
+        TrajectoryError: see plan_move.
+    """
+    return plan_move(q0, None, q1, None, robot).duration

@@ -1,0 +1,187 @@
+"""The joint trajectory type both planners return, and a limit check over samples."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from cell.errors import InvalidInput
+from cell.robot.model import Robot, load_robot
+
+__all__ = [
+    "POSITION_TOL_RAD",
+    "RuckigTrajectory",
+    "ToppraTrajectory",
+    "Trajectory",
+    "as_robot",
+    "check_limits",
+    "joint_vector",
+]
+
+POSITION_TOL_RAD = 1e-6
+"""Tolerance on the joint position limits [rad]."""
+
+
+class Trajectory(ABC):
+    """A joint trajectory q(t) for t in [0, duration].
+
+    Sampling outside [0, duration] clamps t to the interval (the planned end state; a move
+    ending with nonzero velocity needs its own follow-up trajectory to stop).
+
+    Attributes:
+        duration: total time [s].
+        dof: number of joints.
+        kind: "toppra" or "ruckig".
+    """
+
+    duration: float
+    dof: int
+    kind: str
+
+    @abstractmethod
+    def _eval(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+    def sample(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joint state at one time.
+
+        Args:
+            t: time since the start [s].
+
+        Returns:
+            (q [rad], dq [rad/s], ddq [rad/s²]), each shape (dof,).
+        """
+        q, dq, ddq = self.sample_many(np.array([t], dtype=float))
+        return q[0], dq[0], ddq[0]
+
+    def sample_many(self, ts: np.ndarray | Sequence[float]) -> tuple[np.ndarray, ...]:
+        """Joint states at many times.
+
+        Args:
+            ts: times since the start [s], shape (k,).
+
+        Returns:
+            (q [rad], dq [rad/s], ddq [rad/s²]), each shape (k, dof).
+        """
+        t = np.clip(np.asarray(ts, dtype=float).reshape(-1), 0.0, self.duration)
+        return self._eval(t)
+
+    def end_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q, dq, ddq) at t = duration."""
+        return self.sample(self.duration)
+
+
+class ToppraTrajectory(Trajectory):
+    """A toppra parameterisation (spline through the waypoints), from `plan_path`."""
+
+    def __init__(self, traj: Any, dof: int) -> None:
+        self._traj = traj
+        self.duration = float(traj.duration)
+        self.dof = dof
+        self.kind = "toppra"
+
+    def _eval(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        q = np.atleast_2d(self._traj(ts))
+        dq = np.atleast_2d(self._traj(ts, 1))
+        ddq = np.atleast_2d(self._traj(ts, 2))
+        return q, dq, ddq
+
+
+class RuckigTrajectory(Trajectory):
+    """A ruckig move, from `plan_move` or `plan_stop`."""
+
+    def __init__(self, traj: Any, dof: int) -> None:
+        self._traj = traj
+        self.duration = float(traj.duration)
+        self.dof = dof
+        self.kind = "ruckig"
+
+    def _eval(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        out = np.empty((3, ts.size, self.dof))
+        for i, t in enumerate(ts):
+            p, v, a = self._traj.at_time(float(t))
+            out[0, i], out[1, i], out[2, i] = p, v, a
+        return out[0], out[1], out[2]
+
+    def position_bounds(
+        self, max_acceleration: np.ndarray, n: int = 400
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(min, max) position of each joint over the move [rad], each shape (dof,).
+
+        ruckig 0.19.4's own `position_extrema` is wrong for time-synchronised profiles (it
+        missed a maximum by 36 mm in a check), so the extrema are found by sampling and then
+        refined: between samples dt apart a joint with |ddq| ≤ a passes its sampled values
+        by at most a·dt²/8 (the velocity is zero at a true extremum), so every sampled local
+        extremum within that margin of the sampled extreme is refined by a ternary search
+        over its two neighbouring intervals.
+
+        Args:
+            max_acceleration: per-joint acceleration bound [rad/s²], shape (dof,).
+            n: samples.
+
+        Returns:
+            (minimum, maximum), each shape (dof,).
+        """
+        if self.duration <= 0.0:
+            q0 = np.asarray(self._traj.at_time(0.0)[0], dtype=float)
+            return q0.copy(), q0.copy()
+        ts = np.linspace(0.0, self.duration, n)
+        q = np.array([self._traj.at_time(float(t))[0] for t in ts])
+        slack = np.asarray(max_acceleration, dtype=float) * (ts[1] - ts[0]) ** 2 / 8
+        lo, hi = q.min(axis=0), q.max(axis=0)
+        for j in range(self.dof):
+            for sign, ext in ((1.0, hi), (-1.0, lo)):
+                f = sign * q[:, j]
+                pad = np.r_[-np.inf, f, -np.inf]
+                peaks = np.flatnonzero((f >= pad[:-2]) & (f >= pad[2:]) & (f >= f.max() - slack[j]))
+                for k in peaks.tolist():
+                    a, b = float(ts[max(k - 1, 0)]), float(ts[min(k + 1, n - 1)])
+                    for _ in range(40):
+                        m1, m2 = a + (b - a) / 3, b - (b - a) / 3
+                        g1 = sign * self._traj.at_time(m1)[0][j]
+                        g2 = sign * self._traj.at_time(m2)[0][j]
+                        a, b = (m1, b) if g1 < g2 else (a, m2)
+                    best = self._traj.at_time((a + b) / 2)[0][j]
+                    ext[j] = max(ext[j], best) if sign > 0 else min(ext[j], best)
+        return lo, hi
+
+
+def as_robot(robot: Robot | str) -> Robot:
+    """The Robot itself, or the one of that name."""
+    return load_robot(robot) if isinstance(robot, str) else robot
+
+
+def joint_vector(robot: Robot, v: np.ndarray | Sequence[float], name: str) -> np.ndarray:
+    """v as a finite float array of shape (dof,); InvalidInput naming `name` otherwise."""
+    a = np.asarray(v, dtype=float).reshape(-1)
+    if a.shape != (robot.dof,) or not np.all(np.isfinite(a)):
+        raise InvalidInput(f"{name} must be {robot.dof} finite joint values, got {v!r}")
+    return a
+
+
+def check_limits(
+    traj: Trajectory, robot: Robot | str, n: int = 2001, rtol: float = 1e-6
+) -> dict[str, float]:
+    """The worst use of each limit over a densely sampled trajectory.
+
+    Args:
+        traj: the trajectory.
+        robot: the robot whose limits apply.
+        n: samples over [0, duration].
+        rtol: relative tolerance (1.0 + rtol counts as within).
+
+    Returns:
+        {"velocity", "acceleration", "position_margin_rad"}: the largest |dq|/v_max and
+        |ddq|/a_max over joints and samples, and the smallest distance to a position limit
+        [rad] (negative = outside).
+    """
+    rb = as_robot(robot)
+    q, dq, ddq = traj.sample_many(np.linspace(0.0, traj.duration, n))
+    lim = rb.limits
+    return {
+        "velocity": float(np.max(np.abs(dq) / lim.velocity)),
+        "acceleration": float(np.max(np.abs(ddq) / lim.acceleration)),
+        "position_margin_rad": float(min(np.min(q - lim.lower), np.min(lim.upper - q))),
+    }
