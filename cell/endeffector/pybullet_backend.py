@@ -1,16 +1,17 @@
 """The end-effector in the PyBullet cell (cell.sim), behind the EndEffector interface.
 
 * `grasp(L_s)`: the item is moved from the pick station into the open grip
-  (the approach is kinematic), the spool winds the carriage to L_s with the
-  latch engaged, and the fingers close on the item by contact with the band's
-  grip force f_g.
+  (the approach is kinematic) and seated on the hoop at L_s (latch engaged);
+  the fingers close on it by contact with the band's grip force f_g, and from
+  then on friction alone holds it.
 * `set_stroke(L_s)`: the spool winds or unwinds at `spool_speed_mps`.
 * `throw()`: the latch lets go; the band law drives the carriage, which pushes
   the item (sub-stepped at the scene's launch step) until the carriage hits its
   end stop; the item flies on. Its launch velocity is never set.
 * `place()`: the spool unwinds slowly; the carriage lowers the item until it
-  touches something, then the fingers open. Hold the item's lowest point
-  less than `place_travel_m()` above the surface.
+  touches something, then the fingers open (`CellScene.ee_pose_for_place`
+  gives a pose for it). Items shorter than the finger pads (cube30, the flat
+  rocks) are let go when the pads meet the surface and drop the difference.
 """
 
 from __future__ import annotations
@@ -21,12 +22,14 @@ import numpy as np
 
 from cell.endeffector.base import EndEffector, EndEffectorStatus
 from cell.errors import InvalidInput, InvalidParameter, SimulationError
-from cell.sim.band import FINGER_LEFT, FINGER_RIGHT, BandReading
+from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT, BandReading
 from cell.sim.items import Item
 
 __all__ = ["PyBulletEndEffector"]
 
 log = logging.getLogger(__name__)
+
+_STALL_M = 0.002  # [m] carriage lag behind the spool that means it is blocked
 
 
 class PyBulletEndEffector(EndEffector):
@@ -124,8 +127,25 @@ class PyBulletEndEffector(EndEffector):
         centre = stroke_m + it.obj.size[2] / 2 + 5e-4
         pos, orn = cl.multiplyTransforms(e_pos, e_orn, [0, 0, centre], [0, 0, 0, 1])
         cl.resetBasePositionAndOrientation(it.body, pos, orn)
+        # While the fingers close, the item is seated on the hoop, as the approach
+        # presses the hoop onto the item resting on the station; then friction holds it.
+        seat = cl.createConstraint(
+            sc.ee_body,
+            BAND_JOINT,
+            it.body,
+            -1,
+            cl.JOINT_FIXED,
+            [0, 0, 0],
+            [0, 0, centre - stroke_m],
+            [0, 0, 0],
+        )
+        cl.changeConstraint(seat, maxForce=50.0)
         self.band.fingers_closing = True
-        sc.run_for(self.close_time_s)
+        try:
+            sc.run_for(self.close_time_s)
+        finally:
+            cl.removeConstraint(seat)
+        sc.run_for(0.01)
         if not self._in_grip(it, stroke_m):
             raise SimulationError(
                 f"the fingers did not close on item {it.obj.name or it.body} "
@@ -140,12 +160,16 @@ class PyBulletEndEffector(EndEffector):
         inv = cl.invertTransform(e_p, e_o)
         p, _ = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(it.body))
         half = it.obj.width / 2
+        reach = float(np.linalg.norm(it.obj.size))
         opening = [cl.getJointState(ee, j)[0] for j in (FINGER_LEFT, FINGER_RIGHT)]
+        # closed (not jammed open) on something (not on each other), the item's centre
+        # between the pads
         return (
-            min(opening) > 0.5 * half
+            max(opening) < half + 0.002
+            and min(opening) > 1e-3
             and abs(p[0]) < half
-            and abs(p[1]) < half
-            and stroke_m < p[2] < stroke_m + it.obj.size[2]
+            and abs(p[1]) < it.obj.size[1] / 2
+            and stroke_m < p[2] < stroke_m + reach
         )
 
     def set_stroke(self, stroke_m: float) -> None:
@@ -192,11 +216,17 @@ class PyBulletEndEffector(EndEffector):
         tr = sc.track(self.item)
         end = sc.geometry.end_stop_m - 0.002
         step_m = self.place_speed_mps * sc.dt_s
-        while self.band.stroke_cmd_m < end and tr.touchdown is None:
+        blocked = False
+        while self.band.stroke_cmd_m < end and tr.touchdown is None and not blocked:
             self.band.stroke_cmd_m = min(end, self.band.stroke_cmd_m + step_m)
             sc.step()
+            # the carriage stalls when the pads (longer than a flat item) meet the surface
+            blocked = self.band.stroke_cmd_m - self.band.position() > _STALL_M
         if tr.touchdown is None:
-            log.warning("place: the item had not touched down at the end of the stroke")
+            log.warning(
+                "place: the item had not touched down when the fingers opened (%s)",
+                "the pads met the surface first" if blocked else "end of the stroke",
+            )
         self.band.stroke_cmd_m = self.band.position()
         self.band.fingers_closing = False
         sc.run_for(0.1)

@@ -1,0 +1,184 @@
+"""The band mechanism in the scene: the force law drives the carriage each sub-step.
+
+Before every physics step the band's state is evaluated from the mechanism's
+*current* configuration: the carriage position s (the stroke-equivalent L_s
+[m], the `ee_band_joint` value) and the measured grip width a (the sum of the
+finger openings [m], at least the hoop width d). MODEL.md's law gives
+
+    ΔL(s, a),  f_e(ΔL),  α(s, a),  f_o = 2 f_e cos α,  f_g = f_e sin α
+
+and the mechanism applies f_o along the end-effector's +z to the carriage
+(and its reaction to the housing), and closes each finger on the item with
+the force f_g (a motor limited to f_g, so the grip is a contact force). The
+latch is the spool's position servo: while engaged it holds the carriage at
+the commanded stroke against the band; released, the carriage is free and
+the band accelerates it, and the item resting on it, until the band goes
+slack and the carriage is caught by its end stop. Nothing sets the item's
+velocity: it comes out of the contact with the carriage.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.params import EndEffectorParams
+from cell.sim.mechanism import EEGeometry
+
+__all__ = ["BandReading", "BandDrive", "BAND_JOINT", "FINGER_LEFT", "FINGER_RIGHT"]
+
+BAND_JOINT = 0  # ee_band_joint
+FINGER_LEFT = 1  # ee_finger_left_joint
+FINGER_RIGHT = 2  # ee_finger_right_joint
+_LATCH_FORCE_N = 400.0  # [N] most the latch/spool can hold
+_FINGER_SPEED = 0.3  # [m/s] closing speed of a finger before contact
+
+
+@dataclass(frozen=True)
+class BandReading:
+    """The band at one instant, from the mechanism's current configuration.
+
+    Attributes:
+        position_m: carriage position s (stroke-equivalent L_s) [m].
+        velocity_mps: carriage velocity along +z of the end-effector [m/s].
+        width_m: grip width a used by the law (finger opening, ≥ d) [m].
+        stretch_m: ΔL [m].
+        band_force_n: f_e [N].
+        push_n: f_o [N] applied to the carriage.
+        grip_n: f_g [N] each finger's closing force.
+        latch_force_n: force the latch exerts on the carriage [N] (0 released).
+        latched: latch engaged.
+    """
+
+    position_m: float
+    velocity_mps: float
+    width_m: float
+    stretch_m: float
+    band_force_n: float
+    push_n: float
+    grip_n: float
+    latch_force_n: float
+    latched: bool
+
+
+class BandDrive:
+    """Applies the band law, the latch and the finger grip to the end-effector body.
+
+    Args:
+        client: a pybullet BulletClient.
+        body: the end-effector multibody (joints as in cell.sim.mechanism).
+        ee: the band's parameters (the law the plant obeys).
+        geometry: the mechanism's geometry.
+    """
+
+    def __init__(self, client: Any, body: int, ee: EndEffectorParams, geometry: EEGeometry) -> None:
+        self.client = client
+        self.body = body
+        self.ee = ee
+        self.geometry = geometry
+        self.latched = True
+        self.fingers_closing = False
+        self.stroke_cmd_m = ee.stroke_max
+        for j in (FINGER_LEFT, FINGER_RIGHT):
+            client.changeDynamics(body, j, lateralFriction=geometry.pad_friction)
+        for j in (-1, BAND_JOINT, FINGER_LEFT, FINGER_RIGHT):
+            client.changeDynamics(body, j, linearDamping=0.0, angularDamping=0.0)
+        gear = client.createConstraint(
+            body,
+            FINGER_LEFT,
+            body,
+            FINGER_RIGHT,
+            client.JOINT_GEAR,
+            [1, 0, 0],
+            [0, 0, 0],
+            [0, 0, 0],
+        )
+        # both joint values are openings: equal openings keep the grip centred
+        client.changeConstraint(gear, gearRatio=-1, erp=0.2, maxForce=200)
+
+    # -- state ---------------------------------------------------------------
+    def position(self) -> float:
+        """Carriage position s [m] (the stroke the encoder would read)."""
+        return float(self.client.getJointState(self.body, BAND_JOINT)[0])
+
+    def width(self) -> float:
+        """Grip width a = sum of the finger openings [m]."""
+        cl = self.client
+        return float(
+            cl.getJointState(self.body, FINGER_LEFT)[0]
+            + cl.getJointState(self.body, FINGER_RIGHT)[0]
+        )
+
+    def law(self, s: float, a: float) -> tuple[float, float, float, float]:
+        """(ΔL, f_e, f_o, f_g) of the law at carriage position s and width a [m, N]."""
+        a_eff = max(a, self.ee.d)
+        stretch = float(band_stretch(s, a_eff, self.ee))
+        f_e = float(band_force(np.float64(stretch), self.ee))
+        alpha = float(band_angle(s, a_eff, self.ee))
+        return stretch, f_e, float(2 * f_e * np.cos(alpha)), float(f_e * np.sin(alpha))
+
+    def reading(self) -> BandReading:
+        """The band now (law evaluated at the current configuration)."""
+        js = self.client.getJointState(self.body, BAND_JOINT)
+        s, v = float(js[0]), float(js[1])
+        a = self.width()
+        stretch, f_e, push, grip = self.law(s, a)
+        latch = -float(js[3]) if self.latched else 0.0
+        return BandReading(
+            position_m=s,
+            velocity_mps=v,
+            width_m=max(a, self.ee.d),
+            stretch_m=stretch,
+            band_force_n=f_e,
+            push_n=push,
+            grip_n=grip,
+            latch_force_n=latch,
+            latched=self.latched,
+        )
+
+    # -- per sub-step ----------------------------------------------------------
+    def apply(self) -> None:
+        """Apply the band force, the latch and the finger grip for the next physics step."""
+        cl = self.client
+        s = float(cl.getJointState(self.body, BAND_JOINT)[0])
+        a = self.width()
+        _, _, push, grip = self.law(s, a)
+        if push > 0:
+            cl.applyExternalForce(self.body, BAND_JOINT, [0, 0, push], [0, 0, 0], cl.LINK_FRAME)
+            cl.applyExternalForce(self.body, -1, [0, 0, -push], [0, 0, 0], cl.LINK_FRAME)
+        if self.latched:
+            cl.setJointMotorControl2(
+                self.body,
+                BAND_JOINT,
+                cl.POSITION_CONTROL,
+                targetPosition=self.stroke_cmd_m,
+                force=_LATCH_FORCE_N,
+                positionGain=1.0,
+                velocityGain=1.0,
+            )
+        else:
+            cl.setJointMotorControl2(
+                self.body, BAND_JOINT, cl.VELOCITY_CONTROL, targetVelocity=0, force=0
+            )
+        for j in (FINGER_LEFT, FINGER_RIGHT):
+            if self.fingers_closing:
+                cl.setJointMotorControl2(
+                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
+                )
+            else:
+                cl.setJointMotorControl2(
+                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
+                )
+
+    # -- commands --------------------------------------------------------------
+    def reset(self, stroke_m: float, opening_m: float) -> None:
+        """Put the carriage at a stroke and the fingers at an opening (no item), latched."""
+        cl = self.client
+        cl.resetJointState(self.body, BAND_JOINT, stroke_m, 0.0)
+        for j in (FINGER_LEFT, FINGER_RIGHT):
+            cl.resetJointState(self.body, j, opening_m, 0.0)
+        self.stroke_cmd_m = stroke_m
+        self.latched = True

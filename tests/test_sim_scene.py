@@ -1,0 +1,95 @@
+"""The PyBullet scene (DIRECT): bins, items, drag, settle detection, snapshot."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cell.errors import InvalidParameter
+from cell.sim import BinSpec, CellScene, which_bin
+
+BIN = BinSpec("b1", (1.0, 0.5), (0.3, 0.4), 0.12)
+
+
+def test_which_bin_inside_outside_and_above_rim():
+    bins = [BIN, BinSpec("b2", (0.0, -1.0), (0.2, 0.2), 0.1, yaw=math.pi / 4)]
+    assert which_bin((1.0, 0.5, 0.05), bins) == "b1"
+    assert which_bin((1.14, 0.69), bins) == "b1"
+    assert which_bin((1.16, 0.5, 0.05), bins) is None  # beyond the inner wall
+    assert which_bin((1.0, 0.5, 0.2), bins) is None  # above the rim
+    # rotated bin: a corner of the unrotated square lies outside the rotated one
+    assert which_bin((0.13, -1.0, 0.02), bins) == "b2"
+    assert which_bin((0.09, -0.91, 0.02), bins) is None
+    # a tall item standing inside has its centre above the rim
+    assert which_bin((1.0, 0.5, 0.15), bins) is None
+    assert which_bin((1.0, 0.5, 0.15), bins, above_rim_m=0.05) == "b1"
+
+
+def test_bin_spec_raises_if_rim_is_lower_than_wall():
+    with pytest.raises(InvalidParameter, match="rim_height"):
+        BinSpec("x", (0, 0), (0.3, 0.3), 0.005)
+    with pytest.raises(InvalidParameter, match="size_xy"):
+        BinSpec("x", (0, 0), (0.0, 0.3), 0.1)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    sc = CellScene(robot=None, bins=[BIN], pick_station_xy=(-1.0, -1.0))
+    yield sc
+    sc.close()
+
+
+def test_item_dropped_into_a_bin_is_reported_in_that_bin(scene):
+    item = scene.spawn_item("cube40", position=(1.05, 0.45, 0.5))
+    out = scene.watch_until_rest(item)
+    scene.remove_item(item)
+    assert out.rested
+    assert out.bin_id == "b1"
+    assert out.touchdown_body == scene.bin_bodies["b1"]
+    # resting on the bin's floor plate (wall 0.01 m thick): centre at 0.01 + 0.02
+    assert out.rest_xyz[2] == pytest.approx(0.03, abs=2e-3)
+    # it fell 0.47 m (centre 0.5 m -> 0.03 m at contact): sqrt(2 g h), drag is small
+    assert out.touchdown_speed == pytest.approx(math.sqrt(2 * 9.81 * (0.5 - 0.03)), rel=0.03)
+
+
+def test_item_dropped_outside_every_bin_is_in_none(scene):
+    item = scene.spawn_item("sphere40", position=(0.3, -0.3, 0.3))
+    out = scene.watch_until_rest(item, timeout_s=3.0)
+    scene.remove_item(item)
+    assert out.bin_id is None
+    assert out.touchdown_body == scene.floor
+
+
+def test_drag_slows_a_falling_sphere_as_the_closed_form_says(scene):
+    # v(t) = v_t tanh(g t / v_t) for quadratic drag from rest; v_t = sqrt(m g / c)
+    item = scene.spawn_item("sphere40", position=(-2.0, 2.0, 20.0))
+    o = item.obj
+    c = 0.5 * 1.225 * 0.47 * math.pi * (o.size[0] / 2) ** 2
+    vt = math.sqrt(o.mass * 9.81 / c)
+    scene.run_for(1.0)
+    v = scene.client.getBaseVelocity(item.body)[0]
+    scene.remove_item(item)
+    expected = vt * math.tanh(9.81 * 1.0 / vt)
+    assert -v[2] == pytest.approx(expected, rel=3e-3)
+    assert -v[2] < 9.81 - 0.25  # clearly slower than without air
+
+
+@pytest.mark.parametrize("name", ["duck", "rock_000"])
+def test_mesh_items_come_to_rest_on_the_floor(scene, name):
+    item = scene.spawn_item(name, position=(-1.5, 0.0, 0.2))
+    out = scene.watch_until_rest(item, timeout_s=3.0)
+    scene.remove_item(item)
+    assert out.rested and out.bin_id is None
+    half_diag = 0.5 * float(np.linalg.norm(item.obj.size))
+    assert 0.0 < out.rest_xyz[2] < half_diag
+
+
+def test_snapshot_writes_a_picture_of_the_cell(tmp_path):
+    from PIL import Image
+
+    with CellScene(bins=[BIN]) as sc:
+        sc.spawn_item("cube50")
+        path = sc.snapshot(tmp_path / "cell.png", width=160, height=120)
+    img = np.asarray(Image.open(path))
+    assert img.shape == (120, 160, 3)
+    assert img.std() > 10  # not a blank frame
