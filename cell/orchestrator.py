@@ -275,8 +275,6 @@ class Orchestrator:
             return self._throw(base, item, obj, target, q_lift, t0, plan, delta)
         except CellError as exc:
             log.info("item %d (%s) failed: %s", index, obj.name, exc)
-            if self.ee.item is not None:
-                self.ee.item = None
             return ItemResult(
                 **base,
                 action="failed",
@@ -284,7 +282,10 @@ class Orchestrator:
                 cycle_time_s=sc.t - t0,
             )
         finally:
+            # A scored item leaves the scene, as if the bin were emptied: bins that fill
+            # up would make later throws bounce off earlier items and slow the physics.
             sc.remove_item(item)
+            self.ee.item = None
 
     def _place(
         self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray, t0: float
