@@ -1,0 +1,130 @@
+"""`cell learn`: train the residual ΔL_s on a throw log, with the Table 5.1 evaluation."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from cell.cli.common import print_json
+from cell.errors import InvalidInput
+from cell.log import read_throws_csv
+from cell.params import load_params
+from cell.residual.learners import LEARNERS
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "learn",
+        help="learn the stroke residual ΔL_s from a throw log (thesis ch. 5, Table 5.1)",
+        description=(
+            "Compute ΔL_s for every logged throw by the model's inverse, evaluate SVR, random "
+            "forest and MLP by holding out two objects at a time (Table 5.1), and save the "
+            "chosen learner trained on every object. The planner then commands L_s + ΔL_s."
+        ),
+    )
+    p.add_argument("throws", help="throws.csv (THROW_LOG.md)")
+    p.add_argument("-o", "--output", required=True, help="the residual model file (.joblib)")
+    p.add_argument(
+        "--params", metavar="EE.yaml", help="identified parameter file (default: reference values)"
+    )
+    p.add_argument(
+        "--identified-objects",
+        action="store_true",
+        help=(
+            "use the parameter file's identified η_o too (default: its η_ee only, with the "
+            "logged η_o, which is what an unseen object has; identified η_o soak up the "
+            "shape effects the residual is meant to learn)"
+        ),
+    )
+    p.add_argument(
+        "--learner", choices=LEARNERS, default="svr", help="learner to save (svr, the thesis')"
+    )
+    p.add_argument(
+        "--compare",
+        default=",".join(LEARNERS),
+        metavar="L1,L2",
+        help="learners of the round-robin table (default: svr,rf,mlp; empty: skip it)",
+    )
+    p.add_argument("--hold-out", type=int, default=2, metavar="K", help="objects per fold (2)")
+    p.add_argument(
+        "--grid", choices=("small", "full"), default="full", help="hyper-parameter grids (full)"
+    )
+    p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
+    p.add_argument("--plot", metavar="PNG", help="write the Table 5.1 bar chart here")
+    p.add_argument("--json", action="store_true", help="print the table as JSON")
+    p.set_defaults(func=run)
+
+
+def _learners(text: str) -> tuple[str, ...]:
+    names = tuple(t.strip() for t in text.split(",") if t.strip())
+    bad = [n for n in names if n not in LEARNERS]
+    if bad:
+        raise InvalidInput(f"--compare: unknown learner(s) {bad}; valid: {', '.join(LEARNERS)}")
+    return names
+
+
+def run(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from cell.residual.evaluate import round_robin, round_robin_folds
+    from cell.residual.model import train_residual, training_data
+
+    compare = _learners(args.compare)
+    table = read_throws_csv(args.throws)
+    mp = load_params(args.params)
+    if mp.effects:
+        raise InvalidInput(
+            f"{args.params}: effects {sorted(mp.effects)} are switched on; `cell learn` learns "
+            "the residual of the nominal (identified) model: use a file without effects"
+        )
+    data = training_data(table, mp.ee, objects=mp.objects if args.identified_objects else None)
+    n_bad = int((~data.usable).sum())
+    if n_bad:
+        print(
+            f"cell learn: {n_bad} of {len(table)} throws excluded (no observed landing, or "
+            f"observed reach outside the model's range): {data.targets.excluded_counts()}",
+            file=sys.stderr,
+        )
+    summary: dict[str, Any] = {}
+    if compare:
+        ids = sorted(set(data.groups[data.usable].tolist()))
+        n_fits = len(compare) * len(round_robin_folds(ids, hold_out=args.hold_out, seed=args.seed))
+        with tqdm(total=n_fits, desc="round-robin", disable=args.json or None) as bar:
+
+            def step(text: str) -> None:
+                bar.set_postfix_str(text, refresh=False)
+                bar.update()
+
+            summary = round_robin(
+                data,
+                learners=compare,
+                hold_out=args.hold_out,
+                grid=args.grid,
+                seed=args.seed,
+                progress=step,
+            )
+    model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
+    model.save(args.output)
+    if args.plot and summary:
+        from cell.residual.plot import plot_table51
+
+        plot_table51(summary, args.plot)
+    if args.json:
+        print_json({name: s.as_dict() for name, s in summary.items()})
+        return 0
+    if summary:
+        print(
+            f"Table 5.1: hold out {args.hold_out} objects at a time ({len(summary[compare[0]].folds)} folds)"
+        )
+        print(f"{'learner':8s} {'ΔL_s MSE [mm²]':>20s} {'held-out landing RMSE [m]':>28s}")
+        for name, s in summary.items():
+            print(
+                f"{name:8s} {s.dls_mse_mean:10.4f} ± {s.dls_mse_std:<8.4f} "
+                f"{s.heldout_rmse_before_m:12.4f} -> {s.heldout_rmse_after_m:.4f}"
+            )
+    print(
+        f"saved {model.learner} residual ({model.n_train} throws of "
+        f"{len(model.training_objects)} objects; {model.best_params}) -> {args.output}"
+    )
+    return 0

@@ -1,0 +1,264 @@
+"""The evaluation of thesis Table 5.1: hold two objects out at a time in a
+round-robin, train on the rest (hyper-parameters tuned by inner CV on the rest
+only), and report per learner the mean ± std over folds of the ΔL_s MSE on the
+held-out objects, and the landing RMSE on the held-out throws without and with
+the residual.
+
+Landing error on a plain log (the world is unknown): without the residual, the
+model's landing at the stroke used against the observed landing; with it, the
+model's landing at L_used - ΔL_s (the model-equivalent stroke of the throw,
+ΔL_s predicted at that stroke by a short fixed-point iteration) against the
+observed landing.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cell.errors import InvalidParameter
+from cell.model.throw import Landing, ThrowBatch, predict_landing
+from cell.residual.features import FEATURE_NAMES
+from cell.residual.learners import LEARNERS
+from cell.residual.model import ResidualModel, TrainingData, train_residual
+
+__all__ = [
+    "Fold",
+    "FoldResult",
+    "LearnerSummary",
+    "round_robin_folds",
+    "round_robin",
+    "residual_landing",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Fold:
+    """One round-robin fold.
+
+    Attributes:
+        held_out: object ids held out (tested on).
+        train: object ids trained on.
+    """
+
+    held_out: tuple[str, ...]
+    train: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class FoldResult:
+    """One learner on one fold.
+
+    Attributes:
+        fold: the fold.
+        learner: learner name.
+        test_rows: indices of the held-out usable throws in the log.
+        delta_pred_m: predicted ΔL_s on them [m].
+        dls_mse_mm2: ΔL_s MSE on them [mm²].
+        sq_err_before_m2: squared landing error without the residual [m²] per throw.
+        sq_err_after_m2: squared landing error with it [m²] per throw.
+        training_objects: objects the fitted model was trained on.
+        best_params: the inner CV's choice.
+        model: the fold's fitted residual.
+    """
+
+    fold: Fold
+    learner: str
+    test_rows: np.ndarray
+    delta_pred_m: np.ndarray
+    dls_mse_mm2: float
+    sq_err_before_m2: np.ndarray
+    sq_err_after_m2: np.ndarray
+    training_objects: tuple[str, ...]
+    best_params: dict[str, Any] = field(default_factory=dict)
+    model: ResidualModel | None = None
+
+
+@dataclass(frozen=True)
+class LearnerSummary:
+    """Table 5.1's row of one learner.
+
+    Attributes:
+        dls_mse_mean: mean over folds of the held-out ΔL_s MSE [mm²].
+        dls_mse_std: its standard deviation over folds [mm²].
+        heldout_rmse_before_m: landing RMSE of all held-out throws without the residual [m].
+        heldout_rmse_after_m: the same with the residual [m].
+        folds: per-fold results.
+    """
+
+    dls_mse_mean: float
+    dls_mse_std: float
+    heldout_rmse_before_m: float
+    heldout_rmse_after_m: float
+    folds: list[FoldResult]
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON form (`cell learn --json`)."""
+        return {
+            "dls_mse_mean": self.dls_mse_mean,
+            "dls_mse_std": self.dls_mse_std,
+            "heldout_rmse_before_m": self.heldout_rmse_before_m,
+            "heldout_rmse_after_m": self.heldout_rmse_after_m,
+            "folds": [
+                {
+                    "held_out": list(f.fold.held_out),
+                    "dls_mse_mm2": f.dls_mse_mm2,
+                    "n_test": int(f.test_rows.size),
+                    "rmse_before_m": float(np.sqrt(np.mean(f.sq_err_before_m2))),
+                    "rmse_after_m": float(np.sqrt(np.mean(f.sq_err_after_m2))),
+                    "best_params": {k: _plain(v) for k, v in f.best_params.items()},
+                }
+                for f in self.folds
+            ],
+        }
+
+
+def _plain(v: Any) -> Any:
+    return list(v) if isinstance(v, tuple) else v
+
+
+def round_robin_folds(object_ids: list[str], *, hold_out: int = 2, seed: int = 0) -> list[Fold]:
+    """Disjoint folds of `hold_out` objects each, every object held out exactly once
+    (a leftover smaller than `hold_out` joins the last fold); objects are shuffled
+    with `seed` first.
+
+    Raises:
+        InvalidParameter: fewer objects than hold_out + 2 (training needs 2 for its inner CV).
+    """
+    ids = sorted(set(object_ids))
+    if hold_out < 1 or len(ids) < hold_out + 2:
+        raise InvalidParameter(
+            f"a round-robin holding out {hold_out} objects needs at least {hold_out + 2} objects; "
+            f"the log has {len(ids)}"
+        )
+    order = [ids[i] for i in np.random.default_rng(seed).permutation(len(ids))]
+    chunks = [order[i : i + hold_out] for i in range(0, len(order), hold_out)]
+    if len(chunks) > 1 and len(chunks[-1]) < hold_out:
+        chunks[-2].extend(chunks.pop())
+    return [Fold(held_out=tuple(sorted(c)), train=tuple(sorted(set(ids) - set(c)))) for c in chunks]
+
+
+def residual_landing(
+    model: ResidualModel,
+    data: TrainingData,
+    rows: np.ndarray,
+    predict: Callable[[ThrowBatch], Landing],
+    iterations: int = 2,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The model-with-residual landing of logged throws: the model's landing at
+    L_used - ΔL_s, with ΔL_s predicted at that stroke (fixed-point iteration).
+
+    Returns:
+        (landing points [m, W] shape (k, 2), ΔL_s [m] shape (k,)).
+    """
+    batch = data.batch.take(rows)
+    x = data.features[rows].copy()
+    x[:, FEATURE_NAMES.index("stroke_m")] = batch.stroke
+    from cell.model.band import band_angle, band_stretch
+
+    width = batch.size[:, 0]
+    delta = np.zeros(len(batch))
+    for _ in range(iterations + 1):
+        s = batch.stroke - delta
+        x[:, FEATURE_NAMES.index("stroke_m")] = s
+        x[:, FEATURE_NAMES.index("band_stretch_m")] = band_stretch(s, width, model.ee)
+        x[:, FEATURE_NAMES.index("band_angle_rad")] = band_angle(s, width, model.ee)
+        delta = model.predict_features(x)
+    eq = ThrowBatch(
+        **{
+            **{k: getattr(batch, k) for k in batch.__dataclass_fields__},
+            "stroke": batch.stroke - delta,
+        }
+    )
+    return predict(eq).xy, delta
+
+
+def round_robin(
+    data: TrainingData,
+    *,
+    learners: tuple[str, ...] = LEARNERS,
+    hold_out: int = 2,
+    grid: str = "full",
+    seed: int = 0,
+    predict: Callable[[ThrowBatch], Landing] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, LearnerSummary]:
+    """Table 5.1: the round-robin evaluation of each learner.
+
+    Args:
+        data: from `training_data`.
+        learners: which learners.
+        hold_out: objects held out per fold (thesis: 2).
+        grid: "small" or "full" hyper-parameter grids.
+        seed: shuffles the objects into folds; random state of the learners.
+        predict: the model, batch -> Landing (default: nominal with the data's ee).
+        progress: called with a short text after each fit (the CLI's progress bar).
+
+    Returns:
+        learner name -> its summary.
+    """
+    ee = data.ee
+    if predict is None:
+
+        def predict(b: ThrowBatch) -> Landing:
+            return predict_landing(b, ee, strict=False, check_stroke=False)
+
+    usable_ids = sorted(set(data.groups[data.usable].tolist()))
+    folds = round_robin_folds(usable_ids, hold_out=hold_out, seed=seed)
+    observed = data.table.landed
+    before_all = predict(data.batch).xy
+    out: dict[str, LearnerSummary] = {}
+    for name in learners:
+        results: list[FoldResult] = []
+        for fold in folds:
+            held = np.isin(data.groups, fold.held_out)
+            model = train_residual(data, learner=name, grid=grid, rows=~held, seed=seed)
+            if set(model.training_objects) & set(fold.held_out):
+                raise InvalidParameter("internal: a held-out object reached training")
+            test = np.flatnonzero(held & data.usable)
+            pred = model.predict_features(data.features[test])
+            err = (pred - data.targets.delta_stroke[test]) * 1000.0
+            after_xy, _ = residual_landing(model, data, test, predict)
+            results.append(
+                FoldResult(
+                    fold=fold,
+                    learner=name,
+                    test_rows=test,
+                    delta_pred_m=pred,
+                    dls_mse_mm2=float(np.mean(err**2)),
+                    sq_err_before_m2=np.sum((before_all[test] - observed[test]) ** 2, axis=1),
+                    sq_err_after_m2=np.sum((after_xy - observed[test]) ** 2, axis=1),
+                    training_objects=model.training_objects,
+                    best_params=model.best_params,
+                    model=model,
+                )
+            )
+            if progress is not None:
+                progress(f"{name} held out {', '.join(fold.held_out)}")
+        mses = np.array([r.dls_mse_mm2 for r in results])
+        out[name] = LearnerSummary(
+            dls_mse_mean=float(mses.mean()),
+            dls_mse_std=float(mses.std()),
+            heldout_rmse_before_m=float(
+                np.sqrt(np.mean(np.concatenate([r.sq_err_before_m2 for r in results])))
+            ),
+            heldout_rmse_after_m=float(
+                np.sqrt(np.mean(np.concatenate([r.sq_err_after_m2 for r in results])))
+            ),
+            folds=results,
+        )
+        log.info(
+            "%s: ΔL_s MSE %.4f ± %.4f mm², held-out landing RMSE %.4f -> %.4f m",
+            name,
+            out[name].dls_mse_mean,
+            out[name].dls_mse_std,
+            out[name].heldout_rmse_before_m,
+            out[name].heldout_rmse_after_m,
+        )
+    return out
