@@ -321,8 +321,11 @@ class Orchestrator:
         from cell.optimize.plan import plan_throw
 
         goal = (*target.position, target.rim_height)
-        # identified η_o where the parameter file has them (seen objects), else the catalogue's
-        model_obj = self.params.objects.get(obj.name, obj)
+        # Identified η_o where the parameter file has them (seen objects), else the
+        # catalogue's; with a residual, only those the residual was trained with, so
+        # that L_s + ΔL_s means what it meant in training.
+        use_identified = self.residual is None or obj.name in self.residual.identified_objects
+        model_obj = self.params.objects.get(obj.name, obj) if use_identified else obj
         plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
         if self.residual is None:
             return plan, 0.0
