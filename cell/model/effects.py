@@ -1,0 +1,492 @@
+"""Effects: augmentations of the nominal throw model (GAP.md's vocabulary).
+
+Each effect is a frozen dataclass with a few parameters (SI units in their
+names), bounds, a typical scale, the phase it acts in and, where its size
+hangs on a logged quantity, that quantity's name (for the permutation
+control of the sim-to-real diagnosis). Every form is physically shaped:
+
+| effect | form |
+|---|---|
+| band_mass | the push drives m + m_b (m_b = `mass_kg`) |
+| band_damping | f_o scaled by (1 - c ΔL), c = `per_m` [1/m]: a loss growing with stretch |
+| shape_stretch | curved or irregular objects (cylinder, sphere, mesh) stretch the band by k·a more |
+| stroke_offset | the true stroke is the logged one + δ (`delta_m`) |
+| release_pitch | the object leaves at elevation + δ (`delta_rad`) |
+| downwash | air moves down at w = k (rpm / 5000)^p within `radius_m` of the release (horizontally) |
+| wind | a constant air velocity (`x_mps`, `y_mps`, `z_mps`) in the drag law |
+| spin | Magnus lift ½ρA C_L |v|² / m normal to v in its vertical plane, C_L = c tanh(S / c), S = ω r / |v| |
+| tracking_scale | the tracker logs s · true positions (about the world origin); release poses and planes are the robot's, true |
+| bounce | the logged point is the rest point: touchdown + v_h |v_h| / (2 μ g) |
+
+`predict_with_effects` evaluates a batch with any set of effects; launch
+effects reuse `predict_landing`'s push overrides, flight effects use the 3-D
+integrator of `cell.model.flight3d`. With no effects it is exactly the
+nominal model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import astuple, dataclass, fields
+from typing import Any, ClassVar
+
+import numpy as np
+
+from cell.errors import InvalidParameter
+from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.flight3d import fly
+from cell.model.objects import SHAPES
+from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.throw import (
+    Landing,
+    ThrowBatch,
+    drag_constant,
+    launch_state,
+    no_landing_error,
+    predict_landing,
+    throw_axis,
+)
+
+__all__ = [
+    "Effect",
+    "BandMass",
+    "BandDamping",
+    "ShapeStretch",
+    "StrokeOffset",
+    "ReleasePitch",
+    "Downwash",
+    "Wind",
+    "Spin",
+    "TrackingScale",
+    "Bounce",
+    "EFFECTS",
+    "PHASES",
+    "effects_from_mapping",
+    "effects_to_mapping",
+    "predict_with_effects",
+    "flight_accel",
+]
+
+PHASES = ("launch", "flight", "landing", "measurement")
+_CURVED = np.array([s in ("cylinder", "sphere", "mesh") for s in SHAPES])
+DOWNWASH_EDGE_M = 0.05  # [m] width of the smooth edge of the downwash column
+DOWNWASH_REF_RPM = 5000.0  # [rpm] rotor speed at which the downwash speed is k
+
+
+@dataclass(frozen=True)
+class Effect:
+    """Base of all effects: parameters are the dataclass fields (floats, SI)."""
+
+    name: ClassVar[str] = ""
+    phase: ClassVar[str] = ""
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ()
+    scale: ClassVar[tuple[float, ...]] = ()  # typical size of each parameter
+    hangs_on: ClassVar[str | None] = None  # logged quantity for the permutation control
+
+    def vector(self) -> np.ndarray:
+        """The parameters as an array, in field order."""
+        return np.asarray(astuple(self), float)
+
+    @classmethod
+    def param_names(cls) -> tuple[str, ...]:
+        """The parameter names, in field order."""
+        return tuple(f.name for f in fields(cls))  # type: ignore[arg-type]
+
+    @classmethod
+    def from_vector(cls, x: Sequence[float] | np.ndarray) -> Effect:
+        """The effect with these parameter values (field order)."""
+        return cls(*[float(v) for v in x])
+
+    @classmethod
+    def neutral(cls) -> Effect:
+        """The effect at the size where it does nothing."""
+        return cls()
+
+    def params(self) -> dict[str, float]:
+        """The parameters as a plain dict."""
+        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+    def __post_init__(self) -> None:
+        for f, (lo, hi) in zip(fields(self), self.bounds, strict=True):
+            v = getattr(self, f.name)
+            if not np.isfinite(v) or v < lo - 1e-12 or v > hi + 1e-12:
+                raise InvalidParameter(
+                    f"effect {self.name}: {f.name}={v!r} is outside its range [{lo}, {hi}]"
+                )
+
+
+@dataclass(frozen=True)
+class BandMass(Effect):
+    """Part of the band moves with the object during the push."""
+
+    name: ClassVar[str] = "band_mass"
+    phase: ClassVar[str] = "launch"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 0.2),)
+    scale: ClassVar[tuple[float, ...]] = (0.01,)
+    hangs_on: ClassVar[str | None] = "mass"
+    mass_kg: float = 0.0  # [kg] band mass driven with the object
+
+
+@dataclass(frozen=True)
+class BandDamping(Effect):
+    """The band loses a share c·ΔL of its push on release."""
+
+    name: ClassVar[str] = "band_damping"
+    phase: ClassVar[str] = "launch"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 8.0),)
+    scale: ClassVar[tuple[float, ...]] = (1.0,)
+    hangs_on: ClassVar[str | None] = "stretch"
+    per_m: float = 0.0  # [1/m] loss per metre of stretch
+
+
+@dataclass(frozen=True)
+class ShapeStretch(Effect):
+    """Curved or irregular objects stretch the band by k·a more (a = grip width)."""
+
+    name: ClassVar[str] = "shape_stretch"
+    phase: ClassVar[str] = "launch"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-1.0, 1.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.1,)
+    hangs_on: ClassVar[str | None] = "shape"
+    k: float = 0.0  # [-] extra stretch per metre of width
+
+
+@dataclass(frozen=True)
+class StrokeOffset(Effect):
+    """The true stroke is the logged one plus a constant."""
+
+    name: ClassVar[str] = "stroke_offset"
+    phase: ClassVar[str] = "launch"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-0.03, 0.03),)
+    scale: ClassVar[tuple[float, ...]] = (0.003,)
+    delta_m: float = 0.0  # [m]
+
+
+@dataclass(frozen=True)
+class ReleasePitch(Effect):
+    """The object leaves at the commanded elevation plus a constant."""
+
+    name: ClassVar[str] = "release_pitch"
+    phase: ClassVar[str] = "launch"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-0.4, 0.4),)
+    scale: ClassVar[tuple[float, ...]] = (0.03,)
+    delta_rad: float = 0.0  # [rad]
+
+
+@dataclass(frozen=True)
+class Downwash(Effect):
+    """Rotor downwash: air moving down near the drone, growing with rotor speed."""
+
+    name: ClassVar[str] = "downwash"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 40.0), (0.02, 5.0), (0.5, 2.5))
+    scale: ClassVar[tuple[float, ...]] = (2.0, 0.3, 0.5)
+    hangs_on: ClassVar[str | None] = "rotor_rpm"
+    speed_mps: float = 0.0  # [m/s] downward air speed at DOWNWASH_REF_RPM
+    radius_m: float = 0.5  # [m] horizontal reach of the column around the release point
+    exponent: float = 1.0  # [-] w ∝ rpm^exponent
+
+
+@dataclass(frozen=True)
+class Wind(Effect):
+    """A steady air flow in the cell (world frame)."""
+
+    name: ClassVar[str] = "wind"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-30.0, 30.0),) * 3
+    scale: ClassVar[tuple[float, ...]] = (1.0, 1.0, 1.0)
+    x_mps: float = 0.0
+    y_mps: float = 0.0
+    z_mps: float = 0.0
+
+
+@dataclass(frozen=True)
+class Spin(Effect):
+    """Magnus lift from a spin the object leaves with (positive = backspin)."""
+
+    name: ClassVar[str] = "spin"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-600.0, 600.0), (0.05, 1.0))
+    scale: ClassVar[tuple[float, ...]] = (20.0, 0.2)
+    spin_rad_s: float = 0.0  # [rad/s]
+    lift_max: float = 0.4  # [-] saturated lift coefficient
+
+
+@dataclass(frozen=True)
+class TrackingScale(Effect):
+    """The tracking system sees positions scaled by s about its (the world) origin."""
+
+    name: ClassVar[str] = "tracking_scale"
+    phase: ClassVar[str] = "measurement"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.5, 2.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.01,)
+    scale_factor: float = 1.0  # [-]
+
+
+@dataclass(frozen=True)
+class Bounce(Effect):
+    """The logged point is where the object came to rest after sliding."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.05,)
+    inv_mu: float = 0.0  # [-] 1/μ, the inverse friction coefficient of the slide
+
+
+EFFECTS: dict[str, type[Effect]] = {
+    c.name: c
+    for c in (
+        BandMass,
+        BandDamping,
+        ShapeStretch,
+        StrokeOffset,
+        ReleasePitch,
+        Downwash,
+        Wind,
+        Spin,
+        TrackingScale,
+        Bounce,
+    )
+}
+
+
+def effects_from_mapping(mapping: Mapping[str, Mapping[str, Any]] | None) -> list[Effect]:
+    """Effects from a parameter file's `effects` mapping {name: {param: value}}.
+
+    Raises:
+        InvalidParameter: an unknown effect or parameter, or a value out of range.
+    """
+    out: list[Effect] = []
+    for name, values in (mapping or {}).items():
+        cls = EFFECTS.get(str(name))
+        if cls is None:
+            raise InvalidParameter(f"effects: unknown effect {name!r}; valid: {', '.join(EFFECTS)}")
+        values = values or {}
+        if not isinstance(values, Mapping):
+            raise InvalidParameter(f"effects.{name}: must map parameter names to numbers")
+        names = cls.param_names()
+        bad = [k for k in values if k not in names]
+        if bad:
+            raise InvalidParameter(
+                f"effects.{name}: unknown parameter(s) {bad}; valid: {', '.join(names)}"
+            )
+        try:
+            vals = {k: float(v) for k, v in values.items()}
+        except (TypeError, ValueError):
+            raise InvalidParameter(f"effects.{name}: parameters must be numbers") from None
+        out.append(cls(**vals))
+    return out
+
+
+def effects_to_mapping(effects: Sequence[Effect]) -> dict[str, dict[str, float]]:
+    """The parameter-file form {name: {param: value}} of a list of effects."""
+    return {e.name: e.params() for e in effects}
+
+
+def _find(effects: Sequence[Effect], cls: type[Effect]) -> Any:
+    for e in effects:
+        if isinstance(e, cls):
+            return e
+    return None
+
+
+def _permuted(values: np.ndarray, permutation: np.ndarray | None) -> np.ndarray:
+    return values if permutation is None else values[permutation]
+
+
+def launch_overrides(
+    batch: ThrowBatch,
+    ee: EndEffectorParams,
+    effects: Sequence[Effect],
+    *,
+    permutation: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The push f_o [N], the pushed mass [kg] and the throw axis (n, 3) under the launch effects.
+
+    Args:
+        batch: the throws.
+        ee: end-effector parameters.
+        effects: the effects (non-launch ones are ignored).
+        permutation: when given, each effect's own term reads the quantity it hangs
+            on from the throws in this order (the permutation control).
+    """
+    so = _find(effects, StrokeOffset)
+    bm = _find(effects, BandMass)
+    bd = _find(effects, BandDamping)
+    ss = _find(effects, ShapeStretch)
+    rp = _find(effects, ReleasePitch)
+    stroke = batch.stroke + (so.delta_m if so else 0.0)
+    width = batch.size[:, 0]
+    stretch = band_stretch(stroke, width, ee)
+    if ss is not None:
+        curved = _permuted(_CURVED[batch.shape], permutation)
+        stretch = stretch + ss.k * curved * _permuted(width, permutation)
+    push = 2 * band_force(stretch, ee) * np.cos(band_angle(stroke, width, ee))
+    if bd is not None:
+        push = push * np.clip(1.0 - bd.per_m * _permuted(stretch, permutation), 0.0, None)
+    m = batch.mass
+    if bm is not None:
+        mp = _permuted(m, permutation)
+        push_mass = m * (mp + bm.mass_kg) / mp  # = m + m_b without permutation
+    else:
+        push_mass = m
+    elevation = batch.elevation + (rp.delta_rad if rp else 0.0)
+    return push, push_mass, throw_axis(elevation, batch.azimuth)
+
+
+def _flight_accel(
+    batch: ThrowBatch,
+    effects: Sequence[Effect],
+    rotor_rpm: np.ndarray,
+    permutation: np.ndarray | None,
+) -> Any:
+    wind = _find(effects, Wind)
+    dw = _find(effects, Downwash)
+    sp = _find(effects, Spin)
+    if wind is None and dw is None and sp is None:
+        return None
+    w_const = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float) if wind else np.zeros(3)
+    centre = batch.position[:, :2]
+    if dw is not None:
+        rpm = _permuted(rotor_rpm, permutation)
+        w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
+    if sp is not None:
+        kl = 0.5 * RHO_AIR * _area(batch) / batch.mass  # [1/m]
+        radius = batch.size.max(axis=1) / 2
+
+    def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
+        w = np.broadcast_to(w_const, p.shape).copy()
+        if dw is not None:
+            rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
+            inside = 0.5 * (1.0 + np.tanh((dw.radius_m - rho) / DOWNWASH_EDGE_M))
+            w[:, 2] -= w_dw[idx] * inside
+        extra = None
+        if sp is not None:
+            rel = v - w
+            speed = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
+            # normal to v in its vertical plane, pointing up for backspin
+            nz = 1.0 - (rel[:, 2] / speed) ** 2
+            n = -rel * (rel[:, 2] / speed**2)[:, None]
+            n[:, 2] += 1.0
+            n /= np.sqrt(np.maximum(nz, 1e-12))[:, None]
+            s_ratio = sp.spin_rad_s * radius[idx] / speed
+            c_l = sp.lift_max * np.tanh(s_ratio / sp.lift_max)
+            extra = (kl[idx] * c_l * speed**2)[:, None] * n
+        return w, extra
+
+    return accel
+
+
+def flight_accel(
+    batch: ThrowBatch,
+    effects: Sequence[Effect],
+    rotor_rpm: np.ndarray | None = None,
+    *,
+    permutation: np.ndarray | None = None,
+) -> Any:
+    """The flight effects' air velocity and extra acceleration as `flight3d.Accel`
+    (None when no flight effect is present)."""
+    rpm = np.zeros(len(batch)) if rotor_rpm is None else np.asarray(rotor_rpm, float)
+    return _flight_accel(batch, effects, rpm, permutation)
+
+
+def _area(batch: ThrowBatch) -> np.ndarray:
+    from cell.model.objects import drag_area
+
+    return np.asarray(drag_area(batch.shape, batch.size))
+
+
+def predict_with_effects(
+    batch: ThrowBatch,
+    ee: EndEffectorParams,
+    effects: Sequence[Effect] | Mapping[str, Mapping[str, Any]] | None = None,
+    *,
+    rotor_rpm: np.ndarray | None = None,
+    launch: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    permutation: np.ndarray | None = None,
+    strict: bool = False,
+    check_stroke: bool = False,
+    step: float = 0.01,
+) -> Landing:
+    """Observed landing points of a batch with the model plus effects.
+
+    Args:
+        batch: the throws.
+        ee: end-effector parameters.
+        effects: a list of effects, or a parameter file's mapping {name: {param: value}}.
+        rotor_rpm: rotor speed per throw [rpm] (downwash); zeros when None.
+        launch: observed launch states (position (n, 3) [m], velocity (n, 3) [m/s],
+            time since the release command (n,) [s]) that replace the modelled push
+            where finite (throws from another launcher, diagnosed from tracks).
+        permutation: the permutation control: effects read the logged quantity they
+            hang on in this order.
+        strict: raise NoLanding when a throw never reaches its plane.
+        check_stroke: reject strokes outside the end-effector's range.
+        step: RK4 step of the 3-D flight integrator [s] (flight effects only).
+
+    Returns:
+        The landings as observed (with a measurement effect, on the observed scale).
+
+    Raises:
+        InvalidParameter: an unknown effect or bad parameter; a stroke out of range
+            with check_stroke.
+        NoLanding: with strict, when a throw never reaches its plane.
+    """
+    if effects is None:
+        effs: list[Effect] = []
+    elif isinstance(effects, Mapping):
+        effs = effects_from_mapping(effects)
+    else:
+        effs = list(effects)
+    n = len(batch)
+    rpm = np.zeros(n) if rotor_rpm is None else np.asarray(rotor_rpm, float)
+    ts = _find(effs, TrackingScale)
+    s = ts.scale_factor if ts else 1.0
+    if check_stroke:
+        batch.check_stroke(ee)
+    push, push_mass, axis = launch_overrides(batch, ee, effs, permutation=permutation)
+    accel = _flight_accel(batch, effs, rpm, permutation)
+    given = np.zeros(n, bool)
+    if launch is not None:
+        lp, lv, lt = (np.asarray(a, float) for a in launch)
+        given = np.isfinite(lt) & np.all(np.isfinite(lp), axis=1) & np.all(np.isfinite(lv), axis=1)
+    if accel is None and not given.any():
+        land = predict_landing(
+            batch, ee, strict=False, check_stroke=False, push=push, push_mass=push_mass, axis=axis
+        )
+        xyz_t = np.c_[land.x, land.y, batch.land_z]
+        v_imp, t_fl, landed = land.impact_velocity, land.t_flight, land.landed
+        p1, v1 = land.launch_position, land.launch_velocity
+    else:
+        mod = ~given
+        p1 = np.full((n, 3), np.nan)
+        v1 = np.full((n, 3), np.nan)
+        t1 = np.full(n, ee.dt)
+        if mod.any():
+            sub = batch.take(mod)
+            p1[mod], v1[mod] = launch_state(
+                sub, ee, push=push[mod], push_mass=push_mass[mod], axis=axis[mod]
+            )
+        if given.any():
+            p1[given], v1[given], t1[given] = lp[given] / s, lv[given] / s, lt[given]
+        k = drag_constant(batch.shape, batch.mass, batch.size)
+        res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
+        xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
+    xy = xyz_t[:, :2].copy()
+    bo = _find(effs, Bounce)
+    if bo is not None and bo.inv_mu > 0:
+        vh = v_imp[:, :2]
+        xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
+    xy = xy * s
+    if strict and not np.all(landed):
+        raise no_landing_error(np.flatnonzero(~landed), batch)
+    return Landing(
+        x=xy[:, 0],
+        y=xy[:, 1],
+        t_flight=t_fl,
+        launch_position=p1,
+        launch_velocity=v1,
+        landed=landed,
+        impact_velocity=v_imp,
+    )
