@@ -31,6 +31,7 @@ import numpy as np
 
 from cell.errors import CellError, InvalidInput
 from cell.jobs import ItemSpec, Job
+from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
 
@@ -393,35 +394,22 @@ class Orchestrator:
         cross: Any,
     ) -> dict[str, Any]:
         """A THROW_LOG.md row for this throw (the release state as commanded and observed)."""
-        return {
-            "throw_id": throw_id,
-            "object_id": obj.name or obj.shape,
-            "shape": obj.shape,
-            "mass_kg": obj.mass,
-            "size_x_m": obj.size[0],
-            "size_y_m": obj.size[1],
-            "size_z_m": obj.size[2],
-            "stroke_m": stroke,
-            "x_m": float(released_at[0]),
-            "y_m": float(released_at[1]),
-            "z_m": float(released_at[2]),
-            "elevation_rad": plan.elevation_rad,
-            "azimuth_rad": plan.azimuth_rad,
-            "roll_rad": plan.roll_rad,
-            "vx_mps": 0.0,
-            "vy_mps": 0.0,
-            "vz_mps": 0.0,
-            "platform": "arm",
-            "rotor_rpm": 0.0,
-            "land_z_m": target.rim_height,
-            "landed_x_m": float(cross[0]),
-            "landed_y_m": float(cross[1]),
-            "session": self.session,
-            "time_s": time.time(),
-            "t_flight_s": float(cross[2]),
-            "target_bin": target.id,
-            "bin_id": out.bin_id or "",
-        }
+        return throw_record(
+            throw_id,
+            obj,
+            stroke_m=stroke,
+            position_m=released_at,
+            elevation_rad=plan.elevation_rad,
+            azimuth_rad=plan.azimuth_rad,
+            roll_rad=plan.roll_rad,
+            land_z_m=target.rim_height,
+            landed_xy_m=cross[:2],
+            session=self.session,
+            time_s=time.time(),
+            t_flight_s=float(cross[2]),
+            target_bin=target.id,
+            bin_id=out.bin_id or "",
+        )
 
     # -- the run ---------------------------------------------------------------
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:

@@ -22,6 +22,7 @@ from cell.catalogue import catalogue
 from cell.endeffector.pybullet_backend import PyBulletEndEffector
 from cell.errors import InvalidParameter
 from cell.log.csvio import ThrowTable
+from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 from cell.sim.items import resolve_object
 from cell.sim.scene import CellScene
@@ -74,32 +75,19 @@ def throw_once(
             track.append(np.asarray(tr.samples))
     finally:
         scene.remove_item(item)
-    return {
-        "throw_id": throw_id,
-        "object_id": obj.name or obj.shape,
-        "shape": obj.shape,
-        "mass_kg": obj.mass,
-        "size_x_m": obj.size[0],
-        "size_y_m": obj.size[1],
-        "size_z_m": obj.size[2],
-        "stroke_m": stroke,
-        "x_m": float(position[0]),
-        "y_m": float(position[1]),
-        "z_m": float(position[2]),
-        "elevation_rad": elevation,
-        "azimuth_rad": azimuth,
-        "roll_rad": roll,
-        "vx_mps": 0.0,
-        "vy_mps": 0.0,
-        "vz_mps": 0.0,
-        "platform": "arm",
-        "rotor_rpm": 0.0,
-        "land_z_m": land_z,
-        "landed_x_m": x,
-        "landed_y_m": y,
-        "t_flight_s": t,
-        "session": "sim-calibrate",
-    }
+    return throw_record(
+        throw_id,
+        obj,
+        stroke_m=stroke,
+        position_m=position,
+        elevation_rad=elevation,
+        azimuth_rad=azimuth,
+        roll_rad=roll,
+        land_z_m=land_z,
+        landed_xy_m=(x, y),
+        t_flight_s=t,
+        session="sim-calibrate",
+    )
 
 
 def campaign_plan(
