@@ -46,6 +46,7 @@ SETTLE_S = 0.15  # [s] wait after a move so the end-effector and item come to re
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 ARM_SPEED_SCALE = 0.8  # fraction of the joint velocity/acceleration limits used
+CARRY_ACCEL_SCALE = 0.3  # fraction of the acceleration limits while an item is held (no slip)
 
 
 @dataclass(frozen=True)
@@ -228,7 +229,7 @@ class Orchestrator:
             [self.q, *waypoints],
             self.robot,
             velocity_scale=ARM_SPEED_SCALE,
-            acceleration_scale=ARM_SPEED_SCALE,
+            acceleration_scale=ARM_SPEED_SCALE if self.ee.item is None else CARRY_ACCEL_SCALE,
         )
         sc = self.scene
         sc.set_timestep(sc.dt_s)
