@@ -47,7 +47,7 @@ __all__ = [
 ]
 
 _PUSH_STEPS = 2  # RK4 steps across the ~12 ms push (drag changes little in it)
-_FLIGHT_STEP = 0.05  # [s] largest planar RK4 step after the push
+_FLIGHT_STEP = 0.07  # [s] largest planar RK4 step after the push
 _DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per step small
 
 
