@@ -1,0 +1,123 @@
+"""`cell gap`: the sim-to-real diagnosis of a throw log, and `cell gap check`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+from cell.errors import InvalidInput, InvalidParameter
+
+CHECK_HELP = (
+    "`cell gap check` draws campaigns with each effect of the vocabulary injected at a "
+    "random size (plus none, plus an effect outside it), diagnoses them blind and prints "
+    "the confusion table"
+)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "gap",
+        help="sim-to-real diagnosis: where the gap lies, which effect, how far it shrinks",
+        description=(
+            "Diagnose the gap between logged throws (THROW_LOG.md) and the model as "
+            "configured. " + CHECK_HELP + "."
+        ),
+    )
+    p.add_argument("throws", help="throws.csv, or `check` for the withheld-effect check")
+    p.add_argument("--tracks", metavar="CSV", help="observed tracks (tracks.csv)")
+    p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference)")
+    p.add_argument("--json", metavar="FILE", help="write the report (or the check) as JSON")
+    p.add_argument("--report", metavar="HTML", help="write the report as HTML with plots")
+    p.add_argument(
+        "--identify",
+        action="store_true",
+        help="re-identify the nominal band law on training throws of every fit",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of folds, permutations, bootstrap")
+    g = p.add_argument_group("check only")
+    g.add_argument("--quick", action="store_true", help="small campaigns (a smoke run)")
+    g.add_argument("--n", type=int, metavar="THROWS", help="throws per campaign (default 865)")
+    g.add_argument(
+        "--repeats",
+        type=int,
+        default=2,
+        help="times each configuration is thrown (2; 1 = no repeats to estimate noise from)",
+    )
+    g.add_argument("--truths", nargs="+", metavar="NAME", help="only these truths")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.throws == "check":
+        return _check(args)
+    from tqdm import tqdm
+
+    from cell.gap.report import format_table, write_html, write_json
+    from cell.gap.run import diagnose_log
+    from cell.log import read_throws_csv
+    from cell.log.csvio import read_tracks_csv
+    from cell.model.effects import effects_from_mapping
+    from cell.params import load_params
+
+    table = read_throws_csv(args.throws)
+    mp = load_params(args.params)
+    try:
+        base = tuple(effects_from_mapping(mp.effects))
+    except InvalidParameter as exc:
+        raise InvalidInput(f"{args.params}: {exc}") from None
+    tracks = read_tracks_csv(args.tracks) if args.tracks else None
+    with tqdm(desc="cell gap", unit="step", leave=False) as bar:
+
+        def tick(label: str) -> None:
+            bar.set_postfix_str(label)
+            bar.update(1)
+
+        d, prob = diagnose_log(
+            table,
+            mp.ee,
+            base_effects=base,
+            objects=mp.objects,
+            tracks=tracks,
+            identify=args.identify,
+            seed=args.seed,
+            progress=tick,
+        )
+    print(format_table(d.report))
+    if args.json:
+        write_json(d.report, args.json)
+        print(f"report -> {args.json}")
+    if args.report:
+        write_html(d, prob, args.report)
+        print(f"html report -> {args.report}")
+    return 0
+
+
+def _check(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from cell.gap.check import check_json, format_check, run_check
+    from cell.gap.report import jsonable
+    from cell.gap.world import TRUTHS
+
+    truths = tuple(args.truths) if args.truths else TRUTHS
+    bad = [t for t in truths if t not in TRUTHS]
+    if bad:
+        raise InvalidInput(f"--truths: unknown {bad}; valid: {', '.join(TRUTHS)}")
+    n = args.n or (300 if args.quick else 865)
+    if n < 60:
+        raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
+    if args.repeats < 1:
+        raise InvalidInput(f"--repeats {args.repeats}: must be ≥ 1")
+    with tqdm(total=len(truths), desc="cell gap check", unit="campaign", leave=False) as bar:
+
+        def tick(label: str) -> None:
+            bar.set_postfix_str(label)
+            bar.update(1)
+
+        rows = run_check(truths, n=n, seed=args.seed, repeats=args.repeats, progress=tick)
+    print(format_check(rows))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(jsonable(check_json(rows)), fh, indent=2, allow_nan=False)
+        print(f"check -> {args.json}")
+    return 0 if all(r.correct for r in rows) else 1

@@ -1,0 +1,347 @@
+"""The diagnosis: noise floor, effects ranked on held-out throws, and the verdict (GAP.md).
+
+Verdict rules:
+
+* the baseline B is the configured model on held-out throws (with
+  `identify`, its end-effector parameters are refitted on training throws);
+* B within 10 % of the noise floor F: `none`;
+* otherwise effects join one at a time, best first: one joins when it cuts
+  the held-out RMSE by ≥ 10 % of what is left, with a bootstrap interval of
+  the cut above zero, and survives the permutation control (for an effect
+  that hangs on a logged quantity, shuffling that quantity between throws
+  must take away at least a quarter of its cut, with an interval above zero);
+* when the joined effects bring the held-out RMSE A within 1.3 F, they are
+  the verdict; otherwise it is `unknown` (a second effect is tried together
+  with the first when one alone leaves a real gap; it joins only for the cut it adds
+  over the first effect refitted from the pair's solution).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cell.gap.fit import Score, score_set
+from cell.gap.noise import NoiseFloor, noise_floor
+from cell.gap.problem import BandStiffness, GapProblem, rmse
+from cell.gap.stats import bootstrap_cut
+from cell.model.effects import EFFECTS, Effect
+
+__all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects"]
+
+log = logging.getLogger(__name__)
+
+NONE_RATIO = 1.10  # B ≤ this × F: within noise
+VERDICT_RATIO = 1.30  # A ≤ this × F: explained
+MIN_CUT = 0.10  # an effect must cut this share of what is left
+PERM_SHARE = 0.25  # the permuted quantity must take away this share of the cut
+MAX_EFFECTS = 3
+# partners tried with one, with two chosen effects: this many of the best single effects,
+# and as many of those that best fit what the chosen ones leave
+PAIR_TRIES = (2, 1)
+
+
+@dataclass
+class Diagnosis:
+    """The diagnosis of a log: the GAP.md report and what its plots need."""
+
+    report: dict[str, Any]
+    baseline_residual: np.ndarray  # (n, 2) [m]
+    baseline_sq: np.ndarray  # per-throw held-out squared miss [m²]
+    verdict_sq: np.ndarray  # per-throw held-out squared miss after the verdict's effects [m²]
+    verdict_residual: np.ndarray  # (n, 2) [m] with the verdict's effects fitted on all
+    scores: dict[str, Score] = field(default_factory=dict)
+    noise: NoiseFloor | None = None
+
+
+def applicable_effects(prob: GapProblem) -> list[type[Effect]]:
+    """The effects the log can say anything about."""
+    out: list[type[Effect]] = []
+    launch_rows = bool(prob.has_stroke.any())
+    curved = np.isin(prob.batch.shape, [2, 3, 4])
+    for cls in EFFECTS.values():
+        if cls.phase == "launch" and not launch_rows:
+            continue
+        if cls.name == "downwash" and not np.any(prob.rotor_rpm > 0):
+            continue
+        if cls.name == "shape_stretch" and not (curved.any() and (~curved).any()):
+            continue
+        if cls.name == "band_mass" and np.ptp(prob.batch.mass[prob.has_stroke]) <= 0:
+            continue
+        out.append(cls)
+    return out
+
+
+def _partners(prob: GapProblem, first: Score, rest: list[type[Effect]]) -> list[str]:
+    """Effects ranked by how well each alone fits what the chosen ones leave (fitted on all
+    throws on top of the chosen effects held at their sizes): a quick ranking of partners,
+    whose joint fit and held-out score come after."""
+    from dataclasses import replace
+
+    from cell.gap.fit import fit_set
+
+    held = tuple(e for e in first.full.effects if not isinstance(e, BandStiffness))
+    fixed = replace(prob, base_effects=prob.base_effects + held)
+    all_idx = np.arange(len(prob))
+    fits = {c.name: fit_set(fixed, [c], all_idx, max_nfev=15 * len(c.bounds))[0] for c in rest}
+    return sorted(fits, key=lambda nm: fits[nm].train_rmse_m)
+
+
+def _at_bound(eff: Effect) -> list[str]:
+    """Parameters fitted onto a bound that is not their neutral value (a sign that the
+    effect is stretched to mimic something else)."""
+    out = []
+    neutral = eff.neutral().params()
+    for (name, v), (lo, hi) in zip(eff.params().items(), eff.bounds, strict=True):
+        span = hi - lo
+        if (v <= lo + 0.025 * span or v >= hi - 0.025 * span) and abs(v - neutral[name]) > 1e-9:
+            out.append(name)
+    return out
+
+
+def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
+    """The names of effect classes."""
+    return tuple(c.name for c in classes)
+
+
+def _cls(name: str) -> type[Effect]:
+    return BandStiffness if name == BandStiffness.name else EFFECTS[name]
+
+
+def _shrink(before: float, after: float) -> float:
+    return 100.0 * (1.0 - after / before) if before > 0 else 0.0
+
+
+def diagnose(
+    prob: GapProblem,
+    *,
+    identify: bool = False,
+    progress: Callable[[str], None] | None = None,
+) -> Diagnosis:
+    """Diagnose the gap between the logged throws and the configured model.
+
+    Args:
+        prob: the problem (the log and the configured model).
+        identify: re-identify the nominal band law (one stiffness factor) on the
+            training throws of every fit, the baseline's included.
+        progress: called with a short label before each step (the CLI's progress bar).
+
+    Returns:
+        The diagnosis.
+    """
+    tick = progress or (lambda s: None)
+    n = len(prob)
+    all_idx = np.arange(n)
+    prefix: list[type[Effect]] = [BandStiffness] if identify else []
+    tick("baseline")
+    identified: Score | None = None
+    if identify:
+        identified = score_set(prob, prefix)
+        r0 = prob.residual(all_idx, identified.full.effects)
+        base_sq = identified.heldout
+        fit_rmse = identified.full.train_rmse_m
+    else:
+        r0 = prob.residual(all_idx)
+        base_sq = np.sum(r0 * r0, axis=1)
+        fit_rmse = rmse(r0)
+    B = float(np.sqrt(base_sq.mean()))
+    tick("noise floor")
+    nf = noise_floor(prob, r0, prob.landing(all_idx, identified.full.effects if identified else ()))
+    F = nf.floor_m
+    scores: dict[str, Score] = {}
+    for cls in applicable_effects(prob):
+        tick(cls.name)
+        warm = None
+        if identified is not None:
+            neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
+            warm = np.r_[identified.full.x, neutral]
+        scores[cls.name] = score_set(prob, prefix + [cls], warm=warm)
+    ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
+    perm_cache: dict[tuple[str, ...], Score] = {}
+    tests: dict[str, dict[str, Any]] = {}
+
+    def passes(prev_sq: np.ndarray, cand: Score) -> bool:
+        prev = float(np.sqrt(prev_sq.mean()))
+        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=prob.seed)
+        t: dict[str, Any] = {
+            "cut_m": cut,
+            "cut_ci_m": [lo, hi],
+            "cut_share": cut / prev if prev > 0 else 0.0,
+        }
+        ok = cut >= MIN_CUT * prev and lo > 0
+        newest = _cls(cand.names[-1])
+        if ok and newest.hangs_on is not None:
+            tick(f"permutation {newest.name}")
+            classes = [_cls(nm) for nm in cand.names]
+            key = cand.names
+            if key not in perm_cache:
+                perm_cache[key] = score_set(prob, classes, permute=True, warm=None)
+            ps = perm_cache[key]
+            gain, plo, _ = bootstrap_cut(ps.heldout, cand.heldout, seed=prob.seed + 1)
+            survive = gain >= PERM_SHARE * cut and plo > 0
+            t["permutation"] = {
+                "quantity": newest.hangs_on,
+                "heldout_rmse_m": ps.heldout_rmse_m,
+                "gain_over_shuffled_m": gain,
+                "survives": bool(survive),
+            }
+            ok = ok and survive
+        t["passes"] = bool(ok)
+        tests["+".join(_public(cand.names))] = t
+        return ok
+
+    chosen: list[Score] = []
+    cur_sq = base_sq
+    if B > NONE_RATIO * F:
+        for s in ranked:
+            if passes(cur_sq, s):
+                chosen.append(s)
+                cur_sq = s.heldout
+                break
+        while chosen and len(chosen[-1].names) < MAX_EFFECTS:
+            A = float(np.sqrt(cur_sq.mean()))
+            if A <= VERDICT_RATIO * F:
+                break
+            have = chosen[-1].names
+            n_have = len(chosen[-1].full.x)
+            tries = PAIR_TRIES[min(len(_public(have)), len(PAIR_TRIES)) - 1]
+            combos: list[Score] = []
+            rest = [sc for sc in ranked if sc.names[-1] not in have]
+            quick = _partners(prob, chosen[-1], [_cls(sc.names[-1]) for sc in rest])
+            pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
+            for sc in [sc for sc in rest if sc.names[-1] in pick]:
+                classes = [_cls(nm) for nm in have] + [_cls(sc.names[-1])]
+                warm = np.concatenate([chosen[-1].full.x, sc.full.x[len(prefix) :]])
+                tick("+".join(_public(classes_names(classes))))
+                combo = score_set(prob, classes, warm=warm)
+                scores["+".join(_public(combo.names))] = combo
+                combos.append(combo)
+            combos.sort(key=lambda c: c.heldout_rmse_m)
+            best: Score | None = None
+            for combo in combos[:2]:
+                # drop-one: the chosen effects alone, refitted from where the pair put them,
+                # so that a partner only joins for what it adds itself
+                prev = [_cls(nm) for nm in have]
+                drop = score_set(prob, prev, warm=combo.full.x[:n_have])
+                prev_sq = drop.heldout if drop.heldout.mean() < cur_sq.mean() else cur_sq
+                if passes(prev_sq, combo):
+                    best = combo
+                    break
+            if best is None:
+                break
+            chosen.append(best)
+            cur_sq = best.heldout
+    joined = {"+".join(_public(c.names)) for c in chosen}
+    for key, t in tests.items():
+        t["joins"] = key in joined
+    A = float(np.sqrt(cur_sq.mean()))
+    if B <= NONE_RATIO * F:
+        verdict = ["none"]
+    elif chosen and A <= VERDICT_RATIO * F:
+        verdict = _public(chosen[-1].names)
+    elif not chosen and B <= VERDICT_RATIO * F:
+        verdict = ["none"]
+    else:
+        verdict = ["unknown"]
+    if verdict[0] in ("none", "unknown"):
+        v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
+    else:
+        v_sq = cur_sq
+    if chosen and verdict[0] != "none":
+        v_res = prob.residual(all_idx, chosen[-1].full.effects)
+    else:
+        v_res = r0
+    public_effects = (
+        [e for e in chosen[-1].full.effects if e.name != BandStiffness.name] if chosen else []
+    )
+    A_v = float(np.sqrt(v_sq.mean()))
+    _, slo, shi = _shrink_ci(base_sq, v_sq, prob.seed)
+    candidates = []
+    for s in ranked:
+        _, lo, hi = _shrink_ci(base_sq, s.heldout, prob.seed)
+        eff = s.full.effects[-1]
+        candidates.append(
+            {
+                "effect": eff.name,
+                "phase": eff.phase,
+                "heldout_rmse_m": s.heldout_rmse_m,
+                "shrink_pct": _shrink(B, s.heldout_rmse_m),
+                "shrink_ci_pct": [lo, hi],
+                "fit_rmse_m": s.full.train_rmse_m,
+                "params": eff.params(),
+                "at_bound": _at_bound(eff),
+            }
+        )
+    if identified is not None:
+        extra_id = {"band_stiffness_factor": identified.full.effects[0].params()["factor"]}
+    else:
+        extra_id = {}
+    report: dict[str, Any] = {
+        "throws": n,
+        "noise_floor_m": F,
+        "baseline": {"fit_rmse_m": fit_rmse, "heldout_rmse_m": B},
+        "where": {},
+        "candidates": candidates,
+        "verdict": {
+            "effects": verdict,
+            "heldout_rmse_m": A_v,
+            "shrink_pct": _shrink(B, A_v),
+            "shrink_ci_pct": [slo, shi],
+            "params": (
+                {e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}
+            ),
+            "partial_effects": (
+                [e.name for e in public_effects] if verdict[0] == "unknown" else []
+            ),
+        },
+        "noise": {
+            "method": nf.method,
+            "repeats_m": nf.repeats_m,
+            "repeat_dof": nf.repeat_dof,
+            "neighbours_m": nf.neighbours_m,
+            "model_m": nf.model_m,
+        },
+        "tests": tests,
+        "identified": extra_id,
+        "rules": {
+            "none_ratio": NONE_RATIO,
+            "verdict_ratio": VERDICT_RATIO,
+            "min_cut_share": MIN_CUT,
+            "permutation_share": PERM_SHARE,
+        },
+    }
+    return Diagnosis(
+        report=report,
+        baseline_residual=r0,
+        baseline_sq=base_sq,
+        verdict_sq=v_sq,
+        verdict_residual=v_res,
+        scores=scores,
+        noise=nf,
+    )
+
+
+def _public(names: tuple[str, ...] | list[str]) -> list[str]:
+    return [nm for nm in names if nm != BandStiffness.name]
+
+
+def _shrink_ci(
+    before_sq: np.ndarray, after_sq: np.ndarray, seed: int
+) -> tuple[float, float, float]:
+    """Shrink [%] and its 95 % bootstrap interval."""
+    rng = np.random.default_rng(seed + 2)
+    n = before_sq.size
+    ix = rng.integers(0, n, size=(1000, n))
+    b = np.sqrt(before_sq[ix].mean(axis=1))
+    a = np.sqrt(after_sq[ix].mean(axis=1))
+    vals = 100.0 * (1.0 - a / np.maximum(b, 1e-300))
+    lo, hi = np.percentile(vals, [2.5, 97.5])
+    return (
+        _shrink(float(np.sqrt(before_sq.mean())), float(np.sqrt(after_sq.mean()))),
+        float(lo),
+        float(hi),
+    )

@@ -1,0 +1,123 @@
+"""The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from cell.gap.conditions import conditions, worst_conditions
+from cell.gap.diagnose import Diagnosis, diagnose
+from cell.gap.problem import build_problem
+from cell.gap.tracks import fit_tracks, launch_arrays, track_phase
+from cell.log.csvio import ThrowTable
+from cell.model.effects import EFFECTS, Effect
+from cell.model.objects import SHAPES
+from cell.model.params import EndEffectorParams
+from cell.model.throw import drag_constant
+
+__all__ = ["diagnose_log"]
+
+
+def _k_of(table: ThrowTable) -> np.ndarray:
+    codes = np.array([SHAPES.index(s) for s in table.text("shape")])
+    size = np.stack([table.num("size_x_m"), table.num("size_y_m"), table.num("size_z_m")], -1)
+    return drag_constant(codes, table.num("mass_kg"), size)
+
+
+def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
+    rep = d.report
+    v = rep["verdict"]["effects"]
+    base = rep["baseline"]["heldout_rmse_m"]
+    if v == ["none"]:
+        return {
+            "phase": "none",
+            "evidence": (
+                f"no tracks; the held-out miss {base:.3f} m is within 10% of the noise "
+                f"floor {rep['noise_floor_m']:.3f} m"
+            ),
+        }
+    if v == ["unknown"]:
+        plausible = [c for c in rep["candidates"] if not c.get("at_bound")]
+        best = (plausible or rep["candidates"] or [None])[0]
+        if best is None:
+            return {"phase": "unknown", "evidence": "no effect could be tried"}
+        return {
+            "phase": best["phase"],
+            "evidence": (
+                f"no tracks; no named effect explains the landing misses; the best partial "
+                f"one, {best['effect']} ({best['phase']}), takes the held-out RMSE from "
+                f"{base:.3f} to {best['heldout_rmse_m']:.3f} m (noise floor "
+                f"{rep['noise_floor_m']:.3f} m)"
+            ),
+        }
+    phases = [EFFECTS[e].phase for e in v]
+    return {
+        "phase": phases[0],
+        "evidence": (
+            f"no tracks; the structure of the landing misses is that of "
+            f"{' + '.join(f'{e} ({p})' for e, p in zip(v, phases, strict=True))}: held-out "
+            f"RMSE {base:.3f} → {rep['verdict']['heldout_rmse_m']:.3f} m"
+        ),
+    }
+
+
+def diagnose_log(
+    table: ThrowTable,
+    ee: EndEffectorParams,
+    *,
+    base_effects: tuple[Effect, ...] = (),
+    objects: dict | None = None,
+    tracks: dict[str, np.ndarray] | None = None,
+    identify: bool = False,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[Diagnosis, Any]:
+    """Diagnose a throw log against the configured model.
+
+    Args:
+        table: the throw log.
+        ee: the configured end-effector parameters.
+        base_effects: effects the configured model already has (parameter file).
+        objects: identified object parameters by object id (parameter file).
+        tracks: observed tracks {throw_id: (k, 4) t, x, y, z} or None.
+        identify: re-identify the nominal band law on training throws.
+        seed: seed of folds, permutations and bootstraps.
+        progress: called with a short label per step.
+
+    Returns:
+        The diagnosis (its `report` is the GAP.md JSON) and the problem it was made on.
+
+    Raises:
+        InvalidInput: too few throws to diagnose.
+    """
+    launch = None
+    if tracks:
+        fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))
+        launch = launch_arrays(fit_all)
+    prob = build_problem(
+        table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
+    )
+    d = diagnose(prob, identify=identify, progress=progress)
+    rep = d.report
+    where: dict[str, Any] = {}
+    if tracks:
+        tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
+        tp = track_phase(prob, tf)
+        if tp.get("phase"):
+            where = {"phase": tp["phase"], "evidence": "tracks: " + tp["evidence"]}
+        rep["tracks"] = tp
+    if rep["verdict"]["effects"] == ["none"]:
+        evidence = _phase_from_verdict(d)["evidence"]
+        if where:
+            evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
+        where = {"phase": "none", "evidence": evidence}
+    if not where:
+        where = _phase_from_verdict(d)
+    rows = conditions(prob, d.baseline_sq, d.verdict_sq)
+    where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
+    rep["where"] = where
+    rep["conditions"] = rows
+    rep["other_launcher_throws"] = int((~prob.has_stroke).sum())
+    return d, prob
