@@ -79,6 +79,12 @@ def load_params(path: str | Path | None) -> ModelParams:
     effects = raw.get("effects") or {}
     if not isinstance(effects, dict):
         raise InvalidInput(f"{p}: effects must be a mapping of effect name to parameters")
+    from cell.model.effects import effects_from_mapping
+
+    try:
+        effects_from_mapping(effects)  # validate names, parameters and ranges now
+    except InvalidParameter as exc:
+        raise InvalidInput(f"{p}: {exc}") from None
     return ModelParams(ee=ee, objects=objects, effects=effects, note=str(raw.get("note", "")))
 
 

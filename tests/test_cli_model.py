@@ -174,3 +174,56 @@ def test_throw_adhoc_object_and_errors(capsys):
     assert "cube50" in capsys.readouterr().err  # lists the valid ids
     assert main(["throw", "--object", "cube50", "--stroke", "0.5"]) == 2
     assert "0.030 … 0.110" in capsys.readouterr().err
+
+
+def test_predict_honours_effects_switched_on_in_the_parameter_file(tmp_path, capsys):
+    rows = varied_rows(10)
+    src = tmp_path / "throws.csv"
+    write_log(src, rows)
+    (tmp_path / "nominal.yaml").write_text("end_effector: {}\n")
+    (tmp_path / "wind.yaml").write_text("effects: {wind: {x_mps: 3.0, y_mps: 0.0, z_mps: 0.0}}\n")
+    assert (
+        main(
+            [
+                "predict",
+                str(src),
+                "-o",
+                str(tmp_path / "a.csv"),
+                "--params",
+                str(tmp_path / "nominal.yaml"),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "predict",
+                str(src),
+                "-o",
+                str(tmp_path / "b.csv"),
+                "--params",
+                str(tmp_path / "wind.yaml"),
+            ]
+        )
+        == 0
+    )
+    a, b = read_throws_csv(tmp_path / "a.csv"), read_throws_csv(tmp_path / "b.csv")
+    # a tail wind along +x carries every throw farther along +x
+    assert np.all(b.num("pred_x_m") > a.num("pred_x_m"))
+    (tmp_path / "bad.yaml").write_text("effects: {gremlins: {}}\n")
+    assert (
+        main(
+            [
+                "predict",
+                str(src),
+                "-o",
+                str(tmp_path / "c.csv"),
+                "--params",
+                str(tmp_path / "bad.yaml"),
+            ]
+        )
+        == 2
+    )
+    err = capsys.readouterr().err
+    assert "bad.yaml" in err and "gremlins" in err and "band_mass" in err

@@ -39,7 +39,15 @@ def run(args: argparse.Namespace) -> int:
             f"L_s = {batch.stroke[i]} m is outside the end-effector's range "
             f"{mp.ee.stroke_min} … {mp.ee.stroke_max} m",
         )
-    land = predict_landing(batch, mp.ee, strict=False, check_stroke=False)
+    if mp.effects:
+        # a parameter file may switch identified effects on: predictions then include them
+        from cell.model.effects import predict_with_effects
+
+        land = predict_with_effects(
+            batch, mp.ee, mp.effects, rotor_rpm=table.num("rotor_rpm"), strict=False
+        )
+    else:
+        land = predict_landing(batch, mp.ee, strict=False, check_stroke=False)
     if not land.landed.all():
         i = int(np.flatnonzero(~land.landed)[0])
         raise LogFormatError(
