@@ -35,7 +35,7 @@ from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
 
-__all__ = ["ItemResult", "RunSummary", "Orchestrator", "summarise"]
+__all__ = ["ItemResult", "RunSummary", "Orchestrator", "run_items", "summarise"]
 
 log = logging.getLogger(__name__)
 
@@ -130,6 +130,23 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
         wall_time_s=wall_time_s,
         results=list(results),
     )
+
+
+def run_items(
+    job: Job,
+    run_item: Callable[[int, ItemSpec], ItemResult],
+    on_item: Callable[[ItemResult], None] | None = None,
+) -> RunSummary:
+    """Run every item of a job through `run_item`, reporting each to `on_item`, and
+    summarise (shared by the arm orchestrator and the platform runner)."""
+    t_wall = time.perf_counter()
+    results: list[ItemResult] = []
+    for i, spec in enumerate(job.expanded_items()):
+        res = run_item(i, spec)
+        results.append(res)
+        if on_item is not None:
+            on_item(res)
+    return summarise(results, time.perf_counter() - t_wall)
 
 
 def scene_params_path() -> str | None:
@@ -415,14 +432,7 @@ class Orchestrator:
     # -- the run ---------------------------------------------------------------
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
         """Sort every item of the job; `on_item` is called after each (progress)."""
-        t_wall = time.perf_counter()
-        results: list[ItemResult] = []
-        for i, spec in enumerate(self.job.expanded_items()):
-            res = self.run_item(i, spec)
-            results.append(res)
-            if on_item is not None:
-                on_item(res)
-        return summarise(results, time.perf_counter() - t_wall)
+        return run_items(self.job, self.run_item, on_item)
 
     def close(self) -> None:
         """Close the scene and any hardware end-effector."""

@@ -260,16 +260,9 @@ class PlatformRunner:
         Returns:
             The `cell.orchestrator.RunSummary`.
         """
-        from cell.orchestrator import summarise
+        from cell.orchestrator import run_items
 
-        t_wall = time.perf_counter()
-        results = []
-        for i, spec in enumerate(self.job.expanded_items()):
-            res = self.run_item(i, spec)
-            results.append(res)
-            if on_item is not None:
-                on_item(res)
-        return summarise(results, time.perf_counter() - t_wall)
+        return run_items(self.job, self.run_item, on_item)
 
     def close(self) -> None:
         """Close the scene."""
