@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from cell.cli.common import print_json
+from cell.cli.common import add_axis_args, print_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,14 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar=("X", "Y", "Z"),
         help="grip centre in the arm's base frame [m]",
     )
-    p.add_argument(
-        "--elevation",
-        type=float,
-        default=math.radians(30),
-        metavar="RAD",
-        help="throw-axis elevation [rad] (0.5236 = 30°)",
-    )
-    p.add_argument("--azimuth", type=float, default=0.0, metavar="RAD", help="azimuth [rad] (0)")
+    add_axis_args(p)
     p.add_argument(
         "--roll",
         type=float,

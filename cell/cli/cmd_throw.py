@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 
 from cell.catalogue import catalogue
-from cell.cli.common import add_object_args, object_from_args, print_json
+from cell.cli.common import add_axis_args, add_object_args, object_from_args, print_json
 from cell.model import ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
@@ -28,14 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar=("X", "Y", "Z"),
         help="release grip centre in the world frame [m] (0 0 0.6)",
     )
-    p.add_argument(
-        "--elevation",
-        type=float,
-        default=math.radians(30),
-        metavar="RAD",
-        help="throw-axis elevation [rad] (0.5236 = 30°)",
-    )
-    p.add_argument("--azimuth", type=float, default=0.0, metavar="RAD", help="azimuth [rad] (0)")
+    add_axis_args(p)
     p.add_argument(
         "--base-velocity",
         type=float,

@@ -14,7 +14,13 @@ from cell.catalogue import get_object
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import SHAPES, ObjectParams
 
-__all__ = ["add_object_args", "object_from_args", "print_json", "to_jsonable"]
+__all__ = [
+    "add_axis_args",
+    "add_object_args",
+    "object_from_args",
+    "print_json",
+    "to_jsonable",
+]
 
 
 def add_object_args(p: argparse.ArgumentParser) -> None:
@@ -30,6 +36,18 @@ def add_object_args(p: argparse.ArgumentParser) -> None:
         metavar=("X", "Y", "Z"),
         help="box extents [m], x = grip width",
     )
+
+
+def add_axis_args(p: argparse.ArgumentParser) -> None:
+    """--elevation and --azimuth of the throw axis [rad] (MODEL.md: u = (cos e cos a, cos e sin a, sin e))."""
+    p.add_argument(
+        "--elevation",
+        type=float,
+        default=math.radians(30),
+        metavar="RAD",
+        help="throw-axis elevation [rad] (0.5236 = 30°)",
+    )
+    p.add_argument("--azimuth", type=float, default=0.0, metavar="RAD", help="azimuth [rad] (0)")
 
 
 def object_from_args(args: argparse.Namespace) -> ObjectParams:
