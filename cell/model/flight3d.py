@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.model.params import G
-from cell.model.throw import _hermite, _hermite_root
+from cell.model.planar import hermite as _hermite
+from cell.model.planar import hermite_root as _hermite_root
 
 __all__ = ["Accel", "FlightResult", "acceleration", "fly", "sample_path"]
 

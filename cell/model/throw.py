@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -34,6 +33,7 @@ from cell.errors import InvalidParameter, NoLanding
 from cell.model.band import push_force
 from cell.model.objects import ObjectParams, drag_area, drag_coefficient
 from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.planar import flight_planar, flight_planar_one, hermite, hermite_root
 
 __all__ = [
     "ThrowBatch",
@@ -48,7 +48,6 @@ __all__ = [
 
 _PUSH_STEPS = 2  # RK4 steps across the ~12 ms push (drag changes little in it)
 _FLIGHT_STEP = 0.07  # [s] largest planar RK4 step after the push
-_DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per step small
 
 
 def throw_axis(elevation: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
@@ -294,155 +293,6 @@ def launch_state(
     return np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
 
 
-def _hermite_root(
-    z0: np.ndarray, z1: np.ndarray, w0: np.ndarray, w1: np.ndarray, level: np.ndarray
-) -> np.ndarray:
-    """Parameter s ∈ [0, 1] where the cubic Hermite z(s) (w = h·dz/dt) first reaches `level`
-    going down, with z0 > level ≥ z1. Safeguarded Newton from the secant guess."""
-    a = 2 * z0 - 2 * z1 + w0 + w1
-    b = -3 * z0 + 3 * z1 - 2 * w0 - w1
-    c = w0
-    d = z0 - level
-    lo = np.zeros_like(z0)
-    hi = np.ones_like(z0)
-    s = np.clip(d / np.maximum(z0 - z1, 1e-300), 0.0, 1.0)
-    for _ in range(8):
-        f = ((a * s + b) * s + c) * s + d
-        lo = np.where(f > 0, s, lo)
-        hi = np.where(f > 0, hi, s)
-        df = (3 * a * s + 2 * b) * s + c
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s_new = s - f / df
-        bad = ~np.isfinite(s_new) | (s_new < lo) | (s_new > hi)
-        s = np.where(bad, 0.5 * (lo + hi), s_new)
-    return s
-
-
-def _hermite(
-    y0: np.ndarray, y1: np.ndarray, w0: np.ndarray, w1: np.ndarray, s: np.ndarray
-) -> np.ndarray:
-    s2 = s * s
-    s3 = s2 * s
-    return (
-        (2 * s3 - 3 * s2 + 1) * y0
-        + (s3 - 2 * s2 + s) * w0
-        + (-2 * s3 + 3 * s2) * y1
-        + (s3 - s2) * w1
-    )
-
-
-def _rk4_planar(h: Any, z: Any, vh: Any, vz: Any, k: Any, step: float, sqrt: Any) -> tuple:
-    """One RK4 step of the planar flight (h, z, vh, vz) under gravity and drag -k|v|v.
-
-    Written once for arrays (sqrt = np.sqrt) and for Python floats (math.sqrt).
-    """
-    speed = sqrt(vh * vh + vz * vz)
-    a1h = -k * speed * vh
-    a1z = -k * speed * vz - G
-    vh2 = vh + 0.5 * step * a1h
-    vz2 = vz + 0.5 * step * a1z
-    s2 = sqrt(vh2 * vh2 + vz2 * vz2)
-    a2h = -k * s2 * vh2
-    a2z = -k * s2 * vz2 - G
-    vh3 = vh + 0.5 * step * a2h
-    vz3 = vz + 0.5 * step * a2z
-    s3 = sqrt(vh3 * vh3 + vz3 * vz3)
-    a3h = -k * s3 * vh3
-    a3z = -k * s3 * vz3 - G
-    vh4 = vh + step * a3h
-    vz4 = vz + step * a3z
-    s4 = sqrt(vh4 * vh4 + vz4 * vz4)
-    a4h = -k * s4 * vh4
-    a4z = -k * s4 * vz4 - G
-    return (
-        h + step / 6 * (vh + 2 * vh2 + 2 * vh3 + vh4),
-        z + step / 6 * (vz + 2 * vz2 + 2 * vz3 + vz4),
-        vh + step / 6 * (a1h + 2 * a2h + 2 * a3h + a4h),
-        vz + step / 6 * (a1z + 2 * a2z + 2 * a3z + a4z),
-    )
-
-
-def _flight_planar_one(
-    z: float, vh: float, vz: float, k: float, lz: float, max_step: float, t_max: float = 30.0
-) -> tuple[float, float, bool, float, float]:
-    """`_flight_planar` for a single throw in Python floats: the same steps and arithmetic,
-    without NumPy's per-call overhead (a planner verifies one throw at a time)."""
-    h, t = 0.0, 0.0
-    nan = math.nan
-    while t < t_max:
-        step = min(max_step, _DRAG_STEP_SCALE / max(k * math.sqrt(vh * vh + vz * vz), 1e-9))
-        h1, z1, vh1, vz1 = _rk4_planar(h, z, vh, vz, k, step, math.sqrt)
-        if z > lz >= z1:
-            s = float(
-                _hermite_root(*(np.array([v]) for v in (z, z1, step * vz, step * vz1, lz)))[0]
-            )
-            s2, s3 = s * s, s * s * s
-            dist = (
-                (2 * s3 - 3 * s2 + 1) * h
-                + (s3 - 2 * s2 + s) * (step * vh)
-                + (-2 * s3 + 3 * s2) * h1
-                + (s3 - s2) * (step * vh1)
-            )
-            return dist, t + s * step, True, vh + (vh1 - vh) * s, vz + (vz1 - vz) * s
-        if z1 <= lz and vz1 < 0:
-            break
-        h, z, vh, vz = h1, z1, vh1, vz1
-        t += step
-    return nan, nan, False, nan, nan
-
-
-def _flight_planar(
-    z: np.ndarray,
-    vh: np.ndarray,
-    vz: np.ndarray,
-    k: np.ndarray,
-    land_z: np.ndarray,
-    max_step: float,
-    t_max: float = 30.0,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Planar flight under gravity and drag from horizontal distance 0.
-
-    Returns (distance, time, landed, vh_at_impact, vz_at_impact), each shape (n,).
-    """
-    n = z.shape[0]
-    out_h = np.full(n, np.nan)
-    out_t = np.full(n, np.nan)
-    out_vh = np.full(n, np.nan)
-    out_vz = np.full(n, np.nan)
-    idx = np.arange(n)
-    h_pos = np.zeros(n)
-    t = 0.0
-    z = z.copy()
-    vh = vh.copy()
-    vz = vz.copy()
-    k = k.copy()
-    lz = land_z.copy()
-    while idx.size and t < t_max:
-        step = min(
-            max_step, float(_DRAG_STEP_SCALE / max(np.max(k * np.sqrt(vh * vh + vz * vz)), 1e-9))
-        )
-        h1, z1, vh1, vz1 = _rk4_planar(h_pos, z, vh, vz, k, step, np.sqrt)
-        cross = (z > lz) & (z1 <= lz)
-        if np.any(cross):
-            c = cross
-            s = _hermite_root(z[c], z1[c], step * vz[c], step * vz1[c], lz[c])
-            ids = idx[c]
-            out_h[ids] = _hermite(h_pos[c], h1[c], step * vh[c], step * vh1[c], s)
-            out_t[ids] = t + s * step
-            out_vh[ids] = vh[c] + (vh1[c] - vh[c]) * s
-            out_vz[ids] = vz[c] + (vz1[c] - vz[c]) * s
-        # drop crossed throws, and those below their plane still falling (never land)
-        keep = ~cross & ~((z1 <= lz) & (vz1 < 0))
-        t += step
-        if not np.all(keep):
-            idx = idx[keep]
-            h_pos, z, vh, vz, k, lz = h1[keep], z1[keep], vh1[keep], vz1[keep], k[keep], lz[keep]
-        else:
-            h_pos, z, vh, vz = h1, z1, vh1, vz1
-    landed = np.isfinite(out_t)
-    return out_h, out_t, landed, out_vh, out_vz
-
-
 def predict_landing(
     batch: ThrowBatch,
     ee: EndEffectorParams,
@@ -481,7 +331,7 @@ def predict_landing(
         dirx = np.where(vh > 0, v1[:, 0] / vh, 1.0)
         diry = np.where(vh > 0, v1[:, 1] / vh, 0.0)
     if len(batch) == 1:
-        one = _flight_planar_one(
+        one = flight_planar_one(
             float(p1[0, 2]),
             float(vh[0]),
             float(v1[0, 2]),
@@ -492,7 +342,7 @@ def predict_landing(
         dist, t, vhi, vzi = (np.array([one[i]], dtype=float) for i in (0, 1, 3, 4))
         landed = np.array([one[2]])
     else:
-        dist, t, landed, vhi, vzi = _flight_planar(
+        dist, t, landed, vhi, vzi = flight_planar(
             p1[:, 2], vh, v1[:, 2], k, batch.land_z, _FLIGHT_STEP
         )
     result = Landing(
@@ -561,9 +411,9 @@ def reference_landing(
         cross = (pa[:, 2] > lz[ids]) & (pn[:, 2] <= lz[ids])
         if cross.any():
             c = cross
-            s = _hermite_root(pa[c, 2], pn[c, 2], step * va[c, 2], step * vn[c, 2], lz[ids][c])
+            s = hermite_root(pa[c, 2], pn[c, 2], step * va[c, 2], step * vn[c, 2], lz[ids][c])
             for j in range(3):
-                out[ids[c], j] = _hermite(pa[c, j], pn[c, j], step * va[c, j], step * vn[c, j], s)
+                out[ids[c], j] = hermite(pa[c, j], pn[c, j], step * va[c, j], step * vn[c, j], s)
                 out_v[ids[c], j] = va[c, j] + (vn[c, j] - va[c, j]) * s
             out_t[ids[c]] = t + s * step
         gone = cross | ((pn[:, 2] <= lz[ids]) & (vn[:, 2] < 0))

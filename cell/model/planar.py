@@ -1,0 +1,168 @@
+"""Planar flight after the push, and the landing-plane crossing inside a step.
+
+After the push the only forces on the object are gravity and drag along its
+velocity, so its motion stays in the vertical plane of the launch velocity:
+(h, z, vh, vz), h the horizontal distance along that plane. RK4 steps are
+sized to the drag's time scale; the crossing of z = land_z is found on the
+cubic Hermite interpolant of each step (exact for a drag-free parabola).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from cell.model.params import G
+
+__all__ = ["flight_planar", "flight_planar_one", "hermite", "hermite_root", "rk4_planar"]
+
+_DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per step small
+
+
+def hermite_root(
+    z0: np.ndarray, z1: np.ndarray, w0: np.ndarray, w1: np.ndarray, level: np.ndarray
+) -> np.ndarray:
+    """Parameter s ∈ [0, 1] where the cubic Hermite z(s) (w = h·dz/dt) first reaches `level`
+    going down, with z0 > level ≥ z1. Safeguarded Newton from the secant guess."""
+    a = 2 * z0 - 2 * z1 + w0 + w1
+    b = -3 * z0 + 3 * z1 - 2 * w0 - w1
+    c = w0
+    d = z0 - level
+    lo = np.zeros_like(z0)
+    hi = np.ones_like(z0)
+    s = np.clip(d / np.maximum(z0 - z1, 1e-300), 0.0, 1.0)
+    for _ in range(8):
+        f = ((a * s + b) * s + c) * s + d
+        lo = np.where(f > 0, s, lo)
+        hi = np.where(f > 0, hi, s)
+        df = (3 * a * s + 2 * b) * s + c
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_new = s - f / df
+        bad = ~np.isfinite(s_new) | (s_new < lo) | (s_new > hi)
+        s = np.where(bad, 0.5 * (lo + hi), s_new)
+    return s
+
+
+def hermite(
+    y0: np.ndarray, y1: np.ndarray, w0: np.ndarray, w1: np.ndarray, s: np.ndarray
+) -> np.ndarray:
+    s2 = s * s
+    s3 = s2 * s
+    return (
+        (2 * s3 - 3 * s2 + 1) * y0
+        + (s3 - 2 * s2 + s) * w0
+        + (-2 * s3 + 3 * s2) * y1
+        + (s3 - s2) * w1
+    )
+
+
+def rk4_planar(h: Any, z: Any, vh: Any, vz: Any, k: Any, step: float, sqrt: Any) -> tuple:
+    """One RK4 step of the planar flight (h, z, vh, vz) under gravity and drag -k|v|v.
+
+    Written once for arrays (sqrt = np.sqrt) and for Python floats (math.sqrt).
+    """
+    speed = sqrt(vh * vh + vz * vz)
+    a1h = -k * speed * vh
+    a1z = -k * speed * vz - G
+    vh2 = vh + 0.5 * step * a1h
+    vz2 = vz + 0.5 * step * a1z
+    s2 = sqrt(vh2 * vh2 + vz2 * vz2)
+    a2h = -k * s2 * vh2
+    a2z = -k * s2 * vz2 - G
+    vh3 = vh + 0.5 * step * a2h
+    vz3 = vz + 0.5 * step * a2z
+    s3 = sqrt(vh3 * vh3 + vz3 * vz3)
+    a3h = -k * s3 * vh3
+    a3z = -k * s3 * vz3 - G
+    vh4 = vh + step * a3h
+    vz4 = vz + step * a3z
+    s4 = sqrt(vh4 * vh4 + vz4 * vz4)
+    a4h = -k * s4 * vh4
+    a4z = -k * s4 * vz4 - G
+    return (
+        h + step / 6 * (vh + 2 * vh2 + 2 * vh3 + vh4),
+        z + step / 6 * (vz + 2 * vz2 + 2 * vz3 + vz4),
+        vh + step / 6 * (a1h + 2 * a2h + 2 * a3h + a4h),
+        vz + step / 6 * (a1z + 2 * a2z + 2 * a3z + a4z),
+    )
+
+
+def flight_planar_one(
+    z: float, vh: float, vz: float, k: float, lz: float, max_step: float, t_max: float = 30.0
+) -> tuple[float, float, bool, float, float]:
+    """`flight_planar` for a single throw in Python floats: the same steps and arithmetic,
+    without NumPy's per-call overhead (a planner verifies one throw at a time)."""
+    h, t = 0.0, 0.0
+    nan = math.nan
+    while t < t_max:
+        step = min(max_step, _DRAG_STEP_SCALE / max(k * math.sqrt(vh * vh + vz * vz), 1e-9))
+        h1, z1, vh1, vz1 = rk4_planar(h, z, vh, vz, k, step, math.sqrt)
+        if z > lz >= z1:
+            s = float(hermite_root(*(np.array([v]) for v in (z, z1, step * vz, step * vz1, lz)))[0])
+            s2, s3 = s * s, s * s * s
+            dist = (
+                (2 * s3 - 3 * s2 + 1) * h
+                + (s3 - 2 * s2 + s) * (step * vh)
+                + (-2 * s3 + 3 * s2) * h1
+                + (s3 - s2) * (step * vh1)
+            )
+            return dist, t + s * step, True, vh + (vh1 - vh) * s, vz + (vz1 - vz) * s
+        if z1 <= lz and vz1 < 0:
+            break
+        h, z, vh, vz = h1, z1, vh1, vz1
+        t += step
+    return nan, nan, False, nan, nan
+
+
+def flight_planar(
+    z: np.ndarray,
+    vh: np.ndarray,
+    vz: np.ndarray,
+    k: np.ndarray,
+    land_z: np.ndarray,
+    max_step: float,
+    t_max: float = 30.0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Planar flight under gravity and drag from horizontal distance 0.
+
+    Returns (distance, time, landed, vh_at_impact, vz_at_impact), each shape (n,).
+    """
+    n = z.shape[0]
+    out_h = np.full(n, np.nan)
+    out_t = np.full(n, np.nan)
+    out_vh = np.full(n, np.nan)
+    out_vz = np.full(n, np.nan)
+    idx = np.arange(n)
+    h_pos = np.zeros(n)
+    t = 0.0
+    z = z.copy()
+    vh = vh.copy()
+    vz = vz.copy()
+    k = k.copy()
+    lz = land_z.copy()
+    while idx.size and t < t_max:
+        step = min(
+            max_step, float(_DRAG_STEP_SCALE / max(np.max(k * np.sqrt(vh * vh + vz * vz)), 1e-9))
+        )
+        h1, z1, vh1, vz1 = rk4_planar(h_pos, z, vh, vz, k, step, np.sqrt)
+        cross = (z > lz) & (z1 <= lz)
+        if np.any(cross):
+            c = cross
+            s = hermite_root(z[c], z1[c], step * vz[c], step * vz1[c], lz[c])
+            ids = idx[c]
+            out_h[ids] = hermite(h_pos[c], h1[c], step * vh[c], step * vh1[c], s)
+            out_t[ids] = t + s * step
+            out_vh[ids] = vh[c] + (vh1[c] - vh[c]) * s
+            out_vz[ids] = vz[c] + (vz1[c] - vz[c]) * s
+        # drop crossed throws, and those below their plane still falling (never land)
+        keep = ~cross & ~((z1 <= lz) & (vz1 < 0))
+        t += step
+        if not np.all(keep):
+            idx = idx[keep]
+            h_pos, z, vh, vz, k, lz = h1[keep], z1[keep], vh1[keep], vz1[keep], k[keep], lz[keep]
+        else:
+            h_pos, z, vh, vz = h1, z1, vh1, vz1
+    landed = np.isfinite(out_t)
+    return out_h, out_t, landed, out_vh, out_vz
