@@ -1,0 +1,113 @@
+"""YAML read for validation: every node keeps its line, and errors name the file,
+the line and the field path and say what would be valid.
+
+Loading uses yaml's safe composer only: a tag outside YAML's plain types is an
+error, never constructed.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import yaml
+
+from cell.errors import JobError
+
+__all__ = ["Checker", "Node", "to_tree"]
+
+
+class Node:
+    """A YAML value with its line, for error messages."""
+
+    def __init__(self, value: Any, line: int) -> None:
+        self.value = value
+        self.line = line
+
+
+_SAFE_TAGS = frozenset(t for t in yaml.SafeLoader.yaml_constructors if t)
+
+
+def to_tree(node: yaml.Node, path: str) -> Node:
+    line = node.start_mark.line + 1
+    if node.tag not in _SAFE_TAGS:
+        raise JobError(
+            f"{path}, line {line}: YAML tag {node.tag} is not allowed in a job file "
+            "(plain mappings, lists, text and numbers only)"
+        )
+    if isinstance(node, yaml.MappingNode):
+        out: dict[str, Node] = {}
+        for k, v in node.value:
+            key = (
+                yaml.safe_load(yaml.serialize(k)) if not isinstance(k, yaml.ScalarNode) else k.value
+            )
+            if str(key) in out:
+                raise JobError(f"{path}, line {k.start_mark.line + 1}: key {key!r} appears twice")
+            out[str(key)] = to_tree(v, path)
+        return Node(out, line)
+    if isinstance(node, yaml.SequenceNode):
+        return Node([to_tree(v, path) for v in node.value], line)
+    # resolve the scalar with the safe constructor alone
+    value = yaml.SafeLoader("").construct_object(node, deep=True)  # type: ignore[no-untyped-call]
+    return Node(value, line)
+
+
+class Checker:
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def fail(self, node: Node, field_path: str, msg: str) -> JobError:
+        return JobError(f"{self.path}, line {node.line}, {field_path}: {msg}")
+
+    def mapping(self, node: Node, fp: str, allowed: dict[str, str]) -> dict[str, Node]:
+        if not isinstance(node.value, dict):
+            raise self.fail(node, fp, f"must be a mapping with keys {sorted(allowed)}")
+        for k, v in node.value.items():
+            if k not in allowed:
+                raise self.fail(
+                    v,
+                    f"{fp}.{k}" if fp else k,
+                    f"unknown key {k!r}; valid keys here: {', '.join(sorted(allowed))}",
+                )
+        return node.value
+
+    def number(
+        self,
+        node: Node,
+        fp: str,
+        *,
+        lo: float | None = None,
+        hi: float | None = None,
+        strict_lo: bool = False,
+    ) -> float:
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+            raise self.fail(node, fp, f"{v!r} must be a number")
+        v = float(v)
+        if lo is not None and (v <= lo if strict_lo else v < lo):
+            raise self.fail(node, fp, f"{v} must be {'>' if strict_lo else '≥'} {lo}")
+        if hi is not None and v > hi:
+            raise self.fail(node, fp, f"{v} must be ≤ {hi}")
+        return v
+
+    def integer(self, node: Node, fp: str, lo: int) -> int:
+        v = node.value
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise self.fail(node, fp, f"{v!r} must be a whole number ≥ {lo}")
+        return int(v)
+
+    def text(self, node: Node, fp: str, choices: tuple[str, ...] | None = None) -> str:
+        v = node.value
+        if not isinstance(v, str) or not v:
+            raise self.fail(node, fp, f"{v!r} must be a non-empty text")
+        if choices and v not in choices:
+            raise self.fail(node, fp, f"{v!r} is not valid; choose one of {', '.join(choices)}")
+        return v
+
+    def vector(self, node: Node, fp: str, n: int, *, positive: bool = False) -> tuple[float, ...]:
+        if not isinstance(node.value, list) or len(node.value) != n:
+            raise self.fail(node, fp, f"must be a list of {n} numbers")
+        return tuple(
+            self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
+            for i, x in enumerate(node.value)
+        )
