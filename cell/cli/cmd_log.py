@@ -32,6 +32,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         sp.add_argument("--db", metavar="PATH", default=argparse.SUPPRESS, help="store file")
 
 
+def _require_store(db: str | None) -> None:
+    """Reading a store that does not exist is an error (opening it would create an empty one)."""
+    from cell.errors import InvalidInput
+    from cell.log.store import default_db_path
+
+    path = default_db_path(db)
+    if not path.exists():
+        raise InvalidInput(
+            f"{path}: no throw-log store here; give --db PATH (or set CELL_LOG_DB), "
+            "or fill one with `cell log import FILE.csv` or `cell run`"
+        )
+
+
 def run_import(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -55,6 +68,7 @@ def run_import(args: argparse.Namespace) -> int:
 
 
 def run_export(args: argparse.Namespace) -> int:
+    _require_store(args.db)
     import csv
 
     from cell.log import ThrowStore, write_throws_csv
@@ -76,6 +90,7 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    _require_store(args.db)
     from cell.log import ThrowStore
 
     with ThrowStore(args.db) as store:

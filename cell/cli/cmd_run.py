@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if kind == "dynamixel":
         from cell.endeffector.factory import make_end_effector
 
-        cfg = args.ee_config or job.ee_config or str(Path("robots/throwing_ee/dynamixel.yaml"))
+        cfg = args.ee_config or job.ee_config or None
         hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
     store = _store(args)
     orch: Any

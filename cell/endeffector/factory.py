@@ -11,7 +11,16 @@ from cell.errors import InvalidInput
 __all__ = ["EE_KINDS", "DEFAULT_DYNAMIXEL_CONFIG", "make_end_effector"]
 
 EE_KINDS = ("dynamixel",)
-DEFAULT_DYNAMIXEL_CONFIG = Path("robots/throwing_ee/dynamixel.yaml")
+
+
+def _default_config() -> Path:
+    from cell.robot.paths import robots_dir
+
+    return robots_dir() / "throwing_ee" / "dynamixel.yaml"
+
+
+# The shipped configuration, found whatever the current folder is.
+DEFAULT_DYNAMIXEL_CONFIG = _default_config()
 EMULATED_LATENCY_MS = 50.0  # [ms] reply latency allowed for an emulated bus
 
 
