@@ -35,7 +35,14 @@ from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
 
-__all__ = ["ItemResult", "RunSummary", "Orchestrator", "run_items", "summarise"]
+__all__ = [
+    "ItemResult",
+    "RunSummary",
+    "Orchestrator",
+    "run_items",
+    "sorted_throw_record",
+    "summarise",
+]
 
 log = logging.getLogger(__name__)
 
@@ -129,6 +136,44 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
         sim_time_s=sim_time,
         wall_time_s=wall_time_s,
         results=list(results),
+    )
+
+
+def sorted_throw_record(
+    session: str,
+    throw_id: str,
+    obj: ObjectParams,
+    plan: Any,
+    stroke_m: float,
+    released_at: np.ndarray,
+    target: Any,
+    out: Any,
+    cross: Any,
+    *,
+    platform: str = "arm",
+    rotor_rpm: float = 0.0,
+) -> dict[str, Any]:
+    """The throw-log row of a sort throw: the release as planned and observed, the
+    crossing of the target bin's rim plane, and which bin it came to rest in (shared by
+    the arm orchestrator and the platform runner)."""
+    return throw_record(
+        throw_id,
+        obj,
+        stroke_m=stroke_m,
+        position_m=released_at,
+        elevation_rad=plan.elevation_rad,
+        azimuth_rad=plan.azimuth_rad,
+        roll_rad=plan.roll_rad,
+        base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
+        platform=platform,
+        rotor_rpm=rotor_rpm,
+        land_z_m=target.rim_height,
+        landed_xy_m=cross[:2],
+        session=session,
+        time_s=time.time(),
+        t_flight_s=float(cross[2]),
+        target_bin=target.id,
+        bin_id=out.bin_id or "",
     )
 
 
@@ -385,7 +430,9 @@ class Orchestrator:
         throw_id = f"{self.session}-{base['index']:04d}"
         if self.store is not None:
             self.store.append(
-                self._record(throw_id, obj, plan, stroke, released_at, target, out, cross),
+                sorted_throw_record(
+                    self.session, throw_id, obj, plan, stroke, released_at, target, out, cross
+                ),
                 track=out.track,
             )
         return ItemResult(
@@ -398,35 +445,6 @@ class Orchestrator:
             delta_stroke_m=delta,
             cycle_time_s=t_release - t0,
             throw_id=throw_id,
-        )
-
-    def _record(
-        self,
-        throw_id: str,
-        obj: ObjectParams,
-        plan: Any,
-        stroke: float,
-        released_at: np.ndarray,
-        target: Any,
-        out: Any,
-        cross: Any,
-    ) -> dict[str, Any]:
-        """A THROW_LOG.md row for this throw (the release state as commanded and observed)."""
-        return throw_record(
-            throw_id,
-            obj,
-            stroke_m=stroke,
-            position_m=released_at,
-            elevation_rad=plan.elevation_rad,
-            azimuth_rad=plan.azimuth_rad,
-            roll_rad=plan.roll_rad,
-            land_z_m=target.rim_height,
-            landed_xy_m=cross[:2],
-            session=self.session,
-            time_s=time.time(),
-            t_flight_s=float(cross[2]),
-            target_bin=target.id,
-            bin_id=out.bin_id or "",
         )
 
     # -- the run ---------------------------------------------------------------

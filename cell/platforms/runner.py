@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 import uuid
 from collections.abc import Callable
 from typing import Any
@@ -34,8 +33,8 @@ import numpy as np
 
 from cell.errors import CellError, InvalidInput
 from cell.jobs import ItemSpec, Job
-from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
+from cell.orchestrator import sorted_throw_record
 from cell.params import ModelParams, load_params
 from cell.platforms.downwash import DEFAULT_DRONE_LAW, DownwashLaw, predict_drone_landing
 from cell.platforms.mobile import MobilePlatform
@@ -195,7 +194,19 @@ class PlatformRunner:
             throw_id = f"{self.session}-{index:04d}"
             if self.store is not None:
                 self.store.append(
-                    self._record(throw_id, obj, plan, released_at, target, out, cross)
+                    sorted_throw_record(
+                        self.session,
+                        throw_id,
+                        obj,
+                        plan,
+                        plan.stroke_m,
+                        released_at,
+                        target,
+                        out,
+                        cross,
+                        platform=self.job.platform,
+                        rotor_rpm=self.job.rotor_rpm if self.job.platform == "drone" else 0.0,
+                    )
                 )
             return ItemResult(
                 **base,
@@ -220,38 +231,6 @@ class PlatformRunner:
             if self.mobile is not None:
                 sc.stop_drive()
             sc.remove_item(item)
-
-    def _record(
-        self,
-        throw_id: str,
-        obj: ObjectParams,
-        plan: Any,
-        released_at: np.ndarray,
-        target: Any,
-        out: Any,
-        cross: Any,
-    ) -> dict[str, Any]:
-        """A THROW_LOG.md row for this throw."""
-        drone = self.job.platform == "drone"
-        return throw_record(
-            throw_id,
-            obj,
-            stroke_m=plan.stroke_m,
-            position_m=released_at,
-            elevation_rad=plan.elevation_rad,
-            azimuth_rad=plan.azimuth_rad,
-            roll_rad=plan.roll_rad,
-            base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
-            platform=self.job.platform,
-            rotor_rpm=self.job.rotor_rpm if drone else 0.0,
-            land_z_m=target.rim_height,
-            landed_xy_m=cross[:2],
-            session=self.session,
-            time_s=time.time(),
-            t_flight_s=float(cross[2]),
-            target_bin=target.id,
-            bin_id=out.bin_id or "",
-        )
 
     # -- the run -------------------------------------------------------------------
     def run(self, on_item: Callable[[Any], None] | None = None) -> Any:
