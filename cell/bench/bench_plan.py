@@ -27,6 +27,7 @@ from cell.errors import UnreachableTarget
 from cell.model import DEFAULT_EE, EndEffectorParams, ObjectParams, ThrowBatch, predict_landing
 from cell.optimize import DEFAULT_BOUNDS, ThrowBounds, plan_throw
 from cell.optimize.fast import reach_table
+from cell.optimize.plan import Method
 
 __all__ = ["family_targets", "box_targets", "measure", "run"]
 
@@ -91,6 +92,27 @@ def _objects() -> list[ObjectParams]:
     return [e.params for e in catalogue().values()]
 
 
+def _timed_plan(
+    obj: ObjectParams,
+    target: np.ndarray,
+    method: Method,
+    wall_s: list[float],
+    cpu_s: list[float],
+    misses_m: list[float],
+) -> bool:
+    """Plan one target, appending its wall and CPU time [s] and its miss [m]; False when
+    it was unreachable (counted by the caller as a failure, not hidden)."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        plan = plan_throw(obj, target, method=method)
+    except UnreachableTarget:
+        return False
+    wall_s.append(time.perf_counter() - t0)
+    cpu_s.append(time.process_time() - c0)
+    misses_m.append(plan.miss_m)
+    return True
+
+
 def measure(n_fast: int, n_nlp: int, seed: int = 0) -> dict[str, float]:
     """Plan n_fast family targets with the fast path and n_nlp box targets with the NLP."""
     rng = np.random.default_rng(seed)
@@ -116,15 +138,7 @@ def measure(n_fast: int, n_nlp: int, seed: int = 0) -> dict[str, float]:
             t0 = time.perf_counter()
             table.invert(math.hypot(tgt[0] - p0[0], tgt[1] - p0[1]), p0[2] - tgt[2])
             lookup_t.append(time.perf_counter() - t0)
-            t0, c0 = time.perf_counter(), time.process_time()
-            try:
-                plan = plan_throw(obj, tgt, method="fast")
-            except UnreachableTarget:  # counted, not hidden: plan_fast_failed
-                fast_fail += 1
-                continue
-            fast_t.append(time.perf_counter() - t0)
-            fast_cpu.append(time.process_time() - c0)
-            misses.append(plan.miss_m)
+            fast_fail += not _timed_plan(obj, tgt, "fast", fast_t, fast_cpu, misses)
     plan_throw(objs[0], family_targets(objs[0], 1, rng)[0], method="nlp")  # build the NLP
     per = max(1, math.ceil(n_nlp / len(objs)))
     for k, obj in enumerate(objs):
@@ -132,15 +146,7 @@ def measure(n_fast: int, n_nlp: int, seed: int = 0) -> dict[str, float]:
         if todo <= 0:
             break
         for tgt in box_targets(obj, todo, rng):
-            t0, c0 = time.perf_counter(), time.process_time()
-            try:
-                plan = plan_throw(obj, tgt, method="nlp")
-            except UnreachableTarget:  # counted, not hidden: plan_nlp_failed
-                nlp_fail += 1
-                continue
-            nlp_t.append(time.perf_counter() - t0)
-            nlp_cpu.append(time.process_time() - c0)
-            misses.append(plan.miss_m)
+            nlp_fail += not _timed_plan(obj, tgt, "nlp", nlp_t, nlp_cpu, misses)
 
     def ms(v: list[float], q: float) -> float:
         return float(np.percentile(np.asarray(v) * 1e3, q)) if v else float("nan")
