@@ -35,6 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--gui", action="store_true", help="watch the campaign in PyBullet's GUI")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--record", metavar="CAL.rrd", help="write a Rerun recording (cell[record])")
     p.set_defaults(func=run)
 
 
@@ -76,6 +77,10 @@ def run(args: argparse.Namespace) -> int:
             return 0
     if args.n < 1:
         raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+    if args.record:  # fail before the campaign when rerun-sdk is missing
+        from cell.record.stream import import_rerun
+
+        import_rerun()
     plan = campaign_plan(args.n, seed=args.seed)
     scene = None
     if args.gui:
@@ -100,6 +105,10 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.output)
     out.parent.mkdir(parents=True, exist_ok=True)
     save_params(res.params, out)
+    if args.record:
+        from cell.record.calibrate import record_calibration
+
+        record_calibration(args.record, table, res.params)
     summary = {
         "throws": len(table),
         "output": str(out),

@@ -34,6 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="re-identify the nominal band law on training throws of every fit",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of folds, permutations, bootstrap")
+    p.add_argument("--record", metavar="GAP.rrd", help="write a Rerun recording (cell[record])")
     g = p.add_argument_group("check only")
     g.add_argument("--quick", action="store_true", help="small campaigns (a smoke run)")
     g.add_argument("--n", type=int, metavar="THROWS", help="throws per campaign (default 865)")
@@ -59,6 +60,10 @@ def run(args: argparse.Namespace) -> int:
     from cell.model.effects import effects_from_mapping
     from cell.params import load_params
 
+    if args.record:  # fail before the diagnosis when rerun-sdk is missing
+        from cell.record.stream import import_rerun
+
+        import_rerun()
     table = read_throws_csv(args.throws)
     mp = load_params(args.params)
     try:
@@ -89,6 +94,10 @@ def run(args: argparse.Namespace) -> int:
     if args.report:
         write_html(d, prob, args.report)
         print(f"html report -> {args.report}")
+    if args.record:
+        from cell.record.gap import record_gap
+
+        print(f"recording -> {record_gap(args.record, d, prob, tracks)}")
     return 0
 
 

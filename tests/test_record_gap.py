@@ -1,0 +1,128 @@
+"""Rerun recordings of `cell gap` and `cell calibrate`, read back with Rerun's reader;
+the predicted flight against the fast landing path; a missing rerun-sdk."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from cell.cli import main
+from cell.gap.run import diagnose_log
+from cell.gap.world import draw_campaign
+from cell.gap.world_tracks import draw_tracked_campaign
+from cell.log import read_throws_csv
+from cell.log.csvio import write_throws_csv
+from cell.model.effects import TrackingScale
+from cell.model.objects import ObjectParams
+from cell.model.params import DEFAULT_EE
+from cell.model.throw import ThrowBatch, predict_landing
+from cell.record.flight import predicted_flight
+from cell.record.gap import record_gap
+from cell.record.read import read_rows
+
+F32 = 1e-6  # [m] Rerun stores positions as float32
+
+
+def _values(rows: list[dict], column: str) -> list:
+    return [r[column] for r in rows]
+
+
+def test_predicted_flight_starts_at_release_and_ends_on_the_fast_path_landing() -> None:
+    obj = ObjectParams(shape="cube", mass=0.05, size=(0.05, 0.05, 0.05))
+    batch = ThrowBatch.single(
+        obj, stroke=0.05, position=(0.4, 0.1, 0.6), elevation=0.6, azimuth=0.3, land_z=0.15
+    )
+    land = predict_landing(batch, DEFAULT_EE)
+    f = predicted_flight(batch, DEFAULT_EE)
+    assert np.allclose(f[0, 1:], (0.4, 0.1, 0.6)) and f[0, 0] == 0.0
+    assert np.all(np.diff(f[:, 0]) > 0)
+    # the 3-D integrator's path ends where the planar fast path lands (a second solver)
+    assert f[-1, 0] == pytest.approx(float(land.t_flight[0]), abs=1e-9)
+    assert f[-1, 3] == pytest.approx(0.15, abs=1e-3)
+    assert np.hypot(f[-1, 1] - land.x[0], f[-1, 2] - land.y[0]) < 2e-3
+
+
+def test_cli_gap_record_holds_every_throw_before_and_after_the_verdict(tmp_path, capsys) -> None:
+    camp = draw_campaign("stroke_offset", np.random.default_rng(21), n=160)
+    log = tmp_path / "throws.csv"
+    write_throws_csv(camp.table, log)
+    rrd, js = tmp_path / "gap.rrd", tmp_path / "gap.json"
+    assert main(["gap", str(log), "--json", str(js), "--record", str(rrd)]) == 0
+    assert f"recording -> {rrd}" in capsys.readouterr().out
+    rep = json.loads(js.read_text())
+    rows = read_rows(rrd)
+    # the observed landings are the log's, in its order (read independently from the CSV)
+    table = read_throws_csv(log)
+    obs = np.asarray(rows["/world/landings/observed"][0]["Points3D:positions"])
+    assert obs.shape == (len(table), 3)
+    assert np.allclose(obs[:, :2], table.landed, atol=F32)
+    assert np.allclose(obs[:, 2], table.num("land_z_m"), atol=F32)
+    # one step per throw on the `throw` timeline; residuals = observed - model, per throw
+    steps = rows["/world/throw/observed"]
+    assert _values(steps, "throw") == list(range(len(table)))
+    before = np.asarray(_values(rows["/world/throw/model_before"], "Points3D:positions"))[:, 0]
+    res_b = np.array(_values(rows["/gap/before_m"], "Scalars:scalars"))[:, 0]
+    res_a = np.array(_values(rows["/gap/after_m"], "Scalars:scalars"))[:, 0]
+    assert np.allclose(res_b, np.hypot(*(obs[:, :2] - before[:, :2]).T), atol=1e-5)
+    # the verdict's effect shrinks the residuals, as the report says
+    rms_b, rms_a = np.sqrt(np.mean(res_b**2)), np.sqrt(np.mean(res_a**2))
+    assert rep["verdict"]["effects"] == ["stroke_offset"] and rms_a < 0.5 * rms_b
+    assert rms_b == pytest.approx(rep["baseline"]["fit_rmse_m"], rel=1e-6)
+    assert "stroke_offset" in rows["/verdict"][0]["TextDocument:text"][0]
+
+
+def test_gap_record_draws_each_track_beside_the_model_flight(tmp_path) -> None:
+    camp = draw_tracked_campaign(
+        (TrackingScale(1.05),), np.random.default_rng(8), n=120, other_launcher=False
+    )
+    d, prob = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
+    rows = read_rows(record_gap(tmp_path / "gap.rrd", d, prob, camp.tracks))
+    ids = prob.table.text("throw_id")
+    tracks = rows["/world/throw/track"]
+    flights = rows["/world/throw/model_flight"]
+    assert len(tracks) == len(flights) == len(ids)
+    k = 7
+    got = np.asarray(tracks[k]["LineStrips3D:strips"][0])
+    assert tracks[k]["throw"] == k
+    assert np.allclose(got, camp.tracks[ids[k]][:, 1:4], atol=F32)
+    # the model's flight leaves the logged release point and ends on the fast path's landing
+    fl = np.asarray(flights[k]["LineStrips3D:strips"][0])
+    release = [prob.table.num(c)[k] for c in ("x_m", "y_m", "z_m")]
+    assert np.allclose(fl[0], release, atol=F32)
+    land = predict_landing(prob.batch.take(np.array([k])), prob.ee)
+    assert np.hypot(fl[-1, 0] - land.x[0], fl[-1, 1] - land.y[0]) < 2e-3
+
+
+def test_cli_calibrate_record_nominal_and_fitted_against_the_scene(tmp_path) -> None:
+    from cell.identify.report import predicted_landing
+    from cell.params import ModelParams, load_params
+
+    rrd, log, out = tmp_path / "cal.rrd", tmp_path / "cal.csv", tmp_path / "ee.yaml"
+    argv = ["calibrate", "--n", "20", "-o", str(out), "--log", str(log), "--record", str(rrd)]
+    assert main([*argv, "--json"]) == 0
+    table = read_throws_csv(log)
+    rows = read_rows(rrd)
+    nominal = np.array(_values(rows["/calibrate/nominal_m"], "Scalars:scalars"))[:, 0]
+    fitted = np.array(_values(rows["/calibrate/fitted_m"], "Scalars:scalars"))[:, 0]
+    # recomputed here from the logged CSV and the written parameter file
+    for params, got in ((ModelParams(), nominal), (load_params(out), fitted)):
+        want = np.hypot(*(table.landed - predicted_landing(table, params)).T)
+        assert np.allclose(got, want, atol=1e-9)
+    assert np.sqrt(np.mean(fitted**2)) < 0.5 * np.sqrt(np.mean(nominal**2))
+    assert len(rows["/world/throw/release"]) == len(table) == 20
+
+
+def test_a_missing_rerun_sdk_is_a_cell_error_naming_the_extra(tmp_path) -> None:
+    code = (
+        "import sys; sys.modules['rerun'] = None\n"  # makes `import rerun` fail
+        "from cell.cli import main\n"
+        f"sys.exit(main(['gap', 'throws.csv', '--record', {str(tmp_path / 'x.rrd')!r}]))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stderr
+    assert "cell gap: error: --record needs rerun-sdk" in p.stderr
+    assert "cell[record]" in p.stderr and "Traceback" not in p.stderr
