@@ -113,7 +113,7 @@ def link_poses(
         ip, io = client.invertTransform(info[3], info[4])
         out[-1] = tuple(client.multiplyTransforms(p, o, ip, io))  # type: ignore[assignment]
     if rest:
-        states = client.getLinkStates(body, rest, computeForwardKinematics=True)
+        states = client.getLinkStates(body, rest)  # read only: no forward kinematics here
         for k, st in zip(rest, states, strict=True):
             out[k] = (tuple(st[4]), tuple(st[5]))
     return out

@@ -86,6 +86,7 @@ class SceneRecorder:
         self._step = step
         scene.step = sampled_step
         self._sample()
+        self._next_t = scene.t + self.period_s
 
     def on_item_start(self, index: int, obj: Any, target: Any, item: Any) -> None:
         """A new item on the pick station (its body is sampled from now on)."""

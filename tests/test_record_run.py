@@ -1,0 +1,137 @@
+"""`cell run --record`: a Rerun recording of a sort run, read back with Rerun's own reader and
+checked against the run's JSON; without --record nothing from rerun is imported and the run
+is the same."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cell.cli import main
+from cell.record.read import read_rows
+
+JOB = """\
+cell: {robot: panda}
+bins:
+  - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
+  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube50, count: 1, bin: far}
+  - {object: cyl70, count: 1, bin: near}
+  - {object: duck, count: 1, bin: far}
+"""
+BINS = {"near": (0.55, 0.30, 0.12), "far": (1.40, 0.00, 0.15)}  # centre x, y, rim height [m]
+F32 = 2e-6  # [m] Rerun stores positions as float32
+
+NO_RECORD = """\
+import json, sys
+from cell.cli import main
+code = main(["run", sys.argv[1], "--no-log", "--json", sys.argv[2]])
+print(json.dumps({"code": code, "rerun": sorted(m for m in sys.modules if m.startswith("rerun"))}))
+"""
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, dict, dict, Path]:
+    d = tmp_path_factory.mktemp("record_run")
+    job = d / "job.yaml"
+    job.write_text(JOB)
+    plain, recorded, rrd = d / "plain.json", d / "recorded.json", d / "run.rrd"
+    p = subprocess.run(
+        [sys.executable, "-c", NO_RECORD, str(job), str(plain)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert p.returncode == 0, p.stderr
+    flags = json.loads(p.stdout.strip().splitlines()[-1])
+    argv = ["run", str(job), "--no-log", "--json", str(recorded), "--record", str(rrd)]
+    assert main(argv) == 0
+    return flags, json.loads(plain.read_text()), json.loads(recorded.read_text()), rrd
+
+
+def _at_item(rows: list[dict], i: int) -> list[dict]:
+    return [r for r in rows if r.get("item") == i]
+
+
+def test_without_record_nothing_from_rerun_is_imported_and_the_run_is_the_same(runs) -> None:
+    flags, plain, recorded, _ = runs
+    assert flags == {"code": 0, "rerun": []}
+    strip = ("throw_id", "wall_time_s")
+    for a, b in zip(plain["results"], recorded["results"], strict=True):
+        assert {k: v for k, v in a.items() if k not in strip} == {
+            k: v for k, v in b.items() if k not in strip
+        }
+    assert plain["sim_time_s"] == recorded["sim_time_s"]
+
+
+def test_the_scene_arm_and_items_are_entities_on_both_timelines(runs) -> None:
+    _, _, summary, rrd = runs
+    rows = read_rows(rrd)
+    for bin_id, (x, y, rim) in BINS.items():
+        box = rows[f"/world/bins/{bin_id}"][0]
+        assert box["Boxes3D:labels"] == [bin_id]
+        assert np.allclose(box["Boxes3D:centers"][0], (x, y, rim / 2), atol=F32)
+    assert rows["/world/pick_station"][0]["Boxes3D:labels"] == ["pick station"]
+    assert "/world/floor" in rows
+    meshes = [e for e in rows if e.startswith("/world/arm/") and e.endswith("/mesh")]
+    assert len(meshes) >= 8  # the Panda's links (base and 7)
+    assert any(e.startswith("/world/end_effector/link") for e in rows)
+    joints = rows["/arm/joint_angles_rad"]
+    assert all(len(r["Scalars:scalars"]) == 7 for r in joints)
+    t = [r["sim_time"] for r in joints]
+    # the scene's clock runs on through flights and settling; the summary counts arm time
+    assert t == sorted(t) and t[-1] > summary["sim_time_s"]
+    assert np.all(np.diff(t) < 0.04)  # sampled at 30 Hz of simulated time
+    for r in summary["results"]:
+        ent = f"/world/items/{r['index']:03d}_{r['object_id']}"
+        poses = rows[ent]
+        assert len(poses) > 20 and {p["item"] for p in poses} == {r["index"]}
+    assert "Clear:is_recursive" in str(rows["/world/items/000_cube50"][-1])
+    assert "| items | 3 |" in rows["/summary"][0]["TextDocument:text"][0]
+
+
+def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
+    _, _, summary, rrd = runs
+    rows = read_rows(rrd)
+    assert [r["action"] for r in summary["results"]] == ["throw", "place", "throw"]
+    for r in summary["results"]:
+        i = r["index"]
+        for name in ("landing_error_m", "stroke_m", "cycle_time_s"):
+            (row,) = _at_item(rows[f"/items/{name}"], i)
+            assert row["Scalars:scalars"] == [r[name]]  # the very value, not a rounding
+        (land,) = rows[f"/world/landing/{i:03d}"]
+        x, y, z = land["Points3D:positions"][0]
+        bx, by, rim = BINS[r["target_bin"]]
+        # the landing point lies at the JSON's landing error from the target bin's centre
+        assert np.hypot(x - bx, y - by) == pytest.approx(r["landing_error_m"], abs=F32)
+        (target,) = rows[f"/world/landing/{i:03d}/target"]
+        assert np.allclose(target["Points3D:positions"][0], (bx, by, rim), atol=F32)
+        texts = [t["TextLog:text"][0] for t in _at_item(rows["/log"], i)]
+        assert any(f"in bin {r['bin_id']}" in s for s in texts)
+        if r["action"] == "throw":
+            assert z == pytest.approx(rim, abs=F32)  # the rim-plane crossing
+            (obs,) = rows[f"/world/flight/{i:03d}/observed"]
+            (pred,) = rows[f"/world/flight/{i:03d}/predicted"]
+            track = np.asarray(obs["LineStrips3D:strips"][0])
+            # the observed flight passes through the landing point (1 ms samples)
+            assert np.min(np.linalg.norm(track - (x, y, z), axis=1)) < 0.01
+            # the model's flight was planned onto the bin centre at rim height
+            end = np.asarray(pred["LineStrips3D:strips"][0])[-1]
+            assert np.allclose(end, (bx, by, rim), atol=0.01)
+            (rel,) = rows[f"/world/release/{i:03d}"]
+            assert np.allclose(rel["Arrows3D:origins"][0], track[0], atol=0.01)
+        else:
+            assert f"/world/flight/{i:03d}/predicted" not in rows
+
+
+def test_a_recording_needs_the_arm_platform_and_a_file_name(tmp_path, capsys) -> None:
+    job = tmp_path / "job.yaml"
+    job.write_text(JOB)
+    assert main(["run", str(job), "--no-log", "--record", str(tmp_path)]) == 2
+    assert "is a folder" in capsys.readouterr().err
