@@ -215,6 +215,8 @@ class Orchestrator:
         end_effector: "pybullet" (the simulated one) or a ready EndEffector
             (e.g. the Dynamixel back-end): then the hardware end-effector is
             commanded in step with the simulated one.
+        observer: told of the scene, each item's start, release, flight and result
+            (`cell.record.observer.RunObserver`, e.g. the Rerun recorder), or None.
     """
 
     def __init__(
@@ -226,6 +228,7 @@ class Orchestrator:
         session: str = "",
         params: ModelParams | None = None,
         end_effector: Any = None,
+        observer: Any = None,
     ) -> None:
         from cell.endeffector.pybullet_backend import PyBulletEndEffector
         from cell.optimize.bounds import ThrowBounds
@@ -259,6 +262,9 @@ class Orchestrator:
             self.residual = ResidualModel.load(job.residual)
         self.q = np.asarray(self.scene_ready_q(), float)
         self.rng = np.random.default_rng(job.seed)
+        self.observer = observer
+        if observer is not None:
+            observer.on_scene(self.scene, job)
 
     @staticmethod
     def scene_ready_q() -> tuple[float, ...]:
@@ -313,6 +319,8 @@ class Orchestrator:
         t0 = sc.t
         item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
         sc.run_for(0.05)  # let it settle on the station
+        if self.observer is not None:
+            self.observer.on_item_start(index, obj, target, item)
         base: dict[str, Any] = dict(
             index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
         )
@@ -369,6 +377,8 @@ class Orchestrator:
         out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
         err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
         cyc = t_release - t0
+        if self.observer is not None:
+            self.observer.on_flight(base["index"], out, out.rest_xyz)
         self._move([q_above])
         return ItemResult(
             **base,
@@ -390,6 +400,7 @@ class Orchestrator:
         # that L_s + ΔL_s means what it meant in training.
         use_identified = self.residual is None or obj.name in self.residual.identified_objects
         model_obj = self.params.objects.get(obj.name, obj) if use_identified else obj
+        self._model_obj = model_obj  # what the plan assumed (for an observer)
         plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
         if self.residual is None:
             return plan, 0.0
@@ -422,11 +433,17 @@ class Orchestrator:
         if self.hardware is not None:
             self.hardware.throw()
         released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
+        if self.observer is not None:
+            self.observer.on_release(
+                base["index"], plan, self._model_obj, self.params.ee, stroke, released_at
+            )
         self.ee.throw()
         t_release = sc.t
         out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
         cross = out.crossing(target.rim_height)
         err = math.hypot(cross[0] - bx, cross[1] - by)
+        if self.observer is not None:
+            self.observer.on_flight(base["index"], out, (cross[0], cross[1], target.rim_height))
         throw_id = f"{self.session}-{base['index']:04d}"
         if self.store is not None:
             self.store.append(
@@ -450,7 +467,15 @@ class Orchestrator:
     # -- the run ---------------------------------------------------------------
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
         """Sort every item of the job; `on_item` is called after each (progress)."""
-        return run_items(self.job, self.run_item, on_item)
+        if self.observer is None:
+            return run_items(self.job, self.run_item, on_item)
+
+        def done(r: ItemResult) -> None:
+            self.observer.on_item_done(r)
+            if on_item is not None:
+                on_item(r)
+
+        return run_items(self.job, self.run_item, done)
 
     def close(self) -> None:
         """Close the scene and any hardware end-effector."""

@@ -35,6 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)"
     )
+    p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
     p.set_defaults(func=run)
 
 
@@ -44,6 +45,18 @@ def _store(args: argparse.Namespace):  # type: ignore[no-untyped-def]
     from cell.log.store import ThrowStore
 
     return ThrowStore(args.db)
+
+
+def _recorder(args: argparse.Namespace, job: Any) -> Any:
+    if not args.record:
+        return None
+    if job.platform != "arm":
+        from cell.errors import InvalidInput
+
+        raise InvalidInput(f"--record: recordings cover the arm platform, not {job.platform!r}")
+    from cell.record.observer import SceneRecorder
+
+    return SceneRecorder(args.record)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -59,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
 
         cfg = args.ee_config or job.ee_config or None
         hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
+    rec = _recorder(args, job)
     store = _store(args)
     orch: Any
     if job.platform != "arm":
@@ -66,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
 
         orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
     else:
-        orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware)
+        orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware, observer=rec)
     bar = tqdm(
         total=len(job.expanded_items()),
         desc=f"sorting {Path(args.job).name}",
@@ -83,8 +97,12 @@ def run(args: argparse.Namespace) -> int:
         summary = orch.run(progress)
         if args.snapshot:
             orch.scene.snapshot(args.snapshot)
+        if rec is not None:
+            rec.finish(summary)
     finally:
         bar.close()
+        if rec is not None:
+            rec.close()
         orch.close()
         if store is not None:
             store.close()
