@@ -18,7 +18,7 @@ from cell.errors import CellError
 from cell.identify.report import predicted_landing
 from cell.model.throw import throw_axis
 from cell.params import ModelParams
-from cell.record.compare import AFTER, THROW, record_landings
+from cell.record.compare import AFTER, THROW, layout, record_landings
 from cell.record.flight import predicted_flight
 from cell.record.stream import Recording
 
@@ -50,6 +50,8 @@ def record_calibration(
     u = throw_axis(table.num("elevation_rad"), table.num("azimuth_rad"))
     ids = [f"{t} {o}" for t, o in zip(table.text("throw_id"), table.text("object_id"), strict=True)]
     with Recording(path, "cell_calibrate") as r:
+        r.stream.send_blueprint(layout("calibrate", ("nominal", "fitted"), "parameters"))
+        r.document("parameters", _params_markdown(fitted))
         record_landings(r, obs, before, after, ids, ("nominal", "fitted"), scalars="calibrate")
         batch = table.to_batch(objects=fitted.objects)
         for k in range(len(table)):
@@ -68,3 +70,8 @@ def record_calibration(
                 radius=0.004,
             )
         return r.path
+
+
+def _params_markdown(p: ModelParams) -> str:
+    rows = "\n".join(f"| {k} | {v:.6g} |" for k, v in p.ee.as_dict().items())
+    return "# fitted end-effector parameters\n\n| | |\n|---|---|\n" + rows + "\n"

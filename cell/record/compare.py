@@ -8,12 +8,13 @@ them one by one with their |residual| as scalars.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from cell.record.stream import Recording
 
-__all__ = ["THROW", "record_landings", "OBS", "BEFORE", "AFTER"]
+__all__ = ["THROW", "record_landings", "layout", "OBS", "BEFORE", "AFTER"]
 
 THROW = "throw"  # timeline: the throw's row in the log
 OBS, BEFORE, AFTER = (0, 130, 200), (230, 25, 75), (60, 180, 75)
@@ -50,3 +51,22 @@ def record_landings(
             if np.all(np.isfinite(p[k])):
                 r.points(f"world/throw/model_{name}", p[k], colors=[col], radii=0.025)
             r.scalar(f"{scalars}/{name}_m", float(np.hypot(*(obs[k, :2] - p[k, :2]))))
+
+
+def layout(scalars: str, names: tuple[str, str], document: str) -> Any:
+    """The viewer's default layout: landings in 3-D beside the residuals and a document."""
+    import rerun.blueprint as rrb
+
+    eye = rrb.EyeControls3D(position=(-0.5, -2.5, 2.0), look_target=(1.2, 0.0, 0.0))
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin="world", name="landings", eye_controls=eye),
+            rrb.Vertical(
+                rrb.TimeSeriesView(origin=scalars, name=f"|residual| {' / '.join(names)} [m]"),
+                rrb.TextDocumentView(origin=document, name=document),
+            ),
+            column_shares=[2, 1],
+        ),
+        rrb.TimePanel(timeline=THROW, play_state="paused"),
+        collapse_panels=True,
+    )

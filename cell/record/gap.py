@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import CellError
-from cell.record.compare import BEFORE, OBS, THROW, record_landings
+from cell.record.compare import BEFORE, OBS, THROW, layout, record_landings
 from cell.record.flight import predicted_flight
 from cell.record.stream import Recording
 
@@ -54,6 +54,7 @@ def record_gap(
     ids = prob.table.text("throw_id")
     with Recording(path, "cell_gap") as r:
         o3, b3, a3 = (np.column_stack([xy, z]) for xy in (obs, before, after))
+        r.stream.send_blueprint(layout("gap", ("before", "after"), "verdict"))
         record_landings(r, o3, b3, a3, ids, scalars="gap")
         r.document("verdict", _verdict_markdown(d.report))
         for k in range(len(obs)):

@@ -33,6 +33,37 @@ GREEN, RED, GREY = (60, 180, 75), (230, 25, 75), (150, 150, 150)
 PREDICTED, OBSERVED = (255, 160, 0), (0, 130, 200)
 
 
+def _layout() -> Any:
+    """The viewer's default layout: the cell in 3-D beside the per-item figures and the log."""
+    import rerun.blueprint as rrb
+
+    eye = rrb.EyeControls3D(position=(0.7, -2.8, 1.5), look_target=(1.3, 0.05, 0.2))
+    whole = rrb.TimeAxis(  # every item, not a window that follows the cursor
+        view_range=rrb.TimeRange(
+            start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
+        )
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin="world", name="cell", eye_controls=eye),
+            rrb.Vertical(
+                rrb.TimeSeriesView(
+                    origin="items/landing_error_m", name="landing error [m]", axis_x=whole
+                ),
+                rrb.TimeSeriesView(origin="items/stroke_m", name="stroke [m]", axis_x=whole),
+                rrb.TimeSeriesView(
+                    origin="items/cycle_time_s", name="cycle time [s]", axis_x=whole
+                ),
+                rrb.TimeSeriesView(origin="arm", name="joint angles [rad]", axis_x=whole),
+                rrb.TextLogView(origin="log", name="log"),
+            ),
+            column_shares=[2, 1],
+        ),
+        rrb.TimePanel(timeline="sim_time", play_state="following"),
+        collapse_panels=True,
+    )
+
+
 def item_entity(index: int, object_id: str) -> str:
     """The entity path of an item."""
     return f"world/items/{index:03d}_{object_id}"
@@ -50,6 +81,7 @@ class RunRecording:
         self.rec = Recording(path, application_id)
         self.path = self.rec.path
         self.bins: dict[str, dict[str, Any]] = {}
+        self.rec.stream.send_blueprint(_layout())
 
     # -- the scene -------------------------------------------------------------
     def scene(
@@ -149,14 +181,12 @@ class RunRecording:
             f"world/release/{index:03d}",
             p,
             0.2 * u / np.linalg.norm(u),
-            labels=[f"release {index}: L_s {1000 * stroke_m:.1f} mm"],
             colors=[PREDICTED],
         )
         if predicted is not None and len(predicted) > 1:
             r.strips(
                 f"world/flight/{index:03d}/predicted",
                 [predicted[:, 1:4]],
-                labels=["model"],
                 colors=[PREDICTED],
                 radius=0.004,
             )
@@ -167,7 +197,6 @@ class RunRecording:
         self.rec.strips(
             f"world/flight/{index:03d}/observed",
             [np.asarray(observed)[:, 1:4]],
-            labels=["observed"],
             colors=[OBSERVED],
             radius=0.004,
         )
@@ -192,9 +221,7 @@ class RunRecording:
         r.at(sim_time_s, i)
         ok = bool(result.get("in_bin"))
         err = float(result.get("landing_error_m", math.nan))
-        label = f"{i} {result['object_id']}: {result['action']}, {err:.3f} m" + (
-            "" if ok else f" (in {result.get('bin_id') or 'no bin'})"
-        )
+        label = f"{i} {result['object_id']} {err:.2f} m"
         if landing_xyz is not None:
             r.points(
                 f"world/landing/{i:03d}",
@@ -208,7 +235,6 @@ class RunRecording:
             r.points(
                 f"world/landing/{i:03d}/target",
                 [(*b["center_xy"], b["rim_height"])],
-                labels=[f"bin {b['id']}"],
                 colors=[GREY],
                 radii=0.01,
             )
