@@ -92,6 +92,7 @@ class SceneRecorder:
         """A new item on the pick station (its body is sampled from now on)."""
         oid = obj.name or obj.shape
         self._index = index
+        self.run.rec.flush_samples(item=index)
         self.run.item_start(index, oid, target.id, self.scene.t)
         ent = item_entity(index, oid)
         self._items[item.body] = (index, oid)
@@ -123,6 +124,7 @@ class SceneRecorder:
     def on_item_done(self, result: Any) -> None:
         """Score the item; its body leaves the scene."""
         d = result if isinstance(result, dict) else result.__dict__
+        self.run.rec.flush_samples(item=d["index"])
         self.run.item_done(d, self.scene.t, self._landing)
         self._landing = None
         for body, (i, oid) in list(self._items.items()):
@@ -170,21 +172,21 @@ class SceneRecorder:
     def _sample(self) -> None:
         sc = self.scene
         r = self.run.rec
-        r.at(sc.t, self._index)
+        t = sc.t
         cl = sc.client
         for body, entity, links in self._bodies:
             for link, (p, q) in link_poses(cl, body, links).items():
-                r.pose(f"{entity}/link{link}", p, q)
+                r.sample_pose(f"{entity}/link{link}", t, p, q)
         if sc.arm is not None:
             angles = [cl.getJointState(sc.arm, j)[0] for j in sc.arm_joints]
-            r.scalars("arm/joint_angles_rad", angles)
+            r.sample_scalars("arm/joint_angles_rad", t, angles)
         for body, (i, oid) in self._items.items():
             if any(it.body == body for it in sc.items):
                 p, o = cl.getBasePositionAndOrientation(body)
                 info = cl.getDynamicsInfo(body, -1)
                 ip, io = cl.invertTransform(info[3], info[4])
                 lp, lo = cl.multiplyTransforms(p, o, ip, io)
-                r.pose(item_entity(i, oid), lp, lo)
+                r.sample_pose(item_entity(i, oid), t, lp, lo)
 
 
 def _fmt(v: Any) -> Any:

@@ -70,6 +70,10 @@ class Recording:
         self.stream.save(str(self.path))
         self.stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self._closed = False
+        # sampled series, sent as columns (one call per entity, not one per sample)
+        self._poses: dict[str, list[tuple[float, Sequence[float], Sequence[float]]]] = {}
+        self._series: dict[str, list[tuple[float, Sequence[float]]]] = {}
+        self._segment_item: int | None = None
 
     # -- time ------------------------------------------------------------------
     def at(self, sim_time_s: float | None = None, item: int | None = None) -> None:
@@ -225,11 +229,53 @@ class Recording:
         """Remove an entity and its children from the view from now on."""
         self.stream.log(entity, self.rr.Clear(recursive=True))
 
+    # -- sampled series, sent in columns ----------------------------------------
+    def sample_pose(
+        self,
+        entity: str,
+        sim_time_s: float,
+        translation: Sequence[float],
+        quat_xyzw: Sequence[float],
+    ) -> None:
+        """Buffer one pose sample (as `pose`) of the current segment; see `flush_samples`."""
+        self._poses.setdefault(entity, []).append((sim_time_s, translation, quat_xyzw))
+
+    def sample_scalars(self, entity: str, sim_time_s: float, values: Sequence[float]) -> None:
+        """Buffer one sample of several series at once (as `scalars`); see `flush_samples`."""
+        self._series.setdefault(entity, []).append((sim_time_s, values))
+
+    def flush_samples(self, item: int | None = None) -> None:
+        """Send the buffered samples (on `sim_time`, and on `item` when the segment had one),
+        then start a new segment whose samples belong to `item`."""
+        rr = self.rr
+        seg = self._segment_item
+
+        def indexes(ts: list[float]) -> list[Any]:
+            out = [rr.TimeColumn(SIM_TIME, duration=np.asarray(ts, float))]
+            if seg is not None:
+                out.append(rr.TimeColumn(ITEM, sequence=np.full(len(ts), seg, dtype=np.int64)))
+            return out
+
+        for entity, rows in self._poses.items():
+            ts, tr, qs = zip(*rows, strict=True)
+            cols = rr.Transform3D.columns(
+                translation=np.asarray(tr, float), quaternion=np.asarray(qs, float)
+            )
+            self.stream.send_columns(entity, indexes(list(ts)), cols)
+        for entity, vals in self._series.items():
+            ts, vs = zip(*vals, strict=True)
+            arr = np.asarray(vs, float)
+            cols = rr.Scalars.columns(scalars=arr.ravel()).partition([arr.shape[1]] * len(ts))
+            self.stream.send_columns(entity, indexes(list(ts)), cols)
+        self._poses, self._series = {}, {}
+        self._segment_item = item
+
     # -- end -------------------------------------------------------------------
     def close(self) -> None:
-        """Flush everything to the file and close it."""
+        """Send what is buffered, flush everything to the file and close it."""
         if self._closed:
             return
+        self.flush_samples()
         self._closed = True
         self.stream.flush()
         self.stream.disconnect()
