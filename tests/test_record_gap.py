@@ -126,3 +126,14 @@ def test_a_missing_rerun_sdk_is_a_cell_error_naming_the_extra(tmp_path) -> None:
     assert p.returncode == 2, p.stderr
     assert "cell gap: error: --record needs rerun-sdk" in p.stderr
     assert "cell[record]" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_reading_a_file_that_is_not_a_recording_names_it(tmp_path) -> None:
+    from cell.errors import InvalidInput
+
+    bad = tmp_path / "bad.rrd"
+    bad.write_text("not a recording\n")
+    with pytest.raises(InvalidInput, match="bad.rrd: not a Rerun recording"):
+        read_rows(bad)
+    with pytest.raises(InvalidInput, match="no such recording"):
+        read_rows(tmp_path / "missing.rrd")

@@ -35,7 +35,7 @@ def read_rows(path: str | Path) -> dict[str, list[dict[str, Any]]]:
         raise InvalidInput(f"{path}: no such recording")
     try:
         chunks = list(RrdReader(p).stream())
-    except (ValueError, OSError) as exc:
+    except (ValueError, OSError, RuntimeError) as exc:  # Rerun reports a bad file so
         raise InvalidInput(f"{path}: not a Rerun recording ({exc})") from None
     out: dict[str, list[tuple[Any, dict[str, Any]]]] = {}
     for ch in chunks:
