@@ -20,12 +20,18 @@ cell: {robot: panda}
 bins:
   - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
   - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+  - {id: beyond, position_m: [9.00, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
 items:
   - {object: cube50, count: 1, bin: far}
+  - {object: cube50, count: 1, bin: beyond}
   - {object: cyl70, count: 1, bin: near}
   - {object: duck, count: 1, bin: far}
 """
-BINS = {"near": (0.55, 0.30, 0.12), "far": (1.40, 0.00, 0.15)}  # centre x, y, rim height [m]
+BINS = {
+    "near": (0.55, 0.30, 0.12),
+    "far": (1.40, 0.00, 0.15),
+    "beyond": (9.0, 0.0, 0.15),
+}  # centre x, y, rim height [m]
 F32 = 2e-6  # [m] Rerun stores positions as float32
 
 NO_RECORD = """\
@@ -91,17 +97,30 @@ def test_the_scene_arm_and_items_are_entities_on_both_timelines(runs) -> None:
     for r in summary["results"]:
         ent = f"/world/items/{r['index']:03d}_{r['object_id']}"
         poses = rows[ent]
-        assert len(poses) > 20 and {p["item"] for p in poses} == {r["index"]}
+        assert len(poses) > (1 if r["action"] == "failed" else 20)
+        assert {p["item"] for p in poses} == {r["index"]}
     assert "Clear:is_recursive" in str(rows["/world/items/000_cube50"][-1])
-    assert "| items | 3 |" in rows["/summary"][0]["TextDocument:text"][0]
+    assert "| items | 4 |" in rows["/summary"][0]["TextDocument:text"][0]
 
 
 def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
     _, _, summary, rrd = runs
     rows = read_rows(rrd)
-    assert [r["action"] for r in summary["results"]] == ["throw", "place", "throw"]
+    assert [r["action"] for r in summary["results"]] == ["throw", "failed", "place", "throw"]
     for r in summary["results"]:
         i = r["index"]
+        texts = [t["TextLog:text"][0] for t in _at_item(rows["/log"], i)]
+        if r["action"] == "failed":  # the reason as a text entry; no landing, no figures
+            (err,) = [t for t in _at_item(rows["/log"], i) if t["TextLog:level"] == ["ERROR"]]
+            assert (
+                r["reason"].startswith("UnreachableTarget")
+                and r["reason"] in err["TextLog:text"][0]
+            )
+            assert f"/world/landing/{i:03d}" not in rows
+            assert _at_item(rows["/items/landing_error_m"], i) == []
+            (cyc,) = _at_item(rows["/items/cycle_time_s"], i)
+            assert cyc["Scalars:scalars"] == [r["cycle_time_s"]]
+            continue
         for name in ("landing_error_m", "stroke_m", "cycle_time_s"):
             (row,) = _at_item(rows[f"/items/{name}"], i)
             assert row["Scalars:scalars"] == [r[name]]  # the very value, not a rounding
@@ -112,7 +131,6 @@ def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
         assert np.hypot(x - bx, y - by) == pytest.approx(r["landing_error_m"], abs=F32)
         (target,) = rows[f"/world/landing/{i:03d}/target"]
         assert np.allclose(target["Points3D:positions"][0], (bx, by, rim), atol=F32)
-        texts = [t["TextLog:text"][0] for t in _at_item(rows["/log"], i)]
         assert any(f"in bin {r['bin_id']}" in s for s in texts)
         if r["action"] == "throw":
             assert z == pytest.approx(rim, abs=F32)  # the rim-plane crossing
