@@ -20,6 +20,7 @@ from cell.cli import main
 from cell.errors import InvalidInput, LogFormatError
 from cell.log import ThrowStore, read_throws_csv, read_tracks_csv, write_throws_csv
 from cell.log.csvio import ThrowTable
+from cell.log.store import APPLICATION_ID
 from cell.synth import Campaign, default_world, draw_campaign
 
 OBJECTS = ("cube30", "cuboid_c", "cyl50", "sphere70")
@@ -312,3 +313,50 @@ def test_sigkill_mid_import_leaves_nothing_half_imported(tmp_path: Path, campaig
         # the killed import left no lock and no rows behind: it can simply be redone
         assert store.import_table(read_throws_csv(big)) == len(table)
         assert len(store) == len(table) + 1
+
+
+def _sqlite_file_of_something_else(path: Path) -> bytes:
+    conn = sqlite3.connect(str(path))
+    conn.execute("CREATE TABLE inventory (sku TEXT, qty INTEGER)")
+    conn.execute("INSERT INTO inventory VALUES ('a', 3)")
+    conn.commit()
+    conn.close()
+    return path.read_bytes()
+
+
+def test_log_show_leaves_a_foreign_sqlite_file_byte_identical(tmp_path: Path, capsys) -> None:
+    foreign = tmp_path / "inventory.sqlite"
+    before = _sqlite_file_of_something_else(foreign)
+    for argv in (
+        ["log", "show", "--db", str(foreign)],
+        ["log", "export", "--db", str(foreign), "-o", str(tmp_path / "out.csv")],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "not a throw-log store" in err and str(foreign) in err
+        assert "Traceback" not in err
+    assert foreign.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["inventory.sqlite"]
+    # opening it for writing is refused too, before anything is written
+    with pytest.raises(InvalidInput, match="not a throw-log store"):
+        ThrowStore(foreign)
+    assert foreign.read_bytes() == before
+
+
+def test_a_new_store_carries_the_application_id_and_reads_back_read_only(tmp_path: Path) -> None:
+    db = tmp_path / "s.sqlite"
+    with ThrowStore(db) as store:
+        store.append(record(0))
+    header = db.read_bytes()[68:72]  # SQLite header: application id, big-endian
+    assert int.from_bytes(header, "big") == APPLICATION_ID
+    with ThrowStore(db, read_only=True) as store:
+        assert len(store) == 1
+        with pytest.raises(InvalidInput, match="read-only"):
+            store.append(record(1))
+    with ThrowStore(db) as store:
+        assert len(store) == 1
+
+
+def test_a_folder_is_not_a_store(tmp_path: Path) -> None:
+    with pytest.raises(InvalidInput, match="is a folder"):
+        ThrowStore(tmp_path)

@@ -124,7 +124,7 @@ def test_a_missing_rerun_sdk_is_a_cell_error_naming_the_extra(tmp_path) -> None:
     )
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2, p.stderr
-    assert "cell gap: error: --record needs rerun-sdk" in p.stderr
+    assert "cell: error: --record needs rerun-sdk" in p.stderr
     assert "cell[record]" in p.stderr and "Traceback" not in p.stderr
 
 

@@ -56,3 +56,21 @@ def test_small_campaign_logs_valid_throws_and_the_nominal_gap():
     # light objects fly shorter than the nominal impulse predicts, heavy ones farther
     assert gap.by_object["cube30"] > 0.1
     assert gap.by_object["cube60"] < -0.1
+
+
+def test_calibrate_refuses_to_overwrite_the_shipped_parameters(tmp_path, capsys) -> None:
+    """The shipped scene calibration is replaced only on request, and checked before any throw."""
+    from cell.cli import main
+    from cell.orchestrator import scene_params_path
+
+    shipped = scene_params_path()
+    assert shipped is not None
+    before = open(shipped, "rb").read()
+    assert main(["calibrate", "--n", "3", "-o", shipped]) == 2
+    err = capsys.readouterr().err
+    assert "--replace" in err and "Traceback" not in err
+    assert open(shipped, "rb").read() == before
+    for bad in (str(tmp_path), str(tmp_path / "missing" / "ee.yaml")):
+        assert main(["calibrate", "--n", "3", "-o", bad]) == 2
+        assert "-o " in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -55,6 +55,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# Options that name a file a command writes: checked before the command's work starts, so a
+# long run never ends in an unwritable path. (--json is a path only where it takes a value.)
+_OUTPUT_OPTIONS = (
+    ("output", "-o"),
+    ("json", "--json"),
+    ("report", "--report"),
+    ("snapshot", "--snapshot"),
+    ("record", "--record"),
+)
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Check the seed and every output path before a command starts its work."""
+    from cell.cli.common import check_output_path
+    from cell.errors import InvalidInput
+
+    seed = getattr(args, "seed", None)
+    if isinstance(seed, int) and not 0 <= seed < 2**32:
+        raise InvalidInput(f"--seed {seed}: a seed is an integer from 0 to {2**32 - 1}")
+    for attr, flag in _OUTPUT_OPTIONS:
+        value = getattr(args, attr, None)
+        if isinstance(value, str) and value:
+            check_output_path(value, flag)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `cell` console script."""
     parser = build_parser()
@@ -67,9 +92,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
+        _check_outputs(args)
         return int(args.func(args) or 0)
     except CellError as exc:
-        print(f"cell {args.command}: error: {exc}", file=sys.stderr)
+        print(f"cell: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"cell {args.command}: interrupted", file=sys.stderr)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-DEFAULT_OUTPUT = Path("robots/cell_scene/ee_params.yaml")
+DEFAULT_OUTPUT = Path("ee_params.yaml")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,7 +22,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--n", type=int, default=112, help="number of throws (112)")
     p.add_argument("--seed", type=int, default=1, help="seed of the campaign (1)")
     p.add_argument(
-        "-o", "--output", default=str(DEFAULT_OUTPUT), help=f"parameter file ({DEFAULT_OUTPUT})"
+        "-o",
+        "--output",
+        default=str(DEFAULT_OUTPUT),
+        help=f"parameter file ({DEFAULT_OUTPUT} in the current folder)",
+    )
+    p.add_argument(
+        "--replace",
+        action="store_true",
+        help="allow -o to overwrite the shipped scene parameters (robots/cell_scene/ee_params.yaml)",
     )
     p.add_argument(
         "--log", metavar="THROWS.csv", help="also write the campaign as THROW_LOG.md CSV"
@@ -60,6 +68,24 @@ def _snapshot(path: str) -> None:
         sc.snapshot(path)
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse unwritable outputs, and overwriting the shipped parameters, before the campaign."""
+    from cell.cli.common import check_output_path
+    from cell.errors import InvalidInput
+    from cell.orchestrator import scene_params_path
+
+    out = check_output_path(args.output, "-o")
+    shipped = scene_params_path()
+    if shipped and out.resolve() == Path(shipped).resolve() and not args.replace:
+        raise InvalidInput(
+            f"-o {out}: that is the shipped scene calibration the sort jobs use; write to "
+            "another file (the default is ./ee_params.yaml), or add --replace to overwrite it"
+        )
+    for flag, path in (("--log", args.log), ("--record", args.record)):
+        if path:
+            check_output_path(path, flag)
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
@@ -77,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
             return 0
     if args.n < 1:
         raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+    _check_outputs(args)
     if args.record:  # fail before the campaign when rerun-sdk is missing
         from cell.record.stream import import_rerun
 

@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         table = read_throws_csv(args.throws)
         source = args.throws
     else:
-        with ThrowStore(args.db) as store:
+        with ThrowStore(args.db, read_only=True) as store:
             table = store.table()
             source = str(store.path)
         if len(table) == 0:

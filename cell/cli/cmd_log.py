@@ -73,7 +73,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     from cell.log import ThrowStore, write_throws_csv
 
-    with ThrowStore(args.db) as store:
+    with ThrowStore(args.db, read_only=True) as store:
         table = store.table(object_id=args.object, session=args.session)
         tracks = store.tracks(table.text("throw_id")) if args.tracks else {}
         path = store.path
@@ -93,7 +93,7 @@ def run_show(args: argparse.Namespace) -> int:
     _require_store(args.db)
     from cell.log import ThrowStore
 
-    with ThrowStore(args.db) as store:
+    with ThrowStore(args.db, read_only=True) as store:
         counts = store.counts()
         path = store.path
     if args.json:

@@ -62,10 +62,16 @@ def _recorder(args: argparse.Namespace, job: Any) -> Any:
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    from cell.errors import InvalidInput
     from cell.orchestrator import Orchestrator
 
     job = load_job(args.job)
     kind = args.ee or job.ee
+    if args.emulate and kind != "dynamixel":
+        raise InvalidInput(
+            f"--emulate drives an emulated Dynamixel bus; this run's end-effector is {kind!r}: "
+            "add --ee dynamixel (or set ee: dynamixel in the job)"
+        )
     hardware = None
     if kind == "dynamixel":
         from cell.endeffector.factory import make_end_effector

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,6 +19,7 @@ from cell.model.objects import SHAPES, ObjectParams
 __all__ = [
     "add_axis_args",
     "add_object_args",
+    "check_output_path",
     "object_from_args",
     "print_json",
     "to_jsonable",
@@ -97,3 +100,27 @@ def print_json(obj: Any) -> None:
     """Print one JSON document to stdout."""
     json.dump(to_jsonable(obj), sys.stdout, indent=2)
     sys.stdout.write("\n")
+
+
+def check_output_path(path: str | Path, flag: str) -> Path:
+    """Check, before any work starts, that a result can be written to `path`.
+
+    Args:
+        path: the output file the user named.
+        flag: the option that named it (for the message), e.g. "-o".
+
+    Returns:
+        The path.
+
+    Raises:
+        InvalidInput: the path is a folder, its folder does not exist, or is not writable.
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise InvalidInput(f"{flag} {p}: is a folder; give a file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InvalidInput(f"{flag} {p}: the folder {parent} does not exist; create it first")
+    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        raise InvalidInput(f"{flag} {p}: not writable here")
+    return p

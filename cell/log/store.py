@@ -24,6 +24,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote
 
 import numpy as np
 
@@ -37,6 +38,7 @@ log = logging.getLogger(__name__)
 DEFAULT_DB = "cell_log.sqlite"
 _ENV = "CELL_LOG_DB"
 _SCHEMA_VERSION = "1"
+APPLICATION_ID = 0x43454C4C  # "CELL" in the SQLite header: marks a throw-log store
 OPTIONAL_TEXT = ("mesh", "session")
 OPTIONAL_NUM = ("time_s", "t_flight_s")
 _TYPED = REQUIRED_COLUMNS + OPTIONAL_TEXT + OPTIONAL_NUM
@@ -92,8 +94,18 @@ class ThrowStore:
         InvalidInput: the file exists but is not a throw store (or not SQLite).
     """
 
-    def __init__(self, path: str | Path | None = None) -> None:
+    def __init__(self, path: str | Path | None = None, *, read_only: bool = False) -> None:
         self.path = default_db_path(path)
+        self.read_only = read_only
+        if self.path.is_dir():
+            raise InvalidInput(f"{self.path}: is a folder; give a throw-log store file (--db PATH)")
+        if self.path.exists() and self.path.stat().st_size > 0:
+            self._conn = self._open_existing()
+            if read_only:
+                return
+            self._conn.close()
+        elif read_only:
+            raise InvalidInput(f"{self.path}: no throw-log store here")
         try:
             self._conn = sqlite3.connect(str(self.path), isolation_level=None, timeout=30.0)
             self._conn.execute("PRAGMA journal_mode=WAL")
@@ -105,16 +117,45 @@ class ThrowStore:
                 self._conn.execute(
                     "INSERT OR IGNORE INTO meta VALUES ('schema_version', ?)", (_SCHEMA_VERSION,)
                 )
+                self._conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        except sqlite3.OperationalError as exc:
+            raise InvalidInput(f"{self.path}: cannot write the throw-log store ({exc})") from None
         except sqlite3.DatabaseError as exc:
             raise InvalidInput(f"{self.path}: not a throw-log store ({exc})") from None
-        version = self._conn.execute(
-            "SELECT value FROM meta WHERE key = 'schema_version'"
-        ).fetchone()
+
+    def _open_existing(self) -> sqlite3.Connection:
+        """Open an existing file read-only and check that it is a throw store of this version.
+
+        Nothing is written to a file that is not one (no tables, no journal mode change).
+        """
+        uri = "file:" + quote(str(self.path.resolve())) + "?mode=ro"
+        try:
+            conn = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=30.0)
+            app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+            tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master")}
+        except sqlite3.OperationalError as exc:
+            raise InvalidInput(
+                f"{self.path}: cannot read the throw-log store ({exc}); a store in WAL mode "
+                "needs its folder writable, or its -shm file present, to be read"
+            ) from None
+        except sqlite3.DatabaseError as exc:
+            raise InvalidInput(f"{self.path}: not a throw-log store ({exc})") from None
+        ours = app_id == APPLICATION_ID or (app_id == 0 and {"meta", "throws"} <= tables)
+        if not ours:
+            conn.close()
+            raise InvalidInput(
+                f"{self.path}: an SQLite file, but not a throw-log store (application id "
+                f"{app_id:#x}, tables {sorted(tables)[:5]}); give a store made by `cell` "
+                "(--db PATH) or a new file name"
+            )
+        version = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
         if version is None or version[0] != _SCHEMA_VERSION:
+            conn.close()
             raise InvalidInput(
                 f"{self.path}: store schema version {version and version[0]!r}; "
                 f"this cell reads version {_SCHEMA_VERSION}"
             )
+        return conn
 
     # -- plumbing -----------------------------------------------------------------
     def close(self) -> None:
@@ -129,7 +170,12 @@ class ThrowStore:
 
     @contextmanager
     def _transaction(self) -> Iterator[sqlite3.Connection]:
-        self._conn.execute("BEGIN IMMEDIATE")
+        if self.read_only:
+            raise InvalidInput(f"{self.path}: opened read-only; nothing can be written to it")
+        try:
+            self._conn.execute("BEGIN IMMEDIATE")
+        except sqlite3.OperationalError as exc:
+            raise InvalidInput(f"{self.path}: the store is read-only here ({exc})") from None
         try:
             yield self._conn
         except BaseException:

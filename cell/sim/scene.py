@@ -15,9 +15,12 @@ while the band pushes, so the ~10-30 ms push is resolved by 40+ sub-steps.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
+import sys
 import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +60,24 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr() -> Iterator[None]:
+    """Send what C code writes to file descriptor 1 to stderr, so stdout keeps only output.
+
+    `cell calibrate --json` and every other scene command print machine-readable output on
+    stdout; PyBullet's connect banner ("argv[0]=") would come before it.
+    """
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 class CellScene:
@@ -107,7 +128,8 @@ class CellScene:
             from pybullet_utils.bullet_client import BulletClient
         except ImportError:
             raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
-        self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        with _stdout_to_stderr():  # PyBullet prints a banner to the C stdout on connect
+            self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         cl = self.client
         self.dt_s = dt_s
         self.launch_dt_s = launch_dt_s
