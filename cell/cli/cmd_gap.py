@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     except InvalidParameter as exc:
         raise InvalidInput(f"{args.params}: {exc}") from None
     tracks = read_tracks_csv(args.tracks) if args.tracks else None
-    with tqdm(desc="cell gap", unit="step", leave=False) as bar:
+    with tqdm(desc="cell gap", unit="step", leave=False, disable=None) as bar:
 
         def tick(label: str) -> None:
             bar.set_postfix_str(label)
@@ -117,7 +117,7 @@ def _check(args: argparse.Namespace) -> int:
         raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
     if args.repeats < 1:
         raise InvalidInput(f"--repeats {args.repeats}: must be ≥ 1")
-    with tqdm(total=len(truths), desc="cell gap check", unit="campaign", leave=False) as bar:
+    with tqdm(total=len(truths), desc="cell gap check", unit="campaign", leave=False, disable=None) as bar:
 
         def tick(label: str) -> None:
             bar.set_postfix_str(label)

@@ -71,6 +71,7 @@ def run(args: argparse.Namespace) -> int:
             source = str(store.path)
         if len(table) == 0:
             raise InvalidInput(f"{source}: the store holds no throws; give a throws.csv")
+    table.require_varied(10, "identification")
     if args.max_iter < 1:
         raise InvalidInput(f"--max-iter {args.max_iter} must be ≥ 1")
     start = load_params(args.start)
@@ -79,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     evaluated = held if len(held) else fit
     opts = IdentifyOptions(max_iter=args.max_iter, tol=args.tol, fit_objects=not args.ee_only)
     with tqdm(
-        total=args.max_iter, desc="identify", unit="it", disable=args.json, leave=False
+        total=args.max_iter, desc="identify", unit="it", disable=args.json or None, leave=False
     ) as bar:
 
         def progress(it: int, rmse: float) -> None:

@@ -54,7 +54,7 @@ def run_import(args: argparse.Namespace) -> int:
     tracks = read_tracks_csv(args.tracks) if args.tracks else {}
     with (
         ThrowStore(args.db) as store,
-        tqdm(total=len(table), desc="import", unit="throw", leave=False) as bar,
+        tqdm(total=len(table), desc="import", unit="throw", leave=False, disable=None) as bar,
     ):
         n = store.import_table(
             table, tracks, tracks_path=args.tracks or "", progress=lambda k: bar.update(k - bar.n)

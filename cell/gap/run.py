@@ -63,6 +63,9 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
     }
 
 
+MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
+
+
 def diagnose_log(
     table: ThrowTable,
     ee: EndEffectorParams,
@@ -92,6 +95,7 @@ def diagnose_log(
     Raises:
         InvalidInput: too few throws to diagnose.
     """
+    table.require_varied(MIN_THROWS, "the diagnosis")
     launch = None
     if tracks:
         fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))

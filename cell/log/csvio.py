@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import LogFormatError
+from cell.errors import InvalidInput, LogFormatError
 from cell.model.objects import SHAPES, shape_code
 from cell.model.throw import ThrowBatch
 
@@ -62,6 +62,23 @@ NUMERIC_COLUMNS = (
 NULLABLE = ("stroke_m", "landed_x_m", "landed_y_m") + OPTIONAL_NUMERIC
 PLATFORMS = ("arm", "mobile", "drone")
 NONNEGATIVE = ("mass_kg", "size_x_m", "size_y_m", "size_z_m", "rotor_rpm")
+_POS_M = 1000.0  # [m] no position of a cell's throw is farther than this from the base
+_VEL_MPS = 100.0  # [m/s] nor any base or release speed faster
+# Column -> (low, high): what a throw of a real cell can have; wider than any real throw and
+# narrower than nonsense (a 10 rad elevation, a 5 m grip width, a 1e308 kg mass).
+RANGES: dict[str, tuple[float, float]] = {
+    "mass_kg": (0.0, 20.0),
+    "size_x_m": (0.0, 1.0),
+    "size_y_m": (0.0, 1.0),
+    "size_z_m": (0.0, 1.0),
+    "stroke_m": (0.0, 0.5),
+    "elevation_rad": (-math.pi / 2, math.pi / 2),
+    "azimuth_rad": (-2 * math.pi, 2 * math.pi),
+    "roll_rad": (-2 * math.pi, 2 * math.pi),
+    "rotor_rpm": (0.0, 100_000.0),
+    **{c: (-_POS_M, _POS_M) for c in ("x_m", "y_m", "z_m", "land_z_m", "landed_x_m", "landed_y_m")},
+    **{c: (-_VEL_MPS, _VEL_MPS) for c in ("vx_mps", "vy_mps", "vz_mps")},
+}
 
 
 @dataclass
@@ -94,6 +111,39 @@ class ThrowTable:
     def landed(self) -> np.ndarray:
         """Observed landing points [m, W], shape (n, 2) (NaN where not logged)."""
         return np.stack([self.num("landed_x_m"), self.num("landed_y_m")], axis=-1)
+
+    def require_varied(self, n_min: int, purpose: str) -> None:
+        """Refuse a log with fewer than `n_min` distinct throws (release state and landing).
+
+        Args:
+            n_min: the fewest distinct throws `purpose` can work with.
+            purpose: what needs them, for the message ("the diagnosis", "identification").
+
+        Raises:
+            InvalidInput: too few distinct throws (identical rows count once).
+        """
+        cols = [
+            c
+            for c in (
+                "mass_kg",
+                "stroke_m",
+                "x_m",
+                "y_m",
+                "z_m",
+                "elevation_rad",
+                "azimuth_rad",
+                "landed_x_m",
+                "landed_y_m",
+            )
+            if c in self.data
+        ]
+        rows = np.column_stack([self.num(c) for c in cols]) if len(self) else np.empty((0, 0))
+        distinct = len({tuple(np.round(r, 9)) for r in rows})
+        if distinct < n_min:
+            raise InvalidInput(
+                f"{self.path}: {purpose} needs at least {n_min} distinct throws; this log has "
+                f"{len(self)} rows of which {distinct} distinct (identical throws count once)"
+            )
 
     def take(self, idx: np.ndarray | list[int]) -> ThrowTable:
         """The rows at these indices (or boolean mask), as a new table."""
@@ -209,6 +259,11 @@ def _parse(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
                     raise LogFormatError(path, r, c, f"{s!r} is not a finite number")
                 if c in NONNEGATIVE and v < 0:
                     raise LogFormatError(path, r, c, f"{v} is negative; must be ≥ 0")
+                lo, hi = RANGES.get(c, (-math.inf, math.inf))
+                if not lo <= v <= hi:
+                    raise LogFormatError(
+                        path, r, c, f"{v} is outside the valid range [{lo:g}, {hi:g}]"
+                    )
                 arr[r - 1] = v
             data[c] = arr
         else:
@@ -307,6 +362,8 @@ def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
                         vals.append(float(row[c]))
                     except (TypeError, ValueError):
                         raise LogFormatError(p, r, c, f"{row[c]!r} is not a number") from None
+                    if not math.isfinite(vals[-1]):
+                        raise LogFormatError(p, r, c, f"{row[c]!r} is not a finite number")
                 out.setdefault(row["throw_id"], []).append(vals)
     except FileNotFoundError:
         raise LogFormatError(p, None, None, "no such file") from None
