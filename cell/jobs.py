@@ -121,6 +121,11 @@ class Job:
         return out[: self.max_items]
 
 
+def _footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
+    """Whether two axis-aligned bin footprints (centre [x, y] m, size [x, y] m) share area."""
+    return all(abs(pos_a[k] - pos_b[k]) < (size_a[k] + size_b[k]) / 2 for k in (0, 1))
+
+
 def parse_job(text: str, path: str = "<job>") -> Job:
     """Validate a job given as YAML text.
 
@@ -248,6 +253,15 @@ def parse_job(text: str, path: str = "<job>") -> Job:
                 f"the bin reaches within {max(near, 0):.2f} m of the robot base at the "
                 f"origin; keep every bin at least {ROBOT_BASE_CLEARANCE_M} m away",
             )
+        for other in bins:
+            if _footprints_overlap(pos, size, other.position, other.size):
+                raise c.fail(
+                    b["position_m"],
+                    f"{fp}.position_m",
+                    f"bin {bid!r} overlaps bin {other.id!r} (footprints {tuple(size)} m at "
+                    f"{tuple(pos)} and {tuple(other.size)} m at {tuple(other.position)}); "
+                    "an item landing in one would be scored in the other: move them apart",
+                )
         bins.append(BinSpec(bid, pos, size, rim))  # type: ignore[arg-type]
     bin_ids = [b.id for b in bins]
 

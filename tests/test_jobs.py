@@ -50,6 +50,7 @@ def test_good_job_with_routing():
         ("mass_kg: 0.03", "mass_kg: 0", "line 6, items[1].mass_kg"),
         ("object: cube50", "object: cube99", "line 5, items[0].object"),
         ("position_m: [2.0, 0.0]", "position_m: [0.1, 0.0]", "line 3, bins[1].position_m"),
+        ("position_m: [2.0, 0.0]", "position_m: [0.7, 0.35]", "line 3, bins[1].position_m"),
         ("rim_height_m: 0.15", "rim_height_m: -1", "line 3, bins[1].rim_height_m"),
         ("bin: far", "bin: nowhere", "line 5, items[0].bin"),
         ("routing: {sphere: near}", "routing: {sphere: near}\npolicy: yeet", "line 8, policy"),

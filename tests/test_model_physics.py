@@ -248,3 +248,17 @@ def test_bad_end_effector_parameters_raise():
         EndEffectorParams(stroke_min=0.2, stroke_max=0.1)
     with pytest.raises(InvalidParameter, match="unknown end-effector parameter"):
         EndEffectorParams.from_dict({"Ke9": 1.0})
+
+
+@pytest.mark.parametrize(
+    "field, value", [("Ke1", -100.0), ("Ke1", 0.0), ("Ke2", -1.0), ("Ke3", -400.0)]
+)
+def test_a_band_that_would_store_negative_energy_is_refused(field: str, value: float) -> None:
+    """Stored energy ∫f dx over a stretch must be positive; the bounds make it so."""
+    from dataclasses import replace
+
+    from cell.errors import InvalidParameter
+    from cell.model.params import DEFAULT_EE
+
+    with pytest.raises(InvalidParameter, match=field):
+        replace(DEFAULT_EE, **{field: value})

@@ -117,7 +117,9 @@ def _check(args: argparse.Namespace) -> int:
         raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
     if args.repeats < 1:
         raise InvalidInput(f"--repeats {args.repeats}: must be ≥ 1")
-    with tqdm(total=len(truths), desc="cell gap check", unit="campaign", leave=False, disable=None) as bar:
+    with tqdm(
+        total=len(truths), desc="cell gap check", unit="campaign", leave=False, disable=None
+    ) as bar:
 
         def tick(label: str) -> None:
             bar.set_postfix_str(label)

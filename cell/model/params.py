@@ -64,6 +64,14 @@ class EndEffectorParams:
                 raise InvalidParameter(
                     f"end-effector parameter {name}={getattr(self, name)} must be > 0"
                 )
+        # A band is a stiffening spring: its force grows with stretch and its stored energy is
+        # positive (identification keeps the same bounds).
+        if self.Ke1 <= 0 or min(self.Ke3, self.Ke2) < 0:
+            raise InvalidParameter(
+                f"band stiffnesses Ke3={self.Ke3}, Ke2={self.Ke2}, Ke1={self.Ke1} N/m^k: valid "
+                "are Ke1 > 0 and Ke3, Ke2 >= 0 (a band's force grows with its stretch; a "
+                "negative stiffness would store negative energy)"
+            )
         if not 0 <= self.phi <= math.pi:
             raise InvalidParameter(f"end-effector parameter phi={self.phi} must be in [0, pi] rad")
         if not 0 < self.stroke_min < self.stroke_max < self.L_t:
