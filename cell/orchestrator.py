@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import CellError, InvalidInput
+from cell.errors import CellError, HardwareError, InvalidInput
 from cell.jobs import ItemSpec, Job
 from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
@@ -345,6 +345,8 @@ class Orchestrator:
             if plan is None:
                 return self._place(base, item, obj, target, q_lift, t0)
             return self._throw(base, item, obj, target, q_lift, t0, plan, delta)
+        except HardwareError:
+            raise  # the end-effector failed: the run stops (torque off), not just this item
         except CellError as exc:
             log.info("item %d (%s) failed: %s", index, obj.name, exc)
             return ItemResult(

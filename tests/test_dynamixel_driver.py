@@ -222,3 +222,24 @@ def test_status_reads_both_servos() -> None:
         st = ee.status()
         assert "M2 spool ID 2 (xm430-w350)" in st.detail and "47 °C" in st.detail
         assert "12.0 V" in st.detail
+
+
+def test_a_spool_moved_with_torque_off_between_sessions_refuses_the_throw() -> None:
+    """The commanded stroke lives in the servo's goal register, not in a process: a new session
+    that finds the spool moved by hand (torque off) does not adopt the new position."""
+    with EmulatedBus.from_config(FAST, time_scale=TIME_SCALE) as emu:
+        with DynamixelEndEffector(FAST, port=emu.port) as ee:
+            ee.grasp(0.05)
+        # torque is off now; someone turns the spool by hand to 0.035 m (more energy)
+        with emu.lock:
+            emu.servo(2).position = FAST.stroke_to_ticks(0.035)
+        with DynamixelEndEffector(FAST, port=emu.port) as ee:
+            st = ee.status()
+            assert st.latch_engaged and st.holding  # read from the servos, not remembered
+            assert emu.servo(2).value("torque_enable") == 0  # left off: not adopted
+            with pytest.raises(SafetyRefusal, match="torque off"):
+                ee.throw()
+            assert emu.servo(1).value("goal_position") == FAST.latch.engaged_position
+            ee.set_stroke(0.05)  # winding it again makes the throw good
+            ee.throw()
+        assert emu.true_stroke_m() == pytest.approx(FAST.stroke.rest_m)

@@ -155,3 +155,37 @@ def test_a_job_drives_the_dynamixel_end_effector_in_step(tmp_path):
     assert [c[0] for c in calls] == ["grasp", "throw", "grasp", "place"]
     assert calls[1][1]  # the latch was engaged when the throw was commanded
     assert summary.in_bin == 2
+
+
+def test_a_hardware_fault_mid_run_stops_the_run_with_torque_off(tmp_path, monkeypatch, capsys):
+    """An overload on the spool after the first throw: the run stops (exit 3) with both servos'
+    torque off and the throw already made kept, instead of failing every remaining item."""
+    import dataclasses
+
+    import cell.endeffector.factory as factory
+    from cell.endeffector.dynamixel import DynamixelEndEffector, EmulatedBus, load_config
+
+    cfg = load_config(factory.DEFAULT_DYNAMIXEL_CONFIG)
+    cfg = dataclasses.replace(cfg, latency_timer_ms=factory.EMULATED_LATENCY_MS)
+    emu = EmulatedBus.from_config(cfg, time_scale=8.0).start()
+    hw = DynamixelEndEffector(cfg, port=emu.port, on_close=emu.stop)
+    throw = hw.throw
+
+    def throw_then_overload() -> None:
+        throw()
+        emu.servo(cfg.spool.id).set_hardware_error(1 << 5)  # overload: the servo shuts down
+
+    hw.throw = throw_then_overload  # type: ignore[method-assign]
+    monkeypatch.setattr(factory, "make_end_effector", lambda *a, **k: hw)
+    job = tmp_path / "job.yaml"
+    job.write_text(JOB % "  - {object: cube50, bin: far}\n  - {object: cyl70, bin: far, count: 3}")
+    db = tmp_path / "log.sqlite"
+    code = main(["run", str(job), "--ee", "dynamixel", "--emulate", "--db", str(db)])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert "hardware fault" in err and "overload" in err and "Traceback" not in err
+    assert "stopped after 1 of 4 items" in err
+    for servo_id in (cfg.latch.id, cfg.spool.id):
+        assert emu.servo(servo_id).value("torque_enable") == 0
+    with ThrowStore(db, read_only=True) as store:
+        assert len(store) == 1

@@ -59,10 +59,13 @@ def _recorder(args: argparse.Namespace, job: Any) -> Any:
     return SceneRecorder(args.record)
 
 
+EXIT_HARDWARE_FAULT = 3  # the end-effector failed mid-run: stopped safely, torque off
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from cell.errors import InvalidInput
+    from cell.errors import HardwareError, InvalidInput
     from cell.orchestrator import Orchestrator
 
     job = load_job(args.job)
@@ -95,12 +98,25 @@ def run(args: argparse.Namespace) -> int:
         disable=None,
     )
     try:
+        done: list[object] = []  # items finished (the bar does not count when disabled)
 
         def progress(r):  # type: ignore[no-untyped-def]
+            done.append(r)
             bar.update(1)
             bar.set_postfix_str(f"{r.object_id}: {r.action} -> {r.bin_id or '-'}")
 
-        summary = orch.run(progress)
+        try:
+            summary = orch.run(progress)
+        except HardwareError as exc:
+            orch.close()  # torque off on the servos before anything else
+            kept = f"; {len(store)} throws kept in {store.path}" if store is not None else ""
+            print(
+                f"cell: hardware fault: {type(exc).__name__}: {exc}\n"
+                f"cell: the run stopped after {len(done)} of {len(job.expanded_items())} items with the servos' "
+                f"torque off{kept}",
+                file=sys.stderr,
+            )
+            return EXIT_HARDWARE_FAULT
         if args.snapshot:
             orch.scene.snapshot(args.snapshot)
         if rec is not None:

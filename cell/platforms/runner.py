@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import CellError, InvalidInput
+from cell.errors import CellError, HardwareError, InvalidInput
 from cell.jobs import ItemSpec, Job
 from cell.model.objects import ObjectParams
 from cell.orchestrator import sorted_throw_record
@@ -218,6 +218,8 @@ class PlatformRunner:
                 cycle_time_s=t_release - t0,
                 throw_id=throw_id,
             )
+        except HardwareError:
+            raise  # the end-effector failed: the run stops (torque off), not just this item
         except CellError as exc:
             log.info("item %d (%s) failed: %s", index, obj.name, exc)
             self.ee.item = None

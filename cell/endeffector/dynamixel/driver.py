@@ -64,10 +64,9 @@ class DynamixelEndEffector(EndEffector):
         self.bus = DynamixelBus(c.port, c.baud_rate, c.retries, c.latency_timer_ms)
         self._latch: ControlTable = MODELS[self.config.latch.model]
         self._spool: ControlTable = MODELS[self.config.spool.model]
-        self._commanded_m: float | None = None
-        self._holding = False
         self._on_close = on_close
         self._closed = False
+        self._commanded_m: float | None = None  # this process's last stroke command [m]
         if connect:
             self.connect()
 
@@ -91,24 +90,49 @@ class DynamixelEndEffector(EndEffector):
                         f"({table.model_number}): check the IDs and models"
                     )
             self._setup(cfg.latch, self._latch, OPERATING_MODE_POSITION)
-            self._setup(cfg.spool, self._spool, OPERATING_MODE_EXTENDED_POSITION)
+            self._setup(cfg.spool, self._spool, OPERATING_MODE_EXTENDED_POSITION, keep_goal=True)
             self._write(cfg.spool, "profile_acceleration", cfg.spool.profile_acceleration)
-            if self._latch_engaged():
-                self._commanded_m = self._encoder_stroke()  # found engaged: adopt its stroke
-                log.info("latch engaged at connect; holding stroke %.4f m", self._commanded_m)
         except BaseException:
             self.close()
             raise
 
-    def _setup(self, c: LatchConfig | SpoolConfig, table: ControlTable, mode: int) -> None:
+    def _setup(
+        self,
+        c: LatchConfig | SpoolConfig,
+        table: ControlTable,
+        mode: int,
+        *,
+        keep_goal: bool = False,
+    ) -> None:
+        """Set the operating mode and bring torque on where the servo is.
+
+        With `keep_goal` (the spool), the goal position register is the commanded stroke, kept
+        by the servo across processes and torque-off. A spool found with torque off and away
+        from its goal was moved by hand: it is left with torque off and its goal untouched, so
+        a throw stays refused (the stored energy is not what was commanded) until a grasp or
+        set_stroke winds it again.
+        """
         bus = self.bus
         if bus.read(c.id, table["operating_mode"]) != mode:
             bus.write(c.id, table["torque_enable"], 0)  # EEPROM: writable with torque off
             bus.write(c.id, table["operating_mode"], mode)
-        if not bus.read(c.id, table["torque_enable"]):
-            # hold where it is: no jump when torque comes on
-            bus.write(c.id, table["goal_position"], bus.read(c.id, table["present_position"]))
-            bus.write(c.id, table["torque_enable"], 1)
+            keep_goal = False  # a goal from another mode means nothing
+        if bus.read(c.id, table["torque_enable"]):
+            return
+        present = bus.read(c.id, table["present_position"])
+        if keep_goal:
+            goal = bus.read(c.id, table["goal_position"])
+            off_m = abs(self.config.ticks_to_stroke(goal) - self.config.ticks_to_stroke(present))
+            if off_m > self.config.stroke.tolerance_m:
+                log.warning(
+                    "servo ID %d was moved %.4f m from its goal with torque off: left off "
+                    "until the stroke is set again",
+                    c.id,
+                    off_m,
+                )
+                return
+        bus.write(c.id, table["goal_position"], present)  # hold where it is: no jump
+        bus.write(c.id, table["torque_enable"], 1)
 
     def close(self) -> None:
         """Torque off on both servos, then close the port (idempotent, never raises
@@ -154,6 +178,9 @@ class DynamixelEndEffector(EndEffector):
         timing = self.config.timing
         table = self._latch if c is self.config.latch else self._spool
         self._write(c, "profile_velocity", profile_velocity)
+        if not self._read(c, "torque_enable"):  # the spool left off at connect (moved by hand)
+            self._write(c, "goal_position", self._read(c, "present_position"))
+            self._write(c, "torque_enable", 1)  # holds where it is, then moves to the goal
         self._write(c, "goal_position", goal)
         start = self._read(c, "present_position")  # has barely moved yet
         # slowest the servo should go: the profile velocity, or its velocity limit if 0
@@ -227,8 +254,6 @@ class DynamixelEndEffector(EndEffector):
                     f"engaged is {cfg.latch.engaged_position} ± {cfg.latch.tolerance}: check "
                     "the latch lever and gears for an obstruction"
                 )
-            self._commanded_m = cfg.stroke.rest_m
-        self._holding = True
         self._wind_to(stroke_m, cfg.spool.profile_velocity)
 
     def set_stroke(self, stroke_m: float) -> None:
@@ -252,10 +277,8 @@ class DynamixelEndEffector(EndEffector):
         cfg = self.config
         if not self._latch_engaged():
             log.info("place: latch open, the spool is already free at rest")
-            self._holding = False
             return
         self._wind_to(cfg.stroke.rest_m, cfg.spool.place_profile_velocity)
-        self._holding = False
 
     def throw(self) -> None:
         """Open the latch at once: the band releases its stored energy.
@@ -268,16 +291,23 @@ class DynamixelEndEffector(EndEffector):
         cfg = self.config
         self._need_latch("throw")
         measured = self._encoder_stroke()
-        if self._commanded_m is None:
-            raise SafetyRefusal("throw refused: no stroke commanded: grasp first")
-        if abs(measured - self._commanded_m) > cfg.stroke.tolerance_m:
+        # the servo's goal register is the command across processes; this process's own
+        # last command, when it made one, must agree too (a slip that moved the goal)
+        commanded = self._goal_stroke()
+        if self._commanded_m is not None and abs(commanded - self._commanded_m) > 1e-9:
+            commanded = self._commanded_m
+        if not self._read(cfg.spool, "torque_enable"):
             raise SafetyRefusal(
-                f"throw refused: the encoder reads {measured:.4f} m but {self._commanded_m:.4f} m "
+                f"throw refused: the spool (M2 ID {cfg.spool.id}) has torque off: it was moved "
+                "away from its commanded stroke while off; set the stroke again"
+            )
+        if abs(measured - commanded) > cfg.stroke.tolerance_m:
+            raise SafetyRefusal(
+                f"throw refused: the encoder reads {measured:.4f} m but {commanded:.4f} m "
                 f"was commanded (tolerance {cfg.stroke.tolerance_m} m): the stored energy is "
                 "not what the plan assumed; check the spool and thread, then set the stroke again"
             )
         pos = self._move(cfg.latch, cfg.latch.released_position, cfg.latch.throw_profile_velocity)
-        self._holding = False
         self._commanded_m = None
         if abs(pos - cfg.latch.released_position) > cfg.latch.tolerance:
             raise HardwareError(
@@ -291,6 +321,10 @@ class DynamixelEndEffector(EndEffector):
         if not self._latch_engaged():
             return self.config.stroke.rest_m
         return self._encoder_stroke()
+
+    def _goal_stroke(self) -> float:
+        """The stroke the spool servo is commanded to hold: its goal position register."""
+        return self.config.ticks_to_stroke(self._read(self.config.spool, "goal_position"))
 
     def _encoder_stroke(self) -> float:
         return self.config.ticks_to_stroke(self._read(self.config.spool, "present_position"))
@@ -314,7 +348,9 @@ class DynamixelEndEffector(EndEffector):
                 ("M2 spool", cfg.spool, t, m2),
             )
         )
-        return EndEffectorStatus(stroke_m, engaged, self._holding, detail)
+        # holding is read from the servos, not remembered: another process may have thrown
+        holding = engaged and abs(stroke_m - cfg.stroke.rest_m) > cfg.stroke.tolerance_m
+        return EndEffectorStatus(stroke_m, engaged, holding, detail)
 
     @staticmethod
     def _describe(name: str, dxl_id: int, table: ControlTable, blk: RegisterBlock) -> str:
