@@ -85,3 +85,32 @@ def test_identical_rows_are_too_few_to_diagnose_or_identify(
     assert main(["identify", str(path), "-o", str(tmp_path / "ee.yaml")]) == 2
     assert "identification needs at least 10 distinct throws" in capsys.readouterr().err
     assert not (tmp_path / "ee.yaml").exists()
+
+
+def test_a_byte_order_mark_is_read_as_the_text_it_is(good_csv: Path, tmp_path: Path) -> None:
+    from cell.log import read_throws_csv
+
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + good_csv.read_bytes())
+    assert len(read_throws_csv(bom)) == len(read_throws_csv(good_csv)) == 30
+
+
+@pytest.mark.parametrize("kind", ["folder", "binary", "missing"])
+@pytest.mark.parametrize("what", ["throws", "tracks"])
+def test_files_that_are_not_csv_text_are_named(
+    kind: str, what: str, good_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = {"folder": tmp_path / "d", "binary": tmp_path / "b.csv", "missing": tmp_path / "m.csv"}[
+        kind
+    ]
+    if kind == "folder":
+        bad.mkdir()
+    elif kind == "binary":
+        bad.write_bytes(bytes(range(256)) * 8)
+    throws, extra = (bad, []) if what == "throws" else (good_csv, ["--tracks", str(bad)])
+    db = tmp_path / "s.sqlite"
+    assert main(["log", "import", str(throws), *extra, "--db", str(db)]) == 2
+    err = capsys.readouterr().err
+    expected = {"folder": "is a folder", "binary": "not a readable CSV", "missing": "no such file"}
+    assert str(bad) in err and expected[kind] in err and "Traceback" not in err
+    assert not db.exists()

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -305,9 +306,9 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
     Raises:
         LogFormatError: naming the file, the row (1 = first data row) and the column.
     """
-    p = str(path)
+    p = _readable(path)
     try:
-        with open(p, newline="") as fh:
+        with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
             try:
                 header = [h.strip() for h in next(reader)]
@@ -319,6 +320,26 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
     return _parse(header, rows, p)
+
+
+MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is refused unread
+
+
+def _readable(path: str | Path) -> str:
+    """Check that `path` is a file this process can read, of a bounded size, before opening it."""
+    p = str(path)
+    f = Path(p)
+    if not f.exists():
+        raise LogFormatError(p, None, None, "no such file")
+    if f.is_dir():
+        raise LogFormatError(p, None, None, "is a folder; give a CSV file")
+    if not os.access(f, os.R_OK):
+        raise LogFormatError(p, None, None, "is not readable (permission denied)")
+    if f.stat().st_size > MAX_CSV_BYTES:
+        raise LogFormatError(
+            p, None, None, f"is {f.stat().st_size} bytes; at most {MAX_CSV_BYTES} are read"
+        )
+    return p
 
 
 def _fmt(v: Any) -> str:
@@ -345,10 +366,10 @@ def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
     Raises:
         LogFormatError: a missing column or a non-numeric cell.
     """
-    p = str(path)
+    p = _readable(path)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
     try:
-        with open(p, newline="") as fh:
+        with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             header = reader.fieldnames or []
             for c in need:
@@ -365,6 +386,6 @@ def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
                     if not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{row[c]!r} is not a finite number")
                 out.setdefault(row["throw_id"], []).append(vals)
-    except FileNotFoundError:
-        raise LogFormatError(p, None, None, "no such file") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
     return {k: np.asarray(sorted(v)) for k, v in out.items()}
