@@ -5,7 +5,7 @@
       ee: pybullet             # pybullet | dynamixel (end-effector back-end)
       ee_config: robots/throwing_ee/dynamixel.yaml   # for dynamixel
       params: robots/cell_scene/ee_params.yaml       # model parameter file (optional)
-      residual: residual.joblib                       # learned ΔL_s model (optional)
+      residual: residual.skops                        # learned ΔL_s model (optional)
       platform: arm            # arm | drone | mobile
       drone: {hover_height_m: 2.0, rotor_rpm: 8900}   # platform drone only
       mobile: {speed_mps: 0.5}                        # platform mobile: base speed at release

@@ -82,7 +82,7 @@ def main() -> None:
     for learner in ("svr", "rf", "mlp"):
         model = train_residual(data, learner=learner, grid=grid, seed=args.seed)
         if learner == "svr":
-            model.save(args.out / "residual.joblib")
+            model.save(args.out / "residual.skops")
         tt = targeted_throws(
             world, model, unseen_ids(), model_ee=model_ee, throws_per_object=5, seed=args.seed + 1
         )
@@ -101,7 +101,7 @@ def main() -> None:
             plot_targeted(tt, args.out / "unseen_targets.png")
     (args.out / "unseen.json").write_text(json.dumps(summary, indent=2))
     print(
-        f"wrote {args.out}/throws.csv, residual.joblib, table51.*, unseen_targets.png, unseen.json"
+        f"wrote {args.out}/throws.csv, residual.skops, table51.*, unseen_targets.png, unseen.json"
     )
 
 

@@ -80,7 +80,7 @@ def main() -> None:
     )
     plot_table51(rr, args.out / "table51.png")
     model = train_residual(data, learner="svr", grid="small", seed=args.seed)
-    model.save(args.out / "residual.joblib")
+    model.save(args.out / "residual.skops")
 
     scene = CellScene(robot=None, bins=(), pick_station_xy=(-1.0, -1.0))
     ee = PyBulletEndEffector(scene)

@@ -31,7 +31,7 @@ def learned(tmp_path_factory):
 
 
 def test_cell_learn_json_is_keyed_by_learner(learned, capsys):
-    out = learned / "residual.joblib"
+    out = learned / "residual.skops"
     rc = main(["learn", str(learned / "throws.csv"), "-o", str(out), "--grid", "small", "--json"])
     assert rc == 0 and out.is_file()
     doc = json.loads(capsys.readouterr().out)
@@ -49,7 +49,7 @@ def test_cell_learn_json_is_keyed_by_learner(learned, capsys):
 
 
 def test_cell_learn_text_output_and_bad_input(learned, capsys, tmp_path):
-    out = tmp_path / "r.joblib"
+    out = tmp_path / "r.skops"
     rc = main(
         [
             "learn",
@@ -74,7 +74,7 @@ def test_cell_learn_text_output_and_bad_input(learned, capsys, tmp_path):
 
 
 def test_loaded_model_predicts_the_stretch_and_the_planner_adds_it(learned, caplog):
-    model = ResidualModel.load(learned / "residual.joblib")
+    model = ResidualModel.load(learned / "residual.skops")
     cube, cyl = get_object("cube50"), get_object("cyl70")
     d_cube = model.delta_stroke(cube, 0.07, elevation_rad=0.5)
     d_cyl = model.delta_stroke(cyl, 0.07, elevation_rad=0.5)
@@ -95,12 +95,12 @@ def test_loaded_model_predicts_the_stretch_and_the_planner_adds_it(learned, capl
 
 
 def test_loading_a_foreign_file_is_a_clean_error(tmp_path):
-    bad = tmp_path / "x.joblib"
+    bad = tmp_path / "x.skops"
     bad.write_text("not a model")
     with pytest.raises(InvalidInput, match="not a residual model file"):
         ResidualModel.load(bad)
     with pytest.raises(InvalidInput, match="no such residual model file"):
-        ResidualModel.load(tmp_path / "missing.joblib")
+        ResidualModel.load(tmp_path / "missing.skops")
 
 
 def test_parameter_file_ee_is_used_and_identified_objects_only_on_request(
@@ -111,7 +111,7 @@ def test_parameter_file_ee_is_used_and_identified_objects_only_on_request(
         "end_effector: {Ke1: 120.0}\n"
         "objects: {cube50: {shape: cube, mass_kg: 0.065, size_m: [0.05, 0.05, 0.05]}}\n"
     )
-    out = tmp_path / "r.joblib"
+    out = tmp_path / "r.skops"
     args = [
         "learn",
         str(learned / "throws.csv"),
@@ -130,3 +130,49 @@ def test_parameter_file_ee_is_used_and_identified_objects_only_on_request(
     params.write_text("effects: {band_mass: {mass_kg: 0.01}}\n")
     assert main([*args, "--params", str(params)]) == 2
     assert "effects" in capsys.readouterr().err
+
+
+class _Payload:
+    """A pickle that would create a marker file when unpickled."""
+
+    def __init__(self, marker: str) -> None:
+        self.marker = marker
+
+    def __reduce__(self):  # type: ignore[no-untyped-def]
+        return (open, (self.marker, "w"))
+
+
+def test_a_crafted_pickle_runs_nothing_from_a_job_or_the_loader(tmp_path, capsys):
+    """A residual file is untrusted: a pickle (or joblib) payload is refused unread."""
+    import pickle
+
+    import joblib
+
+    marker = tmp_path / "pwned"
+    files = [tmp_path / "evil.skops", tmp_path / "evil.joblib"]
+    files[0].write_bytes(pickle.dumps({"format": "cell-residual/2", "x": _Payload(str(marker))}))
+    joblib.dump({"model": _Payload(str(marker))}, files[1])
+    for f in files:
+        with pytest.raises(InvalidInput, match="not a residual model file"):
+            ResidualModel.load(f)
+    job = tmp_path / "job.yaml"
+    job.write_text(
+        "bins:\n  - {id: far, position_m: [2.0, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}\n"
+        f"items:\n  - {{object: cube50, bin: far}}\ncell: {{residual: {files[0]}}}\n"
+    )
+    assert main(["run", str(job), "--no-log"]) == 2
+    err = capsys.readouterr().err
+    assert "not a residual model file" in err and "Traceback" not in err
+    assert not marker.exists()
+
+
+def test_a_model_file_with_an_untrusted_type_is_refused(tmp_path):
+    """A skops file that would build a type outside the learners' own is refused unbuilt."""
+    import collections
+
+    import skops.io as sio
+
+    f = tmp_path / "odd.skops"
+    sio.dump({"format": "cell-residual/2", "meta": "{}", "pipeline": collections.Counter()}, f)
+    with pytest.raises(InvalidInput, match="does not trust"):
+        ResidualModel.load(f)

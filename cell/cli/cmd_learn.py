@@ -24,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("throws", help="throws.csv (THROW_LOG.md)")
-    p.add_argument("-o", "--output", required=True, help="the residual model file (.joblib)")
+    p.add_argument(
+        "-o", "--output", required=True, help="the residual model file (.skops; never a pickle)"
+    )
     p.add_argument(
         "--params", metavar="EE.yaml", help="identified parameter file (default: reference values)"
     )

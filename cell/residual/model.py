@@ -1,6 +1,6 @@
 """The trained residual: a tuned pipeline with what it needs to be used later
 (feature names, learner, training objects, the model parameters it was
-trained against, the scikit-learn version), saved and loaded with joblib.
+trained against, the scikit-learn version), saved and loaded with skops (no pickle).
 
 The planner commands L_s + ΔL_s (thesis Fig. 5.1): `apply_residual` gives the
 corrected stroke, clipped to the end-effector's range with a flag and a warning
@@ -9,6 +9,7 @@ when it had to clip.
 
 from __future__ import annotations
 
+import json
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -39,7 +40,16 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-FORMAT = "cell-residual/1"
+FORMAT = "cell-residual/2"  # skops container: {format, meta (JSON), pipeline}
+MAX_MODEL_BYTES = 64 * 1024 * 1024  # [B] a random forest of the full grid is ~5 MB
+# Types outside scikit-learn's own estimators that the project's learners are built of; skops
+# trusts sklearn's estimators by default and lists anything else for the loader to judge.
+TRUSTED_TYPES = (
+    "cell.residual.learners.RangeClip",
+    "sklearn.neural_network._stochastic_optimizers.AdamOptimizer",
+    "sklearn.neural_network._stochastic_optimizers.SGDOptimizer",
+    "sklearn.tree._tree.Tree",
+)
 
 
 @dataclass(frozen=True)
@@ -101,33 +111,81 @@ class ResidualModel:
         )
 
     def save(self, path: str | Path) -> None:
-        """Write the model with joblib (atomically)."""
-        import joblib
+        """Write the model in skops' format (no pickle: loading it runs no code), atomically."""
+        import skops.io as sio
 
+        meta = {
+            "learner": self.learner,
+            "feature_names": list(self.feature_names),
+            "training_objects": list(self.training_objects),
+            "ee": self.ee.as_dict(),
+            "sklearn_version": self.sklearn_version,
+            "best_params": {k: _plain(v) for k, v in self.best_params.items()},
+            "n_train": self.n_train,
+            "n_excluded": self.n_excluded,
+            "identified_objects": list(self.identified_objects),
+        }
         tmp = Path(str(path) + ".tmp")
-        joblib.dump({"format": FORMAT, "model": self}, tmp)
+        sio.dump({"format": FORMAT, "meta": json.dumps(meta), "pipeline": self.pipeline}, tmp)
         tmp.replace(path)
 
     @classmethod
     def load(cls, path: str | Path) -> ResidualModel:
-        """Read a model written by `save`.
+        """Read a model written by `save`, trusting only the types its learners are made of.
+
+        The file is untrusted: it is never unpickled. skops lists every type the file would
+        build; a file naming any type outside TRUSTED_TYPES (or scikit-learn's own estimators,
+        which skops trusts) is refused before anything is built.
 
         Raises:
-            InvalidInput: no such file, or not a residual model file.
+            InvalidInput: no such file, too large, not a residual model file, an untrusted
+                type in it, or made with another feature set.
         """
-        import joblib
         import sklearn
+        import skops.io as sio
 
         p = Path(path)
         if not p.is_file():
             raise InvalidInput(f"{p}: no such residual model file")
+        if p.stat().st_size > MAX_MODEL_BYTES:
+            raise InvalidInput(
+                f"{p}: {p.stat().st_size} bytes; a residual model is at most {MAX_MODEL_BYTES}"
+            )
+        not_ours = f"{p}: not a residual model file (expected one written by `cell learn`"
         try:
-            doc = joblib.load(p)
-        except Exception as exc:  # joblib raises many kinds on a foreign file
-            raise InvalidInput(f"{p}: not a residual model file ({exc})") from None
-        if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-            raise InvalidInput(f"{p}: not a residual model file (expected format {FORMAT})")
-        model = doc["model"]
+            untrusted = set(sio.get_untrusted_types(file=p))
+        except Exception as exc:  # a pickle, a zip of something else, garbage: never loaded
+            raise InvalidInput(f"{not_ours}, format {FORMAT}; {type(exc).__name__})") from None
+        foreign = sorted(untrusted - set(TRUSTED_TYPES))
+        if foreign:
+            raise InvalidInput(
+                f"{p}: refused: it would build types this cell does not trust ({', '.join(foreign)}); "
+                f"trusted are scikit-learn's estimators and {', '.join(TRUSTED_TYPES)}"
+            )
+        try:
+            doc = sio.load(p, trusted=sorted(untrusted))
+            meta = json.loads(doc["meta"])
+            fmt = doc["format"]
+            pipeline = doc["pipeline"]
+        except Exception as exc:
+            raise InvalidInput(f"{not_ours}; {type(exc).__name__}: {exc})") from None
+        if fmt != FORMAT:
+            raise InvalidInput(f"{p}: residual model format {fmt!r}; this cell reads {FORMAT}")
+        try:
+            model = cls(
+                learner=str(meta["learner"]),
+                pipeline=pipeline,
+                feature_names=tuple(meta["feature_names"]),
+                training_objects=tuple(meta["training_objects"]),
+                ee=EndEffectorParams.from_dict(meta["ee"], where=f"{p}: ee"),
+                sklearn_version=str(meta["sklearn_version"]),
+                best_params=dict(meta["best_params"]),
+                n_train=int(meta["n_train"]),
+                n_excluded=int(meta["n_excluded"]),
+                identified_objects=tuple(meta["identified_objects"]),
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            raise InvalidInput(f"{p}: residual model metadata is incomplete ({exc})") from None
         if model.feature_names != FEATURE_NAMES:
             raise InvalidInput(
                 f"{p}: made with another feature set ({len(model.feature_names)} features); "
@@ -140,7 +198,12 @@ class ResidualModel:
                 model.sklearn_version,
                 sklearn.__version__,
             )
-        return model  # type: ignore[no-any-return]
+        return model
+
+
+def _plain(v: Any) -> Any:
+    """A hyper-parameter value as JSON can hold it (numpy scalars to Python numbers)."""
+    return v.item() if isinstance(v, np.generic) else v
 
 
 @dataclass(frozen=True)
