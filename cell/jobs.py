@@ -35,8 +35,9 @@ from typing import Any
 import yaml
 
 from cell.catalogue import catalogue
-from cell.errors import JobError
+from cell.errors import InvalidInput, JobError
 from cell.model.objects import SHAPES, ObjectParams
+from cell.yamlsafe import check_yaml, read_yaml_text
 from cell.yamltree import Checker, to_tree
 
 __all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
@@ -46,6 +47,7 @@ PLATFORMS = ("arm", "drone", "mobile")
 EE_BACKENDS = ("pybullet", "dynamixel")
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 
 
 @dataclass(frozen=True)
@@ -117,8 +119,10 @@ class Job:
         """One entry per item, in job order, capped at max_items."""
         out: list[ItemSpec] = []
         for it in self.items:
-            out.extend([it] * it.count)
-        return out[: self.max_items]
+            out.extend([it] * min(it.count, self.max_items - len(out)))
+            if len(out) >= self.max_items:
+                break
+        return out
 
 
 def _footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
@@ -132,6 +136,10 @@ def parse_job(text: str, path: str = "<job>") -> Job:
     Raises:
         JobError: naming the file, the line and the field path, and what is valid.
     """
+    try:
+        check_yaml(text, path)
+    except InvalidInput as exc:
+        raise JobError(str(exc)) from None
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError as exc:
@@ -313,7 +321,7 @@ def parse_job(text: str, path: str = "<job>") -> Job:
                     it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip"
                 )
             obj = ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
-        count = c.integer(it["count"], f"{fp}.count", 1) if "count" in it else 1
+        count = c.integer(it["count"], f"{fp}.count", 1, MAX_ITEMS) if "count" in it else 1
         if "bin" in it:
             dest = c.text(it["bin"], f"{fp}.bin", tuple(bin_ids))
         elif obj.shape in routing:
@@ -328,7 +336,7 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         items.append(ItemSpec(obj, count, dest, itn.line))
 
     policy = c.text(top["policy"], "policy", POLICIES) if "policy" in top else "auto"
-    seed = c.integer(top["seed"], "seed", 0) if "seed" in top else 0
+    seed = c.integer(top["seed"], "seed", 0, 2**32 - 1) if "seed" in top else 0
     lim = (
         c.mapping(
             top["limits"],
@@ -343,7 +351,11 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         if "place_reach_m" in lim
         else 0.75
     )
-    max_items = c.integer(lim["max_items"], "limits.max_items", 1) if "max_items" in lim else 1000
+    max_items = (
+        c.integer(lim["max_items"], "limits.max_items", 1, MAX_ITEMS)
+        if "max_items" in lim
+        else 1000
+    )
     tlim = (
         c.number(lim["item_time_limit_s"], "limits.item_time_limit_s", lo=1.0)
         if "item_time_limit_s" in lim
@@ -379,9 +391,7 @@ def load_job(path: str | Path) -> Job:
     """
     p = str(path)
     try:
-        text = Path(p).read_text()
-    except FileNotFoundError:
-        raise JobError(f"{p}: no such job file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise JobError(f"{p}: cannot be read ({exc})") from None
+        text = read_yaml_text(p, "job file")
+    except InvalidInput as exc:
+        raise JobError(str(exc)) from None
     return parse_job(text, p)

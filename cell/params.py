@@ -19,6 +19,7 @@ import yaml
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
+from cell.yamlsafe import read_yaml_text, safe_load
 
 __all__ = ["ModelParams", "load_params", "save_params"]
 
@@ -49,13 +50,7 @@ def load_params(path: str | Path | None) -> ModelParams:
     if path is None:
         return ModelParams()
     p = str(path)
-    try:
-        with open(p) as fh:
-            raw = yaml.safe_load(fh) or {}
-    except FileNotFoundError:
-        raise InvalidInput(f"{p}: no such parameter file") from None
-    except yaml.YAMLError as exc:
-        raise InvalidInput(f"{p}: not valid YAML ({exc})") from None
+    raw = safe_load(read_yaml_text(p, "parameter file"), p) or {}
     if not isinstance(raw, dict):
         raise InvalidInput(f"{p}: must be a mapping with keys end_effector, objects, effects, note")
     valid = {"end_effector", "objects", "effects", "note"}

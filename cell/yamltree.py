@@ -8,6 +8,7 @@ error, never constructed.
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import yaml
@@ -25,6 +26,7 @@ class Node:
         self.line = line
 
 
+_SCIENTIFIC = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
 _SAFE_TAGS = frozenset(t for t in yaml.SafeLoader.yaml_constructors if t)
 
 
@@ -81,6 +83,8 @@ class Checker:
         strict_lo: bool = False,
     ) -> float:
         v = node.value
+        if isinstance(v, str) and _SCIENTIFIC.fullmatch(v.strip()):
+            v = float(v)  # YAML 1.1 reads 5e-2 (no dot) as text; the parameter loader does not
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
             raise self.fail(node, fp, f"{v!r} must be a number")
         v = float(v)
@@ -90,10 +94,10 @@ class Checker:
             raise self.fail(node, fp, f"{v} must be ≤ {hi}")
         return v
 
-    def integer(self, node: Node, fp: str, lo: int) -> int:
+    def integer(self, node: Node, fp: str, lo: int, hi: int) -> int:
         v = node.value
-        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-            raise self.fail(node, fp, f"{v!r} must be a whole number ≥ {lo}")
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            raise self.fail(node, fp, f"{v!r} must be a whole number from {lo} to {hi}")
         return int(v)
 
     def text(self, node: Node, fp: str, choices: tuple[str, ...] | None = None) -> str:

@@ -20,8 +20,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from cell.endeffector.dynamixel.registers import (
     EXTENDED_POSITION_RANGE,
     MODELS,
@@ -29,6 +27,7 @@ from cell.endeffector.dynamixel.registers import (
     ticks_to_rad,
 )
 from cell.errors import InvalidInput, InvalidParameter
+from cell.yamlsafe import read_yaml_text, safe_load
 
 __all__ = [
     "LatchConfig",
@@ -305,12 +304,7 @@ def load_config(path: str | Path) -> DynamixelConfig:
             the message names the file and the field and says what is valid.
     """
     p = Path(path)
-    try:
-        raw = yaml.safe_load(p.read_text()) or {}
-    except FileNotFoundError:
-        raise InvalidInput(f"{p}: no such end-effector configuration file") from None
-    except (OSError, yaml.YAMLError) as exc:
-        raise InvalidInput(f"{p}: cannot read it as YAML ({exc})") from None
+    raw = safe_load(read_yaml_text(p, "end-effector configuration file"), str(p)) or {}
     if not isinstance(raw, dict):
         raise InvalidInput(f"{p}: must be a mapping with keys {sorted([*_TOP, *_SECTIONS])}")
     unknown = set(raw) - set(_TOP) - set(_SECTIONS)

@@ -1,0 +1,100 @@
+"""YAML from untrusted files, bounded before anything is built.
+
+A job, a parameter file or a Dynamixel configuration comes from a user. YAML's
+anchors and aliases let a few hundred bytes expand into gigabytes ("billion
+laughs"), and deep nesting exhausts the stack. Here the text is first read as a
+stream of parser events, which costs time and memory in proportion to its size:
+a file larger than MAX_BYTES, any alias, nesting deeper than MAX_DEPTH or more
+than MAX_NODES values is refused before a single node is composed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cell.errors import InvalidInput
+
+__all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "check_yaml", "read_yaml_text", "safe_load"]
+
+MAX_BYTES = 1_000_000  # [B] a sort job of thousands of lines is ~100 kB
+MAX_DEPTH = 32  # nesting of mappings and sequences
+MAX_NODES = 200_000  # scalars, mappings and sequences in one file
+
+
+def check_yaml(text: str, path: str) -> None:
+    """Refuse YAML text that is too large, uses aliases, or nests too deep or too wide.
+
+    Args:
+        text: the file's text.
+        path: the file, for the message.
+
+    Raises:
+        InvalidInput: naming the file, the line and the bound; also for YAML syntax errors.
+    """
+    if len(text) > MAX_BYTES:
+        raise InvalidInput(f"{path}: {len(text)} characters; at most {MAX_BYTES} are read")
+    depth = nodes = 0
+    try:
+        for ev in yaml.parse(text, Loader=yaml.SafeLoader):
+            line = ev.start_mark.line + 1 if ev.start_mark is not None else 0
+            if isinstance(ev, yaml.AliasEvent):
+                raise InvalidInput(
+                    f"{path}, line {line}: YAML aliases (*{ev.anchor}) are not "
+                    "accepted; write the value out where it is used"
+                )
+            if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise InvalidInput(
+                        f"{path}, line {line}: nested deeper than {MAX_DEPTH} "
+                        "levels; a valid file nests a few"
+                    )
+            elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
+            if isinstance(ev, (yaml.ScalarEvent, yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                nodes += 1
+                if nodes > MAX_NODES:
+                    raise InvalidInput(f"{path}: more than {MAX_NODES} values; too large to read")
+    except yaml.YAMLError as exc:
+        raise InvalidInput(f"{path}: not valid YAML ({exc})") from None
+
+
+def read_yaml_text(path: str | Path, what: str) -> str:
+    """The text of a user's YAML file, with its size bounded before it is read.
+
+    Args:
+        path: the file.
+        what: what it should be, for the messages ("parameter file").
+
+    Raises:
+        InvalidInput: missing, a folder, unreadable, too large or not UTF-8 text.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InvalidInput(f"{p}: no such {what}")
+    if p.is_dir():
+        raise InvalidInput(f"{p}: is a folder; give a {what} (YAML)")
+    try:
+        if p.stat().st_size > MAX_BYTES:
+            raise InvalidInput(f"{p}: {p.stat().st_size} bytes; a {what} is at most {MAX_BYTES}")
+        return p.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise InvalidInput(f"{p}: not a text file; a {what} is YAML text") from None
+    except OSError as exc:
+        raise InvalidInput(f"{p}: cannot read it ({exc.strerror})") from None
+
+
+def safe_load(text: str, path: str) -> Any:
+    """`yaml.safe_load` of text that passed `check_yaml`.
+
+    Raises:
+        InvalidInput: as `check_yaml`.
+    """
+    check_yaml(text, path)
+    try:
+        return yaml.safe_load(text)
+    except (yaml.YAMLError, RecursionError, OverflowError) as exc:
+        raise InvalidInput(f"{path}: not valid YAML ({exc})") from None
