@@ -114,3 +114,22 @@ def test_files_that_are_not_csv_text_are_named(
     expected = {"folder": "is a folder", "binary": "not a readable CSV", "missing": "no such file"}
     assert str(bad) in err and expected[kind] in err and "Traceback" not in err
     assert not db.exists()
+
+
+def test_a_release_below_its_landing_plane_blames_z_m(
+    good_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = _edit(good_csv, tmp_path / "bad.csv", 2, "z_m", "-0.5")
+    assert main(["predict", str(bad), "-o", str(tmp_path / "o.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "row 3, column 'z_m'" in err and "below the floor" in err
+
+
+def test_hold_out_zero_is_named_as_such(
+    good_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "r.skops"
+    assert main(["learn", str(good_csv), "-o", str(out), "--hold-out", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--hold-out 0: hold out at least 1 object" in err
+    assert not out.exists()

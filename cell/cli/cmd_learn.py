@@ -125,8 +125,20 @@ def run(args: argparse.Namespace) -> int:
                 f"{name:8s} {s.dls_mse_mean:10.4f} ± {s.dls_mse_std:<8.4f} "
                 f"{s.heldout_rmse_before_m:12.4f} -> {s.heldout_rmse_after_m:.4f}"
             )
+    params = {k: v for k, v in model.best_params.items() if k not in ("null", "learner_cv_mse_mm2")}
+    if "null" in model.best_params:
+        null = model.best_params["null"]
+        print(
+            f"note: the {model.learner} learner did not beat "
+            f"{'no correction' if null == 'zero' else 'a constant correction'} in the inner "
+            f"cross-validation (its MSE {model.best_params['learner_cv_mse_mm2']:.3f} mm²): the "
+            f"residual saved is that {'zero' if null == 'zero' else 'constant'} correction. "
+            "The log shows no systematic ΔL_s this learner can predict."
+        )
     print(
         f"saved {model.learner} residual ({model.n_train} throws of "
-        f"{len(model.training_objects)} objects; {model.best_params}) -> {args.output}"
+        f"{len(model.training_objects)} objects; "
+        + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
+        + f") -> {args.output}"
     )
     return 0

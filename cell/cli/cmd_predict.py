@@ -50,12 +50,26 @@ def run(args: argparse.Namespace) -> int:
         land = predict_landing(batch, mp.ee, strict=False, check_stroke=False)
     if not land.landed.all():
         i = int(np.flatnonzero(~land.landed)[0])
+        z0, zl = float(batch.position[i, 2]), float(batch.land_z[i])
+        # blame the column a user most likely got wrong: a release below the floor (z = 0 in
+        # the world frame) is the release height's fault, otherwise the landing plane's
+        column, hint = (
+            (
+                "z_m",
+                f"the release height z_m = {z0} m is below the floor (z = 0) and the plane {zl} m",
+            )
+            if z0 < 0.0 <= zl
+            else (
+                "land_z_m",
+                f"the landing plane z = {zl} m is above the whole flight (released at z = {z0} m)",
+            )
+        )
         raise LogFormatError(
             args.throws,
             i + 1,
-            "land_z_m",
-            f"throw {table.data['throw_id'][i]} never crosses its landing plane "
-            f"z = {batch.land_z[i]} m while descending (released at z = {batch.position[i, 2]} m)",
+            column,
+            f"throw {table.data['throw_id'][i]} never crosses its landing plane while "
+            f"descending: {hint}",
         )
     out = table.with_columns(
         {"pred_x_m": land.x, "pred_y_m": land.y, "pred_t_flight_s": land.t_flight}

@@ -132,7 +132,9 @@ def round_robin_folds(object_ids: list[str], *, hold_out: int = 2, seed: int = 0
         InvalidParameter: fewer objects than hold_out + 2 (training needs 2 for its inner CV).
     """
     ids = sorted(set(object_ids))
-    if hold_out < 1 or len(ids) < hold_out + 2:
+    if hold_out < 1:
+        raise InvalidParameter(f"--hold-out {hold_out}: hold out at least 1 object per fold")
+    if len(ids) < hold_out + 2:
         raise InvalidParameter(
             f"a round-robin holding out {hold_out} objects needs at least {hold_out + 2} objects; "
             f"the log has {len(ids)}"
