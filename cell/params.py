@@ -57,10 +57,18 @@ def load_params(path: str | Path | None) -> ModelParams:
     unknown = sorted(set(raw) - valid)
     if unknown:
         raise InvalidInput(f"{p}: unknown key(s) {unknown}; valid: {sorted(valid)}")
+    for key in ("end_effector", "objects", "effects"):
+        if not isinstance(raw.get(key) or {}, dict):
+            raise InvalidInput(
+                f"{p}: {key}: {raw[key]!r} must be a mapping "
+                + ("of parameter name to number" if key == "end_effector" else "by name")
+            )
     ee = EndEffectorParams.from_dict(raw.get("end_effector") or {}, where=f"{p}: end_effector")
     objects: dict[str, ObjectParams] = {}
     for oid, spec in (raw.get("objects") or {}).items():
         try:
+            if not isinstance(spec, dict):
+                raise TypeError(f"{spec!r} is not a mapping")
             objects[str(oid)] = ObjectParams(
                 shape=str(spec["shape"]),
                 mass=float(spec["mass_kg"]),

@@ -97,8 +97,14 @@ class EndEffectorParams:
             raise InvalidParameter(
                 f"{where}: unknown end-effector parameter(s) {unknown}; valid: {sorted(valid)}"
             )
+        numbers: dict[str, float] = {}
+        for k, v in values.items():
+            try:
+                numbers[k] = float(v)
+            except (TypeError, ValueError):
+                raise InvalidParameter(f"{where}.{k}: {v!r} is not a number") from None
         try:
-            return replace(cls(), **{k: float(v) for k, v in values.items()})
+            return replace(cls(), **numbers)
         except (TypeError, ValueError) as exc:
             if isinstance(exc, InvalidParameter):
                 raise InvalidParameter(f"{where}: {exc}") from None
