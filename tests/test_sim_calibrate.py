@@ -74,3 +74,16 @@ def test_calibrate_refuses_to_overwrite_the_shipped_parameters(tmp_path, capsys)
         assert main(["calibrate", "--n", "3", "-o", bad]) == 2
         assert "-o " in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_scene_commands_keep_stdout_for_their_output(tmp_path, capfd) -> None:
+    """PyBullet's banner ("argv[0]=", printed by C code on connect) goes to stderr, at the
+    file-descriptor level: `cell calibrate --json` prints JSON alone on stdout."""
+    import json
+
+    from cell.cli import main
+
+    assert main(["calibrate", "--n", "28", "--json", "-o", str(tmp_path / "e.yaml")]) == 0
+    out, err = capfd.readouterr()
+    assert json.loads(out)["throws"] == 28
+    assert "argv[0]" in err  # the banner still shows, on the right stream

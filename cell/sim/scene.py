@@ -69,13 +69,18 @@ def _stdout_to_stderr() -> Iterator[None]:
     `cell calibrate --json` and every other scene command print machine-readable output on
     stdout; PyBullet's connect banner ("argv[0]=") would come before it.
     """
+    import ctypes
+
+    libc = ctypes.CDLL(None)
     sys.stdout.flush()
+    libc.fflush(None)
     saved = os.dup(1)
     try:
         os.dup2(2, 1)
         yield
     finally:
         sys.stdout.flush()
+        libc.fflush(None)  # C stdio buffers what PyBullet printed: out before fd 1 is back
         os.dup2(saved, 1)
         os.close(saved)
 
@@ -122,13 +127,13 @@ class CellScene:
         ids = [b.id for b in bins]
         if len(set(ids)) != len(ids):
             raise InvalidParameter(f"bin ids must be unique, got {ids}")
-        try:
-            import pybullet
-            import pybullet_data
-            from pybullet_utils.bullet_client import BulletClient
-        except ImportError:
-            raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
-        with _stdout_to_stderr():  # PyBullet prints a banner to the C stdout on connect
+        with _stdout_to_stderr():  # PyBullet prints banners to the C stdout (import, connect)
+            try:
+                import pybullet
+                import pybullet_data
+                from pybullet_utils.bullet_client import BulletClient
+            except ImportError:
+                raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
             self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
         cl = self.client
         self.dt_s = dt_s
