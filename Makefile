@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install run test lint bench clean
+.PHONY: install run test lint bench figures clean
 
 install: $(STAMP)
 
@@ -27,6 +27,31 @@ test: lint
 
 bench: install
 	$(BIN)/cell bench
+
+# Every figure and quoted figure in README.md and docs/ (about 10 min on 2 cores). The JSON beside
+# each figure is what tests/test_readme_figures.py checks the README's quotes against.
+# Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
+FIG := docs/figures
+TMP := build/figures
+figures: install
+	rm -rf $(TMP) && mkdir -p $(TMP)
+	$(BIN)/cell calibrate --n 0 --snapshot robots/cell_scene/scene.png
+	$(BIN)/cell run tasks/bins.yaml --no-log --json $(FIG)/run.json
+	$(BIN)/cell synth -o $(TMP)/throws.csv --seed 0
+	$(BIN)/cell identify $(TMP)/throws.csv -o $(TMP)/ee.yaml --plot $(TMP)/identify --json > $(FIG)/identify.json
+	cp $(TMP)/identify/reach_overview.png $(FIG)/identify_reach_overview.png
+	$(BIN)/python examples/08_residual_unseen_objects.py $(TMP)/08
+	cp $(TMP)/08/table51.png $(FIG)/table51_synthetic.png
+	cp $(TMP)/08/unseen_targets.png $(FIG)/residual_unseen_synthetic.png
+	cp $(TMP)/08/unseen.json $(FIG)/residual_unseen_synthetic.json
+	$(BIN)/python examples/09_residual_scene.py $(TMP)/09
+	cp $(TMP)/09/unseen_targets_scene.png $(FIG)/residual_unseen_scene.png
+	cp $(TMP)/09/unseen_scene.json $(FIG)/residual_unseen_scene.json
+	$(BIN)/cell study repeatability --plot $(FIG)/repeatability.png --json > $(FIG)/repeatability.json
+	$(BIN)/cell calibrate --n 280 --seed 7 -o $(TMP)/scene_ee.yaml --log $(TMP)/scene.csv
+	$(BIN)/cell gap $(TMP)/scene.csv --report docs/scene_gap/nominal.html --json docs/scene_gap/nominal.json
+	$(BIN)/cell gap $(TMP)/scene.csv --identify --report docs/scene_gap/identified.html --json docs/scene_gap/identified.json
+	$(BIN)/cell bench --json > $(FIG)/bench.json
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -1,0 +1,73 @@
+"""The README quotes figures; `make figures` regenerates them with the JSON beside each. Here
+each quoted figure is read from the README and compared with the last generated JSON, so a
+figure in the README cannot go stale without this failing."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+
+
+def _json(rel: str) -> dict:
+    path = ROOT / rel
+    assert path.is_file(), f"{rel} is missing: run `make figures`"
+    return json.loads(path.read_text())
+
+
+def _quoted(pattern: str) -> tuple[str, ...]:
+    m = re.search(pattern, README)
+    assert m, f"the README no longer quotes {pattern!r}"
+    return m.groups()
+
+
+def test_the_demo_table_is_the_last_generated_run() -> None:
+    run = _json("docs/figures/run.json")
+    n_in, pct = _quoted(r"in the right bin\s+(\d+) \(([\d.]+) %\)")
+    assert int(n_in) == run["in_bin"]
+    assert float(pct) == pytest.approx(100 * run["in_bin_rate"], abs=0.05)
+    (mean,) = _quoted(r"landing error mean\s+([\d.]+) m")
+    assert float(mean) == pytest.approx(run["mean_landing_error_m"], abs=5e-4)
+    (p95,) = _quoted(r"landing error p95\s+([\d.]+) m")
+    assert float(p95) == pytest.approx(run["p95_landing_error_m"], abs=5e-4)
+    (rate,) = _quoted(r"items per hour\s+([\d,]+) \(simulated")
+    assert int(rate.replace(",", "")) == round(run["items_per_hour"])
+
+
+def test_the_scene_residual_figure_is_the_last_generated_one() -> None:
+    scene = _json("docs/figures/residual_unseen_scene.json")
+    before, after = _quoted(r"unseen objects' landing RMSE from ([\d.]+) m to ([\d.]+) m")
+    assert float(before) == pytest.approx(scene["rmse_before_m"], abs=5e-4)
+    assert float(after) == pytest.approx(scene["rmse_after_m"], abs=5e-4)
+
+
+def test_the_scene_gap_quote_is_the_last_generated_report() -> None:
+    report = _json("docs/scene_gap/nominal.json")
+    (rmse,) = _quoted(r"landing RMSE \*\*([\d.]+) m\*\*")
+    assert float(rmse) == pytest.approx(report["baseline"]["heldout_rmse_m"], abs=5e-3)
+
+
+def test_the_benchmark_table_is_the_last_generated_bench() -> None:
+    bench = _json("docs/figures/bench.json")
+    (rate,) = _quoted(r"\| `predictions_per_s`:[^|]*\| ([\d,]+) \|")
+    assert int(rate.replace(",", "")) == bench["predictions_per_s"]
+    fast, fast95 = _quoted(r"\| `plan_fast_median_ms`[^|]*\| ([\d.]+) / ([\d.]+) ms \|")
+    assert float(fast) == pytest.approx(bench["plan_fast_median_ms"], abs=0.005)
+    assert float(fast95) == pytest.approx(bench["plan_fast_p95_ms"], abs=0.005)
+    (gap,) = _quoted(r"\| `gap_s`:[^|]*\| ([\d.]+) s \|")
+    assert float(gap) == pytest.approx(bench["gap_s"], abs=0.05)
+    (ident,) = _quoted(r"\| `identify_s`:[^|]*\| ([\d.]+) s ")
+    assert float(ident) == pytest.approx(bench["identify_s"], abs=0.05)
+
+
+def test_table_5_1_unseen_column_is_the_last_generated_example_08() -> None:
+    unseen = _json("docs/figures/residual_unseen_synthetic.json")
+    for learner in ("svr", "rf", "mlp"):
+        before, after = _quoted(rf"\| {learner.upper()} \|[^|]*\|[^|]*\| ([\d.]+) → ([\d.]+) m \|")
+        assert float(before) == pytest.approx(unseen[learner]["rmse_before_m"], abs=5e-4)
+        assert float(after) == pytest.approx(unseen[learner]["rmse_after_m"], abs=5e-4)
