@@ -24,6 +24,8 @@ __all__ = [
     "CorruptReply",
     "ServoFault",
     "SafetyRefusal",
+    "GraspLost",
+    "CannotGrip",
 ]
 
 
@@ -90,6 +92,23 @@ class CellTimeoutError(CellError, TimeoutError):
 
 class SimulationError(CellError, RuntimeError):
     """The simulated cell could not do what was asked."""
+
+
+class GraspLost(SimulationError):
+    """The item is not (or no longer) in the grip: the pick failed or it fell while carried.
+
+    Attributes:
+        stage: "grasp" (the fingers did not close on it) or "carry" (it left the grip
+            between the pick and the release).
+    """
+
+    def __init__(self, message: str, stage: str) -> None:
+        super().__init__(message)
+        self.stage = stage
+
+
+class CannotGrip(InvalidInput):
+    """An item the pads cannot hold (too wide, too thin, too heavy for the grip force)."""
 
 
 class MissingDependency(CellError, ImportError):

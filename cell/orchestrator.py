@@ -29,13 +29,24 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import CellError, HardwareError, InvalidInput
+from cell.errors import (
+    CannotGrip,
+    CellError,
+    GraspLost,
+    HardwareError,
+    IKFailed,
+    InvalidInput,
+    TrajectoryError,
+    UnreachableTarget,
+)
 from cell.jobs import ItemSpec, Job
 from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
 
 __all__ = [
+    "FAILURES",
+    "failure_of",
     "ItemResult",
     "RunSummary",
     "Orchestrator",
@@ -56,6 +67,30 @@ ARM_SPEED_SCALE = 0.8  # fraction of the joint velocity/acceleration limits used
 CARRY_ACCEL_SCALE = 0.3  # fraction of the acceleration limits while an item is held (no slip)
 
 
+# Why an item did not end in its bin: one of these, always (ItemResult.failure).
+FAILURES = (
+    "unreachable",  # no release within the cell's bounds lands it in the bin
+    "cannot_grip",  # too wide, too thin or too heavy for the pads, refused before the pick
+    "grasp_failed",  # the fingers did not close on it
+    "dropped_while_carried",  # it left the grip between the pick and the release
+    "ik",  # no arm configuration or move reaches the planned pose
+    "missed_bin",  # released, but it came to rest outside its bin
+)
+
+
+def failure_of(exc: BaseException) -> str:
+    """The FAILURES entry for an error that stopped an item before its release."""
+    if isinstance(exc, UnreachableTarget):
+        return "unreachable"
+    if isinstance(exc, CannotGrip):
+        return "cannot_grip"
+    if isinstance(exc, GraspLost):
+        return "grasp_failed" if exc.stage == "grasp" else "dropped_while_carried"
+    if isinstance(exc, (IKFailed, TrajectoryError)):
+        return "ik"
+    return "missed_bin"
+
+
 @dataclass(frozen=True)
 class ItemResult:
     """What became of one item.
@@ -65,7 +100,8 @@ class ItemResult:
         object_id: catalogue id (or ad-hoc name).
         target_bin: where the job wanted it.
         action: "place", "throw" or "failed".
-        reason: why it failed ("" when it did not).
+        failure: why it is not in its bin, one of FAILURES ("" when it is).
+        reason: the full message of that failure ("" when there is none).
         bin_id: the bin it came to rest in ("" for none).
         in_bin: True when that is the target bin.
         landing_error_m: throws: distance of the crossing of the rim plane from the
@@ -80,6 +116,7 @@ class ItemResult:
     object_id: str
     target_bin: str
     action: str
+    failure: str = ""
     reason: str = ""
     bin_id: str = ""
     in_bin: bool = False
@@ -107,6 +144,7 @@ class RunSummary:
     sim_time_s: float
     wall_time_s: float
     results: list[ItemResult] = field(default_factory=list)
+    failures: dict[str, int] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values, item results as a list of dicts."""
@@ -136,6 +174,7 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
         sim_time_s=sim_time,
         wall_time_s=wall_time_s,
         results=list(results),
+        failures={k: c for k in FAILURES if (c := sum(r.failure == k for r in results))},
     )
 
 
@@ -174,6 +213,17 @@ def sorted_throw_record(
         t_flight_s=float(cross[2]),
         target_bin=target.id,
         bin_id=out.bin_id or "",
+    )
+
+
+def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
+    """(failure, reason) of a released item; both empty when it rests in its bin."""
+    if bin_id == target_id:
+        return "", ""
+    where = f"in bin {bin_id!r}" if bin_id else "outside every bin"
+    return (
+        "missed_bin",
+        f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",
     )
 
 
@@ -352,6 +402,7 @@ class Orchestrator:
             return ItemResult(
                 **base,
                 action="failed",
+                failure=failure_of(exc),
                 reason=f"{type(exc).__name__}: {exc}",
                 cycle_time_s=sc.t - t0,
             )
@@ -371,7 +422,11 @@ class Orchestrator:
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
         q_above = self._ik(self._tcp_for_item_centre(above, *down, PICK_STROKE_M, obj), *down)
         q_down = self._ik(self._tcp_for_item_centre(centre, *down, PICK_STROKE_M, obj), *down)
-        self._move([q_lift, q_above, q_down])
+        self._move([q_lift, q_above])
+        # Down into the bin on its own short move: a spline through q_above and q_down
+        # would cut the corner and sweep the item through the bin's wall.
+        self._move([q_down])
+        self._check_held(obj)
         self.ee.place()
         if self.hardware is not None:
             self.hardware.place()
@@ -387,10 +442,21 @@ class Orchestrator:
             action="place",
             bin_id=out.bin_id or "",
             in_bin=out.bin_id == target.id,
+            failure=missed_bin(out.bin_id, target.id, err)[0],
+            reason=missed_bin(out.bin_id, target.id, err)[1],
             landing_error_m=err,
             stroke_m=PICK_STROKE_M,
             cycle_time_s=cyc,
         )
+
+    def _check_held(self, obj: ObjectParams) -> None:
+        """GraspLost when the item is no longer between the pads at the release pose."""
+        if not self.ee.holds_item():
+            raise GraspLost(
+                f"{obj.name or obj.shape} left the grip while carried (mass "
+                f"{obj.mass * 1000:.0f} g, width {obj.width * 1000:.0f} mm)",
+                "carry",
+            )
 
     def _plan(self, obj: ObjectParams, target: Any, index: int) -> tuple[Any, float]:
         """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget."""
@@ -401,7 +467,7 @@ class Orchestrator:
         # catalogue's; with a residual, only those the residual was trained with, so
         # that L_s + ΔL_s means what it meant in training.
         use_identified = self.residual is None or obj.name in self.residual.identified_objects
-        model_obj = self.params.objects.get(obj.name, obj) if use_identified else obj
+        model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
         plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
         if self.residual is None:
@@ -432,6 +498,7 @@ class Orchestrator:
             plan.azimuth_rad,
         )
         self._move([q_lift, q_rel])
+        self._check_held(obj)
         if self.hardware is not None:
             self.hardware.throw()
         released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
@@ -459,6 +526,8 @@ class Orchestrator:
             action="throw",
             bin_id=out.bin_id or "",
             in_bin=out.bin_id == target.id,
+            failure=missed_bin(out.bin_id, target.id, err)[0],
+            reason=missed_bin(out.bin_id, target.id, err)[1],
             landing_error_m=err,
             stroke_m=stroke,
             delta_stroke_m=delta,

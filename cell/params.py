@@ -5,12 +5,18 @@ switched-on model effects, as YAML.
     objects:                              # optional identified η_o by object id
       cube50: {shape: cube, mass_kg: 0.06, size_m: [0.05, 0.05, 0.05]}
     effects: {band_mass: {mass_kg: 0.01}} # optional (see cell.model.effects)
+    mass_rule: {kappa: 0.143, band_mass_kg: 0.014}  # optional: m_eff = κ √(m + m_b)
     note: free text on how the file was made
+
+The mass rule (fitted by `cell calibrate`, see cell.sim.calibrate) gives an
+object the file does not list (an ad-hoc item of a job, a catalogue object
+outside the campaign) the effective mass the identified objects follow, so
+every item is planned with the same model of the scene.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -33,12 +39,25 @@ class ModelParams:
         objects: identified object parameters by object id.
         effects: effect name -> its parameters (empty = nominal model).
         note: how the file was made.
+        mass_rule: (κ [kg^½], m_b [kg]) of m_eff = κ √(m + m_b) for objects not in
+            `objects`, or None (they keep their own mass).
     """
 
     ee: EndEffectorParams = field(default_factory=EndEffectorParams)
     objects: dict[str, ObjectParams] = field(default_factory=dict)
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
     note: str = ""
+    mass_rule: tuple[float, float] | None = None
+
+    def model_object(self, obj: ObjectParams) -> ObjectParams:
+        """The η_o the planner uses for `obj`: the identified one when the file has
+        it, else `obj` with the mass rule's effective mass (its own extents)."""
+        if obj.name and obj.name in self.objects:
+            return self.objects[obj.name]
+        if self.mass_rule is None:
+            return obj
+        kappa, m_b = self.mass_rule
+        return replace(obj, mass=float(kappa * (obj.mass + m_b) ** 0.5))
 
 
 def load_params(path: str | Path | None) -> ModelParams:
@@ -53,7 +72,7 @@ def load_params(path: str | Path | None) -> ModelParams:
     raw = safe_load(read_yaml_text(p, "parameter file"), p) or {}
     if not isinstance(raw, dict):
         raise InvalidInput(f"{p}: must be a mapping with keys end_effector, objects, effects, note")
-    valid = {"end_effector", "objects", "effects", "note"}
+    valid = {"end_effector", "objects", "effects", "mass_rule", "note"}
     unknown = sorted(set(raw) - valid)
     if unknown:
         raise InvalidInput(f"{p}: unknown key(s) {unknown}; valid: {sorted(valid)}")
@@ -88,7 +107,32 @@ def load_params(path: str | Path | None) -> ModelParams:
         effects_from_mapping(effects)  # validate names, parameters and ranges now
     except InvalidParameter as exc:
         raise InvalidInput(f"{p}: {exc}") from None
-    return ModelParams(ee=ee, objects=objects, effects=effects, note=str(raw.get("note", "")))
+    return ModelParams(
+        ee=ee,
+        objects=objects,
+        effects=effects,
+        note=str(raw.get("note", "")),
+        mass_rule=_mass_rule(raw.get("mass_rule"), p),
+    )
+
+
+def _mass_rule(node: Any, path: str) -> tuple[float, float] | None:
+    """The file's mass rule (κ, m_b), validated; None when absent."""
+    if node is None:
+        return None
+    msg = (
+        f"{path}: mass_rule must be {{kappa: K, band_mass_kg: M}} with 0 < K <= 10 kg^0.5 "
+        "and 0 <= M <= 1 kg"
+    )
+    if not isinstance(node, dict) or set(node) != {"kappa", "band_mass_kg"}:
+        raise InvalidInput(f"{msg}; got {node!r}")
+    try:
+        kappa, m_b = float(node["kappa"]), float(node["band_mass_kg"])
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{msg}; got {node!r}") from None
+    if not (0.0 < kappa <= 10.0 and 0.0 <= m_b <= 1.0):
+        raise InvalidInput(f"{msg}; got kappa={kappa}, band_mass_kg={m_b}")
+    return kappa, m_b
 
 
 def save_params(params: ModelParams, path: str | Path) -> None:
@@ -101,6 +145,11 @@ def save_params(params: ModelParams, path: str | Path) -> None:
         }
     if params.effects:
         doc["effects"] = params.effects
+    if params.mass_rule is not None:
+        doc["mass_rule"] = {
+            "kappa": float(params.mass_rule[0]),
+            "band_mass_kg": float(params.mass_rule[1]),
+        }
     if params.note:
         doc["note"] = params.note
     tmp = Path(str(path) + ".tmp")

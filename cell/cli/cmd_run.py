@@ -142,19 +142,26 @@ def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
 def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
     print(f"\nsort job {path}")
     print(
-        f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} {'stroke':>8}  note"
+        f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} "
+        f"{'stroke':>8}  failure"
     )
     for r in s.results:
         print(
             f"{r.index:4d} {r.object_id:14} {r.action:7} {r.target_bin:9} {r.bin_id or '-':9} "
-            f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.reason[:60]}"
+            f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.failure}"
         )
+    failed = [r for r in s.results if r.reason]
+    if failed:
+        print("\nwhy (full messages):")
+        for r in failed:
+            print(f"  item {r.index} ({r.object_id}, {r.failure}): {r.reason}")
     print()
     rows = [
         ("items", f"{s.items}"),
         ("placed", f"{s.placed}"),
         ("thrown", f"{s.thrown}"),
         ("failed", f"{s.failed}"),
+        ("not in their bin", ", ".join(f"{k} {v}" for k, v in s.failures.items()) or "none"),
         ("in the right bin", f"{s.in_bin} ({100 * s.in_bin_rate:.1f} %)"),
         ("landing error mean", _fmt(s.mean_landing_error_m, " m")),
         ("landing error p95", _fmt(s.p95_landing_error_m, " m")),

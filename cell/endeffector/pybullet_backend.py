@@ -21,7 +21,7 @@ import logging
 import numpy as np
 
 from cell.endeffector.base import EndEffector, EndEffectorStatus
-from cell.errors import InvalidInput, InvalidParameter, SimulationError
+from cell.errors import GraspLost, InvalidInput, InvalidParameter
 from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT, BandReading
 from cell.sim.items import Item
 
@@ -63,6 +63,7 @@ class PyBulletEndEffector(EndEffector):
         self.place_speed_mps = place_speed_mps
         self.close_time_s = close_time_s
         self.item: Item | None = None
+        self._grasp_stroke_m = 0.0
         self.last_released: Item | None = None
 
     # -- helpers ---------------------------------------------------------------
@@ -147,11 +148,18 @@ class PyBulletEndEffector(EndEffector):
             cl.removeConstraint(seat)
         sc.run_for(0.01)
         if not self._in_grip(it, stroke_m):
-            raise SimulationError(
+            raise GraspLost(
                 f"the fingers did not close on item {it.obj.name or it.body} "
-                f"(width {it.obj.width:.3f} m)"
+                f"(width {it.obj.width:.3f} m)",
+                "grasp",
             )
         self.item = it
+        self._grasp_stroke_m = stroke_m
+
+    def holds_item(self) -> bool:
+        """The item taken by `grasp` is still between the closed pads (it has not
+        slipped out or fallen while carried)."""
+        return self.item is not None and self._in_grip(self.item, self._grasp_stroke_m)
 
     def _in_grip(self, it: Item, stroke_m: float) -> bool:
         """The fingers stopped on the item and its centre is between them."""

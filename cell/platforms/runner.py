@@ -34,7 +34,7 @@ import numpy as np
 from cell.errors import CellError, HardwareError, InvalidInput
 from cell.jobs import ItemSpec, Job
 from cell.model.objects import ObjectParams
-from cell.orchestrator import sorted_throw_record
+from cell.orchestrator import failure_of, missed_bin, sorted_throw_record
 from cell.params import ModelParams, load_params
 from cell.platforms.downwash import DEFAULT_DRONE_LAW, DownwashLaw, predict_drone_landing
 from cell.platforms.mobile import MobilePlatform
@@ -170,7 +170,7 @@ class PlatformRunner:
         base: dict[str, Any] = dict(
             index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
         )
-        model_obj = self.params.objects.get(obj.name, obj)
+        model_obj = self.params.model_object(obj)
         goal = np.array([*target.position, target.rim_height])
         try:
             if self.mobile is None:
@@ -213,6 +213,8 @@ class PlatformRunner:
                 action="throw",
                 bin_id=out.bin_id or "",
                 in_bin=out.bin_id == target.id,
+                failure=missed_bin(out.bin_id, target.id, err)[0],
+                reason=missed_bin(out.bin_id, target.id, err)[1],
                 landing_error_m=err,
                 stroke_m=plan.stroke_m,
                 cycle_time_s=t_release - t0,
@@ -226,6 +228,7 @@ class PlatformRunner:
             return ItemResult(
                 **base,
                 action="failed",
+                failure=failure_of(exc),
                 reason=f"{type(exc).__name__}: {exc}",
                 cycle_time_s=sc.t - t0,
             )

@@ -182,5 +182,8 @@ def calibrate_table(
         f"m_b = {rule.band_mass_kg:.4f} kg, fitted to the identified masses "
         f"({100 * rule.rms_log_error:.1f} % RMS), with their catalogue extents."
     )
-    res = replace(res, params=replace(extended, note=note))
+    res = replace(
+        res,
+        params=replace(extended, note=note, mass_rule=(rule.kappa, rule.band_mass_kg)),
+    )
     return res, nominal, fitted, rule

@@ -1,0 +1,182 @@
+"""Random sort jobs: layouts and items the cell has never been tuned on.
+
+`random_job(seed)` draws one job as a plain mapping that `cell.jobs.parse_job`
+accepts once dumped to YAML (`cell job random --seed S -o job.yaml` writes it
+so a user can look at it and edit it). The draw is the benchmark's
+(`cell bench sort`):
+
+- 4–7 open bins whose centres lie 0.4–3.2 m from the robot base, at any
+  azimuth the arm can face (its first joint's range, less a margin), 0.25–0.40 m
+  wide, rims 0.05–0.30 m high; bins keep clear of each other, of the robot base
+  (`cell.jobs.ROBOT_BASE_CLEARANCE_M`) and of the pick station;
+- 20–40 items: catalogue objects of every set and ad-hoc items (cube, cuboid,
+  cylinder or sphere, 20–250 g, extents 25–90 mm, density 150–2500 kg/m³), with at
+  least a third of all items from outside the calibration set (`thesis14`);
+  each kind comes 1–4 times, so the cell meets the same object again.
+
+Everything is drawn from one `numpy.random.Generator` seeded by `seed`, so a
+seed names a job.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from cell.catalogue import catalogue
+from cell.jobs import ROBOT_BASE_CLEARANCE_M, ROBOTS
+
+__all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "FACING_HALF_RANGE_RAD"]
+
+CALIBRATION_SET = "thesis14"  # catalogue set thrown by `cell calibrate`
+
+# Half-range of azimuths a bin may be drawn at, by arm [rad]: the first joint's
+# range (Panda ±2.90 rad, UR5 ±2π) less a margin for the wrist to face the bin.
+FACING_HALF_RANGE_RAD = {"panda": math.radians(150.0), "ur5": math.pi}
+
+PICK_STATION_XY_M = (0.45, -0.40)  # [m, W] the default pick station (cell.jobs)
+PICK_STATION_CLEAR_M = 0.35  # [m] no bin footprint within this of the station's centre
+BIN_GAP_M = 0.10  # [m] clearance between bin footprints
+
+
+class LayoutRanges:
+    """The ranges of a random layout (SI units)."""
+
+    bins = (4, 7)
+    distance_m = (0.4, 3.2)
+    width_m = (0.25, 0.40)
+    rim_m = (0.05, 0.30)
+    items = (20, 40)
+    adhoc_mass_kg = (0.020, 0.250)
+    adhoc_extent_m = (0.025, 0.090)
+    adhoc_density_kgpm3 = (150.0, 2500.0)
+    repeat = (1, 4)
+    unseen_share = 1.0 / 3.0
+
+
+def _box_volume(shape: str, size: tuple[float, float, float]) -> float:
+    """Solid volume [m³] of a primitive with box extents `size`."""
+    x, y, z = size
+    if shape == "sphere":
+        return math.pi / 6 * x**3
+    if shape == "cylinder":
+        return math.pi / 4 * x * y * z
+    return x * y * z
+
+
+def _adhoc_item(rng: np.random.Generator) -> dict[str, Any]:
+    """An ad-hoc item: a primitive of plausible density in the issue's ranges."""
+    r = LayoutRanges
+    while True:
+        shape = str(rng.choice(["cube", "cuboid", "cylinder", "sphere"]))
+        if shape in ("cube", "sphere"):
+            e = float(rng.uniform(*r.adhoc_extent_m))
+            size = (e, e, e)
+        elif shape == "cylinder":
+            d, h = rng.uniform(*r.adhoc_extent_m, size=2)
+            size = (float(d), float(d), float(h))
+        else:
+            a, b, c = rng.uniform(*r.adhoc_extent_m, size=3)
+            size = (float(a), float(b), float(c))
+        vol = _box_volume(shape, size)
+        lo = max(r.adhoc_mass_kg[0], r.adhoc_density_kgpm3[0] * vol)
+        hi = min(r.adhoc_mass_kg[1], r.adhoc_density_kgpm3[1] * vol)
+        if lo < hi:
+            mass = float(rng.uniform(lo, hi))
+            return {
+                "shape": shape,
+                "mass_kg": round(mass, 4),
+                "size_m": [round(s, 4) for s in size],
+            }
+
+
+def _bins(rng: np.random.Generator, robot: str) -> list[dict[str, Any]]:
+    r = LayoutRanges
+    n = int(rng.integers(r.bins[0], r.bins[1] + 1))
+    half = FACING_HALF_RANGE_RAD[robot]
+    out: list[dict[str, Any]] = []
+    tries = 0
+    while len(out) < n:
+        tries += 1
+        if tries > 5000:  # a crowded draw: keep what fits (never fewer than the minimum)
+            if len(out) >= r.bins[0]:
+                break
+            out, tries = [], 0
+        w = rng.uniform(*r.width_m, size=2)
+        half_diag = math.hypot(*w) / 2
+        d_lo = max(r.distance_m[0], ROBOT_BASE_CLEARANCE_M + half_diag + 0.01)
+        d = float(rng.uniform(d_lo, r.distance_m[1]))
+        az = float(rng.uniform(-half, half))
+        x, y = d * math.cos(az), d * math.sin(az)
+        if (
+            math.hypot(x - PICK_STATION_XY_M[0], y - PICK_STATION_XY_M[1])
+            < PICK_STATION_CLEAR_M + half_diag
+        ):
+            continue
+        if any(
+            abs(x - b["position_m"][0]) < (w[0] + b["size_m"][0]) / 2 + BIN_GAP_M
+            and abs(y - b["position_m"][1]) < (w[1] + b["size_m"][1]) / 2 + BIN_GAP_M
+            for b in out
+        ):
+            continue
+        out.append(
+            {
+                "id": f"bin_{len(out)}",
+                "position_m": [round(x, 3), round(y, 3)],
+                "size_m": [round(float(w[0]), 3), round(float(w[1]), 3)],
+                "rim_height_m": round(float(rng.uniform(*r.rim_m)), 3),
+            }
+        )
+    return out
+
+
+def random_job(seed: int, robot: str = "panda") -> dict[str, Any]:
+    """A random sort job as a mapping (dump it to YAML for `cell run`).
+
+    Args:
+        seed: names the job (0 ≤ seed < 2³²).
+        robot: one of cell.jobs.ROBOTS.
+    """
+    if robot not in ROBOTS:
+        raise ValueError(f"robot {robot!r}: valid: {', '.join(ROBOTS)}")
+    r = LayoutRanges
+    rng = np.random.default_rng([seed, 0x10B])
+    bins = _bins(rng, robot)
+    cat = catalogue()
+    seen = [k for k, e in cat.items() if e.set == CALIBRATION_SET]
+    unseen = [k for k, e in cat.items() if e.set != CALIBRATION_SET]
+    n_items = int(rng.integers(r.items[0], r.items[1] + 1))
+    items: list[dict[str, Any]] = []
+    n_unseen = 0
+    total = 0
+    while total < n_items:
+        need_unseen = n_unseen < math.ceil(r.unseen_share * n_items)
+        kind = rng.uniform()
+        count = min(int(rng.integers(r.repeat[0], r.repeat[1] + 1)), n_items - total)
+        if need_unseen and kind < 0.5 or not need_unseen and kind < 0.25:
+            entry: dict[str, Any] = _adhoc_item(rng)
+            n_unseen += count
+        elif need_unseen or kind < 0.5:
+            entry = {"object": str(rng.choice(unseen))}
+            n_unseen += count
+        else:
+            entry = {"object": str(rng.choice(seen))}
+        entry["count"] = count
+        entry["bin"] = bins[int(rng.integers(len(bins)))]["id"]
+        items.append(entry)
+        total += count
+    return {
+        "name": f"random layout {seed}",
+        "description": (
+            f"drawn by cell job random --seed {seed} --robot {robot}: {len(bins)} bins, "
+            f"{n_items} items, {n_unseen} of them outside the calibration set"
+        ),
+        "cell": {"robot": robot, "ee": "pybullet"},
+        "bins": bins,
+        "items": items,
+        "policy": "auto",
+        "seed": int(seed),
+        "limits": {"item_time_limit_s": 20},
+    }
