@@ -132,13 +132,53 @@ def _bins(rng: np.random.Generator, robot: str) -> list[dict[str, Any]]:
     return out
 
 
-def random_job(seed: int, robot: str = "panda") -> dict[str, Any]:
+def _object_of(entry: dict[str, Any]) -> Any:
+    from cell.model.objects import ObjectParams
+
+    if "object" in entry:
+        return catalogue()[entry["object"]].params
+    return ObjectParams(
+        shape=entry["shape"], mass=entry["mass_kg"], size=tuple(entry["size_m"]), name=""
+    )
+
+
+def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any) -> list[str]:
+    """The ids of the bins the cell can sort this item into (cell.orchestrator.check_sortable)."""
+    from cell.errors import CannotGrip, UnreachableTarget
+    from cell.jobs import BinSpec
+    from cell.orchestrator import check_sortable
+
+    obj = _object_of(entry)
+    ok = []
+    for b in bins:
+        spec = BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
+        try:
+            check_sortable(params, obj, spec)
+        except (CannotGrip, UnreachableTarget):
+            continue
+        ok.append(b["id"])
+    return ok
+
+
+def random_job(seed: int, robot: str = "panda", params: Any = None) -> dict[str, Any]:
     """A random sort job as a mapping (dump it to YAML for `cell run`).
+
+    Each item goes to a bin drawn among those the cell can sort it into by the
+    planner's model of the scene (`params`, default: the scene's calibrated file):
+    the cell refuses a job with an impossible item up front (cell.orchestrator), so
+    a benchmark of impossible jobs would measure nothing. Items no bin can take are
+    drawn again.
 
     Args:
         seed: names the job (0 ≤ seed < 2³²).
         robot: one of cell.jobs.ROBOTS.
+        params: the model parameters the feasibility check uses.
     """
+    from cell.orchestrator import scene_params_path
+    from cell.params import load_params
+
+    if params is None:
+        params = load_params(scene_params_path())
     if robot not in ROBOTS:
         raise ValueError(f"robot {robot!r}: valid: {', '.join(ROBOTS)}")
     r = LayoutRanges
@@ -157,15 +197,18 @@ def random_job(seed: int, robot: str = "panda") -> dict[str, Any]:
         count = min(int(rng.integers(r.repeat[0], r.repeat[1] + 1)), n_items - total)
         if need_unseen and kind < 0.5 or not need_unseen and kind < 0.25:
             entry: dict[str, Any] = _adhoc_item(rng)
-            n_unseen += count
+            is_unseen = True
         elif need_unseen or kind < 0.5:
-            entry = {"object": str(rng.choice(unseen))}
-            n_unseen += count
+            entry, is_unseen = {"object": str(rng.choice(unseen))}, True
         else:
-            entry = {"object": str(rng.choice(seen))}
+            entry, is_unseen = {"object": str(rng.choice(seen))}, False
+        choices = sortable_bins(entry, bins, params)
+        if not choices:
+            continue
         entry["count"] = count
-        entry["bin"] = bins[int(rng.integers(len(bins)))]["id"]
+        entry["bin"] = choices[int(rng.integers(len(choices)))]
         items.append(entry)
+        n_unseen += count if is_unseen else 0
         total += count
     return {
         "name": f"random layout {seed}",

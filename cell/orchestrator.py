@@ -244,12 +244,110 @@ def run_items(
     return summarise(results, time.perf_counter() - t_wall)
 
 
+def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
+    """The longest stroke [m] the pads hold `obj` at (cell.model.grip).
+
+    Raises:
+        CannotGrip: the item is too wide for the pads, or too heavy for its width at
+            every stroke; the message says what the cell can hold instead.
+    """
+    from cell.model.grip import GRIP_SAFETY, holding_mass_kg, max_grip_stroke
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+    ee = params.ee
+    name = obj.name or obj.shape
+    widest = 2 * DEFAULT_GEOMETRY.finger_open_m
+    if obj.width > widest:
+        raise CannotGrip(
+            f"{name} is {obj.width * 1000:.0f} mm wide across the pads; they open to "
+            f"{widest * 1000:.0f} mm: turn it so a narrower side faces the pads, or sort it by hand"
+        )
+    s_max = max_grip_stroke(ee, obj)
+    if s_max is None:
+        hold = holding_mass_kg(ee, ee.stroke_min, obj.width) / GRIP_SAFETY
+        raise CannotGrip(
+            f"{name} ({obj.mass * 1000:.0f} g, {obj.width * 1000:.0f} mm across the pads) is "
+            f"too heavy for the grip at its width: the pads hold up to {hold * 1000:.0f} g "
+            f"at {obj.width * 1000:.0f} mm (with a {GRIP_SAFETY}x margin for carrying); "
+            "grip it across a wider side, or sort it by hand"
+        )
+    return s_max
+
+
+def check_sortable(
+    params: ModelParams,
+    obj: ObjectParams,
+    bin_spec: Any,
+    *,
+    policy: str = "auto",
+    place_reach_m: float = 0.75,
+    bounds: Any = None,
+) -> None:
+    """Raise CannotGrip or UnreachableTarget when the cell cannot sort `obj` into the
+    bin: the pads cannot hold it, or (for a throw) no release within the bounds lands
+    it there by the planner's model of the scene."""
+    from cell.optimize.bounds import ThrowBounds
+    from cell.optimize.plan import plan_throw
+
+    s_max = grip_stroke_limit(params, obj)
+    dist = math.hypot(*bin_spec.position)
+    if policy == "place" or (policy == "auto" and dist <= place_reach_m):
+        return
+    b = bounds or ThrowBounds()
+    if b.stroke_max is None or s_max < b.stroke_max:
+        from dataclasses import replace as dc_replace
+
+        b = dc_replace(
+            b,
+            stroke_min=params.ee.stroke_min if b.stroke_min is None else b.stroke_min,
+            stroke_max=min(s_max, params.ee.stroke_max),
+        )
+    goal = (*bin_spec.position, bin_spec.rim_height)
+    plan_throw(params.model_object(obj), goal, params.ee, b)
+
+
 def scene_params_path() -> str | None:
     """The scene's calibrated parameter file (robots/cell_scene/ee_params.yaml), if present."""
     from cell.robot.paths import robots_dir
 
     p = robots_dir() / "cell_scene" / "ee_params.yaml"
     return str(p) if p.is_file() else None
+
+
+@dataclass
+class LandingCorrection:
+    """What the landings of one object (or class) taught the planner.
+
+    The scene's reach along a throw is ρ times what the model predicted, and its
+    direction is turned by δ: the next throw of the object aims at a point moved so
+    that, with the same ρ and δ, it lands on the goal.
+
+    Attributes:
+        log_ratio: mean of log(observed reach / aimed reach), ρ = exp(log_ratio).
+        turn_rad: mean angle from the aimed to the observed landing, seen from the
+            release point [rad].
+        n: landings averaged.
+    """
+
+    log_ratio: float = 0.0
+    turn_rad: float = 0.0
+    n: int = 0
+
+    def add(self, log_ratio: float, turn_rad: float) -> None:
+        """Average one more landing in."""
+        self.n += 1
+        self.log_ratio += (log_ratio - self.log_ratio) / self.n
+        self.turn_rad += (turn_rad - self.turn_rad) / self.n
+
+
+LEARN_MAX_LOG_RATIO = math.log(1.5)  # an object's correction stays within ×1/1.5 … ×1.5
+LEARN_MAX_TURN_RAD = math.radians(10.0)  # … and ±10° of turn
+LEARN_CLASS_MAX_LOG_RATIO = math.log(1.15)  # a class's (shape's) within ±15 %, for new objects
+LEARN_CLASS_MAX_TURN_RAD = math.radians(3.0)
+
+
+def _clip(v: float, lim: float) -> float:
+    return max(-lim, min(lim, v))
 
 
 class Orchestrator:
@@ -267,6 +365,10 @@ class Orchestrator:
             commanded in step with the simulated one.
         observer: told of the scene, each item's start, release, flight and result
             (`cell.record.observer.RunObserver`, e.g. the Rerun recorder), or None.
+        learn: correct the planner from each observed landing (the flywheel): an
+            object's next throw aims where its earlier landings say it must
+            (LandingCorrection), and an object never thrown before takes its
+            class's (shape's) correction, bounded more tightly.
     """
 
     def __init__(
@@ -279,6 +381,7 @@ class Orchestrator:
         params: ModelParams | None = None,
         end_effector: Any = None,
         observer: Any = None,
+        learn: bool = False,
     ) -> None:
         from cell.endeffector.pybullet_backend import PyBulletEndEffector
         from cell.optimize.bounds import ThrowBounds
@@ -310,11 +413,36 @@ class Orchestrator:
             from cell.residual.model import ResidualModel
 
             self.residual = ResidualModel.load(job.residual)
+        self._check_job()
         self.q = np.asarray(self.scene_ready_q(), float)
         self.rng = np.random.default_rng(job.seed)
         self.observer = observer
+        self.learn = learn
+        self.corrections: dict[str, LandingCorrection] = {}
         if observer is not None:
             observer.on_scene(self.scene, job)
+
+    def _check_job(self) -> None:
+        """Refuse the job before it starts if an item cannot be gripped or its bin is
+        out of its reach (by the planner's model of the scene)."""
+        from cell.errors import JobError
+
+        job = self.job
+        for spec in job.items:
+            try:
+                check_sortable(
+                    self.params,
+                    spec.obj,
+                    job.bin(spec.bin),
+                    policy=job.policy,
+                    place_reach_m=job.place_reach_m,
+                    bounds=self.bounds,
+                )
+            except (CannotGrip, UnreachableTarget) as exc:
+                raise JobError(
+                    f"{job.path}, line {spec.line}: item {spec.obj.name or spec.obj.shape} "
+                    f"to bin {spec.bin!r}: {exc}"
+                ) from None
 
     @staticmethod
     def scene_ready_q() -> tuple[float, ...]:
@@ -381,8 +509,9 @@ class Orchestrator:
             )
             # Plan before the pick: the end-effector grasps at the stroke it will throw
             # with, so the item sits on the band carriage as the plan assumes.
-            plan, delta = (None, 0.0) if place else self._plan(obj, target, index)
-            stroke = PICK_STROKE_M if plan is None else plan.stroke_m + delta
+            s_grip = grip_stroke_limit(self.params, obj)
+            plan, delta = (None, 0.0) if place else self._plan(obj, target, index, s_grip)
+            stroke = min(PICK_STROKE_M, s_grip) if plan is None else plan.stroke_m + delta
             p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
             down = (-math.pi / 2, 0.0)
             q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, stroke, obj), *down)
@@ -393,7 +522,7 @@ class Orchestrator:
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
             if plan is None:
-                return self._place(base, item, obj, target, q_lift, t0)
+                return self._place(base, item, obj, target, q_lift, t0, stroke)
             return self._throw(base, item, obj, target, q_lift, t0, plan, delta)
         except HardwareError:
             raise  # the end-effector failed: the run stops (torque off), not just this item
@@ -413,15 +542,22 @@ class Orchestrator:
             self.ee.item = None
 
     def _place(
-        self, base: dict, item: Any, obj: ObjectParams, target: Any, q_lift: np.ndarray, t0: float
+        self,
+        base: dict,
+        item: Any,
+        obj: ObjectParams,
+        target: Any,
+        q_lift: np.ndarray,
+        t0: float,
+        stroke: float,
     ) -> ItemResult:
         sc = self.scene
         down = (-math.pi / 2, 0.0)
         bx, by = target.position
         centre = np.array([bx, by, obj.size[2] / 2 + PLACE_CLEARANCE_M + 0.01])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
-        q_above = self._ik(self._tcp_for_item_centre(above, *down, PICK_STROKE_M, obj), *down)
-        q_down = self._ik(self._tcp_for_item_centre(centre, *down, PICK_STROKE_M, obj), *down)
+        q_above = self._ik(self._tcp_for_item_centre(above, *down, stroke, obj), *down)
+        q_down = self._ik(self._tcp_for_item_centre(centre, *down, stroke, obj), *down)
         self._move([q_lift, q_above])
         # Down into the bin on its own short move: a spline through q_above and q_down
         # would cut the corner and sweep the item through the bin's wall.
@@ -445,7 +581,7 @@ class Orchestrator:
             failure=missed_bin(out.bin_id, target.id, err)[0],
             reason=missed_bin(out.bin_id, target.id, err)[1],
             landing_error_m=err,
-            stroke_m=PICK_STROKE_M,
+            stroke_m=stroke,
             cycle_time_s=cyc,
         )
 
@@ -458,8 +594,13 @@ class Orchestrator:
                 "carry",
             )
 
-    def _plan(self, obj: ObjectParams, target: Any, index: int) -> tuple[Any, float]:
-        """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget."""
+    def _plan(
+        self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float = math.inf
+    ) -> tuple[Any, float]:
+        """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget; strokes
+        no longer than `stroke_max_m` (what the grip holds the item at)."""
+        from dataclasses import replace as dc_replace
+
         from cell.optimize.plan import plan_throw
 
         goal = (*target.position, target.rim_height)
@@ -469,13 +610,69 @@ class Orchestrator:
         use_identified = self.residual is None or obj.name in self.residual.identified_objects
         model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
-        plan = plan_throw(model_obj, goal, self.params.ee, self.bounds)
+        bounds = self.bounds
+        if stroke_max_m < self.params.ee.stroke_max:
+            bounds = dc_replace(
+                bounds,
+                stroke_min=self.params.ee.stroke_min
+                if bounds.stroke_min is None
+                else bounds.stroke_min,
+                stroke_max=stroke_max_m,
+            )
+        plan = plan_throw(model_obj, goal, self.params.ee, bounds)
+        self._aim = np.asarray(goal, float)
+        if self.learn:
+            aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
+            if aim is not None:
+                try:
+                    plan = plan_throw(model_obj, tuple(aim), self.params.ee, bounds)
+                    self._aim = aim
+                except UnreachableTarget:
+                    log.info(
+                        "learned aim for %s is out of reach: the model's aim is kept", obj.name
+                    )
         if self.residual is None:
             return plan, 0.0
         from cell.residual.model import residual_for_plan
 
         corrected = residual_for_plan(self.residual, obj, plan)  # clipping is logged there
         return plan, corrected.stroke_m - plan.stroke_m
+
+    # -- the flywheel ------------------------------------------------------------
+    @staticmethod
+    def _class_key(obj: ObjectParams) -> str:
+        return f"class:{obj.shape}"
+
+    def _corrected_aim(self, obj: ObjectParams, plan: Any, goal: np.ndarray) -> np.ndarray | None:
+        """The aim point that the object's (or its class's) correction asks for, or None."""
+        own = self.corrections.get(obj.name or "")
+        if own is not None and own.n:
+            lr = _clip(own.log_ratio, LEARN_MAX_LOG_RATIO)
+            turn = _clip(own.turn_rad, LEARN_MAX_TURN_RAD)
+        else:
+            cls = self.corrections.get(self._class_key(obj))
+            if cls is None or not cls.n:
+                return None
+            lr = _clip(cls.log_ratio, LEARN_CLASS_MAX_LOG_RATIO)
+            turn = _clip(cls.turn_rad, LEARN_CLASS_MAX_TURN_RAD)
+        p0 = np.array([plan.x_m, plan.y_m])
+        v = goal[:2] - p0
+        c, s = math.cos(-turn), math.sin(-turn)
+        v = np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]]) / math.exp(lr)
+        return np.array([*(p0 + v), goal[2]])
+
+    def _learn_from(self, obj: ObjectParams, plan: Any, cross: Any) -> None:
+        """Average this landing into the object's and its class's corrections."""
+        p0 = np.array([plan.x_m, plan.y_m])
+        aimed = self._aim[:2] - p0
+        seen = np.asarray(cross[:2], float) - p0
+        ra, rs = float(np.hypot(*aimed)), float(np.hypot(*seen))
+        if ra < 0.05 or rs < 0.05:
+            return  # too short a throw to say anything about its reach
+        lr = math.log(rs / ra)
+        turn = math.atan2(aimed[0] * seen[1] - aimed[1] * seen[0], float(aimed @ seen))
+        for key in (obj.name or "", self._class_key(obj)):
+            self.corrections.setdefault(key, LandingCorrection()).add(lr, turn)
 
     def _throw(
         self,
@@ -511,6 +708,8 @@ class Orchestrator:
         out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
         cross = out.crossing(target.rim_height)
         err = math.hypot(cross[0] - bx, cross[1] - by)
+        if self.learn:
+            self._learn_from(obj, plan, cross)
         if self.observer is not None:
             self.observer.on_flight(base["index"], out, (cross[0], cross[1], target.rim_height))
         throw_id = f"{self.session}-{base['index']:04d}"

@@ -33,6 +33,7 @@ COMMANDS = (
     "ee",
     "study",
     "bench",
+    "job",
 )
 
 

@@ -36,6 +36,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)"
     )
     p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
+    p.add_argument(
+        "--learn",
+        action="store_true",
+        help="correct the planner from each observed landing during the run (arm platform)",
+    )
     p.set_defaults(func=run)
 
 
@@ -87,9 +92,16 @@ def run(args: argparse.Namespace) -> int:
     if job.platform != "arm":
         from cell.platforms.runner import PlatformRunner
 
+        if args.learn:
+            raise InvalidInput(
+                f"--learn: the flywheel runs on the arm platform, not {job.platform!r}"
+            )
+
         orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
     else:
-        orch = Orchestrator(job, gui=args.gui, store=store, end_effector=hardware, observer=rec)
+        orch = Orchestrator(
+            job, gui=args.gui, store=store, end_effector=hardware, observer=rec, learn=args.learn
+        )
     bar = tqdm(
         total=len(job.expanded_items()),
         desc=f"sorting {Path(args.job).name}",

@@ -1,0 +1,47 @@
+"""What the pads can hold: friction against the band's grip force.
+
+The band's two halves pull the pads together with f_g = f_e sin α each
+(thesis §2, `cell.model.band`); with Coulomb friction μ on both pads the grip
+holds an item of mass m while 2 μ f_g(L_s, a) ≥ s · m g, where s ≥ 1 is a safety
+factor that covers the arm's accelerations while carrying. f_g falls as the
+stroke L_s grows (the band turns toward the throw axis), and a narrow item is
+held by a small angle, so the grip sets, per item, the longest stroke it may be
+carried and thrown with, or refuses the item.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.objects import ObjectParams
+from cell.model.params import EndEffectorParams, G
+
+__all__ = ["PAD_FRICTION", "GRIP_SAFETY", "holding_mass_kg", "max_grip_stroke"]
+
+PAD_FRICTION = 1.2  # Coulomb friction of the latex pads on plastic (the scene's pads)
+GRIP_SAFETY = 1.6  # weight multiple the grip must hold: carrying accelerates up to ~0.6 g
+
+
+def holding_mass_kg(
+    ee: EndEffectorParams, stroke_m: float, width_m: float, friction: float = PAD_FRICTION
+) -> float:
+    """The heaviest item [kg] of width a the pads hold against gravity at stroke L_s."""
+    a = max(width_m, ee.d)
+    f_e = float(band_force(np.float64(band_stretch(stroke_m, a, ee)), ee))
+    f_g = f_e * float(np.sin(band_angle(stroke_m, a, ee)))
+    return 2.0 * friction * f_g / G
+
+
+def max_grip_stroke(
+    ee: EndEffectorParams,
+    obj: ObjectParams,
+    safety: float = GRIP_SAFETY,
+    friction: float = PAD_FRICTION,
+) -> float | None:
+    """The longest stroke [m] in the end-effector's range at which the grip holds
+    `safety` × the item's weight, or None when it cannot at any stroke."""
+    need = safety * obj.mass
+    strokes = np.linspace(ee.stroke_min, ee.stroke_max, 81)
+    ok = [s for s in strokes if holding_mass_kg(ee, float(s), obj.width, friction) >= need]
+    return float(max(ok)) if ok else None
