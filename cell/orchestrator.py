@@ -611,7 +611,8 @@ class Orchestrator:
         model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
         bounds = self.bounds
-        if stroke_max_m < self.params.ee.stroke_max:
+        plan = plan_throw(model_obj, goal, self.params.ee, bounds)
+        if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = dc_replace(
                 bounds,
                 stroke_min=self.params.ee.stroke_min
@@ -619,7 +620,7 @@ class Orchestrator:
                 else bounds.stroke_min,
                 stroke_max=stroke_max_m,
             )
-        plan = plan_throw(model_obj, goal, self.params.ee, bounds)
+            plan = plan_throw(model_obj, goal, self.params.ee, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))

@@ -1,0 +1,83 @@
+"""Random sort jobs (cell.jobgen, `cell job random`): what they draw, and that they load."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import yaml
+
+from cell.catalogue import catalogue
+from cell.cli import main
+from cell.jobgen import CALIBRATION_SET, FACING_HALF_RANGE_RAD, LayoutRanges, random_job
+from cell.jobs import ROBOT_BASE_CLEARANCE_M, load_job, parse_job
+from cell.orchestrator import check_sortable, scene_params_path
+from cell.params import load_params
+
+SEEDS = range(6)
+
+
+@pytest.fixture(scope="module")
+def jobs():
+    return {s: random_job(s) for s in SEEDS}
+
+
+def test_the_same_seed_draws_the_same_job(jobs):
+    assert random_job(2) == jobs[2]
+    assert random_job(3) != jobs[2]
+
+
+def test_bins_lie_in_the_ranges_and_keep_clear(jobs):
+    r = LayoutRanges
+    for doc in jobs.values():
+        bins = doc["bins"]
+        assert r.bins[0] <= len(bins) <= r.bins[1]
+        for b in bins:
+            x, y = b["position_m"]
+            d = math.hypot(x, y)
+            assert r.distance_m[0] - 1e-9 <= d <= r.distance_m[1] + 1e-3
+            assert abs(math.atan2(y, x)) <= FACING_HALF_RANGE_RAD["panda"] + 1e-3
+            assert all(r.width_m[0] - 1e-3 <= w <= r.width_m[1] + 1e-3 for w in b["size_m"])
+            assert r.rim_m[0] - 1e-3 <= b["rim_height_m"] <= r.rim_m[1] + 1e-3
+            assert d - math.hypot(*b["size_m"]) / 2 >= ROBOT_BASE_CLEARANCE_M
+
+
+def test_items_span_the_catalogue_and_ad_hoc_with_a_third_unseen(jobs):
+    cat = catalogue()
+    r = LayoutRanges
+    for doc in jobs.values():
+        n = sum(it["count"] for it in doc["items"])
+        assert r.items[0] <= n <= r.items[1]
+        unseen = sum(
+            it["count"]
+            for it in doc["items"]
+            if "object" not in it or cat[it["object"]].set != CALIBRATION_SET
+        )
+        assert unseen >= n / 3
+        for it in doc["items"]:
+            if "object" not in it:
+                assert r.adhoc_mass_kg[0] <= it["mass_kg"] <= r.adhoc_mass_kg[1]
+                assert all(
+                    r.adhoc_extent_m[0] - 1e-4 <= e <= r.adhoc_extent_m[1] + 1e-4
+                    for e in it["size_m"]
+                )
+    kinds = {("object" in it) for doc in jobs.values() for it in doc["items"]}
+    assert kinds == {True, False}  # both catalogue and ad-hoc items are drawn
+
+
+def test_every_item_goes_to_a_bin_the_cell_can_sort_it_into(jobs):
+    params = load_params(scene_params_path())
+    for s, doc in jobs.items():
+        job = parse_job(yaml.safe_dump(doc), f"<seed {s}>")
+        for spec in job.items:
+            check_sortable(params, spec.obj, job.bin(spec.bin))  # raises if not
+
+
+def test_cell_job_random_writes_a_job_that_loads(tmp_path, capsys):
+    out = tmp_path / "job.yaml"
+    assert main(["job", "random", "--seed", "4", "-o", str(out)]) == 0
+    job = load_job(out)
+    assert job.seed == 4
+    assert len(job.expanded_items()) == sum(it["count"] for it in random_job(4)["items"])
+    assert main(["job", "random", "--seed", "4"]) == 0
+    assert capsys.readouterr().out == out.read_text()
