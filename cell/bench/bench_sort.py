@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import yaml
@@ -36,18 +36,24 @@ class LayoutUnit:
         seed: the job's seed (cell job random --seed).
         robot: the arm.
         learn: correct the planner from each observed landing during the run.
+        max_items: run only the first items of the job (0: all of them).
     """
 
     seed: int
     robot: str = "panda"
     learn: bool = False
+    max_items: int = 0
 
 
 def layout_units(
-    n: int, seed: int, robots: tuple[str, ...] = ("panda",), learn: bool = False
+    n: int,
+    seed: int,
+    robots: tuple[str, ...] = ("panda",),
+    learn: bool = False,
+    max_items: int = 0,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
-    return [LayoutUnit(seed + i, robots[i % len(robots)], learn) for i in range(n)]
+    return [LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items) for i in range(n)]
 
 
 def run_layout(unit: LayoutUnit) -> dict[str, Any]:
@@ -58,6 +64,16 @@ def run_layout(unit: LayoutUnit) -> dict[str, Any]:
         up-front refusal message, "" when it ran), "items": [{object_id, unseen,
         action, in_bin, failure, reason, landing_error_m, cycle_time_s}, ...]}.
     """
+
+    from threadpoolctl import threadpool_limits
+
+    # One BLAS thread, as on a Ray worker (OMP_NUM_THREADS=1): the same floating-point
+    # sums everywhere, so a layout gives the same result serially and on any worker.
+    with threadpool_limits(limits=1):
+        return _run_layout(unit)
+
+
+def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
     from cell.catalogue import catalogue
     from cell.errors import JobError
     from cell.jobgen import CALIBRATION_SET, random_job
@@ -68,6 +84,8 @@ def run_layout(unit: LayoutUnit) -> dict[str, Any]:
     doc = random_job(unit.seed, unit.robot)
     name = f"<random layout {unit.seed}>"
     job = parse_job(yaml.safe_dump(doc, sort_keys=False), name)
+    if unit.max_items:
+        job = replace(job, max_items=unit.max_items)
     cat = catalogue()
     out: dict[str, Any] = {"seed": unit.seed, "robot": unit.robot, "refused": "", "items": []}
     try:

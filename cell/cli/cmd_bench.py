@@ -31,7 +31,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sort: arms taken in turn, comma-separated (panda; e.g. panda,ur5)",
     )
     p.add_argument("--learn", action="store_true", help="sort: the flywheel on (cell run --learn)")
-    p.add_argument("--out", metavar="DIR", help="sort: also write each layout's job and result")
+    p.add_argument("--out", metavar="DIR", help="sort: also write each layout's result here")
+    p.add_argument(
+        "--max-items", type=int, default=0, help="sort: only the first N items of each layout"
+    )
+    from cell.parallel import add_campaign_args
+
+    add_campaign_args(p)
     p.add_argument("--only", nargs="+", metavar="NAME", help="run only these benchmarks")
     p.add_argument("--quick", action="store_true", help="smaller batches (a smoke run)")
     p.set_defaults(func=run)
@@ -39,14 +45,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run_sort(args: argparse.Namespace) -> int:
     import json
-    import sys
     from pathlib import Path
-
-    from tqdm import tqdm
 
     from cell.bench.bench_sort import layout_units, run_layout, summarise_layouts
     from cell.errors import InvalidInput
     from cell.jobs import ROBOTS
+    from cell.parallel import run_campaign
 
     robots = tuple(r.strip() for r in args.robots.split(",") if r.strip())
     bad = [r for r in robots if r not in ROBOTS]
@@ -57,19 +61,20 @@ def run_sort(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-    units = layout_units(args.layouts, args.seed, robots, args.learn)
-    layouts = []
-    with tqdm(
-        total=len(units), desc="random layouts", unit="layout", file=sys.stderr, disable=None
-    ) as bar:
-        for u in units:
-            res = run_layout(u)
-            layouts.append(res)
-            if out is not None:
-                (out / f"layout_{u.seed}.json").write_text(json.dumps(res, indent=1))
-            ok = sum(it["in_bin"] for it in res["items"])
-            bar.set_postfix_str(f"seed {u.seed}: {ok}/{len(res['items'])} in bin")
-            bar.update(1)
+    units = layout_units(args.layouts, args.seed, robots, args.learn, max(0, args.max_items))
+
+    def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]
+        if out is not None:  # written by the driver as each layout arrives
+            (out / f"layout_{units[i].seed}.json").write_text(json.dumps(res, indent=1))
+
+    layouts = run_campaign(
+        run_layout,
+        units,
+        workers=args.workers,
+        address=args.ray_address,
+        desc="random layouts",
+        on_result=keep,
+    )
     figures = summarise_layouts(layouts)
     if args.json:
         print_json(figures)
