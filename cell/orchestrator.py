@@ -251,11 +251,17 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
         CannotGrip: the item is too wide for the pads, or too heavy for its width at
             every stroke; the message says what the cell can hold instead.
     """
+    from dataclasses import replace as dc_replace
+
+    from cell.catalogue import pad_width_m
     from cell.model.grip import GRIP_SAFETY, holding_mass_kg, max_grip_stroke
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     ee = params.ee
     name = obj.name or obj.shape
+    width = pad_width_m(obj)
+    if width < obj.width:  # a mesh the pads meet where it is thinner
+        obj = dc_replace(obj, size=(width, *obj.size[1:]))
     widest = 2 * DEFAULT_GEOMETRY.finger_open_m
     if obj.width > widest:
         raise CannotGrip(
@@ -265,11 +271,19 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     s_max = max_grip_stroke(ee, obj)
     if s_max is None:
         hold = holding_mass_kg(ee, ee.stroke_min, obj.width) / GRIP_SAFETY
+        if obj.width <= ee.d:
+            why = (
+                f"the band closes the pads only on items wider than its anchor spacing "
+                f"d = {ee.d * 1000:.0f} mm"
+            )
+        else:
+            why = (
+                f"the pads hold up to {hold * 1000:.0f} g at {obj.width * 1000:.0f} mm "
+                f"(with a {GRIP_SAFETY}x margin for carrying)"
+            )
         raise CannotGrip(
-            f"{name} ({obj.mass * 1000:.0f} g, {obj.width * 1000:.0f} mm across the pads) is "
-            f"too heavy for the grip at its width: the pads hold up to {hold * 1000:.0f} g "
-            f"at {obj.width * 1000:.0f} mm (with a {GRIP_SAFETY}x margin for carrying); "
-            "grip it across a wider side, or sort it by hand"
+            f"{name} ({obj.mass * 1000:.0f} g, {obj.width * 1000:.0f} mm across the pads) "
+            f"cannot be held: {why}; grip it across a wider side, or sort it by hand"
         )
     return s_max
 

@@ -55,7 +55,7 @@ items:
 
 @pytest.mark.parametrize(
     ("mass", "width", "says"),
-    [(0.9, 0.02, "too heavy for the grip"), (0.05, 0.2, "pads")],
+    [(0.9, 0.02, "cannot be held"), (0.05, 0.2, "pads")],
 )
 def test_an_item_the_pads_cannot_hold_is_refused_before_the_job(mass, width, says):
     job = parse_job(JOB % (mass, width), "job.yaml")
