@@ -65,6 +65,7 @@ def _recorder(args: argparse.Namespace, job: Any) -> Any:
 
 
 EXIT_HARDWARE_FAULT = 3  # the end-effector failed mid-run: stopped safely, torque off
+EXIT_NOTHING_SORTED = 4  # the run ended with no item in its target bin
 
 
 def run(args: argparse.Namespace) -> int:
@@ -144,6 +145,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         d = summary.as_dict()
         Path(args.json).write_text(json.dumps(to_jsonable(d), indent=2))
+    if summary.items and not summary.in_bin:
+        print("cell run: no item came to rest in its target bin", file=sys.stderr)
+        return EXIT_NOTHING_SORTED
     return 0
 
 

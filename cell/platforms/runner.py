@@ -17,8 +17,11 @@ another platform to it. Every item is thrown (neither platform places).
   ruckig trajectory to the release point, arriving with that velocity, and
   the latch opens while it moves.
 
-Time accounting as the arm's: `cycle_time_s` is simulated time from the
-item's loading to its release.
+Time accounting as the arm's (cell.orchestrator): `cycle_time_s` is simulated
+time from the item's loading to the start of the next item's, the wait for
+the item to come to rest included. The loading itself is instantaneous here
+(the item appears in the grip at the release pose): a drone's trip back to a
+loading station is not simulated, so its rate is an upper bound.
 """
 
 from __future__ import annotations
@@ -159,7 +162,15 @@ class PlatformRunner:
 
     # -- one item ----------------------------------------------------------------
     def run_item(self, index: int, spec: ItemSpec) -> Any:
-        """Load, plan, release, observe and record one item; returns its ItemResult."""
+        """Load, plan, release, observe and record one item; returns its ItemResult
+        (cycle time: to the moment the next item can be loaded)."""
+        from dataclasses import replace as dc_replace
+
+        t0 = self.scene.t
+        res = self._run_item(index, spec)
+        return dc_replace(res, cycle_time_s=self.scene.t - t0)
+
+    def _run_item(self, index: int, spec: ItemSpec) -> Any:
         from cell.orchestrator import ItemResult
 
         obj = spec.obj
