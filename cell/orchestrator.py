@@ -303,7 +303,7 @@ def check_sortable(
     bin: the pads cannot hold it, or (for a throw) no release within the bounds lands
     it there by the planner's model of the scene."""
     from cell.optimize.bounds import ThrowBounds
-    from cell.optimize.plan import plan_throw
+    from cell.optimize.plan import plan_facing
 
     s_max = grip_stroke_limit(params, obj)
     dist = math.hypot(*bin_spec.position)
@@ -319,7 +319,7 @@ def check_sortable(
             stroke_max=min(s_max, params.ee.stroke_max),
         )
     goal = (*bin_spec.position, bin_spec.rim_height)
-    plan_throw(params.model_object(obj), goal, params.ee, b)
+    plan_facing(params.model_object(obj), goal, params.ee, b)
 
 
 def scene_params_path() -> str | None:
@@ -487,12 +487,19 @@ class Orchestrator:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
         from cell.robot.motion import plan_path
 
-        traj = plan_path(
-            [self.q, *waypoints],
-            self.robot,
-            velocity_scale=ARM_SPEED_SCALE,
-            acceleration_scale=ARM_SPEED_SCALE if self.ee.item is None else CARRY_ACCEL_SCALE,
-        )
+        try:
+            traj = plan_path(
+                [self.q, *waypoints],
+                self.robot,
+                velocity_scale=ARM_SPEED_SCALE,
+                acceleration_scale=ARM_SPEED_SCALE if self.ee.item is None else CARRY_ACCEL_SCALE,
+            )
+        except TrajectoryError:
+            if len(waypoints) < 2:
+                raise
+            # The spline through the waypoints leaves the joint limits between them: stop
+            # at each instead (a straight joint-space segment stays inside the limit box).
+            return sum(self._move([w]) for w in waypoints)
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
@@ -630,7 +637,7 @@ class Orchestrator:
         no longer than `stroke_max_m` (what the grip holds the item at)."""
         from dataclasses import replace as dc_replace
 
-        from cell.optimize.plan import plan_throw
+        from cell.optimize.plan import plan_facing
 
         goal = (*target.position, target.rim_height)
         # Identified η_o where the parameter file has them (seen objects), else the
@@ -640,7 +647,7 @@ class Orchestrator:
         model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
         bounds = self.bounds
-        plan = plan_throw(model_obj, goal, self.params.ee, bounds)
+        plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = dc_replace(
                 bounds,
@@ -649,13 +656,13 @@ class Orchestrator:
                 else bounds.stroke_min,
                 stroke_max=stroke_max_m,
             )
-            plan = plan_throw(model_obj, goal, self.params.ee, bounds)
+            plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
             if aim is not None:
                 try:
-                    plan = plan_throw(model_obj, tuple(aim), self.params.ee, bounds)
+                    plan = plan_facing(model_obj, tuple(aim), self.params.ee, bounds)
                     self._aim = aim
                 except UnreachableTarget:
                     log.info(

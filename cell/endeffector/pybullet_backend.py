@@ -157,9 +157,17 @@ class PyBulletEndEffector(EndEffector):
         self._grasp_stroke_m = stroke_m
 
     def holds_item(self) -> bool:
-        """The item taken by `grasp` is still between the closed pads (it has not
-        slipped out or fallen while carried)."""
-        return self.item is not None and self._in_grip(self.item, self._grasp_stroke_m)
+        """The item taken by `grasp` is still held: between the closed pads, or (if it
+        slid along them while carried) still touching both pads."""
+        if self.item is None:
+            return False
+        if self._in_grip(self.item, self._grasp_stroke_m):
+            return True
+        cl = self.scene.client
+        touching = {
+            c[4] for c in cl.getContactPoints(bodyA=self.item.body, bodyB=self.scene.ee_body)
+        }
+        return {FINGER_LEFT, FINGER_RIGHT} <= touching
 
     def _in_grip(self, it: Item, stroke_m: float) -> bool:
         """The fingers stopped on the item and its centre is between them."""

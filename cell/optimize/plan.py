@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -36,7 +36,7 @@ from cell.optimize.nlp import solve_nlp
 from cell.optimize.reach import unreachable_error
 from cell.optimize.verify import POLISH_TOL, fly, polish, sigma_batch
 
-__all__ = ["ThrowPlan", "plan_throw", "MISS_TOL"]
+__all__ = ["ThrowPlan", "plan_throw", "plan_facing", "rotate_plan", "MISS_TOL"]
 
 log = logging.getLogger(__name__)
 
@@ -311,3 +311,56 @@ def plan_throw(
     if math.isfinite(best):
         detail += f" (best predicted miss {best:.3f} m)"
     raise unreachable_error(obj, tgt, ee, bounds, _release_point(tgt, bounds, cur), detail + ".")
+
+
+FACING_SECTOR_RAD = math.radians(45.0)  # targets within ±45° of +x use the bounds as given
+
+
+def rotate_plan(plan: ThrowPlan, angle_rad: float) -> ThrowPlan:
+    """The plan turned by `angle_rad` about the vertical axis through the world origin
+    (the model is invariant under it: gravity is vertical, the air still)."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+
+    def rot(x: float, y: float) -> tuple[float, float]:
+        return c * x - s * y, s * x + c * y
+
+    x, y = rot(plan.x_m, plan.y_m)
+    vx, vy = rot(plan.vx_mps, plan.vy_mps)
+    tx, ty = rot(plan.target_x_m, plan.target_y_m)
+    px, py = rot(plan.pred_x_m, plan.pred_y_m)
+    az = math.atan2(math.sin(plan.azimuth_rad + angle_rad), math.cos(plan.azimuth_rad + angle_rad))
+    return replace(
+        plan,
+        x_m=x,
+        y_m=y,
+        vx_mps=vx,
+        vy_mps=vy,
+        azimuth_rad=az,
+        target_x_m=tx,
+        target_y_m=ty,
+        pred_x_m=px,
+        pred_y_m=py,
+    )
+
+
+def plan_facing(
+    obj: ObjectParams,
+    target: tuple[float, float, float] | np.ndarray,
+    ee: EndEffectorParams = DEFAULT_EE,
+    bounds: ThrowBounds = DEFAULT_BOUNDS,
+) -> ThrowPlan:
+    """`plan_throw` for an arm that turns to face its target.
+
+    The bounds' release box lies in front of the base (+x). A target outside
+    ±FACING_SECTOR_RAD of +x (beside or behind the arm) is planned in the frame
+    turned toward it, and the plan is turned back: the arm releases on the side of
+    the bin, as it would after turning its first joint, instead of throwing over
+    its shoulder from the front box.
+    """
+    g = np.asarray(target, float)
+    phi = math.atan2(g[1], g[0])
+    if abs(phi) <= FACING_SECTOR_RAD:
+        return plan_throw(obj, g, ee, bounds)
+    c, s = math.cos(-phi), math.sin(-phi)
+    local = (c * g[0] - s * g[1], s * g[0] + c * g[1], g[2])
+    return rotate_plan(plan_throw(obj, local, ee, bounds), phi)
