@@ -362,6 +362,11 @@ LEARN_CLASS_MAX_LOG_RATIO = math.log(1.15)  # a class's (shape's) within ±15 %,
 LEARN_CLASS_MAX_TURN_RAD = math.radians(3.0)
 
 
+# Release fallbacks when the arm cannot reach a plan's release pose: (largest
+# elevation [rad], the fast path's release height [m]), tried in turn.
+RELEASE_FALLBACKS = ((math.radians(45.0), 0.7), (math.radians(30.0), 0.6))
+
+
 def _clip(v: float, lim: float) -> float:
     return max(-lim, min(lim, v))
 
@@ -424,6 +429,8 @@ class Orchestrator:
         self.ee = PyBulletEndEffector(self.scene)
         self.hardware = end_effector
         self.bounds = ThrowBounds()
+        self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
+        self._q_release = np.zeros(0)
         self.residual = None
         if job.residual:
             from cell.residual.model import ResidualModel
@@ -633,8 +640,49 @@ class Orchestrator:
     def _plan(
         self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float = math.inf
     ) -> tuple[Any, float]:
-        """The throw plan to a bin (and the learned ΔL_s), or UnreachableTarget; strokes
-        no longer than `stroke_max_m` (what the grip holds the item at)."""
+        """The throw plan to a bin (and the learned ΔL_s) whose release pose the arm
+        reaches (its configuration is kept for the throw), or UnreachableTarget / IKFailed.
+
+        When IK finds no configuration for the plan's release pose, the plan is made
+        again with the release lower and the throw axis flatter (RELEASE_FALLBACKS):
+        the arm cannot point steeply up at shoulder height close to its base.
+        """
+        from dataclasses import replace as dc_replace
+
+        err: CellError | None = None
+        for elevation_max, height in ((None, None), *RELEASE_FALLBACKS):
+            self.bounds_now = self.bounds
+            if elevation_max is not None and height is not None:
+                self.bounds_now = dc_replace(
+                    self.bounds,
+                    elevation_max=min(self.bounds.elevation_max, elevation_max),
+                    release_height=height,
+                )
+            try:
+                plan, delta = self._plan_once(obj, target, index, stroke_max_m)
+            except UnreachableTarget as exc:
+                err = err or exc
+                continue
+            stroke = plan.stroke_m + delta
+            centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+            try:
+                self._q_release = self._ik(
+                    self._tcp_for_item_centre(
+                        centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
+                    ),
+                    plan.elevation_rad,
+                    plan.azimuth_rad,
+                )
+            except IKFailed as exc:
+                err = err or exc
+                continue
+            return plan, delta
+        assert err is not None
+        raise err
+
+    def _plan_once(
+        self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float
+    ) -> tuple[Any, float]:
         from dataclasses import replace as dc_replace
 
         from cell.optimize.plan import plan_facing
@@ -646,7 +694,7 @@ class Orchestrator:
         use_identified = self.residual is None or obj.name in self.residual.identified_objects
         model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
-        bounds = self.bounds
+        bounds = self.bounds_now
         plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = dc_replace(
@@ -726,11 +774,11 @@ class Orchestrator:
         bx, by = target.position
         stroke = plan.stroke_m + delta
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-        q_rel = self._ik(
-            self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj),
-            plan.elevation_rad,
-            plan.azimuth_rad,
-        )
+        tcp = self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj)
+        try:  # IK from the lift pose the arm is at; _plan checked one exists from before
+            q_rel = self._ik(tcp, plan.elevation_rad, plan.azimuth_rad)
+        except IKFailed:
+            q_rel = self._q_release
         self._move([q_lift, q_rel])
         self._check_held(obj)
         if self.hardware is not None:
