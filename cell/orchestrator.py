@@ -37,7 +37,6 @@ from cell.errors import (
     GraspLost,
     HardwareError,
     IKFailed,
-    InvalidInput,
     TrajectoryError,
     UnreachableTarget,
 )
@@ -410,17 +409,13 @@ class Orchestrator:
         from cell.sim import BinSpec, CellScene
 
         self.job = job
-        if job.robot != "panda":
-            raise InvalidInput(
-                f"{job.path}: cell.robot {job.robot!r}: the simulated cell has the panda"
-            )
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
         self.session = session or f"run-{uuid.uuid4().hex[:8]}"
         self.robot = load_robot(job.robot)
         bins = [BinSpec(b.id, b.position, b.size, b.rim_height) for b in job.bins]
         self.scene = CellScene(
-            "panda",
+            job.robot,
             bins,
             gui=gui,
             pick_station_xy=job.pick_position[:2],
@@ -437,7 +432,7 @@ class Orchestrator:
 
             self.residual = ResidualModel.load(job.residual)
         self._check_job()
-        self.q = np.asarray(self.scene_ready_q(), float)
+        self.q = np.asarray(self.scene.ready_q, float)
         self.rng = np.random.default_rng(job.seed)
         self.observer = observer
         self.learn = learn
@@ -466,12 +461,6 @@ class Orchestrator:
                     f"{job.path}, line {spec.line}: item {spec.obj.name or spec.obj.shape} "
                     f"to bin {spec.bin!r}: {exc}"
                 ) from None
-
-    @staticmethod
-    def scene_ready_q() -> tuple[float, ...]:
-        from cell.sim import PANDA_READY
-
-        return PANDA_READY
 
     # -- motion ----------------------------------------------------------------
     def _tcp_for_item_centre(

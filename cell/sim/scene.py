@@ -122,8 +122,10 @@ class CellScene:
             raise InvalidParameter(
                 f"time steps dt_s={dt_s}, launch_dt_s={launch_dt_s} s: need 0 < launch ≤ dt ≤ 0.01"
             )
-        if robot not in (None, "panda"):
-            raise InvalidParameter(f"robot {robot!r}: valid are 'panda' or None")
+        from cell.robot.composite import MOUNTS
+
+        if robot is not None and robot not in MOUNTS:
+            raise InvalidParameter(f"robot {robot!r}: valid are {sorted(MOUNTS)} or None")
         ids = [b.id for b in bins]
         if len(set(ids)) != len(ids):
             raise InvalidParameter(f"bin ids must be unique, got {ids}")
@@ -177,27 +179,39 @@ class CellScene:
         self.arm: int | None = None
         self.arm_joints: list[int] = []
         self._flange = -1
-        if robot == "panda":
-            self._load_panda(robot_base_xyz)
+        self.robot = robot
+        self.ready_q: tuple[float, ...] = ()
+        if robot is not None:
+            self._load_arm(robot, robot_base_xyz)
 
     # -- construction ----------------------------------------------------------
-    def _load_panda(self, base_xyz: tuple[float, float, float]) -> None:
+    def _load_arm(self, robot: str, base_xyz: tuple[float, float, float]) -> None:
+        """The arm from the composite URDF Pinocchio plans with (robots/<arm>_throwing):
+        kinematic and collision-free; its end-effector links are hidden, and the
+        physically driven end-effector body follows its `ee_base` link, so the mount
+        (flange offset and yaw) is the mount file's, as in the planner's model."""
+        from cell.robot.composite import composite_urdf, load_mount
+
+        spec = load_mount(robot)
         cl = self.client
-        arm = int(cl.loadURDF(str(panda_urdf()), list(base_xyz), useFixedBase=True))
-        names = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
+        with _stdout_to_stderr():
+            arm = int(cl.loadURDF(str(composite_urdf(robot)), list(base_xyz), useFixedBase=True))
+        joints = {cl.getJointInfo(arm, j)[1].decode(): j for j in range(cl.getNumJoints(arm))}
+        links = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
         self.arm = arm
-        self.arm_joints = [names[f"panda_link{i}"] for i in range(1, 8)]
-        self._flange = names["panda_link8"]
+        self.arm_joints = [joints[n] for n in spec.arm_joints]
+        self._flange = links["ee_base"]
         for j in range(-1, cl.getNumJoints(arm)):
             cl.setCollisionFilterGroupMask(arm, j, 0, 0)  # kinematic, collision-free
-        for link in ("panda_hand", "panda_leftfinger", "panda_rightfinger"):
-            if link in names:  # the throwing end-effector replaces the Panda hand
-                cl.changeVisualShape(arm, names[link], rgbaColor=[0, 0, 0, 0])
-        self.set_arm(PANDA_READY, teleport=True)
+        for name, j in links.items():
+            if name.startswith("ee_"):  # drawn by the driven end-effector body instead
+                cl.changeVisualShape(arm, j, rgbaColor=[0, 0, 0, 0])
+        self.ready_q = tuple(float(v) for v in spec.home)
+        self.set_arm(self.ready_q, teleport=True)
 
     # -- the arm and the end-effector's mount ----------------------------------
     def set_arm(self, q: Sequence[float], *, teleport: bool = False) -> None:
-        """Set the arm's 7 joint positions [rad]; the end-effector follows its flange.
+        """Set the arm's joint positions [rad]; the end-effector follows its mount.
 
         Args:
             q: joint positions [rad].
@@ -205,7 +219,7 @@ class CellScene:
                 instead of letting the mount constraint pull it over the next steps.
 
         Raises:
-            InvalidInput: no arm in this scene, or not 7 values.
+            InvalidInput: no arm in this scene, or not one value per arm joint.
         """
         if self.arm is None:
             raise InvalidInput("this scene has no arm (robot=None): use hold_ee")
@@ -217,9 +231,8 @@ class CellScene:
         for j, v in zip(self.arm_joints, q, strict=True):
             cl.resetJointState(self.arm, j, float(v))
         st = cl.getLinkState(self.arm, self._flange, computeForwardKinematics=True)
-        mount = cl.getQuaternionFromEuler([0.0, 0.0, FLANGE_YAW_RAD])
-        pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], mount)
-        # (a yaw about z commutes with the shift along z)
+        # E, the base plate's face, lies FLANGE_TO_EE_M along ee_base's z
+        pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
         self.hold_ee(pos, orn, teleport=teleport)
 
     def set_arm_motion(self, q_of_t: Callable[[float], Sequence[float]] | None) -> None:
