@@ -28,7 +28,8 @@ test: lint
 bench: install
 	$(BIN)/cell bench
 
-# Every figure and quoted figure in README.md and docs/ (about 10 min on 2 cores). The JSON beside
+# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores, 27 of them the
+# random-layout benchmark). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
@@ -52,6 +53,7 @@ figures: install
 	$(BIN)/cell gap $(TMP)/scene.csv --report docs/scene_gap/nominal.html --json docs/scene_gap/nominal.json
 	$(BIN)/cell gap $(TMP)/scene.csv --identify --report docs/scene_gap/identified.html --json docs/scene_gap/identified.json
 	$(BIN)/cell bench --json > $(FIG)/bench.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --json > $(FIG)/bench_sort.json
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -75,3 +75,25 @@ def test_a_unit_that_raises_is_reported_by_name(local_ray):
 
     with pytest.raises(CampaignFailed, match="unit 3"):
         run_campaign(fails_on_three, list(range(5)), workers=2, progress=False)
+
+
+def test_a_scene_campaign_on_ray_throws_what_the_serial_one_throws(local_ray):
+    from cell.sim.campaign import campaign_plan
+    from cell.sim.campaign import run_campaign as scene_campaign
+
+    plan = campaign_plan(6, seed=3)
+    a = scene_campaign(plan)
+    b = scene_campaign(plan, workers=2)
+    assert len(a) == len(b) == 6
+    for col in ("object_id", "landed_x_m", "landed_y_m", "t_flight_s"):
+        assert list(a.data[col]) == list(b.data[col])
+
+
+def test_gap_check_on_ray_gives_the_serial_verdicts(local_ray):
+    from cell.gap.check import run_check
+
+    kw = dict(n=120, seed=1, repeats=2)
+    a = run_check(("none", "band_mass"), **kw)
+    b = run_check(("none", "band_mass"), workers=2, **kw)
+    strip = [{k: v for k, v in r.__dict__.items() if k != "seconds"} for r in a]
+    assert strip == [{k: v for k, v in r.__dict__.items() if k != "seconds"} for r in b]

@@ -71,3 +71,21 @@ def test_table_5_1_unseen_column_is_the_last_generated_example_08() -> None:
         before, after = _quoted(rf"\| {learner.upper()} \|[^|]*\|[^|]*\| ([\d.]+) → ([\d.]+) m \|")
         assert float(before) == pytest.approx(unseen[learner]["rmse_before_m"], abs=5e-4)
         assert float(after) == pytest.approx(unseen[learner]["rmse_after_m"], abs=5e-4)
+
+
+def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
+    bench = _json("docs/figures/bench_sort.json")
+    rate, lo, hi = _quoted(r"`in_bin_rate` \*\*([\d.]+)\*\* \(95 % interval ([\d.]+)–([\d.]+)\)")
+    assert float(rate) == pytest.approx(bench["in_bin_rate"], abs=5e-4)
+    assert float(lo) == pytest.approx(bench["in_bin_rate_lo"], abs=5e-4)
+    assert float(hi) == pytest.approx(bench["in_bin_rate_hi"], abs=5e-4)
+    (unseen,) = _quoted(r"`in_bin_rate_unseen` \*\*([\d.]+)\*\*")
+    assert float(unseen) == pytest.approx(bench["in_bin_rate_unseen"], abs=5e-4)
+    (items,) = _quoted(r"over (\d+) items of 20 layouts")
+    assert int(items) == bench["items"]
+    (rate_h,) = _quoted(r"`items_per_hour` \*\*([\d,]+)\*\*")
+    assert int(rate_h.replace(",", "")) == round(bench["items_per_hour"])
+    (reach,) = _quoted(r"`scene_reach_err_pct` \*\*([\d.]+) %\*\*")
+    assert float(reach) == pytest.approx(
+        _json("docs/figures/bench.json")["scene_reach_err_pct"], abs=0.05
+    )

@@ -75,6 +75,9 @@ def _check_outputs(args: argparse.Namespace) -> None:
     seed = getattr(args, "seed", None)
     if isinstance(seed, int) and not 0 <= seed < 2**32:
         raise InvalidInput(f"--seed {seed}: a seed is an integer from 0 to {2**32 - 1}")
+    workers = getattr(args, "workers", None)
+    if isinstance(workers, int) and not 1 <= workers <= 4096:
+        raise InvalidInput(f"--workers {workers}: give 1 (in this process) to 4096")
     for attr, flag in _OUTPUT_OPTIONS:
         value = getattr(args, attr, None)
         if isinstance(value, str) and value:

@@ -44,6 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gui", action="store_true", help="watch the campaign in PyBullet's GUI")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--record", metavar="CAL.rrd", help="write a Rerun recording (cell[record])")
+    from cell.parallel import add_campaign_args
+
+    add_campaign_args(p)
     p.set_defaults(func=run)
 
 
@@ -116,7 +119,13 @@ def run(args: argparse.Namespace) -> int:
         scene = CellScene(robot=None, bins=(), pick_station_xy=(-1.0, -1.0), gui=True)
     try:
         with tqdm(total=len(plan), desc="throws", disable=args.json or None) as bar:
-            table = run_campaign(plan, scene=scene, progress=lambda k: bar.update(k - bar.n))
+            table = run_campaign(
+                plan,
+                scene=scene,
+                progress=lambda k: bar.update(k - bar.n),
+                workers=args.workers,
+                address=args.ray_address,
+            )
     finally:
         if scene is not None:
             scene.close()

@@ -45,6 +45,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="times each configuration is thrown (2; 1 = no repeats to estimate noise from)",
     )
     g.add_argument("--truths", nargs="+", metavar="NAME", help="only these truths")
+    from cell.parallel import add_campaign_args
+
+    add_campaign_args(g)
     p.set_defaults(func=run)
 
 
@@ -125,7 +128,15 @@ def _check(args: argparse.Namespace) -> int:
             bar.set_postfix_str(label)
             bar.update(1)
 
-        rows = run_check(truths, n=n, seed=args.seed, repeats=args.repeats, progress=tick)
+        rows = run_check(
+            truths,
+            n=n,
+            seed=args.seed,
+            repeats=args.repeats,
+            progress=tick,
+            workers=args.workers,
+            address=args.ray_address,
+        )
     print(format_check(rows))
     if args.json:
         with open(args.json, "w") as fh:

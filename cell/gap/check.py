@@ -60,6 +60,8 @@ def run_check(
     seed: int = 0,
     repeats: int = 2,
     progress: Callable[[str], None] | None = None,
+    workers: int = 1,
+    address: str | None = None,
 ) -> list[CheckRow]:
     """Draw one campaign per truth, diagnose each blind, and compare.
 
@@ -68,45 +70,75 @@ def run_check(
         n: throws per campaign.
         seed: seed of the world.
         repeats: how many times each throw configuration is thrown (1: no repeats).
-        progress: called with the truth before each campaign.
+        progress: called with the truth as each campaign is done.
+        workers, address: run the campaigns on Ray (cell.parallel); the same rows as
+            the serial run (each campaign carries its own seeds).
 
     Returns:
         One row per campaign.
     """
-    rows = []
+    from cell.parallel import run_campaign
+
     rng = np.random.default_rng(seed)
+    units = [
+        CheckCase(truth, int(rng.integers(2**31)), n, repeats, seed + i)
+        for i, truth in enumerate(truths)
+    ]
+
+    def done(i: int, row: CheckRow) -> None:
+        if progress:
+            progress(row.truth)
+
+    return run_campaign(
+        check_case,
+        units,
+        workers=workers,
+        address=address,
+        desc="cell gap check",
+        on_result=done,
+        progress=False,
+    )
+
+
+@dataclass(frozen=True)
+class CheckCase:
+    """One campaign of `cell gap check`: its truth and seeds (a picklable unit)."""
+
+    truth: str
+    world_seed: int
+    n: int
+    repeats: int
+    diagnose_seed: int
+
+
+def check_case(case: CheckCase) -> CheckRow:
+    """Draw the case's campaign, write and read it back as a log, diagnose it blind."""
+    camp = draw_campaign(
+        case.truth, np.random.default_rng(case.world_seed), n=case.n, repeats=case.repeats
+    )
     with tempfile.TemporaryDirectory() as tmp:
-        for i, truth in enumerate(truths):
-            if progress:
-                progress(truth)
-            camp = draw_campaign(
-                truth, np.random.default_rng(rng.integers(2**31)), n=n, repeats=repeats
-            )
-            path = Path(tmp) / f"campaign_{i}.csv"
-            write_throws_csv(camp.table, path)
-            table = read_throws_csv(path)
-            t0 = time.perf_counter()
-            d, _ = diagnose_log(table, DEFAULT_EE, seed=seed + i)
-            secs = time.perf_counter() - t0
-            rep = d.report
-            B = rep["baseline"]["heldout_rmse_m"]
-            allowed = 100.0 * (1.0 - camp.noise_m / B) if truth != "none" else 0.0
-            rows.append(
-                CheckRow(
-                    truth=truth,
-                    verdict="+".join(rep["verdict"]["effects"]),
-                    throws=rep["throws"],
-                    noise_floor_m=rep["noise_floor_m"],
-                    baseline_m=B,
-                    after_m=rep["verdict"]["heldout_rmse_m"],
-                    shrink_found_pct=rep["verdict"]["shrink_pct"],
-                    shrink_allowed_pct=allowed,
-                    scatter_m=camp.noise_m,
-                    seconds=secs,
-                    params=camp.params,
-                )
-            )
-    return rows
+        path = Path(tmp) / "campaign.csv"
+        write_throws_csv(camp.table, path)
+        table = read_throws_csv(path)
+    t0 = time.perf_counter()
+    d, _ = diagnose_log(table, DEFAULT_EE, seed=case.diagnose_seed)
+    secs = time.perf_counter() - t0
+    rep = d.report
+    B = rep["baseline"]["heldout_rmse_m"]
+    allowed = 100.0 * (1.0 - camp.noise_m / B) if case.truth != "none" else 0.0
+    return CheckRow(
+        truth=case.truth,
+        verdict="+".join(rep["verdict"]["effects"]),
+        throws=rep["throws"],
+        noise_floor_m=rep["noise_floor_m"],
+        baseline_m=B,
+        after_m=rep["verdict"]["heldout_rmse_m"],
+        shrink_found_pct=rep["verdict"]["shrink_pct"],
+        shrink_allowed_pct=allowed,
+        scatter_m=camp.noise_m,
+        seconds=secs,
+        params=camp.params,
+    )
 
 
 def confusion_table(rows: list[CheckRow]) -> tuple[list[str], list[str], np.ndarray]:

@@ -127,11 +127,23 @@ def campaign_plan(
     return plan
 
 
+CHUNK = 8  # throws per unit of a campaign (one fresh scene each)
+
+
+def throw_chunk(chunk: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Throw planned throws in a fresh scene of their own; their records (a unit of a
+    campaign on Ray: every throw teleports the end-effector and grasps a fresh item, so
+    a throw's record does not depend on the throws before it)."""
+    return campaign_records(chunk)
+
+
 def run_campaign(
     plan: Sequence[dict[str, Any]],
     *,
     scene: CellScene | None = None,
     progress: Callable[[int], None] | None = None,
+    workers: int = 1,
+    address: str | None = None,
 ) -> ThrowTable:
     """Throw every planned throw in a scene (a fresh one without arm or bins by default).
 
@@ -139,10 +151,46 @@ def run_campaign(
         plan: throw settings as from `campaign_plan`.
         scene: the scene to throw in (robot=None).
         progress: called with the number of throws done.
+        workers, address: split the plan into chunks thrown on Ray (cell.parallel),
+            each in its own scene; the same records as the serial run.
 
     Returns:
         The throw log of the campaign (THROW_LOG.md columns plus t_flight_s, session).
     """
+    if scene is None:
+        from cell.parallel import run_campaign as on_ray
+
+        # Chunks of a fixed size, each thrown in a fresh scene: the records are the same
+        # on one process or many (a scene's contact caches carry over between throws at
+        # the 1e-13 m level, so the chunking must not depend on the worker count).
+        chunks = [list(plan[i : i + CHUNK]) for i in range(0, len(plan), CHUNK)]
+        done = [0]
+
+        def tick(i: int, recs: list[dict[str, Any]]) -> None:
+            done[0] += len(recs)
+            if progress is not None:
+                progress(done[0])
+
+        parts = on_ray(
+            throw_chunk,
+            chunks,
+            workers=max(1, workers),
+            address=address,
+            desc="throws",
+            on_result=tick,
+            progress=False,
+        )
+        return ThrowTable.from_records([r for part in parts for r in part])
+    return ThrowTable.from_records(campaign_records(plan, scene=scene, progress=progress))
+
+
+def campaign_records(
+    plan: Sequence[dict[str, Any]],
+    *,
+    scene: CellScene | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> list[dict[str, Any]]:
+    """The THROW_LOG.md records of the planned throws, thrown one after the other."""
     own = scene is None
     # the pick station stands behind the thrower, out of every flight path
     sc = (
@@ -169,4 +217,4 @@ def run_campaign(
     finally:
         if own:
             sc.close()
-    return ThrowTable.from_records(records)
+    return records
