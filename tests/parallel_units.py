@@ -4,16 +4,20 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 
-def die_once(unit: tuple[str, int]) -> int:
-    """k², but the worker process running unit 2 dies the first time (no exception:
-    the process is gone, as when a node is lost)."""
-    marker, k = unit
-    if k == 2 and not Path(marker).exists():
+def throw_or_die_once(unit: tuple[str, dict[str, Any]]) -> dict[str, Any]:
+    """One scene throw's log record; the worker process running throw 2 dies the first
+    time (no exception: the process is gone, as when a node is lost)."""
+    from cell.sim.campaign import campaign_records
+
+    marker, setting = unit
+    if setting["throw_id"].endswith("-0002") and not Path(marker).exists():
         Path(marker).write_text("died")
         os._exit(1)
-    return k * k
+    (record,) = campaign_records([setting])
+    return record
 
 
 def fails_on_three(k: int) -> int:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import os
-import sqlite3
 import sys
 from pathlib import Path
 
@@ -50,24 +49,31 @@ def test_a_campaign_on_two_workers_equals_the_serial_run(local_ray):
     assert a["items"] == 6
 
 
-def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_unit(local_ray, tmp_path):
-    from parallel_units import die_once
+def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ray, tmp_path):
+    from parallel_units import throw_or_die_once
+
+    from cell.log.store import ThrowStore
+    from cell.sim.campaign import campaign_plan
 
     marker = tmp_path / "died"
-    db = tmp_path / "rows.sqlite"
-    con = sqlite3.connect(db)
-    con.execute("create table rows (unit integer primary key, value real)")
-    units = [(str(marker), k) for k in range(6)]
-
-    def store(i, r):  # the driver is the only writer, one transaction per row
-        with con:
-            con.execute("insert into rows values (?, ?)", (i, r))
-
-    out = run_campaign(die_once, units, workers=2, on_result=store, progress=False)
+    plan = campaign_plan(5, seed=2)
+    store = ThrowStore(tmp_path / "throws.sqlite")
+    try:
+        # the driver is the only writer: one transaction per row, as results arrive
+        out = run_campaign(
+            throw_or_die_once,
+            [(str(marker), p) for p in plan],
+            workers=2,
+            on_result=lambda i, rec: store.append(rec),
+            progress=False,
+        )
+        ids = store.table().text("throw_id")
+        assert len(store) == len(plan)
+    finally:
+        store.close()
     assert marker.exists()  # one worker process did die mid-campaign
-    assert out == [k * k for k in range(6)]
-    rows = con.execute("select unit, value from rows order by unit").fetchall()
-    assert rows == [(k, k * k) for k in range(6)]
+    assert [r["throw_id"] for r in out] == [p["throw_id"] for p in plan]
+    assert sorted(ids) == sorted(p["throw_id"] for p in plan)  # one row per throw
 
 
 def test_a_unit_that_raises_is_reported_by_name(local_ray):
