@@ -217,7 +217,8 @@ class PlatformRunner:
                         cross,
                         platform=self.job.platform,
                         rotor_rpm=self.job.rotor_rpm if self.job.platform == "drone" else 0.0,
-                    )
+                    ),
+                    track=out.track,
                 )
             return ItemResult(
                 **base,
