@@ -474,10 +474,9 @@ class Orchestrator:
         return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke - obj.size[2] / 2)
 
     def _ik(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
-        from cell.robot.ik import ReleasePose, solve_ik
+        from cell.robot.ik import solve_release_ik
 
-        pose = ReleasePose.from_angles(tcp, elevation, azimuth)
-        return solve_ik(self.robot, pose, self.q).q
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q).q
 
     def _move(self, waypoints: list[np.ndarray]) -> float:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
