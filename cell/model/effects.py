@@ -36,7 +36,7 @@ from cell.errors import InvalidParameter
 from cell.model.band import band_angle, band_force, band_stretch
 from cell.model.flight3d import fly
 from cell.model.objects import SHAPES
-from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import (
     Landing,
     ThrowBatch,
@@ -352,7 +352,7 @@ def _flight_accel(
         rpm = _permuted(rotor_rpm, permutation)
         w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
     if sp is not None:
-        kl = 0.5 * RHO_AIR * _area(batch) / batch.mass  # [1/m]
+        kl = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m], per unit C_L
         radius = batch.size.max(axis=1) / 2
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:

@@ -32,7 +32,7 @@ import numpy as np
 from cell.errors import InvalidParameter, NoLanding
 from cell.model.band import push_force
 from cell.model.objects import ObjectParams, drag_area, drag_coefficient
-from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.planar import flight_planar, flight_planar_one, hermite, hermite_root
 
 __all__ = [
@@ -59,8 +59,8 @@ def throw_axis(elevation: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
 
 def drag_constant(shape: np.ndarray, mass: np.ndarray, size: np.ndarray) -> np.ndarray:
     """k = ½ ρ C_d A / m [1/m], so that drag acceleration is -k |v| v."""
-    return (
-        0.5 * RHO_AIR * drag_coefficient(shape) * drag_area(shape, size) / np.asarray(mass, float)
+    return aero_factor_kg_per_m(drag_coefficient(shape), drag_area(shape, size)) / np.asarray(
+        mass, float
     )
 
 

@@ -12,9 +12,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import numpy as np
-
 from cell.errors import MissingDependency
+from cell.frames import axis_frame, quat_from_matrix
 from cell.sim.bins import BinSpec
 
 __all__ = [
@@ -63,28 +62,7 @@ def panda_urdf() -> Path:
     raise MissingDependency("no Panda URDF: pip install example-robot-data")
 
 
-def release_orientation(elevation: float, azimuth: float, roll: float = 0.0) -> np.ndarray:
-    """Orientation of E whose +z is the throw axis u(e, a) [MODEL.md], rolled by `roll`.
-
-    E = Rz(azimuth) · Ry(π/2 − elevation) · Rz(roll); with roll 0 the grip's x
-    axis lies in the vertical plane of the throw (the lower finger carries the
-    item's weight).
-
-    Returns:
-        Rotation matrix of E in W, shape (3, 3).
-    """
-
-    def rz(t: float) -> np.ndarray:
-        c, s = math.cos(t), math.sin(t)
-        return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
-
-    b = math.pi / 2 - elevation
-    ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1.0, 0], [-math.sin(b), 0, math.cos(b)]])
-    return rz(azimuth) @ ry @ rz(roll)
-
-
-def quat_from_matrix(r: np.ndarray) -> list[float]:
-    """Quaternion (x, y, z, w) of a rotation matrix."""
-    from scipy.spatial.transform import Rotation
-
-    return [float(v) for v in Rotation.from_matrix(r).as_quat()]
+release_orientation = axis_frame
+"""Orientation of E whose +z is the throw axis u(e, a) [MODEL.md], rolled by `roll`
+(`cell.frames.axis_frame`: with roll 0 the grip's x axis lies in the vertical plane of
+the throw, the lower finger carrying the item's weight). Rotation matrix of E in W."""
