@@ -27,6 +27,7 @@ from cell.frames import (
     quat_wxyz_from_matrix,
 )
 from cell.model.band import push_force
+from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import throw_axis
@@ -128,44 +129,16 @@ def simulate_rigid(
     while t < t_max:
         pushing = i < n_push
         h = h_push if pushing else step
-        a1 = acc(v, pushing)
-        a2 = acc(v + 0.5 * h * a1, pushing)
-        a3 = acc(v + 0.5 * h * a2, pushing)
-        a4 = acc(v + h * a3, pushing)
-        p_new = p + h / 6 * (v + 2 * (v + 0.5 * h * a1) + 2 * (v + 0.5 * h * a2) + (v + h * a3))
-        v_new = v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-        b1 = alpha(w)
-        b2 = alpha(w + 0.5 * h * b1)
-        b3 = alpha(w + 0.5 * h * b2)
-        b4 = alpha(w + h * b3)
-        w_new = w + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
+
+        def flow(y: tuple[np.ndarray, ...], push: bool = pushing) -> tuple[np.ndarray, ...]:
+            return (y[1], acc(y[1], push), alpha(y[2]))
+
+        p_new, v_new, w_new = rk4_step(flow, (p, v, w), h)
         q_new = quat_mul_wxyz(q, quat_exp_wxyz(0.5 * (w + w_new), h))
         t_new = t + h
         if not pushing and p[2] > land_z >= p_new[2]:
-            # linear-in-step location of the crossing, refined on the cubic Hermite
-            s = (p[2] - land_z) / (p[2] - p_new[2])
-            for _ in range(6):
-                s2, s3 = s * s, s * s * s
-                hz = (
-                    (2 * s3 - 3 * s2 + 1) * p[2]
-                    + (s3 - 2 * s2 + s) * h * v[2]
-                    + (-2 * s3 + 3 * s2) * p_new[2]
-                    + (s3 - s2) * h * v_new[2]
-                ) - land_z
-                dz = (
-                    (6 * s2 - 6 * s) * p[2]
-                    + (3 * s2 - 4 * s + 1) * h * v[2]
-                    + (-6 * s2 + 6 * s) * p_new[2]
-                    + (3 * s2 - 2 * s) * h * v_new[2]
-                )
-                s = min(1.0, max(0.0, s - hz / dz)) if dz != 0 else s
-            s2, s3 = s * s, s * s * s
-            landing = (
-                (2 * s3 - 3 * s2 + 1) * p
-                + (s3 - 2 * s2 + s) * h * v
-                + (-2 * s3 + 3 * s2) * p_new
-                + (s3 - s2) * h * v_new
-            )
+            sa, pos, _ = plane_crossing(p[None], p_new[None], v[None], v_new[None], h, land_z)
+            s, landing = float(sa[0]), pos[0]
             ts.append(t_new)
             ps.append(p_new)
             qs.append(q_new)
