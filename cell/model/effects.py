@@ -34,7 +34,7 @@ import numpy as np
 
 from cell.errors import InvalidParameter
 from cell.model.band import band_angle, band_force, band_stretch
-from cell.model.flight3d import fly
+from cell.model.flight3d import column_fraction, fly
 from cell.model.objects import SHAPES
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import (
@@ -359,7 +359,7 @@ def _flight_accel(
         w = np.broadcast_to(w_const, p.shape).copy()
         if dw is not None:
             rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
-            inside = 0.5 * (1.0 + np.tanh((dw.radius_m - rho) / DOWNWASH_EDGE_M))
+            inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
             w[:, 2] -= w_dw[idx] * inside
         extra = None
         if sp is not None:

@@ -25,11 +25,26 @@ from cell.model.integrate import hermite as _hermite
 from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.params import G
 
-__all__ = ["Accel", "FlightResult", "acceleration", "fly", "sample_path"]
+__all__ = ["Accel", "FlightResult", "acceleration", "column_fraction", "fly", "sample_path"]
 
 # acc(p, v, idx) -> (air velocity (m, 3) or None, extra acceleration (m, 3) or None);
 # idx are the indices (into the batch) of the rows in p and v.
 Accel = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray | None, np.ndarray | None]]
+
+
+def column_fraction(rho: np.ndarray, radius: np.ndarray | float, edge: float) -> np.ndarray:
+    """How much of a vertical air column's speed reaches a point, by its horizontal distance.
+
+    A smooth top hat, 0.5 (1 + tanh((radius − ρ) / edge)): 1 well inside, 0 well outside,
+    0.5 on the edge. Every downwash law of the cell shapes its column with it (the
+    drone's, `cell.platforms.downwash`, and the gap diagnosis's `Downwash` effect).
+
+    Args:
+        rho: horizontal distance from the column's axis [m].
+        radius: the column's radius [m].
+        edge: width of its smooth edge [m].
+    """
+    return 0.5 * (1.0 + np.tanh((radius - rho) / edge))
 
 
 @dataclass(frozen=True)
