@@ -91,7 +91,10 @@ def acceleration(
 def _rk4(
     p: np.ndarray, v: np.ndarray, k: np.ndarray, idx: np.ndarray, accel: Accel | None, h: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    p1, v1 = rk4_step(lambda y: (y[1], _rates(y[0], y[1], k, idx, accel)), (p, v), h)
+    def rates(ps: list[np.ndarray], vs: list[np.ndarray]) -> list[np.ndarray]:
+        return [_rates(ps[0], vs[0], k, idx, accel)]
+
+    (p1,), (v1,) = rk4_step(rates, [p], [v], h, reads_position=True)
     return p1, v1
 
 

@@ -1,10 +1,10 @@
 """The numerics every flight integrator shares: one RK4 step, one landing-plane crossing.
 
-* `rk4_step`: one classical Runge–Kutta step of y' = f(y), the state a tuple of parts
-  (each a float, a NumPy array or a CasADi expression). A flight is the pair
-  (position, velocity) with f = (velocity, acceleration); the push, the planar and 3-D
-  flights, the rigid body (with its spin as a third part) and the CasADi model all step
-  with it, so they take the same arithmetic, operation for operation.
+* `rk4_step`: one classical Runge–Kutta step of p' = v, v' = a(p, v), the position and
+  velocity as sequences of parts (floats, NumPy arrays or CasADi expressions). The push,
+  the planar and 3-D flights, the reference, the rigid body (its spin an extra part of
+  v) and the CasADi model all step with it, so they take the same arithmetic, operation
+  for operation.
 * `plane_crossing`: where a step crosses a landing plane z = level going down, on the
   cubic Hermite interpolant of the step's end states (positions and velocities), found
   by `hermite_root`; the velocity at the crossing is interpolated linearly in the step.
@@ -21,27 +21,49 @@ __all__ = ["hermite", "hermite_root", "plane_crossing", "rk4_step"]
 
 
 def rk4_step(
-    deriv: Callable[[tuple[Any, ...]], Sequence[Any]], state: tuple[Any, ...], h: Any
-) -> tuple[Any, ...]:
-    """One classical RK4 step of y' = deriv(y).
+    accel: Callable[..., Sequence[Any]],
+    p: Sequence[Any],
+    v: Sequence[Any],
+    h: Any,
+    *,
+    reads_position: bool = False,
+) -> tuple[list[Any], list[Any]]:
+    """One classical RK4 step of p' = v, v' = accel(p, v).
+
+    p and v are sequences of parts (floats, NumPy arrays or CasADi expressions): the
+    components of a position and its velocity, or whole vectors. v may hold more parts
+    than p: those are first-order states with no position (the rigid body's spin).
 
     Args:
-        deriv: the right-hand side; takes and returns a tuple of parts like `state`.
-        state: y, a tuple of parts (floats, arrays or CasADi expressions).
+        accel: the rates of v's parts from the stage's (p, v).
+        p: positions.
+        v: velocities (and any first-order states after them).
         h: the step [s] (a number or a CasADi expression).
+        reads_position: accel uses p; otherwise the stages' positions are not formed
+            (accel gets the step's start p) and the step costs less.
 
     Returns:
-        y after the step, a tuple like `state`:
-        y + h/6 (k1 + 2 k2 + 2 k3 + k4), k2 = f(y + h/2 k1), k3 = f(y + h/2 k2), k4 = f(y + h k3).
+        (p, v) after the step: with a_k = accel at the stages, v_2 = v + h/2 a_1,
+        v_3 = v + h/2 a_2, v_4 = v + h a_3, the new v = v + h/6 (a_1 + 2 a_2 + 2 a_3 + a_4)
+        and the new p = p + h/6 (v + 2 v_2 + 2 v_3 + v_4).
     """
-    k1 = deriv(state)
-    k2 = deriv(tuple(y + 0.5 * h * k for y, k in zip(state, k1, strict=True)))
-    k3 = deriv(tuple(y + 0.5 * h * k for y, k in zip(state, k2, strict=True)))
-    k4 = deriv(tuple(y + h * k for y, k in zip(state, k3, strict=True)))
-    return tuple(
-        y + h / 6 * (a + 2 * b + 2 * c + d)
-        for y, a, b, c, d in zip(state, k1, k2, k3, k4, strict=True)
-    )
+    half = 0.5 * h
+    a1 = accel(p, v)
+    v2 = [x + half * a for x, a in zip(v, a1, strict=True)]
+    a2 = accel([x + half * w for x, w in zip(p, v, strict=False)] if reads_position else p, v2)
+    v3 = [x + half * a for x, a in zip(v, a2, strict=True)]
+    a3 = accel([x + half * w for x, w in zip(p, v2, strict=False)] if reads_position else p, v3)
+    v4 = [x + h * a for x, a in zip(v, a3, strict=True)]
+    a4 = accel([x + h * w for x, w in zip(p, v3, strict=False)] if reads_position else p, v4)
+    sixth = h / 6
+    p_new = [
+        x + sixth * (w1 + 2 * w2 + 2 * w3 + w4)
+        for x, w1, w2, w3, w4 in zip(p, v, v2, v3, v4, strict=False)
+    ]
+    v_new = [
+        x + sixth * (b1 + 2 * b2 + 2 * b3 + b4) for x, b1, b2, b3, b4 in zip(v, a1, a2, a3, a4, strict=True)
+    ]
+    return p_new, v_new
 
 
 def hermite_root(

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.model.integrate import hermite, hermite_root, plane_crossing, rk4_step
+from cell.model.integrate import hermite, hermite_root
 from cell.model.params import G
 
 __all__ = ["flight_planar", "flight_planar_one", "hermite", "hermite_root", "rk4_planar"]
@@ -23,16 +23,38 @@ _DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per ste
 
 
 def rk4_planar(h: Any, z: Any, vh: Any, vz: Any, k: Any, step: float, sqrt: Any) -> tuple:
-    """One RK4 step (`cell.model.integrate.rk4_step`) of the planar flight (h, z, vh, vz)
-    under gravity and drag -k|v|v; for arrays (sqrt = np.sqrt) and Python floats
-    (math.sqrt) alike."""
+    """One RK4 step of the planar flight (h, z, vh, vz) under gravity and drag -k|v|v.
 
-    def deriv(y: tuple) -> tuple:
-        wh, wz = y[2], y[3]
-        speed = sqrt(wh * wh + wz * wz)
-        return (wh, wz, -k * speed * wh, -k * speed * wz - G)
-
-    return rk4_step(deriv, (h, z, vh, vz), step)
+    This is `cell.model.integrate.rk4_step` written out for the planar flight, the
+    planner's and the fast path's inner loop (the general step's list handling costs
+    this loop a third of its time); tests/test_integrate.py checks that the two give
+    the same numbers to the last bit, for arrays (sqrt = np.sqrt) and for Python
+    floats (math.sqrt).
+    """
+    speed = sqrt(vh * vh + vz * vz)
+    a1h = -k * speed * vh
+    a1z = -k * speed * vz - G
+    vh2 = vh + 0.5 * step * a1h
+    vz2 = vz + 0.5 * step * a1z
+    s2 = sqrt(vh2 * vh2 + vz2 * vz2)
+    a2h = -k * s2 * vh2
+    a2z = -k * s2 * vz2 - G
+    vh3 = vh + 0.5 * step * a2h
+    vz3 = vz + 0.5 * step * a2z
+    s3 = sqrt(vh3 * vh3 + vz3 * vz3)
+    a3h = -k * s3 * vh3
+    a3z = -k * s3 * vz3 - G
+    vh4 = vh + step * a3h
+    vz4 = vz + step * a3z
+    s4 = sqrt(vh4 * vh4 + vz4 * vz4)
+    a4h = -k * s4 * vh4
+    a4z = -k * s4 * vz4 - G
+    return (
+        h + step / 6 * (vh + 2 * vh2 + 2 * vh3 + vh4),
+        z + step / 6 * (vz + 2 * vz2 + 2 * vz3 + vz4),
+        vh + step / 6 * (a1h + 2 * a2h + 2 * a3h + a4h),
+        vz + step / 6 * (a1z + 2 * a2z + 2 * a3z + a4z),
+    )
 
 
 def flight_planar_one(
@@ -46,16 +68,15 @@ def flight_planar_one(
         step = min(max_step, _DRAG_STEP_SCALE / max(k * math.sqrt(vh * vh + vz * vz), 1e-9))
         h1, z1, vh1, vz1 = rk4_planar(h, z, vh, vz, k, step, math.sqrt)
         if z > lz >= z1:
-            sa, pos, vel = plane_crossing(
-                np.array([[h, z]]),
-                np.array([[h1, z1]]),
-                np.array([[vh, vz]]),
-                np.array([[vh1, vz1]]),
-                step,
-                lz,
+            s = float(hermite_root(*(np.array([v]) for v in (z, z1, step * vz, step * vz1, lz)))[0])
+            s2, s3 = s * s, s * s * s
+            dist = (
+                (2 * s3 - 3 * s2 + 1) * h
+                + (s3 - 2 * s2 + s) * (step * vh)
+                + (-2 * s3 + 3 * s2) * h1
+                + (s3 - s2) * (step * vh1)
             )
-            s = float(sa[0])
-            return float(pos[0, 0]), t + s * step, True, float(vel[0, 0]), float(vel[0, 1])
+            return dist, t + s * step, True, vh + (vh1 - vh) * s, vz + (vz1 - vz) * s
         if z1 <= lz and vz1 < 0:
             break
         h, z, vh, vz = h1, z1, vh1, vz1
@@ -97,19 +118,12 @@ def flight_planar(
         cross = (z > lz) & (z1 <= lz)
         if np.any(cross):
             c = cross
-            s, pos, vel = plane_crossing(
-                np.stack([h_pos[c], z[c]], axis=-1),
-                np.stack([h1[c], z1[c]], axis=-1),
-                np.stack([vh[c], vz[c]], axis=-1),
-                np.stack([vh1[c], vz1[c]], axis=-1),
-                step,
-                lz[c],
-            )
+            s = hermite_root(z[c], z1[c], step * vz[c], step * vz1[c], lz[c])
             ids = idx[c]
-            out_h[ids] = pos[:, 0]
+            out_h[ids] = hermite(h_pos[c], h1[c], step * vh[c], step * vh1[c], s)
             out_t[ids] = t + s * step
-            out_vh[ids] = vel[:, 0]
-            out_vz[ids] = vel[:, 1]
+            out_vh[ids] = vh[c] + (vh1[c] - vh[c]) * s
+            out_vz[ids] = vz[c] + (vz1[c] - vz[c]) * s
         # drop crossed throws, and those below their plane still falling (never land)
         keep = ~cross & ~((z1 <= lz) & (vz1 < 0))
         t += step

@@ -130,10 +130,10 @@ def simulate_rigid(
         pushing = i < n_push
         h = h_push if pushing else step
 
-        def flow(y: tuple[np.ndarray, ...], push: bool = pushing) -> tuple[np.ndarray, ...]:
-            return (y[1], acc(y[1], push), alpha(y[2]))
+        def rates(_p: object, vs: list[np.ndarray], push: bool = pushing) -> list[np.ndarray]:
+            return [acc(vs[0], push), alpha(vs[1])]  # the spin: a state with no position
 
-        p_new, v_new, w_new = rk4_step(flow, (p, v, w), h)
+        (p_new,), (v_new, w_new) = rk4_step(rates, [p], [v, w], h)
         q_new = quat_mul_wxyz(q, quat_exp_wxyz(0.5 * (w + w_new), h))
         t_new = t + h
         if not pushing and p[2] > land_z >= p_new[2]:

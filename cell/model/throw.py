@@ -278,11 +278,11 @@ def launch_state(
         return ax - c * wx, ay - c * wy, az - c * wz
 
     # Component arrays rather than (n, 3): several times faster in NumPy.
-    def deriv(y: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
-        return (y[3], y[4], y[5], *acc(y[3], y[4], y[5]))
+    def rates(_p: Any, v: Any) -> tuple[np.ndarray, ...]:
+        return acc(*v)
 
     for _ in range(steps):
-        px, py, pz, vx, vy, vz = rk4_step(deriv, (px, py, pz, vx, vy, vz), h)
+        (px, py, pz), (vx, vy, vz) = rk4_step(rates, (px, py, pz), (vx, vy, vz), h)
     return np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
 
 
@@ -391,10 +391,10 @@ def reference_landing(
         def acc(vel: np.ndarray, kk: np.ndarray = ka) -> np.ndarray:
             return g - kk * np.linalg.norm(vel, axis=1, keepdims=True) * vel
 
-        def flow(y: tuple[np.ndarray, ...], f: Any = acc) -> tuple[np.ndarray, ...]:
-            return (y[1], f(y[1]))
+        def rates(_p: Any, vs: list[np.ndarray], f: Any = acc) -> list[np.ndarray]:
+            return [f(vs[0])]
 
-        pn, vn = rk4_step(flow, (pa, va), step)
+        (pn,), (vn,) = rk4_step(rates, [pa], [va], step)
         ids = np.flatnonzero(active)
         cross = (pa[:, 2] > lz[ids]) & (pn[:, 2] <= lz[ids])
         if cross.any():

@@ -61,7 +61,7 @@ class SymbolicThrow:
 def _rk4(p: Any, v: Any, acc: Any, h: Any, steps: int) -> tuple[Any, Any]:
     """RK4 on p' = v, v' = acc(v): the model's own step (`cell.model.integrate.rk4_step`)."""
     for _ in range(steps):
-        p, v = rk4_step(lambda y: (y[1], acc(y[1])), (p, v), h)
+        (p,), (v,) = rk4_step(lambda _p, vs: [acc(vs[0])], [p], [v], h)
     return p, v
 
 
