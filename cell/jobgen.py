@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from cell.catalogue import catalogue
-from cell.jobs import ROBOT_BASE_CLEARANCE_M, ROBOTS
+from cell.jobs import ROBOT_BASE_CLEARANCE_M
+from cell.kinds import ROBOTS
 
 __all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "FACING_HALF_RANGE_RAD"]
 
@@ -171,7 +172,7 @@ def random_job(seed: int, robot: str = "panda", params: Any = None) -> dict[str,
 
     Args:
         seed: names the job (0 ≤ seed < 2³²).
-        robot: one of cell.jobs.ROBOTS.
+        robot: one of cell.kinds.ROBOTS.
         params: the model parameters the feasibility check uses.
     """
     from cell.orchestrator import scene_params_path

@@ -36,15 +36,13 @@ import yaml
 
 from cell.catalogue import catalogue
 from cell.errors import InvalidInput, JobError
+from cell.kinds import EE_BACKENDS, PLATFORMS, ROBOTS
 from cell.model.objects import SHAPES, ObjectParams
 from cell.yamlsafe import check_yaml, read_yaml_text
 from cell.yamltree import Checker, to_tree
 
 __all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
 
-ROBOTS = ("panda", "ur5")
-PLATFORMS = ("arm", "drone", "mobile")
-EE_BACKENDS = ("pybullet", "dynamixel")
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt

@@ -474,10 +474,9 @@ class Orchestrator:
         return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke - obj.size[2] / 2)
 
     def _ik(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
-        from cell.robot.ik import ReleasePose, solve_ik
+        from cell.robot.ik import solve_release_ik
 
-        pose = ReleasePose.from_angles(tcp, elevation, azimuth)
-        return solve_ik(self.robot, pose, self.q).q
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q).q
 
     def _move(self, waypoints: list[np.ndarray]) -> float:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
@@ -568,10 +567,14 @@ class Orchestrator:
                 cycle_time_s=sc.t - t0,
             )
         finally:
-            # A scored item leaves the scene, as if the bin were emptied: bins that fill
-            # up would make later throws bounce off earlier items and slow the physics.
-            sc.remove_item(item)
+            # Bins keep what lands in them, as real bins do (later items land on earlier
+            # ones); an item anywhere else (on the floor, still on the station, in the
+            # grip) is taken away, as an operator would before the next pick.
             self.ee.item = None
+            if sc.in_bin(item) is not None:
+                sc.keep(item)
+            else:
+                sc.remove_item(item)
 
     def _place(
         self,
@@ -586,7 +589,9 @@ class Orchestrator:
         sc = self.scene
         down = (-math.pi / 2, 0.0)
         bx, by = target.position
-        centre = np.array([bx, by, obj.size[2] / 2 + PLACE_CLEARANCE_M + 0.01])
+        # a spot on the bin's floor clear of what it holds (its centre while it is empty)
+        sx, sy, surface_z = sc.place_spot(target.id, obj)
+        centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
         q_above = self._ik(self._tcp_for_item_centre(above, *down, stroke, obj), *down)
         q_down = self._ik(self._tcp_for_item_centre(centre, *down, stroke, obj), *down)

@@ -49,7 +49,7 @@ import numpy as np
 
 from cell.catalogue import catalogue
 from cell.errors import InvalidInput, InvalidParameter
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.model.throw import Landing, ThrowBatch, predict_landing

@@ -11,6 +11,7 @@ from cell.jobs import load_job, parse_job
 from cell.log.store import ThrowStore
 from cell.orchestrator import RunSummary
 from cell.platforms.runner import PlatformRunner
+from cell.sim.settle import crossing
 
 TASKS = Path(__file__).resolve().parents[1] / "tasks"
 
@@ -48,8 +49,22 @@ def test_platform_job_runs_with_the_arm_summary_and_logs_its_platform(platform, 
     assert summary.items == 2 and summary.thrown == 2 and summary.failed == 0
     assert summary.in_bin == 2, [r.reason or r.bin_id for r in summary.results]
     table = store.table(session="t")
+    tracks = store.tracks()
     store.close()
     assert len(table.text("platform")) == 2
+    # every throw carries its flight track, from the release to where it came to rest: it
+    # starts at the logged release point and crosses the rim plane at the logged landing
+    ids = table.text("throw_id")
+    assert sorted(tracks) == sorted(ids)
+    for i, tid in enumerate(ids):
+        tr = tracks[tid]
+        assert tr.shape[1] == 4 and len(tr) > 50 and np.all(np.diff(tr[:, 0]) > 0)
+        release = [table.num(k)[i] for k in ("x_m", "y_m", "z_m")]
+        assert np.linalg.norm(tr[0, 1:] - release) < 0.02  # one step of flight at most
+        x, y, _ = crossing(tr, table.num("land_z_m")[i])
+        assert (x, y) == pytest.approx(
+            (table.num("landed_x_m")[i], table.num("landed_y_m")[i]), abs=1e-9
+        )
     assert set(table.text("platform")) == {platform}
     rpm = table.num("rotor_rpm")
     speed = np.hypot(table.num("vx_mps"), table.num("vy_mps"))

@@ -150,3 +150,37 @@ def test_a_pose_whose_solution_sits_on_joint_limits_is_still_found():
     assert ep <= POSITION_TOL_M and ea <= AXIS_TOL_RAD
     lim = robot.limits
     assert np.min(np.minimum(res.q - lim.lower, lim.upper - res.q)) < 1e-3  # on a limit
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_a_release_puts_the_pads_in_the_vertical_plane_of_the_throw(name):
+    """solve_release_ik: the pads' axis (ee_tcp's x) in the throw's vertical plane, so a
+    pad carries the weight; where neither roll 0 nor π is reachable, the free roll."""
+    from cell.robot.ik import solve_release_ik
+
+    robot = load_robot(name)
+    fixed = 0
+    poses = [(q, p) for q, p in fk_poses(robot, 16, seed=31) if abs(p.axis[2]) < 0.95]
+    for _, pose in poses:
+        res = solve_release_ik(robot, pose.position, pose.elevation, pose.azimuth, robot.home)
+        ep, ea = independent_errors(robot, res.q, pose)
+        assert ep <= POSITION_TOL_M and ea <= AXIS_TOL_RAD
+        x = robot.tcp_pose(res.q)[1][:, 0]
+        normal = np.array([-math.sin(pose.azimuth), math.cos(pose.azimuth), 0.0])
+        if abs(float(x @ normal)) <= math.sin(AXIS_TOL_RAD) + 1e-9:
+            fixed += 1
+        else:  # only when neither pad-under roll has a solution
+            for roll in (0.0, math.pi):
+                with pytest.raises(IKFailed):
+                    solve_ik(robot, ReleasePose(pose.position, pose.axis, roll), robot.home)
+    assert fixed >= 0.6 * len(poses) and len(poses) >= 8
+
+
+def test_a_vertical_release_leaves_the_roll_free():
+    from cell.robot.ik import solve_release_ik
+
+    robot = load_robot("ur5")
+    p = np.array([0.45, -0.3, 0.35])
+    res = solve_release_ik(robot, p, -math.pi / 2, 0.0, robot.home)
+    free = solve_ik(robot, ReleasePose.from_angles(p, -math.pi / 2, 0.0), robot.home)
+    assert np.allclose(res.q, free.q)

@@ -18,7 +18,9 @@ def scene():
 
 def _expected_ee(sc):
     cl = sc.client
-    st = cl.getLinkState(sc.arm, sc._flange, computeForwardKinematics=True)
+    # the Panda's own flange, then the mount file's yaw and the plate face's offset
+    links = {cl.getJointInfo(sc.arm, j)[12].decode(): j for j in range(cl.getNumJoints(sc.arm))}
+    st = cl.getLinkState(sc.arm, links["panda_link8"], computeForwardKinematics=True)
     yaw = cl.getQuaternionFromEuler([0, 0, FLANGE_YAW_RAD])
     p, o = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], yaw)
     return np.asarray(p), np.asarray(cl.getMatrixFromQuaternion(o)).reshape(3, 3)

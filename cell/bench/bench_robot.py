@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from cell.errors import IKFailed, TrajectoryError
+from cell.kinds import ROBOTS
 
 
 def _ik_figures(name: str, n: int, seed: int) -> tuple[list[float], int]:
@@ -80,7 +81,7 @@ def run(quick: bool) -> dict[str, float]:
     all_ok = 0
     path_t: list[float] = []
     move_t: list[float] = []
-    for i, name in enumerate(("panda", "ur5")):
+    for i, name in enumerate(ROBOTS):
         times, ok = _ik_figures(name, n_ik, seed=100 + i)
         all_t += times
         all_ok += ok

@@ -27,7 +27,7 @@ def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
-    from cell.log.csvio import ThrowTable
+    from cell.log.table import ThrowTable
     from cell.model.objects import ObjectParams
     from cell.model.throw import predict_landing
     from cell.orchestrator import grip_stroke_limit, scene_params_path

@@ -49,7 +49,7 @@ def run_sort(args: argparse.Namespace) -> int:
 
     from cell.bench.bench_sort import layout_units, run_layout, summarise_layouts
     from cell.errors import InvalidInput
-    from cell.jobs import ROBOTS
+    from cell.kinds import ROBOTS
     from cell.parallel import run_campaign
 
     robots = tuple(r.strip() for r in args.robots.split(",") if r.strip())

@@ -10,7 +10,7 @@ import numpy as np
 
 from cell.cli.common import print_json
 from cell.errors import InvalidInput
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.params import ModelParams
 
 

@@ -8,13 +8,14 @@ import math
 import numpy as np
 
 from cell.cli.common import add_axis_args, print_json
+from cell.kinds import ROBOTS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reach", help="inverse kinematics to a release pose, and the move time from home"
     )
-    p.add_argument("--robot", default="panda", choices=("panda", "ur5"), help="arm (panda)")
+    p.add_argument("--robot", default="panda", choices=ROBOTS, help="arm (panda)")
     p.add_argument(
         "--at",
         type=float,

@@ -11,6 +11,7 @@ from typing import Any
 
 from cell.cli.common import to_jsonable
 from cell.jobs import load_job
+from cell.kinds import EE_BACKENDS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -23,9 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)"
     )
     p.add_argument("--no-log", action="store_true", help="do not record the throws")
-    p.add_argument(
-        "--ee", choices=("pybullet", "dynamixel"), help="end-effector back-end (overrides the job)"
-    )
+    p.add_argument("--ee", choices=EE_BACKENDS, help="end-effector back-end (overrides the job)")
     p.add_argument(
         "--ee-config",
         metavar="YAML",

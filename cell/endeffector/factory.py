@@ -7,10 +7,12 @@ from pathlib import Path
 
 from cell.endeffector.base import EndEffector
 from cell.errors import InvalidInput
+from cell.kinds import HARDWARE_EE_BACKENDS
 
 __all__ = ["EE_KINDS", "DEFAULT_DYNAMIXEL_CONFIG", "make_end_effector"]
 
-EE_KINDS = ("dynamixel",)
+EE_KINDS = HARDWARE_EE_BACKENDS
+"""The hardware back-ends this factory makes (the simulated one rides a scene)."""
 
 
 def _default_config() -> Path:

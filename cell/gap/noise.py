@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.gap.problem import GapProblem
+from cell.kinds import PLATFORMS
 from cell.model.throw import Landing
 
 __all__ = ["NoiseFloor", "noise_floor", "features"]
@@ -60,7 +61,7 @@ def features(prob: GapProblem) -> np.ndarray:
     out = [t.num(c) for c in cols]
     out.append(np.asarray(prob.batch.shape, float))
     plat = t.text("platform")
-    out.append(np.array([("arm", "mobile", "drone").index(p) for p in plat], float))
+    out.append(np.array([PLATFORMS.index(p) for p in plat], float))
     out.append(np.arange(len(prob), dtype=float))
     for c in ("time_s",):
         if c in t.columns:

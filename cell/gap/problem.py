@@ -15,7 +15,7 @@ from typing import ClassVar
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.effects import Effect, TrackingScale, flight_accel, predict_with_effects
 from cell.model.flight3d import acceleration
 from cell.model.params import EndEffectorParams

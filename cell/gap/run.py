@@ -11,7 +11,7 @@ from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import Diagnosis, diagnose
 from cell.gap.problem import build_problem
 from cell.gap.tracks import fit_tracks, launch_arrays, track_phase
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.effects import EFFECTS, Effect
 from cell.model.objects import SHAPES
 from cell.model.params import EndEffectorParams

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.catalogue import catalogue
-from cell.log.csvio import ThrowTable
+from cell.kinds import PLATFORMS
+from cell.log.table import ThrowTable
 from cell.model.effects import (
     BandDamping,
     BandMass,
@@ -117,7 +118,7 @@ def throw_records(n: int, rng: np.random.Generator, *, repeats: int = 2) -> list
     recs: list[dict] = []
     for _ in range(-(-n // repeats)):
         obj = cat[int(rng.integers(len(cat)))].params
-        plat = str(rng.choice(["arm", "mobile", "drone"], p=[0.5, 0.2, 0.3]))
+        plat = str(rng.choice(list(PLATFORMS), p=[0.5, 0.2, 0.3]))
         vb = np.zeros(3)
         rpm = 0.0
         if plat == "drone":

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.gap.world import throw_records
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.effects import (
     Effect,
     TrackingScale,

@@ -39,7 +39,7 @@ from cell.identify.problem import (
     ee_to_vector,
     push_jacobian,
 )
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.band import push_force
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.throw import ThrowBatch, predict_landing
 from cell.params import ModelParams

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.band import band_angle, band_stretch
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.throw import predict_landing
 from cell.params import ModelParams
 

@@ -1,15 +1,13 @@
 """Throw logs: the THROW_LOG.md interchange format (CSV) and the durable store."""
 
-from cell.log.csvio import (
+from cell.log.csvio import read_throws_csv, read_tracks_csv, write_throws_csv
+from cell.log.store import DEFAULT_DB, ThrowStore, default_db_path
+from cell.log.table import (
     NUMERIC_COLUMNS,
     PLATFORMS,
     REQUIRED_COLUMNS,
     ThrowTable,
-    read_throws_csv,
-    read_tracks_csv,
-    write_throws_csv,
 )
-from cell.log.store import DEFAULT_DB, ThrowStore, default_db_path
 
 __all__ = [
     "DEFAULT_DB",

@@ -1,8 +1,6 @@
-"""Read and write throw logs in the THROW_LOG.md format.
+"""Read and write throw logs in the THROW_LOG.md format (CSV).
 
-`ThrowTable` is columnar: numeric columns are float arrays (an empty cell is
-NaN where the format allows it), text columns are lists of str, and columns
-the format does not know are kept as text in their original order.
+The table type and its column checks are in `cell.log.table` (re-exported here).
 """
 
 from __future__ import annotations
@@ -10,15 +8,19 @@ from __future__ import annotations
 import csv
 import math
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput, LogFormatError
-from cell.model.objects import SHAPES, shape_code
-from cell.model.throw import ThrowBatch
+from cell.errors import LogFormatError
+from cell.log.table import (
+    NUMERIC_COLUMNS,
+    PLATFORMS,
+    REQUIRED_COLUMNS,
+    ThrowTable,
+    parse_cells,
+)
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -29,275 +31,6 @@ __all__ = [
     "write_throws_csv",
     "read_tracks_csv",
 ]
-
-REQUIRED_COLUMNS = (
-    "throw_id",
-    "object_id",
-    "shape",
-    "mass_kg",
-    "size_x_m",
-    "size_y_m",
-    "size_z_m",
-    "stroke_m",
-    "x_m",
-    "y_m",
-    "z_m",
-    "elevation_rad",
-    "azimuth_rad",
-    "roll_rad",
-    "vx_mps",
-    "vy_mps",
-    "vz_mps",
-    "platform",
-    "rotor_rpm",
-    "land_z_m",
-    "landed_x_m",
-    "landed_y_m",
-)
-OPTIONAL_NUMERIC = ("time_s", "t_flight_s")
-NUMERIC_COLUMNS = (
-    tuple(c for c in REQUIRED_COLUMNS if c not in ("throw_id", "object_id", "shape", "platform"))
-    + OPTIONAL_NUMERIC
-)
-# Columns whose cells may be empty (read as NaN).
-NULLABLE = ("stroke_m", "landed_x_m", "landed_y_m") + OPTIONAL_NUMERIC
-PLATFORMS = ("arm", "mobile", "drone")
-NONNEGATIVE = ("mass_kg", "size_x_m", "size_y_m", "size_z_m", "rotor_rpm")
-_POS_M = 1000.0  # [m] no position of a cell's throw is farther than this from the base
-_VEL_MPS = 100.0  # [m/s] nor any base or release speed faster
-# Column -> (low, high): what a throw of a real cell can have; wider than any real throw and
-# narrower than nonsense (a 10 rad elevation, a 5 m grip width, a 1e308 kg mass).
-RANGES: dict[str, tuple[float, float]] = {
-    "mass_kg": (0.0, 20.0),
-    "size_x_m": (0.0, 1.0),
-    "size_y_m": (0.0, 1.0),
-    "size_z_m": (0.0, 1.0),
-    "stroke_m": (0.0, 0.5),
-    "elevation_rad": (-math.pi / 2, math.pi / 2),
-    "azimuth_rad": (-2 * math.pi, 2 * math.pi),
-    "roll_rad": (-2 * math.pi, 2 * math.pi),
-    "rotor_rpm": (0.0, 100_000.0),
-    **{c: (-_POS_M, _POS_M) for c in ("x_m", "y_m", "z_m", "land_z_m", "landed_x_m", "landed_y_m")},
-    **{c: (-_VEL_MPS, _VEL_MPS) for c in ("vx_mps", "vy_mps", "vz_mps")},
-}
-
-
-@dataclass
-class ThrowTable:
-    """A throw log in memory.
-
-    Attributes:
-        columns: column names in order (required first, then the others).
-        data: column name -> float array (numeric) or list of str (text).
-        path: where it was read from, for messages ("" if built in memory).
-    """
-
-    columns: list[str]
-    data: dict[str, Any]
-    path: str = ""
-    _index: dict[str, int] = field(default_factory=dict, repr=False)
-
-    def __len__(self) -> int:
-        return len(self.data["throw_id"])
-
-    def num(self, column: str) -> np.ndarray:
-        """A numeric column as a float array."""
-        return np.asarray(self.data[column], dtype=float)
-
-    def text(self, column: str) -> list[str]:
-        """A text column as a list of str."""
-        return list(self.data[column])
-
-    @property
-    def landed(self) -> np.ndarray:
-        """Observed landing points [m, W], shape (n, 2) (NaN where not logged)."""
-        return np.stack([self.num("landed_x_m"), self.num("landed_y_m")], axis=-1)
-
-    def require_varied(self, n_min: int, purpose: str) -> None:
-        """Refuse a log with fewer than `n_min` distinct throws (release state and landing).
-
-        Args:
-            n_min: the fewest distinct throws `purpose` can work with.
-            purpose: what needs them, for the message ("the diagnosis", "identification").
-
-        Raises:
-            InvalidInput: too few distinct throws (identical rows count once).
-        """
-        cols = [
-            c
-            for c in (
-                "mass_kg",
-                "stroke_m",
-                "x_m",
-                "y_m",
-                "z_m",
-                "elevation_rad",
-                "azimuth_rad",
-                "landed_x_m",
-                "landed_y_m",
-            )
-            if c in self.data
-        ]
-        rows = np.column_stack([self.num(c) for c in cols]) if len(self) else np.empty((0, 0))
-        distinct = len({tuple(np.round(r, 9)) for r in rows})
-        if distinct < n_min:
-            raise InvalidInput(
-                f"{self.path}: {purpose} needs at least {n_min} distinct throws; this log has "
-                f"{len(self)} rows of which {distinct} distinct (identical throws count once)"
-            )
-
-    def take(self, idx: np.ndarray | list[int]) -> ThrowTable:
-        """The rows at these indices (or boolean mask), as a new table."""
-        ii = np.arange(len(self))[np.asarray(idx)]
-        data: dict[str, Any] = {}
-        for c in self.columns:
-            col = self.data[c]
-            data[c] = col[ii] if isinstance(col, np.ndarray) else [col[i] for i in ii]
-        return ThrowTable(columns=list(self.columns), data=data, path=self.path)
-
-    def with_columns(self, extra: dict[str, Any]) -> ThrowTable:
-        """A copy with columns added or replaced (added ones go last)."""
-        cols = list(self.columns) + [c for c in extra if c not in self.columns]
-        data = dict(self.data)
-        data.update(extra)
-        return ThrowTable(columns=cols, data=data, path=self.path)
-
-    def to_batch(self, *, objects: dict[str, Any] | None = None) -> ThrowBatch:
-        """The throws as a model batch.
-
-        Args:
-            objects: optional per-object_id overrides {object_id: ObjectParams}
-                (identified η_o); rows of other objects use their logged values.
-
-        Raises:
-            LogFormatError: a row with no stroke (another launcher's throw).
-        """
-        stroke = self.num("stroke_m")
-        if np.any(np.isnan(stroke)):
-            i = int(np.flatnonzero(np.isnan(stroke))[0])
-            raise LogFormatError(
-                self.path, i + 1, "stroke_m", "empty: the model needs the stroke of every throw"
-            )
-        mass = self.num("mass_kg")
-        size = np.stack([self.num("size_x_m"), self.num("size_y_m"), self.num("size_z_m")], -1)
-        codes = np.array([SHAPES.index(s) for s in self.data["shape"]], dtype=int)
-        if objects:
-            for j, oid in enumerate(self.data["object_id"]):
-                o = objects.get(oid)
-                if o is not None:
-                    mass[j] = o.mass
-                    size[j] = o.size
-        return ThrowBatch.build(
-            stroke=stroke,
-            position=np.stack([self.num("x_m"), self.num("y_m"), self.num("z_m")], -1),
-            elevation=self.num("elevation_rad"),
-            azimuth=self.num("azimuth_rad"),
-            roll=self.num("roll_rad"),
-            base_velocity=np.stack(
-                [self.num("vx_mps"), self.num("vy_mps"), self.num("vz_mps")], -1
-            ),
-            land_z=self.num("land_z_m"),
-            shape=codes,
-            mass=mass,
-            size=size,
-        )
-
-    @classmethod
-    def from_records(cls, records: list[dict[str, Any]], path: str = "") -> ThrowTable:
-        """Build and validate a table from dicts (values as numbers or strings)."""
-        header = list(REQUIRED_COLUMNS)
-        for r in records:
-            for k in r:
-                if k not in header:
-                    header.append(k)
-        rows = [[_cell(r.get(c, "")) for c in header] for r in records]
-        return _parse(header, rows, path)
-
-
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, (float, np.floating)):  # NumPy scalars: repr would name the type
-        f = float(v)
-        return "" if math.isnan(f) else repr(f)
-    if isinstance(v, np.integer):
-        return str(int(v))
-    return str(v)
-
-
-def _parse(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
-    missing = [c for c in REQUIRED_COLUMNS if c not in header]
-    if missing:
-        raise LogFormatError(
-            path, None, missing[0], f"required column missing (all missing: {', '.join(missing)})"
-        )
-    dup = [c for c in header if header.count(c) > 1]
-    if dup:
-        raise LogFormatError(path, None, dup[0], "column appears twice in the header")
-    pos = {c: i for i, c in enumerate(header)}
-    n = len(rows)
-    data: dict[str, Any] = {}
-    for r, row in enumerate(rows, start=1):
-        if len(row) != len(header):
-            raise LogFormatError(
-                path, r, None, f"has {len(row)} cells; the header has {len(header)}"
-            )
-    for c in header:
-        cells = [row[pos[c]].strip() for row in rows]
-        if c in NUMERIC_COLUMNS:
-            arr = np.empty(n)
-            for r, s in enumerate(cells, start=1):
-                if s == "":
-                    if c in NULLABLE:
-                        arr[r - 1] = np.nan
-                        continue
-                    raise LogFormatError(path, r, c, "is empty; a number is required")
-                try:
-                    v = float(s)
-                except ValueError:
-                    raise LogFormatError(path, r, c, f"{s!r} is not a number") from None
-                if not math.isfinite(v):
-                    raise LogFormatError(path, r, c, f"{s!r} is not a finite number")
-                if c in NONNEGATIVE and v < 0:
-                    raise LogFormatError(path, r, c, f"{v} is negative; must be ≥ 0")
-                lo, hi = RANGES.get(c, (-math.inf, math.inf))
-                if not lo <= v <= hi:
-                    raise LogFormatError(
-                        path, r, c, f"{v} is outside the valid range [{lo:g}, {hi:g}]"
-                    )
-                arr[r - 1] = v
-            data[c] = arr
-        else:
-            data[c] = cells
-    for c in ("mass_kg", "size_x_m", "size_y_m", "size_z_m"):
-        bad = np.flatnonzero(data[c] <= 0)
-        if bad.size:
-            raise LogFormatError(path, int(bad[0]) + 1, c, f"{data[c][bad[0]]} must be > 0")
-    for r, s in enumerate(data["shape"], start=1):
-        if s not in SHAPES:
-            raise LogFormatError(
-                path, r, "shape", f"unknown shape {s!r}; valid: {', '.join(SHAPES)}"
-            )
-        shape_code(s)
-    for r, s in enumerate(data["platform"], start=1):
-        if s not in PLATFORMS:
-            raise LogFormatError(
-                path, r, "platform", f"unknown platform {s!r}; valid: {', '.join(PLATFORMS)}"
-            )
-    seen: dict[str, int] = {}
-    for r, s in enumerate(data["throw_id"], start=1):
-        if s == "":
-            raise LogFormatError(path, r, "throw_id", "is empty; a unique id is required")
-        if s in seen:
-            raise LogFormatError(
-                path, r, "throw_id", f"duplicate id {s!r} (first at row {seen[s]})"
-            )
-        seen[s] = r
-    for r, s in enumerate(data["object_id"], start=1):
-        if s == "":
-            raise LogFormatError(path, r, "object_id", "is empty; an object id is required")
-    ordered = list(REQUIRED_COLUMNS) + [c for c in header if c not in REQUIRED_COLUMNS]
-    return ThrowTable(columns=ordered, data=data, path=path)
 
 
 def read_throws_csv(path: str | Path) -> ThrowTable:
@@ -319,7 +52,7 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
         raise LogFormatError(p, None, None, "no such file") from None
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
-    return _parse(header, rows, p)
+    return parse_cells(header, rows, p)
 
 
 MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is refused unread

@@ -29,7 +29,7 @@ from urllib.parse import quote
 import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
-from cell.log.csvio import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
+from cell.log.table import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
 
 __all__ = ["DEFAULT_DB", "ThrowStore", "default_db_path"]
 

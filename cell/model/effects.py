@@ -34,9 +34,9 @@ import numpy as np
 
 from cell.errors import InvalidParameter
 from cell.model.band import band_angle, band_force, band_stretch
-from cell.model.flight3d import fly
+from cell.model.flight3d import column_fraction, fly
 from cell.model.objects import SHAPES
-from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import (
     Landing,
     ThrowBatch,
@@ -352,14 +352,14 @@ def _flight_accel(
         rpm = _permuted(rotor_rpm, permutation)
         w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
     if sp is not None:
-        kl = 0.5 * RHO_AIR * _area(batch) / batch.mass  # [1/m]
+        kl = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m], per unit C_L
         radius = batch.size.max(axis=1) / 2
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
         w = np.broadcast_to(w_const, p.shape).copy()
         if dw is not None:
             rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
-            inside = 0.5 * (1.0 + np.tanh((dw.radius_m - rho) / DOWNWASH_EDGE_M))
+            inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
             w[:, 2] -= w_dw[idx] * inside
         extra = None
         if sp is not None:

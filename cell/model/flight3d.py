@@ -21,15 +21,30 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cell.model.integrate import hermite as _hermite
+from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.params import G
-from cell.model.planar import hermite as _hermite
-from cell.model.planar import hermite_root as _hermite_root
 
-__all__ = ["Accel", "FlightResult", "acceleration", "fly", "sample_path"]
+__all__ = ["Accel", "FlightResult", "acceleration", "column_fraction", "fly", "sample_path"]
 
 # acc(p, v, idx) -> (air velocity (m, 3) or None, extra acceleration (m, 3) or None);
 # idx are the indices (into the batch) of the rows in p and v.
 Accel = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray | None, np.ndarray | None]]
+
+
+def column_fraction(rho: np.ndarray, radius: np.ndarray | float, edge: float) -> np.ndarray:
+    """How much of a vertical air column's speed reaches a point, by its horizontal distance.
+
+    A smooth top hat, 0.5 (1 + tanh((radius − ρ) / edge)): 1 well inside, 0 well outside,
+    0.5 on the edge. Every downwash law of the cell shapes its column with it (the
+    drone's, `cell.platforms.downwash`, and the gap diagnosis's `Downwash` effect).
+
+    Args:
+        rho: horizontal distance from the column's axis [m].
+        radius: the column's radius [m].
+        edge: width of its smooth edge [m].
+    """
+    return 0.5 * (1.0 + np.tanh((radius - rho) / edge))
 
 
 @dataclass(frozen=True)
@@ -76,17 +91,11 @@ def acceleration(
 def _rk4(
     p: np.ndarray, v: np.ndarray, k: np.ndarray, idx: np.ndarray, accel: Accel | None, h: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    a1 = _rates(p, v, k, idx, accel)
-    p2, v2 = p + 0.5 * h * v, v + 0.5 * h * a1
-    a2 = _rates(p2, v2, k, idx, accel)
-    p3, v3 = p + 0.5 * h * v2, v + 0.5 * h * a2
-    a3 = _rates(p3, v3, k, idx, accel)
-    p4, v4 = p + h * v3, v + h * a3
-    a4 = _rates(p4, v4, k, idx, accel)
-    return (
-        p + h / 6 * (v + 2 * v2 + 2 * v3 + v4),
-        v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4),
-    )
+    def rates(ps: list[np.ndarray], vs: list[np.ndarray]) -> list[np.ndarray]:
+        return [_rates(ps[0], vs[0], k, idx, accel)]
+
+    (p1,), (v1,) = rk4_step(rates, [p], [v], h, reads_position=True)
+    return p1, v1
 
 
 def fly(
@@ -131,12 +140,10 @@ def fly(
         cross = (p[:, 2] > lz[idx]) & (p1[:, 2] <= lz[idx])
         if np.any(cross):
             c = cross
-            s = _hermite_root(p[c, 2], p1[c, 2], step * v[c, 2], step * v1[c, 2], lz[idx][c])
-            ids = idx[c]
-            for j in range(3):
-                out_p[ids, j] = _hermite(p[c, j], p1[c, j], step * v[c, j], step * v1[c, j], s)
-                out_v[ids, j] = v[c, j] + (v1[c, j] - v[c, j]) * s
-            out_t[ids] = t_start[ids] + t + s * step
+            s, out_p[idx[c]], out_v[idx[c]] = plane_crossing(
+                p[c], p1[c], v[c], v1[c], step, lz[idx][c]
+            )
+            out_t[idx[c]] = t_start[idx[c]] + t + s * step
         keep = ~cross & ~((p1[:, 2] <= lz[idx]) & (v1[:, 2] < 0))
         idx, p, v = idx[keep], p1[keep], v1[keep]
         t += step

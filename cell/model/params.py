@@ -11,10 +11,20 @@ from typing import Any
 
 from cell.errors import InvalidParameter
 
-__all__ = ["EndEffectorParams", "G", "RHO_AIR", "DEFAULT_EE"]
+__all__ = ["EndEffectorParams", "G", "RHO_AIR", "DEFAULT_EE", "aero_factor_kg_per_m"]
 
 G = 9.81  # [m/s^2] gravity magnitude; world frame W has z up
 RHO_AIR = 1.225  # [kg/m^3] air density
+
+
+def aero_factor_kg_per_m(coefficient: Any, area: Any) -> Any:
+    """½ ρ C A [kg/m]: the air force on a body is this times |v|² (MODEL.md eq. 3.10).
+
+    With C = C_d it is the drag factor c (force −c |v| v [N]); divided by the mass,
+    the drag constant k [1/m] of the model (`cell.model.throw.drag_constant`); with a
+    lift coefficient, the lift factor. Floats or arrays alike.
+    """
+    return 0.5 * RHO_AIR * coefficient * area
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.model.integrate import hermite, hermite_root
 from cell.model.params import G
 
 __all__ = ["flight_planar", "flight_planar_one", "hermite", "hermite_root", "rk4_planar"]
@@ -21,47 +22,14 @@ __all__ = ["flight_planar", "flight_planar_one", "hermite", "hermite_root", "rk4
 _DRAG_STEP_SCALE = 0.5  # step ≤ this / (k |v|): keeps the drag change per step small
 
 
-def hermite_root(
-    z0: np.ndarray, z1: np.ndarray, w0: np.ndarray, w1: np.ndarray, level: np.ndarray
-) -> np.ndarray:
-    """Parameter s ∈ [0, 1] where the cubic Hermite z(s) (w = h·dz/dt) first reaches `level`
-    going down, with z0 > level ≥ z1. Safeguarded Newton from the secant guess."""
-    a = 2 * z0 - 2 * z1 + w0 + w1
-    b = -3 * z0 + 3 * z1 - 2 * w0 - w1
-    c = w0
-    d = z0 - level
-    lo = np.zeros_like(z0)
-    hi = np.ones_like(z0)
-    s = np.clip(d / np.maximum(z0 - z1, 1e-300), 0.0, 1.0)
-    for _ in range(8):
-        f = ((a * s + b) * s + c) * s + d
-        lo = np.where(f > 0, s, lo)
-        hi = np.where(f > 0, hi, s)
-        df = (3 * a * s + 2 * b) * s + c
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s_new = s - f / df
-        bad = ~np.isfinite(s_new) | (s_new < lo) | (s_new > hi)
-        s = np.where(bad, 0.5 * (lo + hi), s_new)
-    return s
-
-
-def hermite(
-    y0: np.ndarray, y1: np.ndarray, w0: np.ndarray, w1: np.ndarray, s: np.ndarray
-) -> np.ndarray:
-    s2 = s * s
-    s3 = s2 * s
-    return (
-        (2 * s3 - 3 * s2 + 1) * y0
-        + (s3 - 2 * s2 + s) * w0
-        + (-2 * s3 + 3 * s2) * y1
-        + (s3 - s2) * w1
-    )
-
-
 def rk4_planar(h: Any, z: Any, vh: Any, vz: Any, k: Any, step: float, sqrt: Any) -> tuple:
     """One RK4 step of the planar flight (h, z, vh, vz) under gravity and drag -k|v|v.
 
-    Written once for arrays (sqrt = np.sqrt) and for Python floats (math.sqrt).
+    This is `cell.model.integrate.rk4_step` written out for the planar flight, the
+    planner's and the fast path's inner loop (the general step's list handling costs
+    this loop a third of its time); tests/test_integrate.py checks that the two give
+    the same numbers to the last bit, for arrays (sqrt = np.sqrt) and for Python
+    floats (math.sqrt).
     """
     speed = sqrt(vh * vh + vz * vz)
     a1h = -k * speed * vh

@@ -19,79 +19,34 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.errors import NoLanding
+from cell.frames import (
+    axis_frame,
+    matrix_from_quat_wxyz,
+    quat_exp_wxyz,
+    quat_mul_wxyz,
+    quat_wxyz_from_matrix,
+)
 from cell.model.band import push_force
+from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.objects import ObjectParams
-from cell.model.params import RHO_AIR, EndEffectorParams, G
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import throw_axis
 
 __all__ = ["RigidTrajectory", "release_orientation", "simulate_rigid", "quat_to_matrix"]
 
 
-def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a unit quaternion (w, x, y, z), shape (3, 3)."""
-    w, x, y, z = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def _matrix_to_quat(r: np.ndarray) -> np.ndarray:
-    tr = np.trace(r)
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    else:
-        i = int(np.argmax(np.diag(r)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k]) * 2
-        q = [0.0, 0.0, 0.0, 0.0]
-        q[0] = (r[k, j] - r[j, k]) / s
-        q[1 + i] = 0.25 * s
-        q[1 + j] = (r[j, i] + r[i, j]) / s
-        q[1 + k] = (r[k, i] + r[i, k]) / s
-    qa = np.array(q)
-    return qa / np.linalg.norm(qa)
+quat_to_matrix = matrix_from_quat_wxyz
+"""Rotation matrix of a unit quaternion (w, x, y, z) (`cell.frames.matrix_from_quat_wxyz`)."""
 
 
 def release_orientation(elevation: float, azimuth: float, roll: float) -> np.ndarray:
     """Quaternion (w, x, y, z) of the object frame O at release.
 
-    O's z axis is the throw axis u; with zero roll its x axis (across the band)
-    is horizontal, pointing left of the throw direction; roll turns x and y
-    about u.
+    O is the throw-axis frame of `cell.frames.axis_frame` (the cell's one roll
+    convention): z along the throw axis u; with zero roll, x (across the band) in the
+    vertical plane of the throw; roll turns x and y about u.
     """
-    z = throw_axis(np.array(elevation), np.array(azimuth)).reshape(3)
-    x0 = np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
-    y0 = np.cross(z, x0)
-    c, s = math.cos(roll), math.sin(roll)
-    x = c * x0 + s * y0
-    y = np.cross(z, x)
-    return _matrix_to_quat(np.column_stack([x, y, z]))
-
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array(
-        [
-            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-        ]
-    )
-
-
-def _quat_exp(omega: np.ndarray, h: float) -> np.ndarray:
-    angle = float(np.linalg.norm(omega)) * h
-    if angle < 1e-12:
-        return np.array([1.0, *(0.5 * h * omega)])
-    axis = omega / np.linalg.norm(omega)
-    return np.array([math.cos(angle / 2), *(math.sin(angle / 2) * axis)])
+    return quat_wxyz_from_matrix(axis_frame(elevation, azimuth, roll))
 
 
 @dataclass(frozen=True)
@@ -151,7 +106,7 @@ def simulate_rigid(
     """
     u = throw_axis(np.array(elevation), np.array(azimuth)).reshape(3)
     f_push = float(push_force(stroke, obj.width, ee)) * u
-    k = 0.5 * RHO_AIR * obj.cd * obj.area / obj.mass
+    k = aero_factor_kg_per_m(obj.cd, obj.area) / obj.mass
     inertia = obj.inertia
     n_push = max(1, math.ceil(ee.dt / step))
     h_push = ee.dt / n_push
@@ -174,44 +129,16 @@ def simulate_rigid(
     while t < t_max:
         pushing = i < n_push
         h = h_push if pushing else step
-        a1 = acc(v, pushing)
-        a2 = acc(v + 0.5 * h * a1, pushing)
-        a3 = acc(v + 0.5 * h * a2, pushing)
-        a4 = acc(v + h * a3, pushing)
-        p_new = p + h / 6 * (v + 2 * (v + 0.5 * h * a1) + 2 * (v + 0.5 * h * a2) + (v + h * a3))
-        v_new = v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
-        b1 = alpha(w)
-        b2 = alpha(w + 0.5 * h * b1)
-        b3 = alpha(w + 0.5 * h * b2)
-        b4 = alpha(w + h * b3)
-        w_new = w + h / 6 * (b1 + 2 * b2 + 2 * b3 + b4)
-        q_new = _quat_mul(q, _quat_exp(0.5 * (w + w_new), h))
+
+        def rates(_p: object, vs: list[np.ndarray], push: bool = pushing) -> list[np.ndarray]:
+            return [acc(vs[0], push), alpha(vs[1])]  # the spin: a state with no position
+
+        (p_new,), (v_new, w_new) = rk4_step(rates, [p], [v, w], h)
+        q_new = quat_mul_wxyz(q, quat_exp_wxyz(0.5 * (w + w_new), h))
         t_new = t + h
         if not pushing and p[2] > land_z >= p_new[2]:
-            # linear-in-step location of the crossing, refined on the cubic Hermite
-            s = (p[2] - land_z) / (p[2] - p_new[2])
-            for _ in range(6):
-                s2, s3 = s * s, s * s * s
-                hz = (
-                    (2 * s3 - 3 * s2 + 1) * p[2]
-                    + (s3 - 2 * s2 + s) * h * v[2]
-                    + (-2 * s3 + 3 * s2) * p_new[2]
-                    + (s3 - s2) * h * v_new[2]
-                ) - land_z
-                dz = (
-                    (6 * s2 - 6 * s) * p[2]
-                    + (3 * s2 - 4 * s + 1) * h * v[2]
-                    + (-6 * s2 + 6 * s) * p_new[2]
-                    + (3 * s2 - 2 * s) * h * v_new[2]
-                )
-                s = min(1.0, max(0.0, s - hz / dz)) if dz != 0 else s
-            s2, s3 = s * s, s * s * s
-            landing = (
-                (2 * s3 - 3 * s2 + 1) * p
-                + (s3 - 2 * s2 + s) * h * v
-                + (-2 * s3 + 3 * s2) * p_new
-                + (s3 - s2) * h * v_new
-            )
+            sa, pos, _ = plane_crossing(p[None], p_new[None], v[None], v_new[None], h, land_z)
+            s, landing = float(sa[0]), pos[0]
             ts.append(t_new)
             ps.append(p_new)
             qs.append(q_new)

@@ -26,14 +26,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from cell.errors import InvalidParameter, NoLanding
 from cell.model.band import push_force
+from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.objects import ObjectParams, drag_area, drag_coefficient
-from cell.model.params import RHO_AIR, EndEffectorParams, G
-from cell.model.planar import flight_planar, flight_planar_one, hermite, hermite_root
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
+from cell.model.planar import flight_planar, flight_planar_one
 
 __all__ = [
     "ThrowBatch",
@@ -59,8 +61,8 @@ def throw_axis(elevation: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
 
 def drag_constant(shape: np.ndarray, mass: np.ndarray, size: np.ndarray) -> np.ndarray:
     """k = ½ ρ C_d A / m [1/m], so that drag acceleration is -k |v| v."""
-    return (
-        0.5 * RHO_AIR * drag_coefficient(shape) * drag_area(shape, size) / np.asarray(mass, float)
+    return aero_factor_kg_per_m(drag_coefficient(shape), drag_area(shape, size)) / np.asarray(
+        mass, float
     )
 
 
@@ -276,20 +278,11 @@ def launch_state(
         return ax - c * wx, ay - c * wy, az - c * wz
 
     # Component arrays rather than (n, 3): several times faster in NumPy.
+    def rates(_p: Any, v: Any) -> tuple[np.ndarray, ...]:
+        return acc(*v)
+
     for _ in range(steps):
-        k1 = acc(vx, vy, vz)
-        v2 = (vx + 0.5 * h * k1[0], vy + 0.5 * h * k1[1], vz + 0.5 * h * k1[2])
-        k2 = acc(*v2)
-        v3 = (vx + 0.5 * h * k2[0], vy + 0.5 * h * k2[1], vz + 0.5 * h * k2[2])
-        k3 = acc(*v3)
-        v4 = (vx + h * k3[0], vy + h * k3[1], vz + h * k3[2])
-        k4 = acc(*v4)
-        px = px + h / 6 * (vx + 2 * v2[0] + 2 * v3[0] + v4[0])
-        py = py + h / 6 * (vy + 2 * v2[1] + 2 * v3[1] + v4[1])
-        pz = pz + h / 6 * (vz + 2 * v2[2] + 2 * v3[2] + v4[2])
-        vx = vx + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-        vy = vy + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
-        vz = vz + h / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+        (px, py, pz), (vx, vy, vz) = rk4_step(rates, (px, py, pz), (vx, vy, vz), h)
     return np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
 
 
@@ -398,23 +391,17 @@ def reference_landing(
         def acc(vel: np.ndarray, kk: np.ndarray = ka) -> np.ndarray:
             return g - kk * np.linalg.norm(vel, axis=1, keepdims=True) * vel
 
-        a1 = acc(va)
-        a2 = acc(va + 0.5 * step * a1)
-        a3 = acc(va + 0.5 * step * a2)
-        a4 = acc(va + step * a3)
-        vb2 = va + 0.5 * step * a1
-        vb3 = va + 0.5 * step * a2
-        vb4 = va + step * a3
-        pn = pa + step / 6 * (va + 2 * vb2 + 2 * vb3 + vb4)
-        vn = va + step / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
+        def rates(_p: Any, vs: list[np.ndarray], f: Any = acc) -> list[np.ndarray]:
+            return [f(vs[0])]
+
+        (pn,), (vn,) = rk4_step(rates, [pa], [va], step)
         ids = np.flatnonzero(active)
         cross = (pa[:, 2] > lz[ids]) & (pn[:, 2] <= lz[ids])
         if cross.any():
             c = cross
-            s = hermite_root(pa[c, 2], pn[c, 2], step * va[c, 2], step * vn[c, 2], lz[ids][c])
-            for j in range(3):
-                out[ids[c], j] = hermite(pa[c, j], pn[c, j], step * va[c, j], step * vn[c, j], s)
-                out_v[ids[c], j] = va[c, j] + (vn[c, j] - va[c, j]) * s
+            s, out[ids[c]], out_v[ids[c]] = plane_crossing(
+                pa[c], pn[c], va[c], vn[c], step, lz[ids][c]
+            )
             out_t[ids[c]] = t + s * step
         gone = cross | ((pn[:, 2] <= lz[ids]) & (vn[:, 2] < 0))
         p[ids], v[ids] = pn, vn

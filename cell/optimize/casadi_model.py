@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from cell.model.band import band_stretch, push_force, stored_energy
+from cell.model.integrate import rk4_step
 from cell.model.ops import casadi_ops
 from cell.model.params import EndEffectorParams, G
 from cell.model.throw import _PUSH_STEPS
@@ -58,17 +59,9 @@ class SymbolicThrow:
 
 
 def _rk4(p: Any, v: Any, acc: Any, h: Any, steps: int) -> tuple[Any, Any]:
-    """RK4 on p' = v, v' = acc(v), written exactly as `cell.model.throw.launch_state`."""
+    """RK4 on p' = v, v' = acc(v): the model's own step (`cell.model.integrate.rk4_step`)."""
     for _ in range(steps):
-        k1 = acc(v)
-        v2 = v + 0.5 * h * k1
-        k2 = acc(v2)
-        v3 = v + 0.5 * h * k2
-        k3 = acc(v3)
-        v4 = v + h * k3
-        k4 = acc(v4)
-        p = p + h / 6 * (v + 2 * v2 + 2 * v3 + v4)
-        v = v + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        (p,), (v,) = rk4_step(lambda _p, vs: [acc(vs[0])], [p], [v], h)
     return p, v
 
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.errors import InvalidParameter
-from cell.model.flight3d import fly
+from cell.model.flight3d import column_fraction, fly
 from cell.model.params import RHO_AIR, EndEffectorParams
 from cell.model.throw import (
     Landing,
@@ -156,7 +156,7 @@ def air_velocity(
     f = 1.0 / (1.0 + s / law.decay_m)
     radius = r0 / np.sqrt(accel) / f
     rho = np.hypot(p[:, 0] - c[:, 0], p[:, 1] - c[:, 1])
-    inside = 0.5 * (1.0 + np.tanh((radius - rho) / law.edge_m))
+    inside = column_fraction(rho, radius, law.edge_m)
     out[:, 2] = -np.where(below, v_i * accel * f * inside, 0.0)
     return out
 

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidParameter, MissingDependency
+from cell.frames import quat_from_matrix
 from cell.model.objects import ObjectParams
 from cell.platforms.downwash import DownwashLaw, air_velocity
 from cell.sim.mechanism import DEFAULT_GEOMETRY, EEGeometry
@@ -76,12 +77,6 @@ def scene_exit_distance_m(
     throws in the scene.
     """
     return geometry.end_stop_m - np.asarray(stroke_m, float) + geometry.pad_length_m
-
-
-def _quat(r: np.ndarray) -> list[float]:
-    from scipy.spatial.transform import Rotation
-
-    return [float(v) for v in Rotation.from_matrix(r).as_quat()]
 
 
 class DronePlatform:
@@ -167,7 +162,7 @@ class DronePlatform:
         """
         r = release_orientation(elevation, azimuth, roll)
         pos = self.release_point - r[:, 2] * (stroke_m + obj.size[2] / 2)
-        return [float(v) for v in pos], _quat(r)
+        return [float(v) for v in pos], quat_from_matrix(r)
 
     def air_velocity(self, points: np.ndarray) -> np.ndarray:
         """Downwash air velocity at points [m/s, W], shape (n, 3)."""

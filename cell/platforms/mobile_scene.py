@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput
+from cell.frames import quat_from_matrix
 from cell.model.objects import ObjectParams
 from cell.platforms.mobile import BaseTrajectory
 from cell.sim.scene import CellScene, release_orientation
@@ -56,11 +57,9 @@ class MovingBaseScene(CellScene):
             stroke_m: the stroke the item will be gripped at [m].
             obj: the item (its size sets where E sits behind its centre).
         """
-        from scipy.spatial.transform import Rotation
-
         r = release_orientation(elevation, azimuth, roll)
         self._offset = -r[:, 2] * (stroke_m + obj.size[2] / 2)
-        self._orn = [float(v) for v in Rotation.from_matrix(r).as_quat()]
+        self._orn = quat_from_matrix(r)
         p0, _, _ = drive.sample(0.0)
         self.hold_ee((p0 + self._offset).tolist(), self._orn, teleport=True)
         self._pending = drive

@@ -217,7 +217,8 @@ class PlatformRunner:
                         cross,
                         platform=self.job.platform,
                         rotor_rpm=self.job.rotor_rpm if self.job.platform == "drone" else 0.0,
-                    )
+                    ),
+                    track=out.track,
                 )
             return ItemResult(
                 **base,
@@ -246,7 +247,10 @@ class PlatformRunner:
         finally:
             if self.mobile is not None:
                 sc.stop_drive()
-            sc.remove_item(item)
+            if sc.in_bin(item) is not None:
+                sc.keep(item)  # bins keep what lands in them
+            else:
+                sc.remove_item(item)
 
     # -- the run -------------------------------------------------------------------
     def run(self, on_item: Callable[[Any], None] | None = None) -> Any:

@@ -122,7 +122,7 @@ class SceneRecorder:
         self._landing = landing_xyz
 
     def on_item_done(self, result: Any) -> None:
-        """Score the item; its body leaves the scene."""
+        """Score the item; the recording stops following it (a bin keeps its body)."""
         d = result if isinstance(result, dict) else result.__dict__
         self.run.rec.flush_samples(item=d["index"])
         self.run.item_done(d, self.scene.t, self._landing)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.band import band_angle, band_stretch
 from cell.model.objects import SHAPES, ObjectParams, drag_area
 from cell.model.params import EndEffectorParams

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput, InvalidParameter
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.model.throw import Landing, ThrowBatch

@@ -20,6 +20,7 @@ from pathlib import Path
 import yaml
 
 from cell.errors import InvalidInput, InvalidParameter
+from cell.kinds import ROBOTS
 from cell.robot.paths import example_robot_data_dir, example_robot_data_share, robots_dir
 
 __all__ = [
@@ -33,7 +34,7 @@ __all__ = [
     "load_mount",
 ]
 
-MOUNTS: dict[str, str] = {"panda": "panda_throwing", "ur5": "ur5_throwing"}
+MOUNTS: dict[str, str] = {name: f"{name}_throwing" for name in ROBOTS}
 """Robot name -> mount folder under robots/."""
 
 EE_URDF = Path("throwing_ee", "throwing_ee.urdf")

@@ -26,6 +26,7 @@ __all__ = [
     "ReleasePose",
     "pose_error",
     "solve_ik",
+    "solve_release_ik",
 ]
 
 POSITION_TOL_M = 1e-3
@@ -414,3 +415,50 @@ def solve_ik(
         iterations=iters,
         seeds_tried=tried,
     )
+
+
+WEIGHT_ROLLS_RAD = (0.0, math.pi)
+"""Rolls that put the pads in the vertical plane of the throw: one pad under the item."""
+
+
+def solve_release_ik(
+    robot: Robot,
+    position: np.ndarray,
+    elevation: float,
+    azimuth: float,
+    q_current: np.ndarray | None = None,
+) -> IKResult:
+    """IK for a release with the item's weight on a pad: the roll fixed at 0 or π.
+
+    With roll 0 (or π) the grip's x axis, across the pads, lies in the vertical plane of
+    the throw, so the lower pad carries the item's weight; with the roll free, a 6-DoF
+    arm may turn the pads sideways and leave the weight to friction (the UR5 did, and
+    dropped the 75 g cyl50 while carrying it). Of the two, the solution nearer
+    q_current wins; if neither is reachable the roll is left free. A vertical axis has
+    no such plane: there the roll is free at once.
+
+    Args:
+        robot: the arm.
+        position: grip centre p [m, W], shape (3,).
+        elevation: e [rad].
+        azimuth: a [rad].
+        q_current: the current configuration [rad]; home if None.
+
+    Returns:
+        The IKResult.
+
+    Raises:
+        IKNoSolution: not even the free roll is reachable.
+    """
+    q_ref = robot.home if q_current is None else np.asarray(q_current, dtype=float)
+    if abs(math.cos(elevation)) > 1e-6:
+        found: list[IKResult] = []
+        for roll in WEIGHT_ROLLS_RAD:
+            try:
+                pose = ReleasePose.from_angles(position, elevation, azimuth, roll)
+                found.append(solve_ik(robot, pose, q_current))
+            except IKFailed:
+                continue
+        if found:
+            return min(found, key=lambda r: float(np.linalg.norm(r.q - q_ref)))
+    return solve_ik(robot, ReleasePose.from_angles(position, elevation, azimuth), q_current)

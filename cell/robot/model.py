@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput, MissingDependency
+from cell.frames import axis_frame
 from cell.robot.composite import MOUNTS, MountSpec, composite_urdf, load_mount
 from cell.robot.limits import JointLimits
 
@@ -29,31 +30,6 @@ TCP_FRAME = "ee_tcp"
 
 EE_JOINTS = ("ee_finger_left_joint", "ee_finger_right_joint", "ee_band_joint")
 """The end-effector's moving joints (locked in the arm model)."""
-
-
-def axis_frame(elevation: float, azimuth: float, roll: float = 0.0) -> np.ndarray:
-    """The orientation whose +z is the throw axis u(elevation, azimuth), rolled about u.
-
-    R = Rz(azimuth) · Ry(π/2 − elevation) · Rz(roll); its third column is
-    u = (cos e cos a, cos e sin a, sin e), as in `cell.model.throw_axis`.
-
-    Args:
-        elevation: e [rad].
-        azimuth: a [rad].
-        roll: rotation about u [rad].
-
-    Returns:
-        Rotation matrix, shape (3, 3), frame in W.
-    """
-
-    def rz(t: float) -> np.ndarray:
-        c, s = math.cos(t), math.sin(t)
-        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-    b = math.pi / 2 - elevation
-    c, s = math.cos(b), math.sin(b)
-    ry = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    return rz(azimuth) @ ry @ rz(roll)
 
 
 class Robot:

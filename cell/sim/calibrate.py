@@ -29,7 +29,7 @@ from cell.catalogue import catalogue
 from cell.errors import InvalidInput
 from cell.identify import IdentifyOptions, IdentifyResult, identify
 from cell.identify.report import predicted_landing, reach
-from cell.log.csvio import ThrowTable
+from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 

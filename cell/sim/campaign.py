@@ -21,8 +21,8 @@ import numpy as np
 from cell.catalogue import catalogue
 from cell.endeffector.pybullet_backend import PyBulletEndEffector
 from cell.errors import InvalidParameter
-from cell.log.csvio import ThrowTable
 from cell.log.records import throw_record
+from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.sim.items import resolve_object
 from cell.sim.scene import CellScene

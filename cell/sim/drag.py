@@ -11,14 +11,14 @@ from typing import Any
 import numpy as np
 
 from cell.model.objects import ObjectParams
-from cell.model.params import RHO_AIR
+from cell.model.params import aero_factor_kg_per_m
 
 __all__ = ["drag_coefficient_kg_per_m", "drag_force", "apply_drag"]
 
 
 def drag_coefficient_kg_per_m(obj: ObjectParams) -> float:
     """c = ½ ρ C_d A [kg/m], so that the drag force is -c |v| v [N]."""
-    return 0.5 * RHO_AIR * obj.cd * obj.area
+    return float(aero_factor_kg_per_m(obj.cd, obj.area))
 
 
 def drag_force(c_kg_per_m: float, velocity: np.ndarray) -> np.ndarray:

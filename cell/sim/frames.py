@@ -1,20 +1,21 @@
 """Frames, mount and poses of the scene's arm and end-effector (world frame W: z up).
 
 E is the end-effector frame: on the base plate face, +z the throw axis, x
-across the grip. It sits on the Panda's flange (`panda_link8`) at
-Rz(FLANGE_YAW_RAD) · translate(0, 0, FLANGE_TO_EE_M), i.e. on the base plate
-face of robots/throwing_ee's `ee_base` as robots/panda_throwing/mount.yaml
-mounts it; the TCP `ee_tcp` is at z = EE_TO_TCP_M in E.
+across the grip. It lies FLANGE_TO_EE_M along z from robots/throwing_ee's
+`ee_base` (the origin of its `ee_band_joint`), which each arm's mount file puts
+on the arm's flange (the Panda's `panda_link8` at Rz(FLANGE_YAW_RAD)); the TCP
+`ee_tcp` is at z = EE_TO_TCP_M in E. These numbers are read from the
+description (robots/throwing_ee/throwing_ee.urdf, robots/panda_throwing/mount.yaml),
+not repeated here.
 """
 
 from __future__ import annotations
 
-import math
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import numpy as np
-
-from cell.errors import MissingDependency
+from cell.errors import InvalidParameter, MissingDependency
+from cell.frames import axis_frame, quat_from_matrix
 from cell.sim.bins import BinSpec
 
 __all__ = [
@@ -29,11 +30,35 @@ __all__ = [
     "quat_from_matrix",
 ]
 
-FLANGE_TO_EE_M = 0.015  # [m] flange (panda_link8) to E (the base plate face) along z
-FLANGE_YAW_RAD = -math.pi / 4  # [rad] E's yaw on the flange, as robots/panda_throwing/mount.yaml
-EE_TO_TCP_M = 0.13  # [m] E to the TCP `ee_tcp` (0.145 m from the flange, robots/throwing_ee)
+
+def _joint_z(root: ET.Element, name: str, path: Path) -> float:
+    """The z of a joint's origin in its parent link [m] (the description's joints along z)."""
+    for j in root.iter("joint"):
+        if j.get("name") == name:
+            o = j.find("origin")
+            xyz = [float(v) for v in (o.get("xyz", "0 0 0") if o is not None else "0 0 0").split()]
+            if len(xyz) != 3 or xyz[0] or xyz[1]:
+                raise InvalidParameter(f"{path}: joint {name!r} must sit on ee_base's z axis")
+            return xyz[2]
+    raise InvalidParameter(f"{path}: no joint {name!r}")
+
+
+def _description() -> tuple[float, float, float, tuple[float, ...]]:
+    from cell.robot.composite import end_effector_urdf, load_mount
+
+    path = end_effector_urdf()
+    root = ET.parse(path).getroot()
+    plate = _joint_z(root, "ee_band_joint", path)  # the stroke's zero: the plate face
+    tcp = _joint_z(root, "ee_tcp_joint", path)
+    panda = load_mount("panda")
+    return plate, round(tcp - plate, 12), panda.mount_rpy[2], panda.home
+
+
+FLANGE_TO_EE_M, EE_TO_TCP_M, FLANGE_YAW_RAD, PANDA_READY = _description()
+"""[m] ee_base (on the flange) to E, the base plate face; [m] E to the TCP `ee_tcp`;
+[rad] E's yaw on the Panda's flange (its mount file); [rad] the Panda's ready
+configuration (its mount file's home)."""
 MOUNT_FORCE_N = 1000.0  # [N] most the mount constraint exerts (EE + item at ~100 m/s^2)
-PANDA_READY = (0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785)  # [rad]
 DEFAULT_BINS = (
     BinSpec("near", (0.45, 0.45), (0.3, 0.3), 0.12),
     BinSpec("mid", (1.3, 0.3), (0.4, 0.4), 0.15),
@@ -63,28 +88,7 @@ def panda_urdf() -> Path:
     raise MissingDependency("no Panda URDF: pip install example-robot-data")
 
 
-def release_orientation(elevation: float, azimuth: float, roll: float = 0.0) -> np.ndarray:
-    """Orientation of E whose +z is the throw axis u(e, a) [MODEL.md], rolled by `roll`.
-
-    E = Rz(azimuth) · Ry(π/2 − elevation) · Rz(roll); with roll 0 the grip's x
-    axis lies in the vertical plane of the throw (the lower finger carries the
-    item's weight).
-
-    Returns:
-        Rotation matrix of E in W, shape (3, 3).
-    """
-
-    def rz(t: float) -> np.ndarray:
-        c, s = math.cos(t), math.sin(t)
-        return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
-
-    b = math.pi / 2 - elevation
-    ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1.0, 0], [-math.sin(b), 0, math.cos(b)]])
-    return rz(azimuth) @ ry @ rz(roll)
-
-
-def quat_from_matrix(r: np.ndarray) -> list[float]:
-    """Quaternion (x, y, z, w) of a rotation matrix."""
-    from scipy.spatial.transform import Rotation
-
-    return [float(v) for v in Rotation.from_matrix(r).as_quat()]
+release_orientation = axis_frame
+"""Orientation of E whose +z is the throw axis u(e, a) [MODEL.md], rolled by `roll`
+(`cell.frames.axis_frame`: with roll 0 the grip's x axis lies in the vertical plane of
+the throw, the lower finger carrying the item's weight). Rotation matrix of E in W."""

@@ -176,6 +176,7 @@ class CellScene:
         self._arm_motion: Callable[[float], Sequence[float]] | None = None
         self.items: list[Item] = []
         self._trackers: dict[int, Tracker] = {}
+        self._kept: set[int] = set()  # items left resting in a bin (see `keep`)
         self.arm: int | None = None
         self.arm_joints: list[int] = []
         self._flange = -1
@@ -433,6 +434,95 @@ class CellScene:
         self.client.removeBody(item.body)
         self.items = [i for i in self.items if i.body != item.body]
         self._trackers.pop(item.body, None)
+        self._kept.discard(item.body)
+
+    # -- what the bins hold ----------------------------------------------------
+    def in_bin(self, item: Item) -> str | None:
+        """The bin the item's centre lies in now, below its rim + half the item's largest
+        extent (as `watch_until_rest` scores it), or None."""
+        pos, _ = self.client.getBasePositionAndOrientation(item.body)
+        return which_bin(pos, self.bins, above_rim_m=max(item.obj.size) / 2)
+
+    def keep(self, item: Item) -> None:
+        """Leave an item resting where it is: a bin keeps what lands in it.
+
+        It stays a body of the scene (later items land on it and may knock it about),
+        but is no longer tracked nor given the drag law (a resting or nudged item moves
+        at well under 1 m/s, where drag is below 0.1 % of its weight), and Bullet puts it
+        to sleep until something touches it: piles of items awake in the bins would
+        make every physics step several times slower (their contacts are solved at
+        every step with 60 solver iterations).
+        """
+        cl = self.client
+        self._trackers.pop(item.body, None)
+        self._kept.add(item.body)
+        cl.changeDynamics(item.body, -1, activationState=cl.ACTIVATION_STATE_ENABLE_SLEEPING)
+        cl.changeDynamics(item.body, -1, activationState=cl.ACTIVATION_STATE_SLEEP)
+
+    def kept_items(self, bin_id: str | None = None) -> list[Item]:
+        """Items left in the scene by `keep` (those whose centre lies in `bin_id`, if given)."""
+        kept = [it for it in self.items if it.body in self._kept]
+        return kept if bin_id is None else [it for it in kept if self.in_bin(it) == bin_id]
+
+    def place_spot(
+        self, bin_id: str, obj: ObjectParams, *, margin_m: float = 0.01, grid: int = 7
+    ) -> tuple[float, float, float]:
+        """Where in a bin to set an item down, clear of what the bin already holds.
+
+        Candidates are a grid x grid of points on the bin's floor, kept half the item's
+        footprint plus `margin_m` from the walls. Of those that clear every item resting
+        in the bin (footprints as circles of half the largest extent, plus the margin),
+        the one nearest the bin's centre wins (the centre itself in an empty bin);
+        when none is clear, the one with the most room, on top of what lies under it.
+
+        Args:
+            bin_id: the bin.
+            obj: the item to set down.
+            margin_m: clearance from walls and other items [m].
+            grid: candidates per side.
+
+        Returns:
+            (x [m], y [m], z [m]) in W: the spot and the height of the surface under it
+            (the floor plate's top, or the top of the items there).
+
+        Raises:
+            InvalidInput: no such bin.
+        """
+        spec = next((b for b in self.bins if b.id == bin_id), None)
+        if spec is None:
+            raise InvalidInput(f"no bin {bin_id!r} in the scene; bins: {[b.id for b in self.bins]}")
+        r_new = max(obj.size[0], obj.size[1]) / 2
+        hx = max(spec.size_xy[0] / 2 - r_new - margin_m, 0.0)
+        hy = max(spec.size_xy[1] / 2 - r_new - margin_m, 0.0)
+        c, s = np.cos(spec.yaw), np.sin(spec.yaw)
+        cands = [
+            (
+                spec.center_xy[0] + c * x - s * y,
+                spec.center_xy[1] + s * x + c * y,
+            )
+            for x in np.linspace(-hx, hx, grid)
+            for y in np.linspace(-hy, hy, grid)
+        ]
+        held = []
+        for it in self.kept_items(bin_id):
+            p, _ = self.client.getBasePositionAndOrientation(it.body)
+            held.append((np.asarray(p, float), max(it.obj.size) / 2))
+
+        def room(xy: tuple[float, float]) -> float:
+            return min(
+                (float(np.hypot(xy[0] - p[0], xy[1] - p[1])) - r - r_new for p, r in held),
+                default=np.inf,
+            )
+
+        clear = [xy for xy in cands if room(xy) >= margin_m]
+        if clear:
+            x, y = min(
+                clear, key=lambda xy: np.hypot(xy[0] - spec.center_xy[0], xy[1] - spec.center_xy[1])
+            )
+            return float(x), float(y), float(spec.wall)
+        x, y = max(cands, key=room)
+        under = [p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m]
+        return float(x), float(y), float(max([spec.wall, *under]))
 
     def which_bin(self, point: Sequence[float]) -> str | None:
         """The id of the bin a point lies in (see cell.sim.bins.which_bin), or None."""
@@ -453,7 +543,8 @@ class CellScene:
                 self.set_arm(self._arm_motion(self.t))
             self.band.apply()
             for it in self.items:
-                apply_drag(cl, it.body, it.drag_c)
+                if it.body not in self._kept:
+                    apply_drag(cl, it.body, it.drag_c)
             cl.stepSimulation()
             self.t += self._dt_now
             for body, tr in self._trackers.items():

@@ -1,0 +1,19 @@
+"""The names the cell knows, each list defined here once.
+
+* `ROBOTS`: the arms with a mount under robots/ (`robots/<name>_throwing/mount.yaml`).
+* `PLATFORMS`: what carries the end-effector. Its order is an encoding (the gap
+  diagnosis codes a platform by its index, a synthetic world draws them in this order):
+  add new names at the end.
+* `EE_BACKENDS`: the end-effector back-ends; `pybullet` is the simulated one, the
+  others are hardware (`HARDWARE_EE_BACKENDS`).
+"""
+
+from __future__ import annotations
+
+__all__ = ["EE_BACKENDS", "HARDWARE_EE_BACKENDS", "PLATFORMS", "ROBOTS", "SIM_EE_BACKEND"]
+
+ROBOTS: tuple[str, ...] = ("panda", "ur5")
+PLATFORMS: tuple[str, ...] = ("arm", "mobile", "drone")
+SIM_EE_BACKEND = "pybullet"
+EE_BACKENDS: tuple[str, ...] = (SIM_EE_BACKEND, "dynamixel")
+HARDWARE_EE_BACKENDS: tuple[str, ...] = tuple(k for k in EE_BACKENDS if k != SIM_EE_BACKEND)
