@@ -9,6 +9,7 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ray = pytest.importorskip("ray")
@@ -208,3 +209,15 @@ def test_an_address_where_no_ray_answers_is_refused_at_once(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"--ray-address 127.0.0.1:{port}: no Ray cluster answers there" in err
     assert "ray start --head" in err
+
+
+def test_bench_ray_figures(local_ray):
+    from cell.bench import available
+    from cell.bench.bench_ray import run
+
+    assert "ray" in available()
+    fig = run(quick=True)  # on the module's Ray: its start is not measured here
+    assert np.isnan(fig["ray_start_s"])
+    for key in ("ray_task_overhead_ms", "ray_roundtrip_ms", "store_chunk_append_ms"):
+        assert 0 < fig[key] < 1e4, key
+    assert 0 < fig["scene_chunk_cpu_s"] < 600
