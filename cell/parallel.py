@@ -6,36 +6,52 @@ in unit order:
 
 - `workers=1` and no address: in this process, one unit after the other; Ray is
   not imported (the default on one machine);
-- `workers>1`: a local Ray with that many CPUs is started, unless `address` (or
-  the RAY_ADDRESS environment variable) names a running cluster to join; each
-  unit is one Ray task, so each task's worker process builds its own PyBullet
-  client and model (nothing is shared between units, which is what makes the
-  results identical to the serial run: every unit carries its own seed).
+- `workers>1`: a new local Ray with that many CPUs is started (always a new one:
+  a cluster that `ray start --head` runs on the same machine is joined only when
+  named), unless `address` (or the RAY_ADDRESS environment variable) names a
+  running cluster to join; then the cluster's CPUs decide how many units run at
+  once. Each unit is one Ray task, so each task's worker process builds its own
+  PyBullet client and model. Tasks, not actors: Ray's scheduler balances the
+  load and retries a task whose process died, and nothing is shared between
+  units, which is what makes the results identical to the serial run (every
+  unit carries its own seed; a scene campaign's unit builds its own scene).
 
 The driver is the only writer: `on_result(index, result)` is called here, in
-the driver, as each result arrives (that is where a caller appends rows to its
-throw-log store, each in its own transaction), so a worker that dies loses
-nothing already written. A task whose worker process dies is retried once by
-Ray (`max_retries=1`); a unit whose function raises is not retried (it would
-raise again: the simulation is deterministic) and is reported as a CellError
-naming the unit. Ctrl-C cancels the outstanding tasks; what `on_result` has
-handled is kept.
+the driver, as each result arrives (in completion order, not unit order; that is
+where a caller appends rows to its throw-log store, each in its own
+transaction), so a worker that dies loses nothing already written.
+
+Failures. A task whose worker process dies (killed, out of memory, node lost) is
+retried by Ray `retries` times (default once); if it dies again, the campaign
+stops with `CampaignFailed` naming the unit, after cancelling the outstanding
+tasks. A unit whose function raises is not retried (the simulations are
+seeded: it would raise again) and is reported the same way, with its error
+(in-process, the function's error itself is raised).
+Ctrl-C cancels the outstanding tasks and raises KeyboardInterrupt; what
+`on_result` has handled is kept.
+
+At most 2 × (the CPUs Ray offers) tasks are in flight at a time: a worker always
+finds a queued task, and the driver's bookkeeping stays small for campaigns of
+many thousands of units.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import socket
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
-from cell.errors import CellError, InvalidInput
+from cell.errors import CellError, InvalidInput, MissingDependency
 
 __all__ = ["run_campaign", "add_campaign_args", "CampaignFailed"]
 
 U = TypeVar("U")
 R = TypeVar("R")
+
+_REPR_MAX = 160  # characters of a unit's repr in a message
 
 
 class CampaignFailed(CellError, RuntimeError):
@@ -57,6 +73,11 @@ def add_campaign_args(p: Any) -> None:
     )
 
 
+def _unit_text(unit: Any) -> str:
+    text = repr(unit)
+    return text if len(text) <= _REPR_MAX else text[: _REPR_MAX - 1] + "…"
+
+
 def run_campaign(
     fn: Callable[[U], R],
     units: Sequence[U],
@@ -66,26 +87,33 @@ def run_campaign(
     desc: str = "campaign",
     on_result: Callable[[int, R], None] | None = None,
     progress: bool = True,
+    retries: int = 1,
 ) -> list[R]:
     """Run `fn` on every unit; results in unit order.
 
     Args:
         fn: a module-level function (Ray pickles it by reference).
         units: picklable units of work.
-        workers: 1 runs in-process; N > 1 runs N at a time on Ray.
+        workers: 1 runs in-process; N > 1 runs N at a time on a local Ray.
         address: a Ray cluster to join (default: $RAY_ADDRESS when workers > 1).
         desc: the progress bar's label.
         on_result: called in the driver with (unit index, result) as results arrive.
-        progress: show one progress bar for the whole campaign (on stderr).
+        progress: show one progress bar for the whole campaign (on stderr, on a terminal).
+        retries: how many times Ray runs again a task whose worker process died.
 
     Raises:
-        InvalidInput: workers < 1.
-        CampaignFailed: a unit's function raised on its worker.
+        InvalidInput: workers < 1 or retries < 0; an address where no Ray answers.
+        MissingDependency: workers > 1 and ray is not installed.
+        CampaignFailed: on Ray, a unit's function raised on its worker, or its worker
+            died on every try (in-process, the function's own error is raised).
+        KeyboardInterrupt: Ctrl-C (the outstanding tasks are cancelled first).
     """
     from tqdm import tqdm
 
     if workers < 1:
         raise InvalidInput(f"--workers {workers}: give 1 or more")
+    if retries < 0:
+        raise InvalidInput(f"retries={retries}: give 0 or more")
     address = address or (os.environ.get("RAY_ADDRESS") if workers > 1 else None)
     bar = tqdm(
         total=len(units),
@@ -98,15 +126,63 @@ def run_campaign(
         if workers == 1 and not address:
             out: list[R] = []
             for i, u in enumerate(units):
-                r = fn(u)
+                r = fn(u)  # an error is raised as it is, in this process
                 out.append(r)
                 if on_result is not None:
                     on_result(i, r)
                 bar.update(1)
             return out
-        return _run_ray(fn, units, workers, address, on_result, bar)
+        return _run_ray(fn, units, workers, address, on_result, bar, retries)
     finally:
         bar.close()
+
+
+def _check_reachable(address: str, timeout_s: float = 5.0) -> None:
+    """Fail fast when nothing listens at a host:port address (ray.init would wait minutes).
+
+    "auto" and addresses without a port are left to Ray.
+
+    Raises:
+        InvalidInput: the connection is refused or times out.
+    """
+    hostport = address.split("://", 1)[-1]
+    host, sep, port = hostport.rpartition(":")
+    if not sep or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]") or "127.0.0.1", int(port)), timeout_s):
+            pass
+    except OSError as exc:
+        raise InvalidInput(
+            f"--ray-address {address}: no Ray cluster answers there ({exc}); start its head "
+            "with `ray start --head --port=6379` and give HEAD_IP:6379, or leave the address "
+            "out to start a local Ray"
+        ) from None
+
+
+def _init_ray(workers: int, address: str | None) -> bool:
+    """Connect to (or start) Ray; True when this call started it (and must shut it down)."""
+    try:
+        import ray
+    except ImportError:
+        raise MissingDependency(
+            f"--workers {workers} needs Ray: pip install 'ray>=2.40' (or --workers 1)"
+        ) from None
+    if address:
+        _check_reachable(address)
+    if ray.is_initialized():  # e.g. a test's Ray, or a caller's own cluster connection
+        return False
+    quiet = {"log_to_driver": False, "logging_level": logging.ERROR}
+    if address:
+        try:
+            ray.init(address=address, **quiet)  # type: ignore[arg-type]
+        except (ConnectionError, ValueError, RuntimeError) as exc:
+            raise InvalidInput(f"--ray-address {address}: cannot join that Ray ({exc})") from None
+    else:
+        # "local": a new instance even when `ray start --head` runs here (ray.init() would
+        # join that one, and refuse num_cpus for it)
+        ray.init(address="local", num_cpus=workers, include_dashboard=False, **quiet)  # type: ignore[arg-type]
+    return True
 
 
 def _run_ray(
@@ -116,48 +192,62 @@ def _run_ray(
     address: str | None,
     on_result: Callable[[int, Any], None] | None,
     bar: Any,
+    retries: int,
 ) -> list[Any]:
+    started = _init_ray(workers, address)
     import ray
 
-    started = False
-    if not ray.is_initialized():
-        if address:
-            ray.init(address=address, log_to_driver=False, logging_level=logging.ERROR)
-        else:
-            ray.init(
-                num_cpus=workers,
-                include_dashboard=False,
-                log_to_driver=False,
-                logging_level=logging.ERROR,
-            )
-        started = True
     try:
-        task = ray.remote(max_retries=1, retry_exceptions=False, num_cpus=1)(fn)
-        refs = {task.remote(u): i for i, u in enumerate(units)}
+        cpus = int(ray.cluster_resources().get("CPU", workers))
+        in_flight = max(2, 2 * cpus)
+        task = ray.remote(max_retries=retries, retry_exceptions=False, num_cpus=1)(fn)
         results: list[Any] = [None] * len(units)
-        pending = list(refs)
+        refs: dict[Any, int] = {}
+        pending: list[Any] = []
+        next_unit = 0
         try:
-            while pending:
+            while next_unit < len(units) or pending:
+                while next_unit < len(units) and len(pending) < in_flight:
+                    ref = task.remote(units[next_unit])
+                    refs[ref] = next_unit
+                    pending.append(ref)
+                    next_unit += 1
                 done, pending = ray.wait(pending, num_returns=1)
                 ref = done[0]
-                i = refs[ref]
+                i = refs.pop(ref)
                 try:
                     r = ray.get(ref)
-                except ray.exceptions.RayError as exc:
-                    for p in pending:
-                        ray.cancel(p, force=True)
+                except ray.exceptions.RayTaskError as exc:  # fn raised: not retried
+                    cause = exc.cause if exc.cause is not None else exc
+                    _cancel(ray, pending)
                     raise CampaignFailed(
-                        f"unit {i} ({units[i]!r}) failed on its worker: {exc}"
+                        f"unit {i} ({_unit_text(units[i])}) failed: {type(cause).__name__}: {cause}"
+                    ) from None
+                except ray.exceptions.RayError as exc:  # the worker died on every try
+                    _cancel(ray, pending)
+                    first_line = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+                    raise CampaignFailed(
+                        f"unit {i} ({_unit_text(units[i])}) was lost: its worker died "
+                        f"{retries + 1} time(s) ({type(exc).__name__}: {first_line}); the "
+                        f"{len(units) - next_unit + len(pending)} units not yet done are "
+                        "cancelled, what was handled before is kept"
                     ) from None
                 results[i] = r
                 if on_result is not None:
                     on_result(i, r)
                 bar.update(1)
         except KeyboardInterrupt:
-            for p in pending:
-                ray.cancel(p, force=True)
+            _cancel(ray, pending)
             raise
         return results
     finally:
         if started:
             ray.shutdown()
+
+
+def _cancel(ray: Any, pending: list[Any]) -> None:
+    for p in pending:
+        try:
+            ray.cancel(p, force=True)
+        except Exception:  # noqa: BLE001 - finished or gone meanwhile: nothing to cancel
+            pass

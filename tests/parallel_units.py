@@ -25,3 +25,19 @@ def fails_on_three(k: int) -> int:
     if k == 3:
         raise ValueError("unit three is bad")
     return k
+
+
+def dies_on_two(unit: tuple[int, str]) -> int:
+    """k * k, but the worker process running k = 2 dies, every time (each try leaves a
+    line in the file `unit[1]` first)."""
+    k, attempts = unit
+    if k == 2:
+        with open(attempts, "a") as f:
+            f.write("died\n")
+        os._exit(1)
+    return k * k
+
+
+def square(k: int) -> int:
+    """k * k."""
+    return k * k

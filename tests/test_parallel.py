@@ -1,5 +1,6 @@
 """Campaigns on Ray (cell.parallel): a local Ray of 2 workers gives what the serial
-run gives; a worker process that dies is retried and nothing is lost or doubled."""
+run gives; a worker process that dies is retried and nothing is lost or doubled; a unit
+lost twice, and Ctrl-C, stop the campaign keeping what the driver handled."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ray = pytest.importorskip("ray")
@@ -23,6 +25,7 @@ if str(HERE) not in sys.path:
 @pytest.fixture(scope="module")
 def local_ray():
     ray.init(
+        address="local",  # a new Ray, even if `ray start` runs one on this machine
         num_cpus=2,
         include_dashboard=False,
         log_to_driver=False,
@@ -103,3 +106,118 @@ def test_gap_check_on_ray_gives_the_serial_verdicts(local_ray):
     b = run_check(("none", "band_mass"), workers=2, **kw)
     strip = [{k: v for k, v in r.__dict__.items() if k != "seconds"} for r in a]
     assert strip == [{k: v for k, v in r.__dict__.items() if k != "seconds"} for r in b]
+
+
+def _calibrate(tmp_path, tag, capsys, *extra):
+    from cell.cli import main
+
+    files = {k: tmp_path / f"{tag}.{k}" for k in ("yaml", "csv", "sqlite")}
+    argv = ["calibrate", "--n", "16", "--seed", "4", "--json", "-o", str(files["yaml"])]
+    argv += ["--log", str(files["csv"]), "--db", str(files["sqlite"]), *extra]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    summary.pop("output")
+    return summary, files
+
+
+def test_cli_calibrate_on_two_workers_writes_what_the_serial_run_writes(
+    local_ray, tmp_path, capsys
+):
+    from cell.log.store import ThrowStore
+
+    serial, a = _calibrate(tmp_path, "serial", capsys)
+    on_ray, b = _calibrate(tmp_path, "ray", capsys, "--workers", "2")
+    assert serial == on_ray  # the identified parameters, the gaps, the mass rule
+    assert serial["throws"] == 16
+    assert a["csv"].read_text() == b["csv"].read_text()  # the log, row for row
+    assert a["yaml"].read_text() == b["yaml"].read_text()
+    # the driver appended both chunks as they arrived: one row per throw, the same rows
+    with ThrowStore(a["sqlite"]) as sa, ThrowStore(b["sqlite"]) as sb:
+        ta, tb = sa.table(), sb.table()
+        assert len(sa) == len(sb) == 16
+    ids = tb.text("throw_id")
+    assert sorted(ids) == ta.text("throw_id") and len(set(ids)) == 16
+    order = sorted(range(16), key=lambda k: ids[k])
+    for col in ("object_id", "landed_x_m", "landed_y_m", "t_flight_s", "stroke_m"):
+        assert list(ta.data[col]) == [tb.data[col][k] for k in order]
+
+
+def test_cli_calibrate_refuses_a_store_that_holds_the_campaign_already(tmp_path, capsys):
+    from cell.cli import main
+    from cell.log.store import ThrowStore
+    from cell.sim.campaign import campaign_plan
+    from cell.sim.campaign import run_campaign as scene_campaign
+
+    db = tmp_path / "s.sqlite"
+    with ThrowStore(db) as store:
+        store.import_table(scene_campaign(campaign_plan(1, seed=4)))
+    argv = ["calibrate", "--n", "16", "--seed", "4", "--db", str(db), "--workers", "2"]
+    assert main(argv + ["-o", str(tmp_path / "e.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert "already holds 1 throw(s)" in err and "cal004-0000" in err
+    with ThrowStore(db) as store:
+        assert len(store) == 1  # nothing thrown, nothing written
+
+
+def test_a_unit_whose_worker_always_dies_is_retried_once_then_reported_as_lost(local_ray, tmp_path):
+    from parallel_units import dies_on_two
+
+    attempts = tmp_path / "attempts"
+    got: dict[int, int] = {}
+    with pytest.raises(
+        CampaignFailed, match=r"unit 2 \(\(2, .*\) was lost: its worker died 2 time"
+    ):
+        run_campaign(
+            dies_on_two,
+            [(k, str(attempts)) for k in range(6)],
+            workers=2,
+            on_result=got.__setitem__,
+            progress=False,
+        )
+    assert attempts.read_text() == "died\n" * 2  # the first try and Ray's one retry
+    assert 2 not in got
+    assert all(v == k * k for k, v in got.items())  # what was handled before is right
+
+
+def test_ctrl_c_cancels_the_campaign_and_keeps_what_was_handled(local_ray):
+    from parallel_units import square
+
+    got: list[int] = []
+
+    def handle(i: int, r: int) -> None:
+        got.append(r)
+        if len(got) == 2:
+            raise KeyboardInterrupt  # as Ctrl-C in the driver while results arrive
+
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(square, list(range(40)), workers=2, on_result=handle, progress=False)
+    assert len(got) == 2
+    # the same Ray runs the next campaign to the end: nothing of the cancelled one is left
+    assert run_campaign(square, list(range(6)), workers=2, progress=False) == [0, 1, 4, 9, 16, 25]
+
+
+def test_an_address_where_no_ray_answers_is_refused_at_once(tmp_path, capsys):
+    import socket
+
+    from cell.cli import main
+
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    argv = ["calibrate", "--n", "2", "--ray-address", f"127.0.0.1:{port}"]
+    assert main(argv + ["-o", str(tmp_path / "e.yaml")]) == 2
+    err = capsys.readouterr().err
+    assert f"--ray-address 127.0.0.1:{port}: no Ray cluster answers there" in err
+    assert "ray start --head" in err
+
+
+def test_bench_ray_figures(local_ray):
+    from cell.bench import available
+    from cell.bench.bench_ray import run
+
+    assert "ray" in available()
+    fig = run(quick=True)  # on the module's Ray: its start is not measured here
+    assert np.isnan(fig["ray_start_s"])
+    for key in ("ray_task_overhead_ms", "ray_roundtrip_ms", "store_chunk_append_ms"):
+        assert 0 < fig[key] < 1e4, key
+    assert 0 < fig["scene_chunk_cpu_s"] < 600

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+from typing import Any
 
 DEFAULT_OUTPUT = Path("ee_params.yaml")
 
@@ -35,7 +37,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--log", metavar="THROWS.csv", help="also write the campaign as THROW_LOG.md CSV"
     )
-    p.add_argument("--db", metavar="PATH", help="append the throws to this throw store")
+    p.add_argument(
+        "--db",
+        metavar="PATH",
+        help="append the throws to this throw store (each chunk of 8 as it is thrown)",
+    )
     p.add_argument(
         "--snapshot",
         metavar="FILE.png",
@@ -89,12 +95,28 @@ def _check_outputs(args: argparse.Namespace) -> None:
             check_output_path(path, flag)
 
 
+def _open_store(path: str, plan: list[dict]) -> Any:  # type: ignore[type-arg]
+    """The throw store, refused before the campaign if it already holds one of its throws."""
+    from cell.errors import InvalidInput
+    from cell.log.store import ThrowStore
+
+    store = ThrowStore(path)
+    known = store.existing_ids([p["throw_id"] for p in plan])
+    if known:
+        store.close()
+        raise InvalidInput(
+            f"--db {store.path}: already holds {len(known)} throw(s) of this campaign "
+            f"(e.g. {sorted(known)[0]!r}); give another --seed or another store"
+        )
+    return store
+
+
 def run(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from cell.cli.common import print_json
     from cell.errors import InvalidInput
-    from cell.log.csvio import write_throws_csv
+    from cell.log.csvio import ThrowTable, write_throws_csv
     from cell.params import save_params
     from cell.sim.calibrate import calibrate_table
     from cell.sim.campaign import campaign_plan, run_campaign
@@ -112,6 +134,15 @@ def run(args: argparse.Namespace) -> int:
 
         import_rerun()
     plan = campaign_plan(args.n, seed=args.seed)
+    store = _open_store(args.db, plan) if args.db else None
+    appended = [0]
+
+    def append(records: list[dict]) -> None:  # type: ignore[type-arg]
+        # the driver is the only writer: each chunk of throws in one transaction, as it
+        # arrives, so a dead worker or a Ctrl-C loses no throw already appended
+        if store is not None:
+            appended[0] += store.import_table(ThrowTable.from_records(records))
+
     scene = None
     if args.gui:
         from cell.sim import CellScene
@@ -125,17 +156,23 @@ def run(args: argparse.Namespace) -> int:
                 progress=lambda k: bar.update(k - bar.n),
                 workers=args.workers,
                 address=args.ray_address,
+                on_records=append,
             )
+    except BaseException:
+        if store is not None:
+            print(
+                f"cell calibrate: {appended[0]} of {len(plan)} throws were appended to "
+                f"{store.path} before the campaign stopped",
+                file=sys.stderr,
+            )
+        raise
     finally:
         if scene is not None:
             scene.close()
+        if store is not None:
+            store.close()
     if args.log:
         write_throws_csv(table, args.log)
-    if args.db:
-        from cell.log.store import ThrowStore
-
-        with ThrowStore(args.db) as store:
-            store.import_table(table)
     with tqdm(desc="identify", unit="it", disable=args.json or None) as bar:
         res, nominal, fitted, rule = calibrate_table(table, progress=lambda i, r: bar.update(1))
     out = Path(args.output)

@@ -183,6 +183,10 @@ class ThrowStore:
             raise
         self._conn.execute("COMMIT")
 
+    def existing_ids(self, ids: list[str]) -> set[str]:
+        """Those of `ids` already in the store (to refuse a campaign before it runs)."""
+        return self._existing_ids(list(ids))
+
     def _existing_ids(self, ids: list[str]) -> set[str]:
         found: set[str] = set()
         for k in range(0, len(ids), 500):

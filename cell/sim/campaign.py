@@ -144,6 +144,7 @@ def run_campaign(
     progress: Callable[[int], None] | None = None,
     workers: int = 1,
     address: str | None = None,
+    on_records: Callable[[list[dict[str, Any]]], None] | None = None,
 ) -> ThrowTable:
     """Throw every planned throw in a scene (a fresh one without arm or bins by default).
 
@@ -153,6 +154,9 @@ def run_campaign(
         progress: called with the number of throws done.
         workers, address: split the plan into chunks thrown on Ray (cell.parallel),
             each in its own scene; the same records as the serial run.
+        on_records: called in this process with each chunk's records as they arrive
+            (in completion order; with `scene`, once with all of them): where a caller
+            appends them to its throw store, the driver being the only writer.
 
     Returns:
         The throw log of the campaign (THROW_LOG.md columns plus t_flight_s, session).
@@ -168,6 +172,8 @@ def run_campaign(
 
         def tick(i: int, recs: list[dict[str, Any]]) -> None:
             done[0] += len(recs)
+            if on_records is not None:
+                on_records(recs)
             if progress is not None:
                 progress(done[0])
 
@@ -181,7 +187,10 @@ def run_campaign(
             progress=False,
         )
         return ThrowTable.from_records([r for part in parts for r in part])
-    return ThrowTable.from_records(campaign_records(plan, scene=scene, progress=progress))
+    records = campaign_records(plan, scene=scene, progress=progress)
+    if on_records is not None:
+        on_records(records)
+    return ThrowTable.from_records(records)
 
 
 def campaign_records(
