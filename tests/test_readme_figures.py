@@ -81,7 +81,7 @@ def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
     assert float(hi) == pytest.approx(bench["in_bin_rate_hi"], abs=5e-4)
     (unseen,) = _quoted(r"`in_bin_rate_unseen` \*\*([\d.]+)\*\*")
     assert float(unseen) == pytest.approx(bench["in_bin_rate_unseen"], abs=5e-4)
-    (items,) = _quoted(r"over (\d+) items of 20 layouts")
+    (items,) = _quoted(r"[Oo]ver (\d+) items of 20\s+layouts")
     assert int(items) == bench["items"]
     (rate_h,) = _quoted(r"`items_per_hour` \*\*([\d,]+)\*\*")
     assert int(rate_h.replace(",", "")) == round(bench["items_per_hour"])

@@ -92,7 +92,8 @@ def test_the_scene_arm_and_items_are_entities_on_both_timelines(runs) -> None:
     assert all(len(r["Scalars:scalars"]) == 7 for r in joints)
     t = [r["sim_time"] for r in joints]
     # the scene's clock runs on through flights and settling; the summary counts arm time
-    assert t == sorted(t) and t[-1] > summary["sim_time_s"]
+    # the poses cover the whole run, to within one 30 Hz frame of its end
+    assert t == sorted(t) and t[-1] > summary["sim_time_s"] - 1 / 30
     assert np.all(np.diff(t) < 0.04)  # sampled at 30 Hz of simulated time
     for r in summary["results"]:
         ent = f"/world/items/{r['index']:03d}_{r['object_id']}"
