@@ -158,6 +158,9 @@ BAD_ARGS = [
     ["synth", "-o", "t.csv", "--n", "0"],
     ["synth", "-o", "t.csv", "--world", "missing.yaml"],
     ["calibrate", "--n", "-3"],
+    ["calibrate", "--n", "2", "--gui", "--workers", "2"],
+    ["calibrate", "--n", "2", "--workers", "0"],
+    ["learn", "missing.csv", "-o", "r.skops", "--workers", "-1"],
 ]
 
 

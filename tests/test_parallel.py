@@ -221,3 +221,24 @@ def test_bench_ray_figures(local_ray):
     for key in ("ray_task_overhead_ms", "ray_roundtrip_ms", "store_chunk_append_ms"):
         assert 0 < fig[key] < 1e4, key
     assert 0 < fig["scene_chunk_cpu_s"] < 600
+
+
+def test_cli_learn_fits_on_two_workers_give_the_serial_table(local_ray, tmp_path, capsys):
+    from cell.cli import main
+    from cell.log import write_throws_csv
+    from cell.model import DEFAULT_EE
+    from cell.residual.campaign import shape_stretch_hook
+    from cell.synth import Campaign, NoiseModel, World, draw_campaign
+
+    noise = NoiseModel(along_rel=0.005, across_rel=0.0025, floor_m=0.003)
+    world = World(ee=DEFAULT_EE, noise=noise, predict=shape_stretch_hook(0.1))
+    log = tmp_path / "throws.csv"
+    write_throws_csv(draw_campaign(world, Campaign(n=140, stroke_m=(0.04, 0.10)), seed=4), log)
+    docs = []
+    for extra in ([], ["--workers", "2"]):
+        argv = ["learn", str(log), "-o", str(tmp_path / "r.skops"), "--grid", "small"]
+        assert main([*argv, "--compare", "svr", "--json", *extra]) == 0
+        docs.append(json.loads(capsys.readouterr().out))
+    assert set(docs[0]) == {"svr"}
+    assert len(docs[0]["svr"]["folds"]) == 7  # 14 objects, 2 held out a fold
+    assert docs[0] == docs[1]  # every fold's figures and chosen hyper-parameters

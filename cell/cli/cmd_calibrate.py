@@ -128,6 +128,11 @@ def run(args: argparse.Namespace) -> int:
             return 0
     if args.n < 1:
         raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+    if args.gui and (args.workers > 1 or args.ray_address):
+        raise InvalidInput(
+            "--gui shows the campaign in this process's window: give --workers 1 and no "
+            "--ray-address with it"
+        )
     _check_outputs(args)
     if args.record:  # fail before the campaign when rerun-sdk is missing
         from cell.record.stream import import_rerun

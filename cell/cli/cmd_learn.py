@@ -55,6 +55,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
     p.add_argument("--plot", metavar="PNG", help="write the Table 5.1 bar chart here")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    from cell.parallel import add_campaign_args
+
+    add_campaign_args(p)  # the round-robin's fits (learner x fold) on Ray
     p.set_defaults(func=run)
 
 
@@ -105,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
                 grid=args.grid,
                 seed=args.seed,
                 progress=step,
+                workers=args.workers,
+                address=args.ray_address,
             )
     model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
     model.save(args.output)

@@ -1,4 +1,4 @@
-"""Pieces several subcommands share: the object flags, JSON output."""
+"""Pieces several subcommands share: the object flags, the campaign flags, JSON output."""
 
 from __future__ import annotations
 
@@ -15,9 +15,11 @@ import numpy as np
 from cell.catalogue import get_object
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import SHAPES, ObjectParams
+from cell.parallel import add_campaign_args  # --workers N, --ray-address ADDR
 
 __all__ = [
     "add_axis_args",
+    "add_campaign_args",
     "add_object_args",
     "check_output_path",
     "object_from_args",

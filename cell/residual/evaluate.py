@@ -33,6 +33,8 @@ __all__ = [
     "round_robin_folds",
     "round_robin",
     "residual_landing",
+    "FitUnit",
+    "fit_fold",
 ]
 
 log = logging.getLogger(__name__)
@@ -181,6 +183,52 @@ def residual_landing(
     return predict(eq).xy, delta
 
 
+@dataclass(frozen=True)
+class FitUnit:
+    """One fit of the round-robin: a learner on a fold (a picklable unit of a campaign).
+
+    Attributes:
+        data: the training data (all rows; the fold's held-out objects are left out).
+        learner: learner name.
+        fold: the fold.
+        grid: "small" or "full".
+        seed: the learner's random state.
+        predict: the model, batch -> Landing (None: nominal with the data's ee).
+    """
+
+    data: TrainingData
+    learner: str
+    fold: Fold
+    grid: str
+    seed: int
+    predict: Callable[[ThrowBatch], Landing] | None = None
+
+
+def _nominal(ee: Any) -> Callable[[ThrowBatch], Landing]:
+    def predict(b: ThrowBatch) -> Landing:
+        return predict_landing(b, ee, strict=False, check_stroke=False)
+
+    return predict
+
+
+def fit_fold(unit: FitUnit) -> tuple[np.ndarray, np.ndarray, np.ndarray, ResidualModel]:
+    """Train on the fold's training objects and predict its held-out throws.
+
+    Returns:
+        (held-out usable rows, their predicted ΔL_s [m], their landings with the
+        residual [m, W] shape (k, 2), the fitted model).
+    """
+    data = unit.data
+    held = np.isin(data.groups, unit.fold.held_out)
+    model = train_residual(data, learner=unit.learner, grid=unit.grid, rows=~held, seed=unit.seed)
+    if set(model.training_objects) & set(unit.fold.held_out):
+        raise InvalidParameter("internal: a held-out object reached training")
+    test = np.flatnonzero(held & data.usable)
+    pred = model.predict_features(data.features[test])
+    after_xy, _ = residual_landing(model, data, test, unit.predict or _nominal(data.ee))
+    return test, pred, after_xy, model
+
+
 def round_robin(
     data: TrainingData,
     *,
@@ -190,6 +238,8 @@ def round_robin(
     seed: int = 0,
     predict: Callable[[ThrowBatch], Landing] | None = None,
     progress: Callable[[str], None] | None = None,
+    workers: int = 1,
+    address: str | None = None,
 ) -> dict[str, LearnerSummary]:
     """Table 5.1: the round-robin evaluation of each learner.
 
@@ -201,35 +251,44 @@ def round_robin(
         seed: shuffles the objects into folds; random state of the learners.
         predict: the model, batch -> Landing (default: nominal with the data's ee).
         progress: called with a short text after each fit (the CLI's progress bar).
+        workers, address: fit on Ray (cell.parallel), one fit (learner × fold) a unit;
+            the same table as in this process (every fit is seeded).
 
     Returns:
         learner name -> its summary.
     """
-    ee = data.ee
-    if predict is None:
-
-        def predict(b: ThrowBatch) -> Landing:
-            return predict_landing(b, ee, strict=False, check_stroke=False)
+    from cell.parallel import run_campaign
 
     usable_ids = sorted(set(data.groups[data.usable].tolist()))
     folds = round_robin_folds(usable_ids, hold_out=hold_out, seed=seed)
     observed = data.table.landed
-    before_all = predict(data.batch).xy
+    before_all = (predict or _nominal(data.ee))(data.batch).xy
+    units = [FitUnit(data, name, fold, grid, seed, predict) for name in learners for fold in folds]
+
+    def done(i: int, r: Any) -> None:
+        if progress is not None:
+            u = units[i]
+            progress(f"{u.learner} held out {', '.join(u.fold.held_out)}")
+
+    fits = run_campaign(
+        fit_fold,
+        units,
+        workers=workers,
+        address=address,
+        desc="round-robin",
+        on_result=done,
+        progress=False,
+    )
     out: dict[str, LearnerSummary] = {}
     for name in learners:
         results: list[FoldResult] = []
-        for fold in folds:
-            held = np.isin(data.groups, fold.held_out)
-            model = train_residual(data, learner=name, grid=grid, rows=~held, seed=seed)
-            if set(model.training_objects) & set(fold.held_out):
-                raise InvalidParameter("internal: a held-out object reached training")
-            test = np.flatnonzero(held & data.usable)
-            pred = model.predict_features(data.features[test])
+        for unit, (test, pred, after_xy, model) in zip(units, fits, strict=True):
+            if unit.learner != name:
+                continue
             err = (pred - data.targets.delta_stroke[test]) * 1000.0
-            after_xy, _ = residual_landing(model, data, test, predict)
             results.append(
                 FoldResult(
-                    fold=fold,
+                    fold=unit.fold,
                     learner=name,
                     test_rows=test,
                     delta_pred_m=pred,
@@ -241,8 +300,6 @@ def round_robin(
                     model=model,
                 )
             )
-            if progress is not None:
-                progress(f"{name} held out {', '.join(fold.held_out)}")
         mses = np.array([r.dls_mse_mm2 for r in results])
         out[name] = LearnerSummary(
             dls_mse_mean=float(mses.mean()),
