@@ -39,7 +39,7 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
             ),
         }
     if v == ["unknown"]:
-        plausible = [c for c in rep["candidates"] if not c.get("at_bound")]
+        plausible = [c for c in rep["candidates"] if not c.get("refused")]
         best = (plausible or rep["candidates"] or [None])[0]
         if best is None:
             return {"phase": "unknown", "evidence": "no effect could be tried"}
@@ -103,12 +103,14 @@ def diagnose_log(
     prob = build_problem(
         table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
     )
-    d = diagnose(prob, identify=identify, progress=progress)
-    rep = d.report
-    where: dict[str, Any] = {}
+    tp: dict[str, Any] | None = None
     if tracks:
         tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
         tp = track_phase(prob, tf)
+    d = diagnose(prob, identify=identify, tracks=tp, progress=progress)
+    rep = d.report
+    where: dict[str, Any] = {}
+    if tp is not None:
         if tp.get("phase"):
             where = {"phase": tp["phase"], "evidence": "tracks: " + tp["evidence"]}
         rep["tracks"] = tp

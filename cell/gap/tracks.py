@@ -30,8 +30,10 @@ from cell.model.throw import drag_constant, launch_state
 
 __all__ = ["TrackFit", "fit_tracks", "track_phase", "launch_arrays"]
 
-WINDOW_S = 0.15  # [s] samples used for a launch (or end) state
+WINDOW_S = 0.15  # [s] samples used for an end state
 MIN_SAMPLES = 4
+DISTURBED_S = 0.08  # [s] the first samples a release may still disturb (fit to the rest)
+DROP_SIGMA = 3.0  # a leading sample this many σ (per axis) off the rest's fit is dropped
 
 
 @dataclass(frozen=True)
@@ -41,11 +43,13 @@ class TrackFit:
     Attributes:
         t0: time of the first sample [s], shape (n,).
         p0, v0: position [m] and velocity [m/s] at t0, shape (n, 3).
-        c0: how an acceleration error Δa [m/s²] biases (p0, v0): the fit returns
-            p0 + c0[:, 0] Δa and v0 + c0[:, 1] Δa, shape (n, 2).
+        c0: how an acceleration error Δa [m/s²] biases (p0, v0), shape (n, 2): zero, since
+            the whole-track fit frees a constant acceleration (kept for the problem's
+            launch correction).
         t1: time of the last sample [s], shape (n,).
         p1, v1: position and velocity at t1, shape (n, 3).
-        g_ratio: apparent gravity over g, shape (n,).
+        g_ratio: apparent gravity over g (the whole track's free acceleration), shape (n,).
+        dropped: leading samples dropped as disturbed, shape (n,).
         samples: the track per throw (k, 4) arrays t, x, y, z (None: no track).
     """
 
@@ -57,6 +61,7 @@ class TrackFit:
     p1: np.ndarray
     v1: np.ndarray
     g_ratio: np.ndarray
+    dropped: np.ndarray
     samples: list[np.ndarray | None]
 
 
@@ -89,15 +94,72 @@ def _state(
     return float(t_ref), sol[0], sol[1], bias
 
 
-def _g_ratio(tr: np.ndarray, k: float) -> float:
-    tau = tr[:, 0] - tr[:, 0].mean()
-    if len(tr) < 6 or np.ptp(tau) < 0.1:
-        return float("nan")
-    coef = np.polyfit(tau, tr[:, 1:4], 2)  # (3, 3): a/2, v, p at the mid time
-    a = 2 * coef[0]
-    v = coef[1]
-    drag = -k * np.linalg.norm(v) * v
-    return float(-(a[2] - drag[2]) / G)
+def _drag_path(tau: np.ndarray, v0: np.ndarray, acc: np.ndarray, k: float) -> np.ndarray:
+    """Displacement [m] drag adds at times tau (from 0) along the path with start velocity
+    v0 and constant acceleration acc (drag evaluated on that path, integrated twice by the
+    trapezoid rule from tau = 0)."""
+    t = np.r_[0.0, tau] if tau[0] > 0 else tau
+    v = v0[None, :] + t[:, None] * acc[None, :]
+    d = -k * np.linalg.norm(v, axis=1)[:, None] * v
+    dt = np.diff(t)[:, None]
+    vel = np.vstack([np.zeros(3), np.cumsum(0.5 * (d[1:] + d[:-1]) * dt, axis=0)])
+    pos = np.vstack([np.zeros(3), np.cumsum(0.5 * (vel[1:] + vel[:-1]) * dt, axis=0)])
+    return pos[1:] if tau[0] > 0 else pos
+
+
+def _free_fit(
+    tau: np.ndarray, pos: np.ndarray, k: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Position, velocity at tau = 0 and a constant extra acceleration (besides gravity and
+    drag) fitted to samples (tau (m,) [s], pos (m, 3) [m]); also the residuals (m, 3)."""
+    gvec = np.array([0.0, 0.0, -G])
+    a_mat = np.stack([np.ones_like(tau), tau, 0.5 * tau**2], axis=1)
+    sol = np.linalg.lstsq(a_mat, pos, rcond=None)[0]
+    for _ in range(3):
+        drag = _drag_path(tau, sol[1], sol[2], k)
+        sol = np.linalg.lstsq(a_mat, pos - drag, rcond=None)[0]
+    drag = _drag_path(tau, sol[1], sol[2], k)
+    res = pos - drag - a_mat @ sol
+    return sol[0], sol[1], sol[2] - gvec, res
+
+
+def _whole_track(tr: np.ndarray, k: float) -> tuple[float, np.ndarray, np.ndarray, float, int]:
+    """The launch state from the whole track, its disturbed first samples dropped.
+
+    The track is fitted with a free start state and a free constant acceleration (gravity,
+    any steady flight effect and a tracking scale all show as such) plus drag. The first
+    samples after a release may still be disturbed (contact with the launcher, the
+    tracker's lock): a fit to the samples after DISTURBED_S gives the scatter σ of the
+    rest; the leading samples off that fit by more than DROP_SIGMA σ are dropped, and
+    the state is fitted again from the first sample kept.
+
+    Returns:
+        (t0 [s], p0 [m], v0 [m/s] at the first kept sample, apparent gravity / g, dropped).
+    """
+    t = tr[:, 0]
+    pos = tr[:, 1:4]
+    core = t >= t[0] + DISTURBED_S
+    if core.sum() < 8:
+        core = np.ones(len(t), bool)
+    _, _, _, res_core = _free_fit(t[core] - t[0], pos[core], k)
+    sigma = float(np.sqrt(np.mean(np.sum(res_core**2, axis=1))))
+    p_c, v_c, a_c, _ = _free_fit(t[core] - t[0], pos[core], k)
+    tau_all = t - t[0]
+    gvec = np.array([0.0, 0.0, -G])
+    pred = p_c + np.outer(tau_all, v_c) + 0.5 * np.outer(tau_all**2, gvec + a_c)
+    pred = pred + _drag_path(np.maximum(tau_all, 1e-9), v_c, gvec + a_c, k)
+    off = np.linalg.norm(pos - pred, axis=1) / max(sigma / np.sqrt(3.0), 1e-4)
+    # the leading run of samples off the fit (a disturbance decays: the sample after the
+    # last one detected is dropped as well)
+    out = off[: max(len(t) // 2, 1)] > DROP_SIGMA
+    drop = int(np.argmin(out)) if not out.all() else int(out.size)
+    drop = drop + 1 if drop else 0
+    if len(t) - drop < 8:
+        drop = max(len(t) - 8, 0)
+    t0 = float(t[drop])
+    p0, v0, a, _ = _free_fit(t[drop:] - t0, pos[drop:], k)
+    g_ratio = float(-(a[2] - G) / G) if np.ptp(t[drop:]) >= 0.1 else float("nan")
+    return t0, p0, v0, g_ratio, drop
 
 
 def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarray) -> TrackFit:
@@ -118,6 +180,7 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
         "p1": np.full((n, 3), np.nan),
         "v1": np.full((n, 3), np.nan),
         "g_ratio": np.full(n, np.nan),
+        "dropped": np.zeros(n),
     }
     samples: list[np.ndarray | None] = []
     for i, tid in enumerate(throw_ids):
@@ -126,9 +189,10 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             samples.append(None)
             continue
         samples.append(tr)
-        out["t0"][i], out["p0"][i], out["v0"][i], out["c0"][i] = _state(tr, float(k[i]), True)
+        t0, p0, v0, g_ratio, drop = _whole_track(tr, float(k[i]))
+        out["t0"][i], out["p0"][i], out["v0"][i], out["g_ratio"][i] = t0, p0, v0, g_ratio
+        out["dropped"][i] = drop
         out["t1"][i], out["p1"][i], out["v1"][i], _ = _state(tr, float(k[i]), False)
-        out["g_ratio"][i] = _g_ratio(tr, float(k[i]))
     return TrackFit(samples=samples, **out)
 
 
@@ -241,6 +305,8 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
             "g_ratio": g_med,
             "g_ratio_se": g_se,
             "g_ratio_object_spread": spread,
+            "measurement": bool(measurement),
+            "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
         }
     )
     return out

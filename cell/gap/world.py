@@ -81,7 +81,7 @@ def _make(name: str, rng: np.random.Generator) -> tuple[Callable[[float], list[E
     if name == "wind":
         th = rng.uniform(-np.pi, np.pi)
         vz = rng.uniform(-0.2, 0.2)
-        return (lambda m: [Wind(m * np.cos(th), m * np.sin(th), m * vz)]), 25.0
+        return (lambda m: [Wind(m * np.cos(th), m * np.sin(th), m * vz)]), 2.5
     if name == "spin":
         lm = rng.uniform(0.2, 0.5)
         return (lambda m: [Spin(sign * m, lm)]), 600.0
