@@ -38,6 +38,7 @@ from cell.gap.fit import Score, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.stats import bootstrap_cut
+from cell.gap.tracks import phase_evidence
 from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
 
 __all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects"]
@@ -69,12 +70,13 @@ class Diagnosis:
     noise: NoiseFloor | None = None
 
 
-def refusal(eff: Effect, tracks: dict[str, Any] | None) -> str | None:
+def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) -> str | None:
     """Why a fitted effect may not join the verdict (None: it may).
 
     Args:
         eff: the fitted effect.
         tracks: the tracks' evidence (`cell.gap.tracks.track_phase`) or None.
+        floor_m: the noise floor [m] (the landing share's significance).
     """
     bound = _at_bound(eff)
     if bound:
@@ -87,9 +89,7 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None) -> str | None:
         return None
     if eff.phase == "measurement":
         if not tracks.get("measurement"):
-            return (
-                f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g: no measurement gap"
-            )
+            return f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g: no measurement gap"
         if isinstance(eff, TrackingScale):
             g = tracks["g_ratio"]
             tol = max(SCALE_AGREE, 3 * tracks.get("g_ratio_se", 0.0))
@@ -99,13 +99,16 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None) -> str | None:
                     f"gravity ratio {g:.4f}"
                 )
         return None
-    shares = {p: tracks.get(f"{p}_m", float("nan")) for p in ("launch", "flight", "landing")}
-    finite = [v for v in shares.values() if np.isfinite(v)]
-    own = shares.get(eff.phase, float("nan"))
-    if finite and np.isfinite(own) and own < AGREE_SHARE * max(finite):
-        top = max((p for p in shares if np.isfinite(shares[p])), key=lambda p: shares[p])
+    ev = phase_evidence(tracks, floor_m)
+    top = ev["phase"]
+    if top is None or top == "measurement" or top == eff.phase:
+        return None
+    own = ev["shares"].get(eff.phase, float("nan"))
+    if not np.isfinite(own) or ev["significant"].get(eff.phase):
+        return None
+    if own < AGREE_SHARE * ev["shares"][top]:
         return (
-            f"the tracks place the gap in the {top} ({shares[top]:.3f} m), not the "
+            f"the tracks place the gap in the {top} ({ev['shares'][top]:.3f} m), not the "
             f"{eff.phase} ({own:.3f} m)"
         )
     return None
@@ -218,6 +221,7 @@ def diagnose(
     F = nf.floor_m
     scores: dict[str, Score] = {}
     members: dict[str, type[Effect]] = {}
+    member_rank: dict[str, tuple[bool, float]] = {}
     laws: dict[str, dict[str, float]] = {}
     for family in applicable_families(prob):
         for cls in family:
@@ -229,19 +233,25 @@ def diagnose(
             sc = score_set(prob, prefix + [cls], warm=warm)
             if len(family) > 1:
                 laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
-            if cls.name not in scores or sc.heldout_rmse_m < scores[cls.name].heldout_rmse_m:
+            # the member that predicts held-out throws best; one at a bound or implausible
+            # only when every member is
+            key = (_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible()) != []
+            rank = (key, sc.heldout_rmse_m)
+            if cls.name not in scores or rank < member_rank[cls.name]:
                 scores[cls.name] = sc
                 members[cls.name] = cls
+                member_rank[cls.name] = rank
     ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
 
     def refuse(cand: Score) -> str | None:
         for e in cand.full.effects:
             if isinstance(e, BandStiffness):
                 continue
-            why = refusal(e, tracks)
+            why = refusal(e, tracks, F)
             if why:
                 return f"{e.name}: {why}"
         return None
+
     perm_cache: dict[tuple[str, ...], Score] = {}
     tests: dict[str, dict[str, Any]] = {}
 
@@ -368,7 +378,7 @@ def diagnose(
                 "laws_heldout_rmse_m": laws.get(eff.name, {}),
                 "at_bound": _at_bound(eff),
                 "implausible": eff.implausible(),
-                "refused": refusal(eff, tracks),
+                "refused": refusal(eff, tracks, F),
             }
         )
     if identified is not None:
@@ -392,9 +402,7 @@ def diagnose(
             "laws": (
                 {e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}
             ),
-            "params_ci95": (
-                _verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}
-            ),
+            "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
             "partial_effects": (
                 [e.name for e in public_effects] if verdict[0] == "unknown" else []
             ),

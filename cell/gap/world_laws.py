@@ -33,7 +33,7 @@ import numpy as np
 from cell.gap.world import throw_records
 from cell.log.csvio import ThrowTable
 from cell.model.flight3d import fly, sample_path
-from cell.model.params import DEFAULT_EE, G, EndEffectorParams
+from cell.model.params import DEFAULT_EE, EndEffectorParams, G
 from cell.model.throw import ThrowBatch, drag_constant, launch_state, throw_axis
 
 __all__ = ["LawCampaign", "draw_law_campaign", "LAW_EFFECT"]
@@ -74,6 +74,8 @@ class LawCampaign:
     laws: tuple[dict[str, Any], ...]
     noise_m: float
     true_xy: np.ndarray
+    true_launch: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    accel: Any = None
 
 
 def _law(laws: list[dict[str, Any]], name: str) -> dict[str, Any] | None:
@@ -249,4 +251,6 @@ def draw_law_campaign(
         laws=tuple(laws),
         noise_m=float(landing_noise_m * np.sqrt(2)),
         true_xy=xy[ok],
+        true_launch=(p1[ok], v1[ok], t1[ok]),
+        accel=(accel, k[ok], ok),
     )

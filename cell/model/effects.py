@@ -370,18 +370,14 @@ def effects_from_mapping(mapping: Mapping[str, Mapping[str, Any]] | None) -> lis
         if not isinstance(values, Mapping):
             raise InvalidParameter(f"effects.{name}: must map parameter names to numbers")
         cls = member_for(str(name), list(values)) or cls0
-        names = tuple(
-            dict.fromkeys(n for c in FAMILIES[str(name)] for n in c.param_names())
-        )
+        names = tuple(dict.fromkeys(n for c in FAMILIES[str(name)] for n in c.param_names()))
         bad = [k for k in values if k not in names]
         if bad:
             raise InvalidParameter(
                 f"effects.{name}: unknown parameter(s) {bad}; valid: {', '.join(names)}"
             )
         if member_for(str(name), list(values)) is None:
-            laws = "; ".join(
-                f"{c.law}: {', '.join(c.param_names())}" for c in FAMILIES[str(name)]
-            )
+            laws = "; ".join(f"{c.law}: {', '.join(c.param_names())}" for c in FAMILIES[str(name)])
             raise InvalidParameter(
                 f"effects.{name}: parameters {list(values)} mix laws of the family ({laws})"
             )
