@@ -55,6 +55,7 @@ MAX_EFFECTS = 3
 PAIR_TRIES = (2, 1)
 AGREE_SHARE = 0.35  # a phase the tracks give less than this share of the largest is clean
 SCALE_AGREE = 0.005  # a tracking scale within this of the tracks' apparent gravity ratio
+BOUND_TOL = 2e-3  # a parameter within this share of its range from a bound sits at it
 
 
 @dataclass
@@ -159,7 +160,9 @@ def _at_bound(eff: Effect) -> list[str]:
     neutral = eff.neutral().params()
     for (name, v), (lo, hi) in zip(eff.params().items(), eff.bounds, strict=True):
         span = hi - lo
-        if (v <= lo + 0.025 * span or v >= hi - 0.025 * span) and abs(v - neutral[name]) > 1e-9:
+        if (v <= lo + BOUND_TOL * span or v >= hi - BOUND_TOL * span) and abs(
+            v - neutral[name]
+        ) > BOUND_TOL * span:
             out.append(name)
     return out
 

@@ -472,7 +472,8 @@ def _flight_accel(
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
-        w = np.broadcast_to(w_const, p.shape).copy()
+        w = np.empty_like(p)
+        w[:] = w_const
         if dw is not None:
             rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
             inside = 0.5 * (1.0 + np.tanh((dw.radius_m - rho) / DOWNWASH_EDGE_M))

@@ -126,20 +126,24 @@ def fly(
     kk = np.asarray(k, float)
     lz = np.asarray(land_z, float)
     t = 0.0
+    # the steps that cross, located inside the step all at once after the loop
+    hits: list[tuple[np.ndarray, ...]] = []
     while idx.size and t < t_max:
         p1, v1 = _rk4(p, v, kk[idx], idx, accel, step)
         cross = (p[:, 2] > lz[idx]) & (p1[:, 2] <= lz[idx])
         if np.any(cross):
             c = cross
-            s = _hermite_root(p[c, 2], p1[c, 2], step * v[c, 2], step * v1[c, 2], lz[idx][c])
-            ids = idx[c]
-            for j in range(3):
-                out_p[ids, j] = _hermite(p[c, j], p1[c, j], step * v[c, j], step * v1[c, j], s)
-                out_v[ids, j] = v[c, j] + (v1[c, j] - v[c, j]) * s
-            out_t[ids] = t_start[ids] + t + s * step
+            hits.append((idx[c], p[c], p1[c], v[c], v1[c], np.full(int(c.sum()), t)))
         keep = ~cross & ~((p1[:, 2] <= lz[idx]) & (v1[:, 2] < 0))
         idx, p, v = idx[keep], p1[keep], v1[keep]
         t += step
+    if hits:
+        ids, pa, pb, va, vb, tt = (np.concatenate(x) for x in zip(*hits, strict=True))
+        s = _hermite_root(pa[:, 2], pb[:, 2], step * va[:, 2], step * vb[:, 2], lz[ids])
+        for j in range(3):
+            out_p[ids, j] = _hermite(pa[:, j], pb[:, j], step * va[:, j], step * vb[:, j], s)
+            out_v[ids, j] = va[:, j] + (vb[:, j] - va[:, j]) * s
+        out_t[ids] = t_start[ids] + tt + s * step
     landed = np.isfinite(out_t)
     return FlightResult(position=out_p, velocity=out_v, t=out_t, landed=landed)
 
