@@ -25,6 +25,7 @@ from cell.model.effects import (
     BandMass,
     Bounce,
     Downwash,
+    DragScale,
     Effect,
     ReleasePitch,
     ShapeStretch,
@@ -85,6 +86,8 @@ def _make(name: str, rng: np.random.Generator) -> tuple[Callable[[float], list[E
     if name == "spin":
         lm = rng.uniform(0.2, 0.5)
         return (lambda m: [Spin(sign * m, lm)]), 600.0
+    if name == "drag_scale":
+        return (lambda m: [DragScale(1.0 + sign * m)]), 0.7
     if name == "tracking_scale":
         return (lambda m: [TrackingScale(1.0 + sign * m)]), 0.3
     if name == "bounce":
@@ -101,6 +104,7 @@ TRUTHS = (
     "downwash",
     "wind",
     "spin",
+    "drag_scale",
     "tracking_scale",
     "bounce",
     "none",
