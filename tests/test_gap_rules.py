@@ -132,7 +132,9 @@ def test_whole_track_launch_drops_a_disturbed_start() -> None:
     v_true = (path[:, 1] - path[:, 0]) / (2 * h)
     err_whole = np.sqrt(np.mean(np.sum((fit.v0 - v_true) ** 2, axis=1)))
     # the first-window fit from the first sample, against the truth at that sample
-    first = np.array([_state(camp.tracks[i], float(kk), True)[2] for i, kk in zip(ids, k)])
+    first = np.array(
+        [_state(camp.tracks[i], float(kk), True)[2] for i, kk in zip(ids, k, strict=True)]
+    )
     t_first = np.array([camp.tracks[i][0, 0] for i in ids])
     t_rel = np.stack([t_first - t1, t_first - t1 + 2 * h], axis=1)
     path = sample_path(p1, v1, k, t_rel, step=0.001)

@@ -62,8 +62,11 @@ LAW_CASES: dict[str, tuple[str, list[dict[str, Any]], dict[str, Any]]] = {
         [{"law": "rolling", "tau_s": 0.05}],
         {"other_launcher": True, "disturbed": True},
     ),
-    "yaw~unknown": ("unknown", [{"law": "yaw", "delta_rad": 0.04}], {"tracked": True,
-                                                                      "disturbed": True}),
+    "yaw~unknown": (
+        "unknown",
+        [{"law": "yaw", "delta_rad": 0.04}],
+        {"tracked": True, "disturbed": True},
+    ),
 }
 CASES: tuple[str, ...] = TRUTHS + tuple(LAW_CASES)
 

@@ -238,8 +238,8 @@ def diagnose(
                 laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
             # the member that predicts held-out throws best; one at a bound or implausible
             # only when every member is
-            key = (_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible()) != []
-            rank = (key, sc.heldout_rmse_m)
+            stretched = bool(_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible())
+            rank = (stretched, sc.heldout_rmse_m)
             if cls.name not in scores or rank < member_rank[cls.name]:
                 scores[cls.name] = sc
                 members[cls.name] = cls

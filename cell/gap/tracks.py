@@ -2,17 +2,21 @@
 
 For each tracked throw:
 
-* launch: the launch state (position, velocity at the first sample) is fitted
-  to the first samples (gravity and drag at the fitted velocity as the known
-  acceleration) and compared with the model's; its share of the landing miss
-  is the landing difference it makes under the nominal flight;
-* flight: the nominal flight from the observed launch state is compared with
-  the rest of the track (the deviation at the last sample);
-* landing: the touchdown the track leads to (the nominal flight from the state
-  fitted to the last samples) against the logged landing point;
-* measurement: the track's apparent gravity (a free quadratic fit, corrected
-  for drag) against g; a tracking system off in scale shows a gravity off by
-  the same factor for every object.
+* launch state: fitted to the whole track (not its first samples alone) with a free
+  start state and a free constant acceleration besides gravity and drag; the first
+  samples after a release may still be disturbed (contact with the launcher, the
+  tracker's lock), so a leading run of samples off the fit to the rest is dropped. This
+  is the launch of a throw from another launcher;
+* launch and flight shares: the free flight (acceleration linear in time) fitted to the
+  even and to the odd samples separately, carried back to the release. Launch share:
+  the landing difference between that release state and the model's under the nominal
+  flight; flight share: the landing difference between the nominal flight from it and
+  the observed flight. Each is the mean product of the two halves' differences, so the
+  tracks' scatter drops out, and comes with a z-score;
+* landing: the touchdown the track leads to (the nominal flight from the state fitted to
+  the last samples) against the logged landing point;
+* measurement: the whole track's apparent gravity against g; a tracking system off in
+  scale shows a gravity off by the same factor for every object.
 """
 
 from __future__ import annotations
