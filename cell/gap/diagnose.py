@@ -13,7 +13,16 @@ Verdict rules:
 * when the joined effects bring the held-out RMSE A within 1.3 F, they are
   the verdict; otherwise it is `unknown` (a second effect is tried together
   with the first when one alone leaves a real gap; it joins only for the cut it adds
-  over the first effect refitted from the pair's solution).
+  over the first effect refitted from the pair's solution);
+* an effect is a family of laws (`cell.model.effects.FAMILIES`): every member is
+  fitted and scored, and the one that predicts held-out throws best stands for
+  the effect;
+* an effect is refused (does not join, and the report says why) when a parameter
+  sits at a bound, when its value is one no real cell has (outside the effect's
+  plausible range), or when the tracks contradict it: its phase carries less than
+  AGREE_SHARE of the largest phase share of the landing miss the tracks show, a
+  measurement effect without an apparent gravity off g, or a tracking scale off the
+  tracks' apparent gravity ratio by more than SCALE_AGREE.
 """
 
 from __future__ import annotations
@@ -29,7 +38,8 @@ from cell.gap.fit import Score, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.stats import bootstrap_cut
-from cell.model.effects import EFFECTS, Effect
+from cell.gap.tracks import phase_evidence
+from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
 
 __all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects"]
 
@@ -43,6 +53,9 @@ MAX_EFFECTS = 3
 # partners tried with one, with two chosen effects: this many of the best single effects,
 # and as many of those that best fit what the chosen ones leave
 PAIR_TRIES = (2, 1)
+AGREE_SHARE = 0.35  # a phase the tracks give less than this share of the largest is clean
+SCALE_AGREE = 0.005  # a tracking scale within this of the tracks' apparent gravity ratio
+BOUND_TOL = 2e-3  # a parameter within this share of its range from a bound sits at it
 
 
 @dataclass
@@ -56,6 +69,55 @@ class Diagnosis:
     verdict_residual: np.ndarray  # (n, 2) [m] with the verdict's effects fitted on all
     scores: dict[str, Score] = field(default_factory=dict)
     noise: NoiseFloor | None = None
+
+
+def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) -> str | None:
+    """Why a fitted effect may not join the verdict (None: it may).
+
+    Args:
+        eff: the fitted effect.
+        tracks: the tracks' evidence (`cell.gap.tracks.track_phase`) or None.
+        floor_m: the noise floor [m] (the landing share's significance).
+    """
+    bound = _at_bound(eff)
+    if bound:
+        return f"at a bound: {', '.join(bound)}"
+    bad = eff.implausible()
+    if bad:
+        p = eff.params()
+        return "implausible: " + ", ".join(f"{k}={p[k]:.4g}" for k in bad)
+    if not tracks or not tracks.get("phase"):
+        return None
+    if eff.phase == "measurement":
+        if not tracks.get("measurement"):
+            return f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g: no measurement gap"
+        if isinstance(eff, TrackingScale):
+            g = tracks["g_ratio"]
+            tol = max(SCALE_AGREE, 3 * tracks.get("g_ratio_se", 0.0))
+            if abs(eff.scale_factor - g) > tol:
+                return (
+                    f"scale {eff.scale_factor:.4f} disagrees with the tracks' apparent "
+                    f"gravity ratio {g:.4f}"
+                )
+        return None
+    ev = phase_evidence(tracks, floor_m)
+    top = ev["phase"]
+    if top is None or top == "measurement" or top == eff.phase:
+        return None
+    own = ev["shares"].get(eff.phase, float("nan"))
+    if not np.isfinite(own) or ev["significant"].get(eff.phase):
+        return None
+    if own < AGREE_SHARE * ev["shares"][top]:
+        return (
+            f"the tracks place the gap in the {top} ({ev['shares'][top]:.3f} m), not the "
+            f"{eff.phase} ({own:.3f} m)"
+        )
+    return None
+
+
+def applicable_families(prob: GapProblem) -> list[tuple[type[Effect], ...]]:
+    """The effects the log can say anything about, each as its family of laws."""
+    return [FAMILIES[c.name] for c in applicable_effects(prob)]
 
 
 def applicable_effects(prob: GapProblem) -> list[type[Effect]]:
@@ -98,7 +160,9 @@ def _at_bound(eff: Effect) -> list[str]:
     neutral = eff.neutral().params()
     for (name, v), (lo, hi) in zip(eff.params().items(), eff.bounds, strict=True):
         span = hi - lo
-        if (v <= lo + 0.025 * span or v >= hi - 0.025 * span) and abs(v - neutral[name]) > 1e-9:
+        if (v <= lo + BOUND_TOL * span or v >= hi - BOUND_TOL * span) and abs(
+            v - neutral[name]
+        ) > BOUND_TOL * span:
             out.append(name)
     return out
 
@@ -108,8 +172,12 @@ def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
     return tuple(c.name for c in classes)
 
 
-def _cls(name: str) -> type[Effect]:
-    return BandStiffness if name == BandStiffness.name else EFFECTS[name]
+def _cls(name: str, chosen: dict[str, type[Effect]] | None = None) -> type[Effect]:
+    if name == BandStiffness.name:
+        return BandStiffness
+    if chosen and name in chosen:
+        return chosen[name]
+    return EFFECTS[name]
 
 
 def _shrink(before: float, after: float) -> float:
@@ -120,6 +188,7 @@ def diagnose(
     prob: GapProblem,
     *,
     identify: bool = False,
+    tracks: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """Diagnose the gap between the logged throws and the configured model.
@@ -128,6 +197,7 @@ def diagnose(
         prob: the problem (the log and the configured model).
         identify: re-identify the nominal band law (one stiffness factor) on the
             training throws of every fit, the baseline's included.
+        tracks: the tracks' evidence of where the gap lies (`track_phase`), or None.
         progress: called with a short label before each step (the CLI's progress bar).
 
     Returns:
@@ -153,14 +223,38 @@ def diagnose(
     nf = noise_floor(prob, r0, prob.landing(all_idx, identified.full.effects if identified else ()))
     F = nf.floor_m
     scores: dict[str, Score] = {}
-    for cls in applicable_effects(prob):
-        tick(cls.name)
-        warm = None
-        if identified is not None:
-            neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
-            warm = np.r_[identified.full.x, neutral]
-        scores[cls.name] = score_set(prob, prefix + [cls], warm=warm)
+    members: dict[str, type[Effect]] = {}
+    member_rank: dict[str, tuple[bool, float]] = {}
+    laws: dict[str, dict[str, float]] = {}
+    for family in applicable_families(prob):
+        for cls in family:
+            tick(cls.name + (f" ({cls.law})" if cls.law else ""))
+            warm = None
+            if identified is not None:
+                neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
+                warm = np.r_[identified.full.x, neutral]
+            sc = score_set(prob, prefix + [cls], warm=warm)
+            if len(family) > 1:
+                laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
+            # the member that predicts held-out throws best; one at a bound or implausible
+            # only when every member is
+            stretched = bool(_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible())
+            rank = (stretched, sc.heldout_rmse_m)
+            if cls.name not in scores or rank < member_rank[cls.name]:
+                scores[cls.name] = sc
+                members[cls.name] = cls
+                member_rank[cls.name] = rank
     ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
+
+    def refuse(cand: Score) -> str | None:
+        for e in cand.full.effects:
+            if isinstance(e, BandStiffness):
+                continue
+            why = refusal(e, tracks, F)
+            if why:
+                return f"{e.name}: {why}"
+        return None
+
     perm_cache: dict[tuple[str, ...], Score] = {}
     tests: dict[str, dict[str, Any]] = {}
 
@@ -173,10 +267,14 @@ def diagnose(
             "cut_share": cut / prev if prev > 0 else 0.0,
         }
         ok = cut >= MIN_CUT * prev and lo > 0
-        newest = _cls(cand.names[-1])
+        why = refuse(cand)
+        if why:
+            t["refused"] = why
+            ok = False
+        newest = _cls(cand.names[-1], members)
         if ok and newest.hangs_on is not None:
             tick(f"permutation {newest.name}")
-            classes = [_cls(nm) for nm in cand.names]
+            classes = [_cls(nm, members) for nm in cand.names]
             key = cand.names
             if key not in perm_cache:
                 perm_cache[key] = score_set(prob, classes, permute=True, warm=None)
@@ -211,10 +309,10 @@ def diagnose(
             tries = PAIR_TRIES[min(len(_public(have)), len(PAIR_TRIES)) - 1]
             combos: list[Score] = []
             rest = [sc for sc in ranked if sc.names[-1] not in have]
-            quick = _partners(prob, chosen[-1], [_cls(sc.names[-1]) for sc in rest])
+            quick = _partners(prob, chosen[-1], [_cls(sc.names[-1], members) for sc in rest])
             pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
             for sc in [sc for sc in rest if sc.names[-1] in pick]:
-                classes = [_cls(nm) for nm in have] + [_cls(sc.names[-1])]
+                classes = [_cls(nm, members) for nm in have] + [_cls(sc.names[-1], members)]
                 warm = np.concatenate([chosen[-1].full.x, sc.full.x[len(prefix) :]])
                 tick("+".join(_public(classes_names(classes))))
                 combo = score_set(prob, classes, warm=warm)
@@ -225,7 +323,7 @@ def diagnose(
             for combo in combos[:2]:
                 # drop-one: the chosen effects alone, refitted from where the pair put them,
                 # so that a partner only joins for what it adds itself
-                prev = [_cls(nm) for nm in have]
+                prev = [_cls(nm, members) for nm in have]
                 drop = score_set(prob, prev, warm=combo.full.x[:n_have])
                 prev_sq = drop.heldout if drop.heldout.mean() < cur_sq.mean() else cur_sq
                 if passes(prev_sq, combo):
@@ -264,16 +362,26 @@ def diagnose(
     for s in ranked:
         _, lo, hi = _shrink_ci(base_sq, s.heldout, prob.seed)
         eff = s.full.effects[-1]
+        ci = s.full.ci[-len(eff.bounds) :] if s.full.ci is not None else None
         candidates.append(
             {
                 "effect": eff.name,
+                "law": eff.law,
                 "phase": eff.phase,
                 "heldout_rmse_m": s.heldout_rmse_m,
                 "shrink_pct": _shrink(B, s.heldout_rmse_m),
                 "shrink_ci_pct": [lo, hi],
                 "fit_rmse_m": s.full.train_rmse_m,
                 "params": eff.params(),
+                "params_ci95": (
+                    {k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci, strict=True)}
+                    if ci is not None
+                    else {}
+                ),
+                "laws_heldout_rmse_m": laws.get(eff.name, {}),
                 "at_bound": _at_bound(eff),
+                "implausible": eff.implausible(),
+                "refused": refusal(eff, tracks, F),
             }
         )
     if identified is not None:
@@ -294,6 +402,10 @@ def diagnose(
             "params": (
                 {e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}
             ),
+            "laws": (
+                {e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}
+            ),
+            "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
             "partial_effects": (
                 [e.name for e in public_effects] if verdict[0] == "unknown" else []
             ),
@@ -308,6 +420,8 @@ def diagnose(
         "tests": tests,
         "identified": extra_id,
         "rules": {
+            "agree_share": AGREE_SHARE,
+            "scale_agree": SCALE_AGREE,
             "none_ratio": NONE_RATIO,
             "verdict_ratio": VERDICT_RATIO,
             "min_cut_share": MIN_CUT,
@@ -323,6 +437,23 @@ def diagnose(
         scores=scores,
         noise=nf,
     )
+
+
+def _verdict_ci(score: Score) -> dict[str, dict[str, list[float]]]:
+    """95 % intervals of the verdict's parameters {effect: {param: [lo, hi]}}."""
+    out: dict[str, dict[str, list[float]]] = {}
+    if score.full.ci is None:
+        return out
+    i = 0
+    for e in score.full.effects:
+        m = len(e.bounds)
+        if not isinstance(e, BandStiffness):
+            out[e.name] = {
+                k: [float(a), float(b)]
+                for k, (a, b) in zip(e.params(), score.full.ci[i : i + m], strict=True)
+            }
+        i += m
+    return out
 
 
 def _public(names: tuple[str, ...] | list[str]) -> list[str]:

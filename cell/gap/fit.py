@@ -27,6 +27,7 @@ class Fit:
     effects: tuple[Effect, ...]
     x: np.ndarray  # scaled parameter vector
     train_rmse_m: float
+    ci: np.ndarray | None = None  # 95 % intervals of the parameters (p, 2), physical units
 
 
 @dataclass(frozen=True)
@@ -114,7 +115,25 @@ def fit_set(
     )
     eff = _unpack(classes, res.x, scale)
     r = res.fun.reshape(-1, 2)
-    return Fit(effects=eff, x=res.x, train_rmse_m=rmse(r)), res.fun, np.asarray(res.jac)
+    jac = np.asarray(res.jac)
+    ci = intervals(res.x, res.fun, jac, scale, lo, hi)
+    return Fit(effects=eff, x=res.x, train_rmse_m=rmse(r), ci=ci), res.fun, jac
+
+
+def intervals(
+    x: np.ndarray, r: np.ndarray, jac: np.ndarray, scale: np.ndarray, lo: np.ndarray,
+    hi: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """95 % intervals of least-squares parameters (p, 2) [physical units]: ±1.96 standard
+    errors from the Gauss-Newton covariance σ² (JᵀJ)⁻¹, σ² the residual variance; clipped
+    to the bounds."""
+    m, p = jac.shape
+    s2 = float(r @ r) / max(m - p, 1)
+    cov = s2 * np.linalg.pinv(jac.T @ jac)
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    lo_x = np.clip(x - 1.96 * se, lo, hi)
+    hi_x = np.clip(x + 1.96 * se, lo, hi)
+    return np.stack([lo_x * scale, hi_x * scale], axis=1)
 
 
 def _refit(

@@ -73,7 +73,7 @@ def format_table(report: dict[str, Any]) -> str:
             + (f"; after {c['after_rmse_m']:.4f} m" if "after_rmse_m" in c else "")
             + ")"
         )
-    lines.append("candidates       held-out RMSE   shrink [95% CI]          params")
+    lines.append("candidates              held-out RMSE   shrink [95% CI]          params")
     tests = r.get("tests", {})
     for c in r["candidates"]:
         lo, hi = c.get("shrink_ci_pct", [float("nan")] * 2)
@@ -84,10 +84,11 @@ def format_table(report: dict[str, Any]) -> str:
             perm = t.get("permutation")
             if perm is not None and not perm["survives"]:
                 mark += " (permutation)"
-        if c.get("at_bound"):
-            mark += f" [at bound: {', '.join(c['at_bound'])}]"
+        if c.get("refused"):
+            mark += f" [refused: {c['refused']}]"
+        name = c["effect"] + (f" ({c['law']})" if c.get("law") else "")
         lines.append(
-            f"  {c['effect']:15s}{c['heldout_rmse_m']:8.4f} m   {c['shrink_pct']:6.1f}% "
+            f"  {name:22s}{c['heldout_rmse_m']:8.4f} m   {c['shrink_pct']:6.1f}% "
             f"[{lo:6.1f}, {hi:6.1f}]   {_fmt_params(c['params'])}  {mark}"
         )
     v = r["verdict"]
@@ -96,6 +97,14 @@ def format_table(report: dict[str, Any]) -> str:
         f"verdict          {' + '.join(v['effects'])}: held-out {b['heldout_rmse_m']:.4f} → "
         f"{v['heldout_rmse_m']:.4f} m, shrink {v['shrink_pct']:.1f}% [{lo:.1f}, {hi:.1f}]"
     )
+    for eff, ci in (v.get("params_ci95") or {}).items():
+        p = v["params"].get(eff, {})
+        law = (v.get("laws") or {}).get(eff)
+        lines.append(
+            f"  {eff}{f' ({law})' if law else ''}: "
+            + ", ".join(f"{k}={p[k]:.4g} [{a:.4g}, {b:.4g}]" for k, (a, b) in ci.items())
+            + " (95% intervals)"
+        )
     if v.get("partial_effects"):
         lines.append(
             f"                 (partly explained by {' + '.join(v['partial_effects'])}; the rest "

@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 
 from cell.gap.conditions import conditions, worst_conditions
-from cell.gap.diagnose import Diagnosis, diagnose
+from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
 from cell.gap.problem import build_problem
-from cell.gap.tracks import fit_tracks, launch_arrays, track_phase
+from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
 from cell.log.table import ThrowTable
 from cell.model.effects import EFFECTS, Effect
 from cell.model.objects import SHAPES
@@ -39,7 +39,7 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
             ),
         }
     if v == ["unknown"]:
-        plausible = [c for c in rep["candidates"] if not c.get("at_bound")]
+        plausible = [c for c in rep["candidates"] if not c.get("refused")]
         best = (plausible or rep["candidates"] or [None])[0]
         if best is None:
             return {"phase": "unknown", "evidence": "no effect could be tried"}
@@ -61,6 +61,43 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
             f"RMSE {base:.3f} → {rep['verdict']['heldout_rmse_m']:.3f} m"
         ),
     }
+
+
+def _where_from_tracks(d: Diagnosis, tp: dict[str, Any]) -> dict[str, Any]:
+    """The phase the tracks place the gap in; where they allow the verdict's phase too (or
+    cannot tell), the verdict's."""
+    rep = d.report
+    ev = phase_evidence(tp, rep["noise_floor_m"])
+    tp["significant"] = ev["significant"]
+    v = rep["verdict"]["effects"]
+    v_phase = EFFECTS[v[0]].phase if v[0] not in ("none", "unknown") else None
+    top = ev["phase"]
+    text = "tracks: " + tp["evidence"]
+    if top is None:
+        if v_phase is None:
+            best = _phase_from_verdict(d)
+            return {
+                "phase": best["phase"],
+                "evidence": text
+                + "; no phase share is significant in the tracks; "
+                + best["evidence"].replace("no tracks; ", ""),
+            }
+        return {
+            "phase": v_phase,
+            "evidence": text + f"; no phase share is significant in the tracks (the first "
+            f"samples after a release are not seen); the verdict's effect acts in the {v_phase}",
+        }
+    if v_phase and v_phase != top and top != "measurement":
+        own = ev["shares"].get(v_phase, float("nan"))
+        if np.isfinite(own) and (
+            ev["significant"].get(v_phase) or own >= AGREE_SHARE * ev["shares"][top]
+        ):
+            return {
+                "phase": v_phase,
+                "evidence": text + f"; the tracks allow the {v_phase} ({own:.3f} m) beside the "
+                f"{top} ({ev['shares'][top]:.3f} m), and the verdict's effect acts there",
+            }
+    return {"phase": top, "evidence": text}
 
 
 MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
@@ -103,15 +140,17 @@ def diagnose_log(
     prob = build_problem(
         table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
     )
-    d = diagnose(prob, identify=identify, progress=progress)
-    rep = d.report
-    where: dict[str, Any] = {}
+    tp: dict[str, Any] | None = None
     if tracks:
         tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
         tp = track_phase(prob, tf)
-        if tp.get("phase"):
-            where = {"phase": tp["phase"], "evidence": "tracks: " + tp["evidence"]}
+    d = diagnose(prob, identify=identify, tracks=tp, progress=progress)
+    rep = d.report
+    where: dict[str, Any] = {}
+    if tp is not None:
         rep["tracks"] = tp
+        if tp.get("phase"):
+            where = _where_from_tracks(d, tp)
     if rep["verdict"]["effects"] == ["none"]:
         evidence = _phase_from_verdict(d)["evidence"]
         if where:

@@ -26,6 +26,7 @@ from cell.model.effects import (
     BandMass,
     Bounce,
     Downwash,
+    DragScale,
     Effect,
     ReleasePitch,
     ShapeStretch,
@@ -82,10 +83,12 @@ def _make(name: str, rng: np.random.Generator) -> tuple[Callable[[float], list[E
     if name == "wind":
         th = rng.uniform(-np.pi, np.pi)
         vz = rng.uniform(-0.2, 0.2)
-        return (lambda m: [Wind(m * np.cos(th), m * np.sin(th), m * vz)]), 25.0
+        return (lambda m: [Wind(m * np.cos(th), m * np.sin(th), m * vz)]), 2.5
     if name == "spin":
         lm = rng.uniform(0.2, 0.5)
         return (lambda m: [Spin(sign * m, lm)]), 600.0
+    if name == "drag_scale":
+        return (lambda m: [DragScale(1.0 + sign * m)]), 0.7
     if name == "tracking_scale":
         return (lambda m: [TrackingScale(1.0 + sign * m)]), 0.3
     if name == "bounce":
@@ -102,6 +105,7 @@ TRUTHS = (
     "downwash",
     "wind",
     "spin",
+    "drag_scale",
     "tracking_scale",
     "bounce",
     "none",

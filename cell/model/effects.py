@@ -12,11 +12,19 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 | shape_stretch | curved or irregular objects (cylinder, sphere, mesh) stretch the band by k·a more |
 | stroke_offset | the true stroke is the logged one + δ (`delta_m`) |
 | release_pitch | the object leaves at elevation + δ (`delta_rad`) |
-| downwash | air moves down at w = k (rpm / 5000)^p within `radius_m` of the release (horizontally) |
+| downwash (column) | air moves down at w = k (rpm / 5000)^p within `radius_m` of the release (horizontally) |
+| downwash (decay) | the same column, its speed falling off as exp(−depth / `depth_m`) below the release height |
 | wind | a constant air velocity (`x_mps`, `y_mps`, `z_mps`) in the drag law |
+| drag_scale | the drag constant k = ½ρC_dA/m times `factor` (C_d off for rough, soft or tumbling objects) |
 | spin | Magnus lift ½ρA C_L |v|² / m normal to v in its vertical plane, C_L = c tanh(S / c), S = ω r / |v| |
 | tracking_scale | the tracker logs s · true positions (about the world origin); release poses and planes are the robot's, true |
-| bounce | the logged point is the rest point: touchdown + v_h |v_h| / (2 μ g) |
+| bounce (friction) | the logged point is the rest point: touchdown + v_h |v_h| / (2 μ g) (∝ impact speed²) |
+| bounce (rolling) | the rest point is touchdown + `tau_s` · v_h (∝ impact speed: rolling) |
+
+An effect is a family of laws (`FAMILIES`): its members share the name and the phase and
+differ in how the effect grows (the diagnosis picks the member that predicts held-out
+throws best). Besides its bounds, each effect has a plausible range (`plausible`): a value
+no real cell has (a 5 m/s wind indoors) is outside it.
 
 `predict_with_effects` evaluates a batch with any set of effects; launch
 effects reuse `predict_landing`'s push overrides, flight effects use the 3-D
@@ -59,7 +67,11 @@ __all__ = [
     "Spin",
     "TrackingScale",
     "Bounce",
+    "BounceRolling",
+    "DownwashDecay",
+    "DragScale",
     "EFFECTS",
+    "FAMILIES",
     "PHASES",
     "effects_from_mapping",
     "effects_to_mapping",
@@ -82,6 +94,9 @@ class Effect:
     bounds: ClassVar[tuple[tuple[float, float], ...]] = ()
     scale: ClassVar[tuple[float, ...]] = ()  # typical size of each parameter
     hangs_on: ClassVar[str | None] = None  # logged quantity for the permutation control
+    law: ClassVar[str] = ""  # the member of the effect's family of laws
+    # plausible range of each parameter (None: the bounds): what a real cell can have
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = None
 
     def vector(self) -> np.ndarray:
         """The parameters as an array, in field order."""
@@ -105,6 +120,15 @@ class Effect:
     def params(self) -> dict[str, float]:
         """The parameters as a plain dict."""
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}
+
+    def implausible(self) -> list[str]:
+        """Parameters outside their plausible range."""
+        rng = self.plausible or self.bounds
+        return [
+            f.name
+            for f, (lo, hi) in zip(fields(self), rng, strict=True)
+            if not lo <= getattr(self, f.name) <= hi
+        ]
 
     def __post_init__(self) -> None:
         for f, (lo, hi) in zip(fields(self), self.bounds, strict=True):
@@ -182,8 +206,41 @@ class Downwash(Effect):
     bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 40.0), (0.02, 5.0), (0.5, 2.5))
     scale: ClassVar[tuple[float, ...]] = (2.0, 0.3, 0.5)
     hangs_on: ClassVar[str | None] = "rotor_rpm"
+    law: ClassVar[str] = "column"
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = (
+        (0.0, 15.0),
+        (0.05, 3.0),
+        (0.5, 2.5),
+    )
     speed_mps: float = 0.0  # [m/s] downward air speed at DOWNWASH_REF_RPM
     radius_m: float = 0.5  # [m] horizontal reach of the column around the release point
+    exponent: float = 1.0  # [-] w ∝ rpm^exponent
+
+
+@dataclass(frozen=True)
+class DownwashDecay(Effect):
+    """Rotor downwash falling off with depth below the rotor (the release height)."""
+
+    name: ClassVar[str] = "downwash"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = (
+        (0.0, 40.0),
+        (0.02, 5.0),
+        (0.05, 10.0),
+        (0.5, 2.5),
+    )
+    scale: ClassVar[tuple[float, ...]] = (2.0, 0.3, 0.5, 0.5)
+    hangs_on: ClassVar[str | None] = "rotor_rpm"
+    law: ClassVar[str] = "decay"
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = (
+        (0.0, 15.0),
+        (0.05, 3.0),
+        (0.05, 8.0),
+        (0.5, 2.5),
+    )
+    speed_mps: float = 0.0  # [m/s] downward air speed at the rotor, at DOWNWASH_REF_RPM
+    radius_m: float = 0.5  # [m] horizontal reach of the column around the release point
+    depth_m: float = 1.0  # [m] e-folding depth of the speed below the release height
     exponent: float = 1.0  # [-] w ∝ rpm^exponent
 
 
@@ -193,8 +250,12 @@ class Wind(Effect):
 
     name: ClassVar[str] = "wind"
     phase: ClassVar[str] = "flight"
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-30.0, 30.0),) * 3
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-10.0, 10.0),) * 3
     scale: ClassVar[tuple[float, ...]] = (1.0, 1.0, 1.0)
+    # an indoor cell: draughts and fans, not weather
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = ((-3.0, 3.0),) * 2 + (
+        (-1.0, 1.0),
+    )
     x_mps: float = 0.0
     y_mps: float = 0.0
     z_mps: float = 0.0
@@ -213,6 +274,18 @@ class Spin(Effect):
 
 
 @dataclass(frozen=True)
+class DragScale(Effect):
+    """The object's air drag is `factor` times what its shape's C_d says."""
+
+    name: ClassVar[str] = "drag_scale"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.1, 6.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.05,)
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = ((0.25, 4.0),)
+    factor: float = 1.0  # [-] C_d multiplier
+
+
+@dataclass(frozen=True)
 class TrackingScale(Effect):
     """The tracking system sees positions scaled by s about its (the world) origin."""
 
@@ -220,6 +293,7 @@ class TrackingScale(Effect):
     phase: ClassVar[str] = "measurement"
     bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.5, 2.0),)
     scale: ClassVar[tuple[float, ...]] = (0.01,)
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = ((0.8, 1.25),)
     scale_factor: float = 1.0  # [-]
 
 
@@ -231,7 +305,21 @@ class Bounce(Effect):
     phase: ClassVar[str] = "landing"
     bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2.0),)
     scale: ClassVar[tuple[float, ...]] = (0.05,)
+    law: ClassVar[str] = "friction"
     inv_mu: float = 0.0  # [-] 1/μ, the inverse friction coefficient of the slide
+
+
+@dataclass(frozen=True)
+class BounceRolling(Effect):
+    """The logged point is where the object came to rest after rolling on: tau_s · v_h
+    beyond the touchdown (a speed decaying with time constant tau_s)."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 1.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.01,)
+    law: ClassVar[str] = "rolling"
+    tau_s: float = 0.0  # [s] rolled distance per m/s of horizontal impact speed
 
 
 EFFECTS: dict[str, type[Effect]] = {
@@ -245,10 +333,26 @@ EFFECTS: dict[str, type[Effect]] = {
         Downwash,
         Wind,
         Spin,
+        DragScale,
         TrackingScale,
         Bounce,
     )
 }
+
+# every effect's family of laws (the first member is the effect's class in EFFECTS)
+FAMILIES: dict[str, tuple[type[Effect], ...]] = {
+    name: (cls, *extra)
+    for name, cls in EFFECTS.items()
+    for extra in [{"downwash": (DownwashDecay,), "bounce": (BounceRolling,)}.get(name, ())]
+}
+
+
+def member_for(name: str, params: Sequence[str]) -> type[Effect] | None:
+    """The family member of effect `name` whose parameters are `params` (or a subset)."""
+    for cls in FAMILIES.get(name, ()):
+        if set(params) <= set(cls.param_names()):
+            return cls
+    return None
 
 
 def effects_from_mapping(mapping: Mapping[str, Mapping[str, Any]] | None) -> list[Effect]:
@@ -259,17 +363,23 @@ def effects_from_mapping(mapping: Mapping[str, Mapping[str, Any]] | None) -> lis
     """
     out: list[Effect] = []
     for name, values in (mapping or {}).items():
-        cls = EFFECTS.get(str(name))
-        if cls is None:
+        cls0 = EFFECTS.get(str(name))
+        if cls0 is None:
             raise InvalidParameter(f"effects: unknown effect {name!r}; valid: {', '.join(EFFECTS)}")
         values = values or {}
         if not isinstance(values, Mapping):
             raise InvalidParameter(f"effects.{name}: must map parameter names to numbers")
-        names = cls.param_names()
+        cls = member_for(str(name), list(values)) or cls0
+        names = tuple(dict.fromkeys(n for c in FAMILIES[str(name)] for n in c.param_names()))
         bad = [k for k in values if k not in names]
         if bad:
             raise InvalidParameter(
                 f"effects.{name}: unknown parameter(s) {bad}; valid: {', '.join(names)}"
+            )
+        if member_for(str(name), list(values)) is None:
+            laws = "; ".join(f"{c.law}: {', '.join(c.param_names())}" for c in FAMILIES[str(name)])
+            raise InvalidParameter(
+                f"effects.{name}: parameters {list(values)} mix laws of the family ({laws})"
             )
         try:
             vals = {k: float(v) for k, v in values.items()}
@@ -342,24 +452,34 @@ def _flight_accel(
     permutation: np.ndarray | None,
 ) -> Any:
     wind = _find(effects, Wind)
-    dw = _find(effects, Downwash)
+    dw = _find(effects, Downwash) or _find(effects, DownwashDecay)
     sp = _find(effects, Spin)
-    if wind is None and dw is None and sp is None:
+    ds = _find(effects, DragScale)
+    if wind is None and dw is None and sp is None and ds is None:
         return None
+    decay = isinstance(dw, DownwashDecay)
     w_const = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float) if wind else np.zeros(3)
     centre = batch.position[:, :2]
+    release_z = batch.position[:, 2]
     if dw is not None:
         rpm = _permuted(rotor_rpm, permutation)
         w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
     if sp is not None:
         kl = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m], per unit C_L
         radius = batch.size.max(axis=1) / 2
+    if ds is not None:
+        # the drag the nominal law does not have: (factor - 1) of it
+        k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
-        w = np.broadcast_to(w_const, p.shape).copy()
+        w = np.empty_like(p)
+        w[:] = w_const
         if dw is not None:
             rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
             inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
+            if decay:
+                depth = np.clip(release_z[idx] - p[:, 2], 0.0, None)
+                inside = inside * np.exp(-depth / dw.depth_m)
             w[:, 2] -= w_dw[idx] * inside
         extra = None
         if sp is not None:
@@ -373,6 +493,10 @@ def _flight_accel(
             s_ratio = sp.spin_rad_s * radius[idx] / speed
             c_l = sp.lift_max * np.tanh(s_ratio / sp.lift_max)
             extra = (kl[idx] * c_l * speed**2)[:, None] * n
+        if ds is not None:
+            rel = v - w
+            drag = -(k_extra[idx] * np.linalg.norm(rel, axis=1))[:, None] * rel
+            extra = drag if extra is None else extra + drag
         return w, extra
 
     return accel
@@ -478,6 +602,9 @@ def predict_with_effects(
     if bo is not None and bo.inv_mu > 0:
         vh = v_imp[:, :2]
         xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
+    br = _find(effs, BounceRolling)
+    if br is not None and br.tau_s > 0:
+        xy = xy + v_imp[:, :2] * br.tau_s
     xy = xy * s
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)
