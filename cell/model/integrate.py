@@ -61,7 +61,8 @@ def rk4_step(
         for x, w1, w2, w3, w4 in zip(p, v, v2, v3, v4, strict=False)
     ]
     v_new = [
-        x + sixth * (b1 + 2 * b2 + 2 * b3 + b4) for x, b1, b2, b3, b4 in zip(v, a1, a2, a3, a4, strict=True)
+        x + sixth * (b1 + 2 * b2 + 2 * b3 + b4)
+        for x, b1, b2, b3, b4 in zip(v, a1, a2, a3, a4, strict=True)
     ]
     return p_new, v_new
 
