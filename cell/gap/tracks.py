@@ -270,6 +270,16 @@ def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x * x))) if x.size else float("nan")
 
 
+def fit_span(fit: TrackFit, idx: np.ndarray) -> np.ndarray:
+    """Time from the first kept sample to the last [s] of throws idx."""
+    return np.array(
+        [
+            (tr[-1, 0] - fit.t0[i]) if tr is not None else np.nan
+            for i, tr in ((i, fit.samples[i]) for i in idx)
+        ]
+    )
+
+
 def _cross_rms(d0: np.ndarray, d1: np.ndarray) -> tuple[float, float]:
     """√ of the mean product of two independent estimates of the same differences (n, 2):
     the RMS of the differences, free of the estimates' scatter on average (0 when the
@@ -302,9 +312,16 @@ def phase_evidence(tracks: dict[str, Any], floor_m: float) -> dict[str, Any]:
         right after it can look like a launch gap)}.
     """
     shares = {p: float(tracks.get(f"{p}_m", float("nan"))) for p in ("launch", "flight", "landing")}
+    # a flight effect shows as the flight share or as the bend the tracks see directly
+    bend = float(tracks.get("bend_m", float("nan")))
+    if np.isfinite(bend):
+        shares["flight"] = max(shares["flight"], bend) if np.isfinite(shares["flight"]) else bend
     sig = {
         "launch": bool(tracks.get("launch_z", float("nan")) >= Z_SIG),
-        "flight": bool(tracks.get("flight_z", float("nan")) >= Z_SIG),
+        "flight": bool(
+            tracks.get("flight_z", float("nan")) >= Z_SIG
+            or tracks.get("bend_z", float("nan")) >= Z_SIG
+        ),
         "landing": bool(shares["landing"] > LANDING_SIG * floor_m),
     }
     if tracks.get("measurement"):
@@ -348,6 +365,15 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         rel_land.append(fly(p_rel, v_rel, kk, lz, step=prob.step).position[:, :2])
         bent_land.append(fly(pe, ve, kk, lz, step=prob.step).position[:, :2])
     has_h = np.all(np.isfinite(hv[:, 0, :, 0]), axis=0)
+    # the bend: each half's nominal flight from its first kept state against its own last
+    # state (no extrapolation: what the tracks see of a flight effect directly)
+    t_span = np.nan_to_num(fit_span(fit, idx))
+    bends = []
+    for h in range(2):
+        p0h, v0h, pe = (np.nan_to_num(x) for x in (hv[h, 0], hv[h, 1], hv[h, 2]))
+        nom = sample_path(p0h, v0h, kk, t_span[:, None], step=prob.step)[:, 0, :]
+        bends.append(pe - nom)
+    bend_m, bend_z = _cross_rms(bends[0][has_h], bends[1][has_h])
     # the track's touchdown: nominal flight from the state fitted to its last samples
     end_land = fly(fit.p1[idx], fit.v1[idx], kk, lz, step=prob.step).position[:, :2]
     logged = prob.observed[idx]
@@ -412,8 +438,8 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         else "no launch comparison (no stroke logged)"
     )
     parts.append(
-        f"the flight after launch bends {flight_m:.3f} m off the nominal path "
-        f"({flight_land_m:.3f} m at the landing)"
+        f"the flight after launch bends {bend_m:.3f} m off the nominal path over the tracks "
+        f"(z {bend_z:.1f}; {flight_land_m:.3f} m at the landing from the release)"
     )
     parts.append(f"logged landings lie {landing_m:.3f} m from the tracks' touchdowns")
     parts.append(
@@ -434,6 +460,8 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
             "measurement": bool(measurement),
             "launch_z": launch_z,
             "flight_z": flight_z,
+            "bend_m": bend_m,
+            "bend_z": bend_z,
             "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
         }
     )
