@@ -52,6 +52,7 @@ figures: install
 	$(BIN)/cell calibrate --n 280 --seed 7 -o $(TMP)/scene_ee.yaml --log $(TMP)/scene.csv
 	$(BIN)/cell gap $(TMP)/scene.csv --report docs/scene_gap/nominal.html --json docs/scene_gap/nominal.json
 	$(BIN)/cell gap $(TMP)/scene.csv --identify --report docs/scene_gap/identified.html --json docs/scene_gap/identified.json
+	$(BIN)/cell gap check --json $(FIG)/gap_check.json
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --json > $(FIG)/bench_sort.json
 

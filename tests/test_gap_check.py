@@ -12,7 +12,9 @@ from cell.gap.check import CASES, CheckRow, check_case, confusion_table, format_
 
 
 def test_check_reduced_set_is_diagonal() -> None:
-    truths = ("stroke_offset", "bounce", "none", "unknown")
+    # the full set is run by `make figures` (docs/figures/gap_check.json, test_gap_readme.py);
+    # here a launch effect, none and an effect outside the vocabulary
+    truths = ("stroke_offset", "none", "unknown")
     cases = make_cases(truths, n=200, seed=1)
     rows = []
     for case in cases:
