@@ -289,6 +289,14 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     return s_max
 
 
+def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float) -> Any:
+    """`bounds` with the stroke capped at what the grip holds the item at [m]."""
+    from dataclasses import replace as dc_replace
+
+    lo = params.ee.stroke_min if bounds.stroke_min is None else bounds.stroke_min
+    return dc_replace(bounds, stroke_min=lo, stroke_max=min(stroke_max_m, params.ee.stroke_max))
+
+
 def check_sortable(
     params: ModelParams,
     obj: ObjectParams,
@@ -310,13 +318,7 @@ def check_sortable(
         return
     b = bounds or ThrowBounds()
     if b.stroke_max is None or s_max < b.stroke_max:
-        from dataclasses import replace as dc_replace
-
-        b = dc_replace(
-            b,
-            stroke_min=params.ee.stroke_min if b.stroke_min is None else b.stroke_min,
-            stroke_max=min(s_max, params.ee.stroke_max),
-        )
+        b = grip_bounds(b, params, s_max)
     goal = (*bin_spec.position, bin_spec.rim_height)
     plan_facing(params.model_object(obj), goal, params.ee, b)
 
@@ -677,7 +679,6 @@ class Orchestrator:
     def _plan_once(
         self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float
     ) -> tuple[Any, float]:
-        from dataclasses import replace as dc_replace
 
         from cell.optimize.plan import plan_facing
 
@@ -691,13 +692,7 @@ class Orchestrator:
         bounds = self.bounds_now
         plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
-            bounds = dc_replace(
-                bounds,
-                stroke_min=self.params.ee.stroke_min
-                if bounds.stroke_min is None
-                else bounds.stroke_min,
-                stroke_max=stroke_max_m,
-            )
+            bounds = grip_bounds(bounds, self.params, stroke_max_m)
             plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
