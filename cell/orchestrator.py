@@ -47,6 +47,7 @@ from cell.params import ModelParams, load_params
 
 __all__ = [
     "FAILURES",
+    "InFlight",
     "failure_of",
     "ItemResult",
     "RunSummary",
@@ -61,11 +62,10 @@ log = logging.getLogger(__name__)
 PICK_STROKE_M = (
     0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
 )
-SETTLE_S = 0.15  # [s] wait after a move so the end-effector and item come to rest
+SETTLE_S = 0.05  # [s] wait after a move so the end-effector and item come to rest
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
-ARM_SPEED_SCALE = 0.8  # fraction of the joint velocity/acceleration limits used
-CARRY_ACCEL_SCALE = 0.3  # fraction of the acceleration limits while an item is held (no slip)
+ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
 
 
 # Why an item did not end in its bin: one of these, always (ItemResult.failure).
@@ -77,6 +77,28 @@ FAILURES = (
     "ik",  # no arm configuration or move reaches the planned pose
     "missed_bin",  # released, but it came to rest outside its bin
 )
+
+
+@dataclass
+class InFlight:
+    """A released item the loop is not waiting for: `score(outcome)` makes its
+    ItemResult (and records the throw) once the plant says where it came to rest.
+
+    Attributes:
+        base: the result's index, object_id and target_bin.
+        obj: the item's parameters.
+        item: the scene's item.
+        score: Outcome → (ItemResult, landing point [m, W]).
+    """
+
+    base: dict[str, Any]
+    obj: ObjectParams
+    item: Any
+    score: Callable[[Any], tuple[Any, Any]]
+
+    @property
+    def index(self) -> int:
+        return int(self.base["index"])
 
 
 def failure_of(exc: BaseException) -> str:
@@ -245,6 +267,18 @@ def run_items(
     return summarise(results, time.perf_counter() - t_wall)
 
 
+def as_gripped(obj: ObjectParams) -> ObjectParams:
+    """The item as the pads see it: a mesh is as wide as it is where the pads meet it."""
+    from dataclasses import replace as dc_replace
+
+    from cell.catalogue import pad_width_m
+
+    width = pad_width_m(obj)
+    if width < obj.width:
+        return dc_replace(obj, size=(width, *obj.size[1:]))
+    return obj
+
+
 def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     """The longest stroke [m] the pads hold `obj` at (cell.model.grip).
 
@@ -252,17 +286,12 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
         CannotGrip: the item is too wide for the pads, or too heavy for its width at
             every stroke; the message says what the cell can hold instead.
     """
-    from dataclasses import replace as dc_replace
-
-    from cell.catalogue import pad_width_m
     from cell.model.grip import GRIP_SAFETY, holding_mass_kg, max_grip_stroke
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     ee = params.ee
     name = obj.name or obj.shape
-    width = pad_width_m(obj)
-    if width < obj.width:  # a mesh the pads meet where it is thinner
-        obj = dc_replace(obj, size=(width, *obj.size[1:]))
+    obj = as_gripped(obj)
     widest = 2 * DEFAULT_GEOMETRY.finger_open_m
     if obj.width > widest:
         raise CannotGrip(
@@ -439,6 +468,9 @@ class Orchestrator:
         self.observer = observer
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
+        self._flying: list[InFlight] = []  # thrown, not yet at rest
+        self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
+        self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
         if observer is not None:
             observer.on_scene(self.scene, job)
 
@@ -480,23 +512,32 @@ class Orchestrator:
 
         return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q).q
 
-    def _move(self, waypoints: list[np.ndarray]) -> float:
-        """Follow a toppra path through joint waypoints in the scene; returns its duration [s]."""
+    def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
+        """Follow a toppra path through joint waypoints in the scene; returns its duration [s].
+
+        Empty, the path uses ARM_SPEED_SCALE of the joint limits; carrying, the
+        fastest time-scaling of it whose item acceleration the grip holds
+        (`cell.robot.carry`).
+        """
         from cell.robot.motion import plan_path
 
+        settle_s = SETTLE_S if settle_s is None else settle_s
         try:
-            traj = plan_path(
-                [self.q, *waypoints],
-                self.robot,
-                velocity_scale=ARM_SPEED_SCALE,
-                acceleration_scale=ARM_SPEED_SCALE if self.ee.item is None else CARRY_ACCEL_SCALE,
-            )
+            if self.ee.item is None:
+                traj = plan_path(
+                    [self.q, *waypoints],
+                    self.robot,
+                    velocity_scale=ARM_SPEED_SCALE,
+                    acceleration_scale=ARM_SPEED_SCALE,
+                )
+            else:
+                traj = self._carry_path(waypoints)
         except TrajectoryError:
             if len(waypoints) < 2:
                 raise
             # The spline through the waypoints leaves the joint limits between them: stop
             # at each instead (a straight joint-space segment stays inside the limit box).
-            return sum(self._move([w]) for w in waypoints)
+            return sum(self._move([w], settle_s) for w in waypoints)
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
@@ -504,26 +545,51 @@ class Orchestrator:
         for q in qs:
             sc.set_arm(q)
             sc.step()
-        sc.run_for(SETTLE_S)
+        if settle_s > 0:
+            sc.run_for(settle_s)
         self.q = np.asarray(waypoints[-1], float)
-        return float(traj.duration) + SETTLE_S
+        self._land()
+        return float(traj.duration) + settle_s
+
+    def _carry_path(self, waypoints: list[np.ndarray]) -> Any:
+        """The fastest path through the waypoints that the grip holds the item along."""
+        from cell.model.grip import holding_mass_kg
+        from cell.robot.carry import carry_specific_force_limit, plan_carry
+        from cell.sim import EE_TO_TCP_M
+
+        obj, stroke = self._carried
+        hold = holding_mass_kg(self.params.ee, stroke, obj.width)
+        f_max = carry_specific_force_limit(hold, obj.mass)
+        offset = (0.0, 0.0, stroke + obj.size[2] / 2 - EE_TO_TCP_M)
+        traj, _ = plan_carry(
+            [self.q, *waypoints],
+            self.robot,
+            f_max,
+            offset_tcp_m=offset,
+            velocity_scale=ARM_SPEED_SCALE,
+            acceleration_scale=ARM_SPEED_SCALE,
+        )
+        return traj
 
     # -- one item --------------------------------------------------------------
     def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
-        """Pick, decide, plan, move, release, observe and record one item.
+        """Pick, decide, plan, move, release, observe and record one item, and wait
+        for it to come to rest.
 
-        Its `cycle_time_s` is the simulated time from the start of its pick to the
-        moment the loop is free for the next pick: the moves, the end-effector's
-        actions, and the wait for the item to come to rest (this loop scores an
-        item before it picks the next one).
+        Its `cycle_time_s` is the simulated time from the start of its pick until it
+        is scored (`run` instead goes on with the next pick while a thrown item flies).
         """
         from dataclasses import replace as dc_replace
 
         t0 = self.scene.t
         res = self._run_item(index, spec)
+        if isinstance(res, InFlight):
+            res = self._wait_for(res)
+        if self.observer is not None and index in self._flights:
+            self.observer.on_flight(index, *self._flights.pop(index))
         return dc_replace(res, cycle_time_s=self.scene.t - t0)
 
-    def _run_item(self, index: int, spec: ItemSpec) -> ItemResult:
+    def _run_item(self, index: int, spec: ItemSpec) -> ItemResult | InFlight:
         obj = spec.obj
         target = self.job.bin(spec.bin)
         sc = self.scene
@@ -535,6 +601,7 @@ class Orchestrator:
         base: dict[str, Any] = dict(
             index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
         )
+        flying: InFlight | None = None
         try:
             dist = math.hypot(*target.position)
             place = self.job.policy == "place" or (
@@ -552,11 +619,13 @@ class Orchestrator:
             q_lift = self._ik(self._tcp_for_item_centre(lift, *down, stroke, obj), *down)
             self._move([q_lift, q_pick])
             self.ee.grasp(stroke, item)
+            self._carried = (as_gripped(obj), stroke)
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
             if plan is None:
                 return self._place(base, item, obj, target, q_lift, t0, stroke)
-            return self._throw(base, item, obj, target, q_lift, t0, plan, delta)
+            flying = self._throw(base, item, obj, target, q_lift, t0, plan, delta)
+            return flying
         except HardwareError:
             raise  # the end-effector failed: the run stops (torque off), not just this item
         except CellError as exc:
@@ -573,10 +642,8 @@ class Orchestrator:
             # ones); an item anywhere else (on the floor, still on the station, in the
             # grip) is taken away, as an operator would before the next pick.
             self.ee.item = None
-            if sc.in_bin(item) is not None:
-                sc.keep(item)
-            else:
-                sc.remove_item(item)
+            if flying is None:  # a thrown item is tidied once it is scored (_settle)
+                self._tidy(item)
 
     def _place(
         self,
@@ -609,8 +676,7 @@ class Orchestrator:
         out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
         err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
         cyc = t_release - t0
-        if self.observer is not None:
-            self.observer.on_flight(base["index"], out, out.rest_xyz)
+        self._flights[base["index"]] = (out, out.rest_xyz)  # for the observer, in order
         self._move([q_above])
         return ItemResult(
             **base,
@@ -735,10 +801,11 @@ class Orchestrator:
         v = np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]]) / math.exp(lr)
         return np.array([*(p0 + v), goal[2]])
 
-    def _learn_from(self, obj: ObjectParams, plan: Any, cross: Any) -> None:
-        """Average this landing into the object's and its class's corrections."""
+    def _learn_from(self, obj: ObjectParams, plan: Any, cross: Any, aim: np.ndarray) -> None:
+        """Average this landing (aimed at `aim`) into the object's and its class's
+        corrections."""
         p0 = np.array([plan.x_m, plan.y_m])
-        aimed = self._aim[:2] - p0
+        aimed = aim[:2] - p0
         seen = np.asarray(cross[:2], float) - p0
         ra, rs = float(np.hypot(*aimed)), float(np.hypot(*seen))
         if ra < 0.05 or rs < 0.05:
@@ -758,7 +825,7 @@ class Orchestrator:
         t0: float,
         plan: Any,
         delta: float,
-    ) -> ItemResult:
+    ) -> InFlight:
         sc = self.scene
         bx, by = target.position
         stroke = plan.stroke_m + delta
@@ -779,47 +846,149 @@ class Orchestrator:
             )
         self.ee.throw()
         t_release = sc.t
-        out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
-        cross = out.crossing(target.rim_height)
-        err = math.hypot(cross[0] - bx, cross[1] - by)
-        if self.learn:
-            self._learn_from(obj, plan, cross)
-        if self.observer is not None:
-            self.observer.on_flight(base["index"], out, (cross[0], cross[1], target.rim_height))
-        throw_id = f"{self.session}-{base['index']:04d}"
-        if self.store is not None:
-            self.store.append(
-                sorted_throw_record(
-                    self.session, throw_id, obj, plan, stroke, released_at, target, out, cross
-                ),
-                track=out.track,
+        aim = self._aim
+
+        def score(out: Any) -> tuple[ItemResult, Any]:
+            cross = out.crossing(target.rim_height)
+            err = math.hypot(cross[0] - bx, cross[1] - by)
+            if self.learn:
+                self._learn_from(obj, plan, cross, aim)
+            throw_id = f"{self.session}-{base['index']:04d}"
+            if self.store is not None:
+                self.store.append(
+                    sorted_throw_record(
+                        self.session, throw_id, obj, plan, stroke, released_at, target, out, cross
+                    ),
+                    track=out.track,
+                )
+            failure, reason = missed_bin(out.bin_id, target.id, err)
+            res = ItemResult(
+                **base,
+                action="throw",
+                bin_id=out.bin_id or "",
+                in_bin=out.bin_id == target.id,
+                failure=failure,
+                reason=reason,
+                landing_error_m=err,
+                stroke_m=stroke,
+                delta_stroke_m=delta,
+                cycle_time_s=t_release - t0,
+                throw_id=throw_id,
             )
-        return ItemResult(
-            **base,
-            action="throw",
-            bin_id=out.bin_id or "",
-            in_bin=out.bin_id == target.id,
-            failure=missed_bin(out.bin_id, target.id, err)[0],
-            reason=missed_bin(out.bin_id, target.id, err)[1],
-            landing_error_m=err,
-            stroke_m=stroke,
-            delta_stroke_m=delta,
-            cycle_time_s=t_release - t0,
-            throw_id=throw_id,
-        )
+            return res, (cross[0], cross[1], target.rim_height)
+
+        return InFlight(base, obj, item, score)
+
+    # -- items in flight ---------------------------------------------------------
+    def _tidy(self, item: Any) -> None:
+        """Bins keep what lands in them, as real bins do (later items land on earlier
+        ones); an item anywhere else (on the floor, still on the station, in the grip)
+        is taken away, as an operator would."""
+        if self.scene.in_bin(item) is not None:
+            self.scene.keep(item)
+        else:
+            self.scene.remove_item(item)
+
+    def _settle(self, f: InFlight, out: Any) -> ItemResult:
+        """Score an item whose flight ended (`out`: its Outcome, or the NoLanding error)."""
+        try:
+            if isinstance(out, CellError):
+                raise out
+            res, landing = f.score(out)
+            self._flights[f.index] = (out, landing)
+        except CellError as exc:
+            log.info("item %d (%s) failed: %s", f.index, f.obj.name, exc)
+            res = ItemResult(
+                **f.base,
+                action="failed",
+                failure=failure_of(exc),
+                reason=f"{type(exc).__name__}: {exc}",
+            )
+        finally:
+            self._tidy(f.item)
+        return res
+
+    def _poll(self, f: InFlight) -> ItemResult | None:
+        """The item's result once its flight has ended, else None (non-blocking)."""
+        try:
+            out = self.scene.outcome_if_settled(f.item, timeout_s=self.job.item_time_limit_s)
+        except CellError as exc:
+            return self._settle(f, exc)
+        return None if out is None else self._settle(f, out)
+
+    def _wait_for(self, f: InFlight) -> ItemResult:
+        """Step the scene until the item's flight has ended; its result."""
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        while (res := self._poll(f)) is None:
+            sc.step()
+        return res
+
+    def _land(self) -> None:
+        """Score every item in flight that has come to rest (called between moves)."""
+        for f in list(self._flying):
+            res = self._poll(f)
+            if res is not None:
+                self._flying.remove(f)
+                self._scored[f.index] = res
 
     # -- the run ---------------------------------------------------------------
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
-        """Sort every item of the job; `on_item` is called after each (progress)."""
-        if self.observer is None:
-            return run_items(self.job, self.run_item, on_item)
+        """Sort every item of the job; `on_item` is called after each, in job order.
 
-        def done(r: ItemResult) -> None:
-            self.observer.on_item_done(r)
-            if on_item is not None:
-                on_item(r)
+        The next pick starts as soon as an item is thrown: the physics keeps stepping
+        the thrown item while the arm moves on, and it is scored when it comes to
+        rest. An item's `cycle_time_s` runs from the start of its pick to the start of
+        the next one; the last item's, until everything thrown has come to rest.
+        With `learn`, an item waits for the landing of an earlier throw of the same
+        object (or class) that is still in flight, so that it learns from it.
+        """
+        from dataclasses import replace as dc_replace
 
-        return run_items(self.job, self.run_item, done)
+        t_wall = time.perf_counter()
+        sc = self.scene
+        starts: list[float] = []
+        results: list[ItemResult] = []
+        self._flying, self._scored, self._flights = [], {}, {}
+
+        def emit(t_end: float | None = None) -> None:
+            while (i := len(results)) in self._scored and (i + 1 < len(starts) or t_end):
+                t_next = starts[i + 1] if i + 1 < len(starts) else float(t_end or sc.t)
+                res = dc_replace(self._scored.pop(i), cycle_time_s=t_next - starts[i])
+                results.append(res)
+                if self.observer is not None:
+                    if i in self._flights:
+                        self.observer.on_flight(i, *self._flights.pop(i))
+                    self.observer.on_item_done(res)
+                if on_item is not None:
+                    on_item(res)
+
+        for i, spec in enumerate(self.job.expanded_items()):
+            if self.learn:
+                self._wait_for_kin(spec.obj)
+            starts.append(sc.t)
+            emit()
+            res = self._run_item(i, spec)
+            if isinstance(res, InFlight):
+                self._flying.append(res)
+            else:
+                self._scored[i] = res
+            self._land()
+        sc.set_timestep(sc.dt_s)
+        while self._flying:
+            sc.step()
+            self._land()
+        emit(t_end=sc.t)
+        return summarise(results, time.perf_counter() - t_wall)
+
+    def _wait_for_kin(self, obj: ObjectParams) -> None:
+        """Let in-flight throws of the same object or class land first (learning)."""
+        keys = {obj.name or "", self._class_key(obj)}
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        while any({f.obj.name or "", self._class_key(f.obj)} & keys for f in self._flying):
+            sc.step()
+            self._land()
 
     def close(self) -> None:
         """Close the scene and any hardware end-effector."""

@@ -615,10 +615,30 @@ class CellScene:
         self.set_timestep(self.dt_s)
         tr = self._trackers.get(item.body) or self.track(item)
         t_end = self.t + timeout_s
-        while not tr.at_rest and self.t < t_end:
+        while not tr.at_rest and self.t < t_end and not self._fell_out(tr):
             self.step()
-            if tr.samples and tr.samples[-1][3] < -1.0:
-                break  # fell out of the world
+        return self._end_watch(item, tr, timeout_s)
+
+    def outcome_if_settled(self, item: Item, *, timeout_s: float = 6.0) -> Outcome | None:
+        """Where a tracked item went, once it rests or `timeout_s` after its release; None
+        while it is still moving. Lets the loop go on with the next item while this one
+        flies (the physics steps it with everything else); its track is the same as
+        `watch_until_rest` would have recorded.
+
+        Raises:
+            InvalidInput: the item is not being tracked.
+            NoLanding: it never touched anything but the end-effector.
+        """
+        tr = self.tracker(item)
+        if tr.at_rest or self.t >= tr.t0 + timeout_s or self._fell_out(tr):
+            return self._end_watch(item, tr, timeout_s)
+        return None
+
+    @staticmethod
+    def _fell_out(tr: Tracker) -> bool:
+        return bool(tr.samples) and tr.samples[-1][3] < -1.0  # fell out of the world
+
+    def _end_watch(self, item: Item, tr: Tracker, timeout_s: float) -> Outcome:
         self._trackers.pop(item.body, None)
         if tr.touchdown is None:
             raise NoLanding(

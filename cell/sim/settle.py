@@ -117,7 +117,13 @@ class Tracker:
     def sample(
         self, t: float, pos: tuple, vel: np.ndarray, spin: np.ndarray, contacts: list
     ) -> None:
-        """Record one step: time [s], position [m], velocity [m/s], spin [rad/s], contacts."""
+        """Record one step: time [s], position [m], velocity [m/s], spin [rad/s], contacts.
+
+        Once the item is at rest the track is complete: later steps add nothing, so a
+        track read late (the loop went on with the next item) is the one read at rest.
+        """
+        if self.rest_t is not None:
+            return
         rel = t - self.t0
         self.samples.append((rel, float(pos[0]), float(pos[1]), float(pos[2])))
         speed = float(np.linalg.norm(vel))
