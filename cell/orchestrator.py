@@ -963,23 +963,37 @@ class Orchestrator:
                 if on_item is not None:
                     on_item(res)
 
-        for i, spec in enumerate(self.job.expanded_items()):
-            if self.learn:
-                self._wait_for_kin(spec.obj)
-            starts.append(sc.t)
-            emit()
-            res = self._run_item(i, spec)
-            if isinstance(res, InFlight):
-                self._flying.append(res)
-            else:
-                self._scored[i] = res
-            self._land()
+        try:
+            for i, spec in enumerate(self.job.expanded_items()):
+                if self.learn:
+                    self._wait_for_kin(spec.obj)
+                starts.append(sc.t)
+                emit()
+                res = self._run_item(i, spec)
+                if isinstance(res, InFlight):
+                    self._flying.append(res)
+                else:
+                    self._scored[i] = res
+                self._land()
+            self._land_all()
+        except HardwareError:
+            # the run stops; what was thrown before the fault still lands and is recorded
+            self._land_all()
+            emit(t_end=sc.t)
+            raise
+        except BaseException:
+            emit(t_end=sc.t)  # report what was scored; an item still in flight is lost
+            raise
+        emit(t_end=sc.t)
+        return summarise(results, time.perf_counter() - t_wall)
+
+    def _land_all(self) -> None:
+        """Step the scene until every thrown item has come to rest, scoring each."""
+        sc = self.scene
         sc.set_timestep(sc.dt_s)
         while self._flying:
             sc.step()
             self._land()
-        emit(t_end=sc.t)
-        return summarise(results, time.perf_counter() - t_wall)
 
     def _wait_for_kin(self, obj: ObjectParams) -> None:
         """Let in-flight throws of the same object or class land first (learning)."""

@@ -186,7 +186,7 @@ class SceneRecorder:
                 info = cl.getDynamicsInfo(body, -1)
                 ip, io = cl.invertTransform(info[3], info[4])
                 lp, lo = cl.multiplyTransforms(p, o, ip, io)
-                r.sample_pose(item_entity(i, oid), t, lp, lo)
+                r.sample_pose(item_entity(i, oid), t, lp, lo, item=i)
 
 
 def _fmt(v: Any) -> Any:

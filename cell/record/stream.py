@@ -71,7 +71,9 @@ class Recording:
         self.stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self._closed = False
         # sampled series, sent as columns (one call per entity, not one per sample)
-        self._poses: dict[str, list[tuple[float, Sequence[float], Sequence[float]]]] = {}
+        self._poses: dict[
+            tuple[str, int | None], list[tuple[float, Sequence[float], Sequence[float]]]
+        ] = {}
         self._series: dict[str, list[tuple[float, Sequence[float]]]] = {}
         self._segment_item: int | None = None
 
@@ -236,9 +238,13 @@ class Recording:
         sim_time_s: float,
         translation: Sequence[float],
         quat_xyzw: Sequence[float],
+        item: int | None = None,
     ) -> None:
-        """Buffer one pose sample (as `pose`) of the current segment; see `flush_samples`."""
-        self._poses.setdefault(entity, []).append((sim_time_s, translation, quat_xyzw))
+        """Buffer one pose sample (as `pose`) of the current segment; see `flush_samples`.
+
+        `item`: the item the sample belongs to, when it is not the segment's (a thrown
+        item still flying while the next one is picked)."""
+        self._poses.setdefault((entity, item), []).append((sim_time_s, translation, quat_xyzw))
 
     def sample_scalars(self, entity: str, sim_time_s: float, values: Sequence[float]) -> None:
         """Buffer one sample of several series at once (as `scalars`); see `flush_samples`."""
@@ -250,18 +256,19 @@ class Recording:
         rr = self.rr
         seg = self._segment_item
 
-        def indexes(ts: list[float]) -> list[Any]:
+        def indexes(ts: list[float], own: int | None = None) -> list[Any]:
             out = [rr.TimeColumn(SIM_TIME, duration=np.asarray(ts, float))]
-            if seg is not None:
-                out.append(rr.TimeColumn(ITEM, sequence=np.full(len(ts), seg, dtype=np.int64)))
+            tag = seg if own is None else own
+            if tag is not None:
+                out.append(rr.TimeColumn(ITEM, sequence=np.full(len(ts), tag, dtype=np.int64)))
             return out
 
-        for entity, rows in self._poses.items():
+        for (entity, own), rows in self._poses.items():
             ts, tr, qs = zip(*rows, strict=True)
             cols = rr.Transform3D.columns(
                 translation=np.asarray(tr, float), quaternion=np.asarray(qs, float)
             )
-            self.stream.send_columns(entity, indexes(list(ts)), cols)
+            self.stream.send_columns(entity, indexes(list(ts), own), cols)
         for entity, vals in self._series.items():
             ts, vs = zip(*vals, strict=True)
             arr = np.asarray(vs, float)
