@@ -62,6 +62,7 @@ log = logging.getLogger(__name__)
 PICK_STROKE_M = (
     0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
 )
+SWING_WAYPOINTS = 2  # waypoints that keep the carry's swing free of twist (see _swing)
 SETTLE_S = 0.05  # [s] wait after a move so the end-effector and item come to rest
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
@@ -279,6 +280,33 @@ def as_gripped(obj: ObjectParams) -> ObjectParams:
     return obj
 
 
+def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
+    """What the pads hold `obj` with at stroke L_s [m] (a `cell.robot.carry.GripHold`):
+    the friction force of the grip model, the couple of the pads' contact patches (as
+    long as the pads and the item overlap along the throw axis, as wide as both along
+    y), and where the item's centre of mass sits above that patch."""
+    from cell.model.grip import holding_mass_kg
+    from cell.model.params import G
+    from cell.robot.carry import GripHold, patch_torsion_radius_m
+    from cell.sim import EE_TO_TCP_M
+    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
+
+    gripped = as_gripped(obj)
+    height = obj.size[2]
+    length = min(GEO.pad_length_m, height)
+    force = holding_mass_kg(params.ee, stroke_m, gripped.width) * G
+    half_y = min(GEO.pad_half_width_m, obj.size[1] / 2)
+    return GripHold(
+        force_n=force,
+        torque_nm=force * patch_torsion_radius_m(half_y, length / 2),
+        mass_kg=obj.mass,
+        inertia_xx=float(obj.inertia[0]),
+        offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),
+        lever_m=(height - length) / 2,
+        base_half_m=obj.size[1] / 2,
+    )
+
+
 def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     """The longest stroke [m] the pads hold `obj` at (cell.model.grip).
 
@@ -420,6 +448,8 @@ class Orchestrator:
             object's next throw aims where its earlier landings say it must
             (LandingCorrection), and an object never thrown before takes its
             class's (shape's) correction, bounded more tightly.
+        speed_scale: fraction of the joint velocity and acceleration limits the arm's
+            moves use, in (0, 1] (a carry may go slower, as its grip allows).
     """
 
     def __init__(
@@ -433,12 +463,18 @@ class Orchestrator:
         end_effector: Any = None,
         observer: Any = None,
         learn: bool = False,
+        speed_scale: float = ARM_SPEED_SCALE,
     ) -> None:
         from cell.endeffector.pybullet_backend import PyBulletEndEffector
         from cell.optimize.bounds import ThrowBounds
         from cell.robot.model import load_robot
         from cell.sim import BinSpec, CellScene
 
+        if not (0.0 < speed_scale <= 1.0):
+            from cell.errors import InvalidInput
+
+            raise InvalidInput(f"speed_scale {speed_scale!r}: give a fraction in (0, 1]")
+        self.speed_scale = float(speed_scale)
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
@@ -468,6 +504,7 @@ class Orchestrator:
         self.observer = observer
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
+        self._frame: tuple[float, float] | None = None  # the grip's (azimuth, roll) now
         self._flying: list[InFlight] = []  # thrown, not yet at rest
         self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
         self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
@@ -512,10 +549,85 @@ class Orchestrator:
 
         return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q).q
 
+    def _swing(self, q_lift: np.ndarray, q_rel: np.ndarray, plan: Any) -> list[np.ndarray]:
+        """Waypoints between the lift and the release that keep the grip on the twist-free
+        swing (`_pick_frame`): the throw axis turns up about one horizontal axis, the
+        pads' y axis stays level. A joint-space spline between the two ends alone rolls
+        the grip sideways on the way, and a tall item hanging from the pads turns in
+        them (cell.robot.carry). None when the grip was not taken twist-free, or when
+        a waypoint has no IK (the spline between the ends is used then)."""
+        if self._frame is None or SWING_WAYPOINTS < 1:
+            return []
+        az, roll = self._frame
+        rb = self.robot
+        p0, p1 = rb.tcp_pose(q_lift)[0], rb.tcp_pose(q_rel)[0]
+        e0, e1 = -math.pi / 2, plan.elevation_rad
+        out: list[np.ndarray] = []
+        q = q_lift
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        for k in range(1, SWING_WAYPOINTS + 1):
+            f = k / (SWING_WAYPOINTS + 1)
+            pose = ReleasePose.from_angles(p0 + f * (p1 - p0), e0 + f * (e1 - e0), az, roll)
+            try:
+                q = solve_ik(rb, pose, q, random_seeds=0, solutions=1).q
+            except IKFailed:
+                return []
+            out.append(q)
+        return out
+
+    def _pick_frame(self, plan: Any) -> tuple[float, float] | None:
+        """(azimuth, roll) [rad] of the grip pointing down that the release's frame swings
+        up from without a twist about the throw axis, or None (a place: any roll).
+
+        axis_frame(e, a, roll) = Rz(a) Ry(π/2 − e) Rz(roll): with the same a and roll, the
+        down frame (e = −π/2) turns into the release frame about one horizontal axis. A
+        twist about the axis while the pads hold the item shifts its contacts and spoils
+        the launch (measured in the scene: a cylinder carried through a half turn about
+        the axis left at 0.25 m/s sideways and downward instead of 2.5 m/s forward).
+        """
+        if plan is None:
+            return None
+        roll = self._roll_of(self._q_release, plan.elevation_rad, plan.azimuth_rad)
+        return (float(plan.azimuth_rad), roll)
+
+    def _ik_frame(self, tcp: np.ndarray) -> np.ndarray:
+        """IK for the grip pointing down at `tcp` [m, W], in the item's frame
+        (`self._frame`: (azimuth, roll), else the roll is free)."""
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        if self._frame is not None:
+            az, roll = self._frame
+            try:
+                pose = ReleasePose.from_angles(tcp, -math.pi / 2, az, roll)
+                return solve_ik(self.robot, pose, self.q).q
+            except IKFailed:
+                log.info("no IK for the twist-free grip at %s: the roll is left free", tcp)
+        return self._ik(tcp, -math.pi / 2, 0.0)
+
+    def _ik_release(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
+        """IK for the release, at the roll the item was gripped for (`self._frame`)."""
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        if self._frame is not None:
+            pose = ReleasePose.from_angles(tcp, elevation, azimuth, self._frame[1])
+            try:
+                return solve_ik(self.robot, pose, self.q).q
+            except IKFailed:
+                pass
+        return self._ik(tcp, elevation, azimuth)
+
+    def _roll_of(self, q: np.ndarray, elevation: float, azimuth: float) -> float:
+        """The roll (0 or π) of the release configuration q: its pads' axis against roll 0's."""
+        from cell.robot.ik import ReleasePose
+
+        x0 = ReleasePose.from_angles(np.zeros(3), elevation, azimuth, 0.0).rotation()[:, 0]
+        return 0.0 if float(self.robot.tcp_pose(q)[1][:, 0] @ x0) >= 0.0 else math.pi
+
     def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s].
 
-        Empty, the path uses ARM_SPEED_SCALE of the joint limits; carrying, the
+        Empty, the path uses `speed_scale` of the joint limits; carrying, the
         fastest time-scaling of it whose item acceleration the grip holds
         (`cell.robot.carry`).
         """
@@ -527,8 +639,8 @@ class Orchestrator:
                 traj = plan_path(
                     [self.q, *waypoints],
                     self.robot,
-                    velocity_scale=ARM_SPEED_SCALE,
-                    acceleration_scale=ARM_SPEED_SCALE,
+                    velocity_scale=self.speed_scale,
+                    acceleration_scale=self.speed_scale,
                 )
             else:
                 traj = self._carry_path(waypoints)
@@ -553,21 +665,15 @@ class Orchestrator:
 
     def _carry_path(self, waypoints: list[np.ndarray]) -> Any:
         """The fastest path through the waypoints that the grip holds the item along."""
-        from cell.model.grip import holding_mass_kg
-        from cell.robot.carry import carry_specific_force_limit, plan_carry
-        from cell.sim import EE_TO_TCP_M
+        from cell.robot.carry import plan_carry
 
         obj, stroke = self._carried
-        hold = holding_mass_kg(self.params.ee, stroke, obj.width)
-        f_max = carry_specific_force_limit(hold, obj.mass)
-        offset = (0.0, 0.0, stroke + obj.size[2] / 2 - EE_TO_TCP_M)
         traj, _ = plan_carry(
             [self.q, *waypoints],
             self.robot,
-            f_max,
-            offset_tcp_m=offset,
-            velocity_scale=ARM_SPEED_SCALE,
-            acceleration_scale=ARM_SPEED_SCALE,
+            carry_hold(self.params, obj, stroke),
+            velocity_scale=self.speed_scale,
+            acceleration_scale=self.speed_scale,
         )
         return traj
 
@@ -614,12 +720,16 @@ class Orchestrator:
             stroke = min(PICK_STROKE_M, s_grip) if plan is None else plan.stroke_m + delta
             p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
             down = (-math.pi / 2, 0.0)
-            q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, stroke, obj), *down)
+            # Grip it turned as the release will hold it: the carry then only swings the
+            # throw axis up, it does not twist the item about it (a twist in the grip
+            # spoils the launch, see _pick_frame).
+            self._frame = self._pick_frame(plan)
+            q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
             lift = p_item + np.array([0, 0, LIFT_M])
-            q_lift = self._ik(self._tcp_for_item_centre(lift, *down, stroke, obj), *down)
+            q_lift = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj))
             self._move([q_lift, q_pick])
             self.ee.grasp(stroke, item)
-            self._carried = (as_gripped(obj), stroke)
+            self._carried = (obj, stroke)
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
             if plan is None:
@@ -662,8 +772,8 @@ class Orchestrator:
         sx, sy, surface_z = sc.place_spot(target.id, obj)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
-        q_above = self._ik(self._tcp_for_item_centre(above, *down, stroke, obj), *down)
-        q_down = self._ik(self._tcp_for_item_centre(centre, *down, stroke, obj), *down)
+        q_above = self._ik_frame(self._tcp_for_item_centre(above, *down, stroke, obj))
+        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *down, stroke, obj))
         self._move([q_lift, q_above])
         # Down into the bin on its own short move: a spline through q_above and q_down
         # would cut the corner and sweep the item through the bin's wall.
@@ -832,10 +942,10 @@ class Orchestrator:
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj)
         try:  # IK from the lift pose the arm is at; _plan checked one exists from before
-            q_rel = self._ik(tcp, plan.elevation_rad, plan.azimuth_rad)
+            q_rel = self._ik_release(tcp, plan.elevation_rad, plan.azimuth_rad)
         except IKFailed:
             q_rel = self._q_release
-        self._move([q_lift, q_rel])
+        self._move([q_lift, *self._swing(q_lift, q_rel, plan), q_rel])
         self._check_held(obj)
         if self.hardware is not None:
             self.hardware.throw()

@@ -13,17 +13,17 @@ from cell.errors import TrajectoryError
 from cell.jobs import parse_job
 from cell.model.grip import holding_mass_kg
 from cell.model.params import G
-from cell.orchestrator import LIFT_M, Orchestrator
+from cell.orchestrator import LIFT_M, Orchestrator, carry_hold
 from cell.robot.carry import (
     CARRY_MARGIN,
-    carry_specific_force_limit,
+    GripHold,
+    grip_use,
     item_accelerations,
     peak_specific_force,
     plan_carry,
 )
 from cell.robot.model import load_robot
 from cell.robot.motion import plan_path
-from cell.sim import EE_TO_TCP_M
 
 
 def test_item_acceleration_matches_the_closed_form_of_a_turning_base():
@@ -64,20 +64,45 @@ def test_item_acceleration_matches_finite_differences_along_a_path():
     assert close.sum() >= 5
 
 
+def _hold(force_n: float, mass_kg: float = 0.05) -> GripHold:
+    """A grip that only slips (no turning: a huge couple)."""
+    return GripHold(force_n, 1e9, mass_kg, 1e-5, (0.0, 0.0, 0.0), 0.0)
+
+
 def test_the_carry_path_keeps_under_its_bound_and_slows_for_a_tighter_one():
     rb = load_robot("panda")
     q0 = rb.home
     q1 = q0 + np.array([0.8, -0.4, 0.3, 0.5, -0.9, 0.4, 0.6])
     free = plan_path([q0, q1], rb)
     peak_free = peak_specific_force(free, rb)
+    m = 0.05
     for frac in (0.8, 0.5):
-        bound = G + frac * (peak_free - G)
-        tr, peak = plan_carry([q0, q1], rb, bound)
-        assert peak <= bound
-        assert peak_specific_force(tr, rb, n=801) <= bound * 1.02  # finer sampling
+        f_max = G + frac * (peak_free - G)  # the specific force the carry may ask [m/s²]
+        hold = _hold(m * f_max * CARRY_MARGIN, m)
+        tr, use = plan_carry([q0, q1], rb, hold)
+        assert use <= 1 / CARRY_MARGIN + 1e-12
+        assert peak_specific_force(tr, rb, n=801) <= f_max * 1.02  # finer sampling
         assert tr.duration > free.duration
     with pytest.raises(TrajectoryError, match="cannot be carried"):
-        plan_carry([q0, q1], rb, 0.9 * G)
+        plan_carry([q0, q1], rb, _hold(m * G, m))
+
+
+def test_grip_use_of_a_tall_item_hanging_sideways_is_the_closed_form():
+    """At rest with the pads' y axis up, gravity pulls the item along y: the pads carry
+    m g and the couple m g × lever (a closed form), so use = m g/F + m g L/T."""
+    import pinocchio as pin  # noqa: F401  (the robot model)
+
+    from cell.robot.ik import ReleasePose, solve_ik
+
+    rb = load_robot("panda")
+    pose = ReleasePose.from_angles(np.array([0.45, 0.0, 0.5]), 0.0, 0.0, math.pi / 2)
+    q = solve_ik(rb, pose, rb.home).q
+    y_axis = rb.tcp_pose(q)[1][:, 1]
+    assert abs(y_axis[2]) > 0.999  # the pads' y axis is vertical
+    rest = plan_path([q, q + 1e-3], rb, velocity_scale=1e-3, acceleration_scale=1e-6)  # slow
+    hold = GripHold(1.2, 0.012, 0.07, 4e-5, (0.0, 0.0, 0.0), 0.025)
+    expect = 0.07 * G / 1.2 + 0.07 * G * 0.025 / 0.012
+    assert grip_use(rest, rb, hold) == pytest.approx(expect, rel=0.02)
 
 
 WIDTH_M = 0.03
@@ -93,7 +118,7 @@ items:
 def _carry(mass_fraction: float, margin: float) -> tuple[bool, float, float]:
     """Grasp a box of `mass_fraction` × what the pads hold at rest, carry it from the
     pick to a release pose at the grip limit computed with `margin`; (still held, the
-    item's drift in the grip [m], the path's peak |a − g| [m/s²])."""
+    item's drift in the grip [m], the path's peak use of the grip)."""
     from cell.orchestrator import scene_params_path
     from cell.params import load_params
 
@@ -115,9 +140,8 @@ def _carry(mass_fraction: float, margin: float) -> tuple[bool, float, float]:
         orc.ee.grasp(STROKE_M, item)
         before = orc.ee.held_offset_m()
         q_rel = orc._ik(np.array([0.3, 0.2, 0.6]), math.radians(30.0), 0.0)
-        f_max = carry_specific_force_limit(m_hold, obj.mass, margin)
-        offset = (0.0, 0.0, STROKE_M + obj.size[2] / 2 - EE_TO_TCP_M)
-        tr, peak = plan_carry([orc.q, q_lift, q_rel], orc.robot, f_max, offset_tcp_m=offset)
+        hold = carry_hold(orc.params, obj, STROKE_M)
+        tr, peak = plan_carry([orc.q, q_lift, q_rel], orc.robot, hold, margin=margin)
         qs, _, _ = tr.sample_many(np.arange(sc.dt_s, tr.duration + sc.dt_s, sc.dt_s))
         for q in qs:
             sc.set_arm(q)
@@ -134,9 +158,9 @@ def test_an_item_carried_at_the_computed_limit_does_not_slip():
     """The heaviest item the cell carries (1/GRIP_SAFETY of the static hold) at the
     computed limit stays within 1 mm; a lighter one too."""
     for frac in (0.625, 0.45):
-        held, drift, peak = _carry(frac, CARRY_MARGIN)
+        held, drift, use = _carry(frac, CARRY_MARGIN)
         assert held and drift < 1e-3, (frac, drift)
-        assert peak > G  # it did accelerate
+        assert frac < use <= 1 / CARRY_MARGIN  # it did accelerate, within the bound
 
 
 def test_carrying_at_the_static_limit_slides_the_item():
@@ -144,3 +168,49 @@ def test_carrying_at_the_static_limit_slides_the_item():
     same kind of carry lets the item slide: the margin is needed, not decoration."""
     held, drift, _ = _carry(0.7, 1.0)
     assert (not held) or drift > 5e-3
+
+
+def _turn_in_grip_deg(obj, stroke_m: float) -> float:
+    """Grasp `obj` with the pads' y axis up (gravity pulls it along the pads' faces, its
+    centre of mass above their patch) in a scene without an arm; its turn [deg] in 1 s."""
+    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.sim import CellScene
+
+    with CellScene(robot=None) as sc:
+        ee = PyBulletEndEffector(sc)
+        cl = sc.client
+        pos, orn = sc.ee_pose_for_release((0, 0, 0.7), 0.0, 0.0, stroke_m, obj, math.pi / 2)
+        sc.hold_ee(pos, orn, teleport=True)
+        item = sc.spawn_item(obj)
+        ee.grasp(stroke_m, item)
+
+        def rel() -> tuple:
+            e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
+            return cl.multiplyTransforms(
+                *cl.invertTransform(e_p, e_o), *cl.getBasePositionAndOrientation(item.body)
+            )[1]
+
+        q0 = rel()
+        sc.run_for(1.0)
+        d = cl.getDifferenceQuaternion(q0, rel())
+        return math.degrees(2 * math.acos(min(1.0, abs(d[3]))))
+
+
+def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():
+    """Gravity along the pads' faces: the grip model's use (force and couple) below 1
+    for a short box, above 1 for a tall one; the scene's pads hold the first still and
+    let the second turn."""
+    from cell.model.objects import ObjectParams
+    from cell.orchestrator import scene_params_path
+    from cell.params import load_params
+
+    params = load_params(scene_params_path())
+    stroke = 0.07
+    short = ObjectParams(shape="cuboid", mass=0.06, size=(0.05, 0.05, 0.05), name="")
+    tall = ObjectParams(shape="cuboid", mass=0.07, size=(0.04, 0.04, 0.08), name="")
+    for obj, turns in ((short, False), (tall, True)):
+        h = carry_hold(params, obj, stroke)
+        use = obj.mass * G / h.force_n + obj.mass * G * h.lever_m / h.torque_nm
+        assert (use > 1.0) is turns, (obj.size, use)
+        turned = _turn_in_grip_deg(obj, stroke)
+        assert (turned > 10.0) if turns else (turned < 2.0), (obj.size, turned)

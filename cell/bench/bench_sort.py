@@ -37,12 +37,14 @@ class LayoutUnit:
         robot: the arm.
         learn: correct the planner from each observed landing during the run.
         max_items: run only the first items of the job (0: all of them).
+        speed_scale: fraction of the arm's joint limits its moves use (Orchestrator).
     """
 
     seed: int
     robot: str = "panda"
     learn: bool = False
     max_items: int = 0
+    speed_scale: float = 1.0
 
 
 def layout_units(
@@ -51,9 +53,13 @@ def layout_units(
     robots: tuple[str, ...] = ("panda",),
     learn: bool = False,
     max_items: int = 0,
+    speed_scale: float = 1.0,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
-    return [LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items) for i in range(n)]
+    return [
+        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale)
+        for i in range(n)
+    ]
 
 
 def run_layout(unit: LayoutUnit) -> dict[str, Any]:
@@ -87,9 +93,15 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
     if unit.max_items:
         job = replace(job, max_items=unit.max_items)
     cat = catalogue()
-    out: dict[str, Any] = {"seed": unit.seed, "robot": unit.robot, "refused": "", "items": []}
+    out: dict[str, Any] = {
+        "seed": unit.seed,
+        "robot": unit.robot,
+        "speed_scale": unit.speed_scale,
+        "refused": "",
+        "items": [],
+    }
     try:
-        orch = Orchestrator(job, learn=unit.learn)
+        orch = Orchestrator(job, learn=unit.learn, speed_scale=unit.speed_scale)
     except JobError as exc:
         out["refused"] = str(exc)
         out["wall_time_s"] = time.perf_counter() - t0

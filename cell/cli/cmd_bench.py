@@ -18,10 +18,16 @@ def register(sub: argparse._SubParsersAction) -> None:
             "Without a subject: the speed and accuracy figures of the model, planner, IK, "
             "identification and gap diagnosis. `cell bench sort`: sort N random layouts "
             "(cell job random) in the scene and report in_bin_rate (95 %% interval), "
-            "in_bin_rate_unseen, items_per_hour and failures by reason."
+            "in_bin_rate_unseen, items_per_hour and failures by reason. `cell bench tradeoff`: "
+            "the same at several arm speed scales, items per hour against in-bin rate."
         ),
     )
-    p.add_argument("what", nargs="?", choices=("sort",), help="sort: the random-layout benchmark")
+    p.add_argument(
+        "what",
+        nargs="?",
+        choices=("sort", "tradeoff"),
+        help="sort: the random-layout benchmark; tradeoff: it at several arm speed scales",
+    )
     p.add_argument("--json", action="store_true", help="print one flat JSON object")
     p.add_argument("--layouts", type=int, default=8, help="sort: layouts to draw (8)")
     p.add_argument("--seed", type=int, default=0, help="sort: seed of the first layout (0)")
@@ -35,6 +41,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--max-items", type=int, default=0, help="sort: only the first N items of each layout"
     )
+    p.add_argument(
+        "--speed-scale",
+        type=float,
+        default=1.0,
+        help="sort: fraction of the arm's joint limits its moves use, in (0, 1] (1)",
+    )
+    p.add_argument(
+        "--scales",
+        default="0.4,0.6,0.8,1.0",
+        help="tradeoff: speed scales, comma-separated (0.4,0.6,0.8,1.0)",
+    )
+    p.add_argument("--plot", metavar="PNG", help="tradeoff: write the plot here")
     from cell.parallel import add_campaign_args
 
     add_campaign_args(p)
@@ -49,19 +67,19 @@ def run_sort(args: argparse.Namespace) -> int:
 
     from cell.bench.bench_sort import layout_units, run_layout, summarise_layouts
     from cell.errors import InvalidInput
-    from cell.kinds import ROBOTS
     from cell.parallel import run_campaign
 
-    robots = tuple(r.strip() for r in args.robots.split(",") if r.strip())
-    bad = [r for r in robots if r not in ROBOTS]
-    if bad or not robots:
-        raise InvalidInput(f"--robots {args.robots!r}: give arms from {', '.join(ROBOTS)}")
+    robots = _robots(args.robots)
     if not 1 <= args.layouts <= 10_000:
         raise InvalidInput(f"--layouts {args.layouts}: give 1 to 10000")
     out = Path(args.out) if args.out else None
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-    units = layout_units(args.layouts, args.seed, robots, args.learn, max(0, args.max_items))
+    if not 0.0 < args.speed_scale <= 1.0:
+        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
+    units = layout_units(
+        args.layouts, args.seed, robots, args.learn, max(0, args.max_items), args.speed_scale
+    )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]
         if out is not None:  # written by the driver as each layout arrives
@@ -84,9 +102,63 @@ def run_sort(args: argparse.Namespace) -> int:
     return 0
 
 
+def _robots(text: str) -> tuple[str, ...]:
+    from cell.errors import InvalidInput
+    from cell.kinds import ROBOTS
+
+    robots = tuple(r.strip() for r in text.split(",") if r.strip())
+    bad = [r for r in robots if r not in ROBOTS]
+    if bad or not robots:
+        raise InvalidInput(f"--robots {text!r}: give arms from {', '.join(ROBOTS)}")
+    return robots
+
+
+def run_tradeoff(args: argparse.Namespace) -> int:
+    import json
+
+    from cell.bench.bench_sort import run_layout
+    from cell.bench.bench_tradeoff import plot_tradeoff, tradeoff_rows, tradeoff_units
+    from cell.errors import InvalidInput
+    from cell.parallel import run_campaign
+
+    try:
+        scales = tuple(sorted({float(v) for v in args.scales.split(",") if v.strip()}))
+    except ValueError:
+        scales = ()
+    if not scales or not all(0.0 < s <= 1.0 for s in scales):
+        raise InvalidInput(f"--scales {args.scales!r}: give fractions in (0, 1], e.g. 0.5,1.0")
+    if not 1 <= args.layouts <= 10_000:
+        raise InvalidInput(f"--layouts {args.layouts}: give 1 to 10000")
+    units = tradeoff_units(
+        scales, args.layouts, args.seed, _robots(args.robots), max(0, args.max_items)
+    )
+    results = run_campaign(
+        run_layout,
+        units,
+        workers=args.workers,
+        address=args.ray_address,
+        desc="layouts x speed scales",
+    )
+    rows = tradeoff_rows(results)
+    if args.plot:
+        plot_tradeoff(rows, args.plot)
+    if args.json:
+        print(json.dumps({"points": rows}, indent=1))
+    else:
+        print(f"{'scale':>6s} {'items/h':>8s} {'in-bin':>7s}  95 % interval  items")
+        for r in rows:
+            print(
+                f"{r['speed_scale']:6.2f} {r['items_per_hour']:8.0f} {r['in_bin_rate']:7.3f}  "
+                f"{r['in_bin_rate_lo']:.3f}-{r['in_bin_rate_hi']:.3f}   {r['items']}"
+            )
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     if args.what == "sort":
         return run_sort(args)
+    if args.what == "tradeoff":
+        return run_tradeoff(args)
     benches = available()
     if args.only:
         unknown = [n for n in args.only if n not in benches]

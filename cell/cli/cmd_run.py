@@ -40,6 +40,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="correct the planner from each observed landing during the run (arm platform)",
     )
+    p.add_argument(
+        "--speed-scale",
+        type=float,
+        default=1.0,
+        help="fraction of the arm's joint velocity and acceleration limits its moves use, "
+        "in (0, 1] (1; a carry goes slower where the grip needs it)",
+    )
     p.set_defaults(func=run)
 
 
@@ -74,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
     from cell.orchestrator import Orchestrator
 
     job = load_job(args.job)
+    if not 0.0 < args.speed_scale <= 1.0:
+        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
     kind = args.ee or job.ee
     if args.emulate and kind != "dynamixel":
         raise InvalidInput(
@@ -100,7 +109,13 @@ def run(args: argparse.Namespace) -> int:
         orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
     else:
         orch = Orchestrator(
-            job, gui=args.gui, store=store, end_effector=hardware, observer=rec, learn=args.learn
+            job,
+            gui=args.gui,
+            store=store,
+            end_effector=hardware,
+            observer=rec,
+            learn=args.learn,
+            speed_scale=args.speed_scale,
         )
     bar = tqdm(
         total=len(job.expanded_items()),

@@ -209,6 +209,7 @@ class PyBulletEndEffector(EndEffector):
             raise InvalidInput("throw: no item in the grip")
         sc = self.scene
         sc.set_timestep(sc.launch_dt_s)
+        sc.refresh_contacts(self.item)  # the pads' contacts as they are now (see there)
         sc.track(self.item)
         self.band.latched = False
         stop = sc.geometry.end_stop_m - 1e-3

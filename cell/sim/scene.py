@@ -554,6 +554,26 @@ class CellScene:
                     self.t, pos, np.asarray(vel), np.asarray(spin), cl.getContactPoints(bodyA=body)
                 )
 
+    def refresh_contacts(self, item: Item) -> None:
+        """Drop the cached contacts between the end-effector and `item`, then step once at
+        the current step: Bullet makes them anew, with the normals the bodies have now.
+
+        Why: for a cylinder or a mesh (GJK pairs) Bullet keeps each contact point with
+        the normal it was made with, in world axes. While the pads hold an item and the
+        arm turns the end-effector, the points stay (nothing slides) but their normals
+        do not turn: after a carry they were measured 30-40° off the pads' faces, and at
+        the launch they wedged a cylinder against one pad (it left at 0.2 m/s instead of
+        3.2 m/s). Filtering the pair out for one step empties the cache; the item is
+        unsupported for that one step (it falls g·dt²/2, under a micrometre).
+        """
+        cl = self.client
+        links = range(-1, cl.getNumJoints(self.ee_body))
+        for link in links:
+            cl.setCollisionFilterPair(self.ee_body, item.body, link, -1, 0)
+        self.step()
+        for link in links:
+            cl.setCollisionFilterPair(self.ee_body, item.body, link, -1, 1)
+
     def run_for(self, seconds: float) -> None:
         """Step for a duration [s] at the current step."""
         self.step(max(1, int(round(seconds / self._dt_now))))
