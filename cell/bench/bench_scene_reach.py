@@ -22,8 +22,17 @@ __all__ = ["run", "scene_reach_errors"]
 LAND_Z_M = 0.1  # [m] the landing plane (a typical rim)
 
 
-def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
-    """Relative reach errors (model − scene) / scene of n throws, and their settings."""
+def scene_reach_errors(
+    n: int, seed: int = 0, params_path: str | None = None
+) -> tuple[np.ndarray, list[dict]]:
+    """Relative reach errors (model − scene) / scene of n throws, and their settings.
+
+    Args:
+        n: number of throws.
+        seed: the draw (items and settings come from the random stream [seed, 0x5C], which
+            the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
+        params_path: the parameter file to predict with (default: the shipped scene file).
+    """
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
@@ -35,7 +44,7 @@ def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
     from cell.sim import CellScene
     from cell.sim.campaign import throw_once
 
-    params = load_params(scene_params_path())
+    params = load_params(params_path or scene_params_path())
     rng = np.random.default_rng([seed, 0x5C])
     errs: list[float] = []
     rows: list[dict] = []
