@@ -151,3 +151,25 @@ def test_fitted_law_reproduces_held_out_heavy_and_wide_items_in_the_scene():
     e = np.asarray(errs)
     bound = sigma * math.sqrt(chi2.ppf(0.999, e.size) / e.size)
     assert math.sqrt(np.mean(e**2)) < bound, (e, sigma, bound)
+
+
+def test_with_the_ride_the_fast_path_the_reference_and_the_rigid_body_agree():
+    """The three integrators of the model share the ride: landings within 1 mm."""
+    from cell.model.rigid import simulate_rigid
+    from cell.model.throw import reference_landing
+
+    rng = np.random.default_rng(5)
+    for _ in range(6):
+        obj = ObjectParams("cube", float(rng.uniform(0.03, 0.2)), (0.05, 0.05, 0.05))
+        kw = {
+            "stroke": float(rng.uniform(0.035, 0.1)),
+            "position": (0.0, 0.0, float(rng.uniform(0.5, 0.9))),
+            "elevation": float(rng.uniform(0.0, 1.1)),
+            "azimuth": float(rng.uniform(-1, 1)),
+        }
+        b = ThrowBatch.single(obj, land_z=0.1, **kw)  # type: ignore[arg-type]
+        fast = predict_landing(b, RIDE)
+        ref = reference_landing(b, RIDE)
+        rigid = simulate_rigid(obj, RIDE, land_z=0.1, **kw)  # type: ignore[arg-type]
+        assert np.hypot(*(fast.xy[0] - ref.xy[0])) < 1e-3
+        assert np.hypot(*(rigid.landing[:2] - ref.xy[0])) < 1e-3
