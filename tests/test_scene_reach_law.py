@@ -173,3 +173,16 @@ def test_with_the_ride_the_fast_path_the_reference_and_the_rigid_body_agree():
         rigid = simulate_rigid(obj, RIDE, land_z=0.1, **kw)  # type: ignore[arg-type]
         assert np.hypot(*(fast.xy[0] - ref.xy[0])) < 1e-3
         assert np.hypot(*(rigid.landing[:2] - ref.xy[0])) < 1e-3
+
+
+def test_the_calibration_never_throws_an_item_the_bench_draws():
+    """Hold-out: the ad-hoc campaign (stream 0xCA1) and the bench (stream 0x5C) draw
+    different items at every seed the README quotes."""
+    from cell.jobgen import _adhoc_item
+    from cell.sim.campaign import adhoc_plan
+
+    cal = {(p["object"].shape, p["object"].mass, p["object"].size) for p in adhoc_plan(160, seed=1)}
+    for seed in (0, 1, 100):
+        rng = np.random.default_rng([seed, 0x5C])
+        bench = [_adhoc_item(rng) for _ in range(600)]
+        assert not cal & {(d["shape"], d["mass_kg"], tuple(d["size_m"])) for d in bench}

@@ -33,8 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help=(
             "throws of ad-hoc items (20-250 g, 25-90 mm, every shape) over the whole envelope "
             "that the mass rule for objects outside the campaign is fitted to (160; their own "
-            "random stream of --seed, never the bench's); 0: fit the rule to the identified "
-            "masses alone"
+            "random stream of --seed, never the bench's; --log and --db hold the catalogue "
+            "throws only); 0: fit the rule to the identified masses alone"
         ),
     )
     p.add_argument(
