@@ -5,7 +5,8 @@ switched-on model effects, as YAML.
     objects:                              # optional identified η_o by object id
       cube50: {shape: cube, mass_kg: 0.06, size_m: [0.05, 0.05, 0.05]}
     effects: {band_mass: {mass_kg: 0.01}} # optional (see cell.model.effects)
-    mass_rule: {kappa: 0.143, band_mass_kg: 0.014}  # optional: m_eff = κ √(m + m_b)
+    mass_rule: {kappa: 0.143, band_mass_kg: 0.014, width_exponent: -0.08}
+                                          # optional: m_eff = κ √(m + m_b) (a / 0.05 m)^β
     note: free text on how the file was made
 
 The mass rule (fitted by `cell calibrate`, see cell.sim.calibrate) gives an
@@ -27,7 +28,9 @@ from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.yamlsafe import read_yaml_text, safe_load
 
-__all__ = ["ModelParams", "load_params", "save_params"]
+__all__ = ["ModelParams", "load_params", "save_params", "WIDTH_REF_M"]
+
+WIDTH_REF_M = 0.05  # [m] the grip width the mass rule's κ refers to
 
 
 @dataclass(frozen=True)
@@ -39,15 +42,16 @@ class ModelParams:
         objects: identified object parameters by object id.
         effects: effect name -> its parameters (empty = nominal model).
         note: how the file was made.
-        mass_rule: (κ [kg^½], m_b [kg]) of m_eff = κ √(m + m_b) for objects not in
-            `objects`, or None (they keep their own mass).
+        mass_rule: (κ [kg^½], m_b [kg], β) of m_eff = κ √(m + m_b) (a / a_ref)^β for
+            objects not in `objects` (a their grip width, a_ref = WIDTH_REF_M), or None
+            (they keep their own mass). A file without β (width_exponent) has β = 0.
     """
 
     ee: EndEffectorParams = field(default_factory=EndEffectorParams)
     objects: dict[str, ObjectParams] = field(default_factory=dict)
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
     note: str = ""
-    mass_rule: tuple[float, float] | None = None
+    mass_rule: tuple[float, ...] | None = None
 
     def model_object(self, obj: ObjectParams) -> ObjectParams:
         """The η_o the planner uses for `obj`: the identified one when the file has
@@ -56,8 +60,10 @@ class ModelParams:
             return self.objects[obj.name]
         if self.mass_rule is None:
             return obj
-        kappa, m_b = self.mass_rule
-        return replace(obj, mass=float(kappa * (obj.mass + m_b) ** 0.5))
+        kappa, m_b = self.mass_rule[0], self.mass_rule[1]
+        beta = self.mass_rule[2] if len(self.mass_rule) > 2 else 0.0
+        m_eff = kappa * (obj.mass + m_b) ** 0.5 * (obj.width / WIDTH_REF_M) ** beta
+        return replace(obj, mass=float(m_eff))
 
 
 def load_params(path: str | Path | None) -> ModelParams:
@@ -116,23 +122,26 @@ def load_params(path: str | Path | None) -> ModelParams:
     )
 
 
-def _mass_rule(node: Any, path: str) -> tuple[float, float] | None:
-    """The file's mass rule (κ, m_b), validated; None when absent."""
+def _mass_rule(node: Any, path: str) -> tuple[float, float, float] | None:
+    """The file's mass rule (κ, m_b, β), validated; None when absent (β = 0 when the file
+    has no width_exponent, as files written before it had)."""
     if node is None:
         return None
     msg = (
-        f"{path}: mass_rule must be {{kappa: K, band_mass_kg: M}} with 0 < K <= 10 kg^0.5 "
-        "and 0 <= M <= 1 kg"
+        f"{path}: mass_rule must be {{kappa: K, band_mass_kg: M[, width_exponent: B]}} with "
+        "0 < K <= 10 kg^0.5, 0 <= M <= 1 kg and |B| <= 1"
     )
-    if not isinstance(node, dict) or set(node) != {"kappa", "band_mass_kg"}:
+    keys = {"kappa", "band_mass_kg"}
+    if not isinstance(node, dict) or not keys <= set(node) <= keys | {"width_exponent"}:
         raise InvalidInput(f"{msg}; got {node!r}")
     try:
         kappa, m_b = float(node["kappa"]), float(node["band_mass_kg"])
+        beta = float(node.get("width_exponent", 0.0))
     except (TypeError, ValueError):
         raise InvalidInput(f"{msg}; got {node!r}") from None
-    if not (0.0 < kappa <= 10.0 and 0.0 <= m_b <= 1.0):
-        raise InvalidInput(f"{msg}; got kappa={kappa}, band_mass_kg={m_b}")
-    return kappa, m_b
+    if not (0.0 < kappa <= 10.0 and 0.0 <= m_b <= 1.0 and abs(beta) <= 1.0):
+        raise InvalidInput(f"{msg}; got kappa={kappa}, band_mass_kg={m_b}, width_exponent={beta}")
+    return kappa, m_b, beta
 
 
 def save_params(params: ModelParams, path: str | Path) -> None:
@@ -150,6 +159,8 @@ def save_params(params: ModelParams, path: str | Path) -> None:
             "kappa": float(params.mass_rule[0]),
             "band_mass_kg": float(params.mass_rule[1]),
         }
+        if len(params.mass_rule) > 2 and params.mass_rule[2] != 0:
+            doc["mass_rule"]["width_exponent"] = float(params.mass_rule[2])
     if params.note:
         doc["note"] = params.note
     tmp = Path(str(path) + ".tmp")

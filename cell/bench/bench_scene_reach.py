@@ -17,13 +17,22 @@ import math
 
 import numpy as np
 
-__all__ = ["run", "scene_reach_errors"]
+__all__ = ["run", "scene_reach_errors", "breakdown", "main"]
 
 LAND_Z_M = 0.1  # [m] the landing plane (a typical rim)
 
 
-def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
-    """Relative reach errors (model − scene) / scene of n throws, and their settings."""
+def scene_reach_errors(
+    n: int, seed: int = 0, params_path: str | None = None
+) -> tuple[np.ndarray, list[dict]]:
+    """Relative reach errors (model − scene) / scene of n throws, and their settings.
+
+    Args:
+        n: number of throws.
+        seed: the draw (items and settings come from the random stream [seed, 0x5C], which
+            the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
+        params_path: the parameter file to predict with (default: the shipped scene file).
+    """
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
@@ -35,7 +44,7 @@ def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
     from cell.sim import CellScene
     from cell.sim.campaign import throw_once
 
-    params = load_params(scene_params_path())
+    params = load_params(params_path or scene_params_path())
     rng = np.random.default_rng([seed, 0x5C])
     errs: list[float] = []
     rows: list[dict] = []
@@ -77,6 +86,66 @@ def scene_reach_errors(n: int, seed: int = 0) -> tuple[np.ndarray, list[dict]]:
     return np.array(errs), rows
 
 
+_BINS: dict[str, tuple[str, float, list[float]]] = {
+    # name: (row key, scale to the unit in the name, bin edges)
+    "mass_g": ("mass_kg", 1000.0, [20, 60, 90, 120, 160, 200, 251]),
+    "width_mm": ("width", 1000.0, [25, 40, 55, 70, 80, 91]),
+    "stroke_mm": ("stroke", 1000.0, [30, 50, 70, 90, 111]),
+    "elevation_deg": ("elevation", 180.0 / math.pi, [0, 15, 30, 45, 66]),
+}
+
+
+def _stats(e: np.ndarray) -> dict[str, float]:
+    return {
+        "n": int(e.size),
+        "rms_pct": float(100 * np.sqrt(np.mean(e**2))) if e.size else float("nan"),
+        "bias_pct": float(100 * np.mean(e)) if e.size else float("nan"),
+    }
+
+
+def breakdown(errs: np.ndarray, rows: list[dict]) -> dict[str, object]:
+    """The relative reach errors by mass, grip width, stroke, elevation and shape bins."""
+    out: dict[str, object] = {"all": _stats(errs)}
+    for name, (key, scale, edges) in _BINS.items():
+        x = np.array(
+            [(r["size_m"][0] if key == "width" else r[key]) * scale for r in rows], dtype=float
+        )
+        out[name] = {
+            f"{lo:g}-{hi:g}": _stats(errs[(x >= lo) & (x < hi)])
+            for lo, hi in zip(edges[:-1], edges[1:], strict=True)
+        }
+    shapes = np.array([r["shape"] for r in rows])
+    out["shape"] = {s: _stats(errs[shapes == s]) for s in sorted(set(shapes))}
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m cell.bench.bench_scene_reach [--n N] [--seed S] [--params FILE] [--json OUT]`:
+    the figure and its breakdown for one draw and parameter file."""
+    import argparse
+    import json
+
+    ap = argparse.ArgumentParser(prog="python -m cell.bench.bench_scene_reach")
+    ap.add_argument("--n", type=int, default=60)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--params", default=None, help="parameter file (the shipped scene file)")
+    ap.add_argument("--json", default=None, help="write the breakdown here")
+    args = ap.parse_args(argv)
+    e, rows = scene_reach_errors(args.n, seed=args.seed, params_path=args.params)
+    doc = {
+        "n": args.n,
+        "seed": args.seed,
+        "params": args.params or "robots/cell_scene/ee_params.yaml",
+        **breakdown(e, rows),
+    }
+    text = json.dumps(doc, indent=1)
+    if args.json:
+        with open(args.json, "w") as fh:
+            fh.write(text + "\n")
+    print(text)
+    return 0
+
+
 def run(quick: bool) -> dict[str, float]:
     """scene_reach_err_pct (RMS) and its 95th percentile over n throws."""
     e, _ = scene_reach_errors(12 if quick else 60)
@@ -86,3 +155,7 @@ def run(quick: bool) -> dict[str, float]:
         "scene_reach_bias_pct": float(100 * np.mean(e)),
         "scene_reach_err_p95_pct": float(100 * np.percentile(np.abs(e), 95)),
     }
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

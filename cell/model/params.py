@@ -45,6 +45,13 @@ class EndEffectorParams:
         dt: duration of the launch push [s].
         stroke_min: smallest allowed stroke L_s [m].
         stroke_max: largest allowed stroke L_s [m].
+        L_e: where the item leaves the carriage [m, carriage position like L_s], or 0 (the
+            thesis model: the item leaves at the end of the push). With L_e > 0 the item
+            rides the carriage from L_s to L_e after the push (`cell.model.throw.ride`): it
+            is carried L_e − L_s along the throw axis, the pads hold it across the axis, and
+            gravity's component along the axis takes 2 g sin(e) (L_e − L_s) from its speed
+            squared. The PyBullet scene's carriage runs on to its end stop before the item
+            flies free, so its calibration sets L_e; an older file without it keeps 0.
     """
 
     r_r: float = 0.010
@@ -60,6 +67,7 @@ class EndEffectorParams:
     dt: float = 0.012
     stroke_min: float = 0.03
     stroke_max: float = 0.11
+    L_e: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -89,10 +97,16 @@ class EndEffectorParams:
                 f"stroke range [{self.stroke_min}, {self.stroke_max}] m must satisfy "
                 f"0 < stroke_min < stroke_max < L_t={self.L_t}"
             )
+        if self.L_e != 0 and not self.stroke_min < self.L_e < self.L_t:
+            raise InvalidParameter(
+                f"end-effector parameter L_e={self.L_e} m (where the item leaves the carriage) "
+                f"must be 0 (off) or in (stroke_min={self.stroke_min}, L_t={self.L_t})"
+            )
 
     def as_dict(self) -> dict[str, float]:
-        """The parameters as a plain dict of floats."""
-        return {k: float(v) for k, v in asdict(self).items()}
+        """The parameters as a plain dict of floats (L_e only when it is on, so files and
+        reports of the thesis model stay as they were)."""
+        return {k: float(v) for k, v in asdict(self).items() if k != "L_e" or v != 0}
 
     @classmethod
     def from_dict(cls, values: dict[str, Any], *, where: str = "parameters") -> EndEffectorParams:

@@ -30,7 +30,7 @@ from cell.model.band import push_force
 from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
-from cell.model.throw import throw_axis
+from cell.model.throw import ride, throw_axis
 
 __all__ = ["RigidTrajectory", "release_orientation", "simulate_rigid", "quat_to_matrix"]
 
@@ -157,6 +157,9 @@ def simulate_rigid(
             break
         p, v, w, q, t = p_new, v_new, w_new, q_new, t_new
         i += 1
+        if i == n_push and ee.L_e > 0:  # the ride on the carriage to L_e, as launch_state
+            travel = float((p - np.asarray(position, float)) @ u)
+            (p,), (v,) = ride(p[None], v[None], u[None], np.array([stroke + travel]), ee.L_e)
         ts.append(t)
         ps.append(p)
         qs.append(q)

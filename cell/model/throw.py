@@ -43,6 +43,7 @@ __all__ = [
     "throw_axis",
     "drag_constant",
     "launch_state",
+    "ride",
     "predict_landing",
     "reference_landing",
     "no_landing_error",
@@ -283,7 +284,40 @@ def launch_state(
 
     for _ in range(steps):
         (px, py, pz), (vx, vy, vz) = rk4_step(rates, (px, py, pz), (vx, vy, vz), h)
-    return np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
+    p1, v1 = np.stack([px, py, pz], axis=-1), np.stack([vx, vy, vz], axis=-1)
+    if ee.L_e > 0:
+        p1, v1 = ride(p1, v1, u, batch.stroke + np.sum((p1 - batch.position) * u, axis=1), ee.L_e)
+    return p1, v1
+
+
+_RIDE_MIN_SPEED2 = 1e-6  # [m²/s²] floor of the speed² left after the ride (stalls at ~1 mm/s)
+
+
+def ride(
+    position: np.ndarray, velocity: np.ndarray, axis: np.ndarray, stroke: np.ndarray, L_e: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The item riding the carriage from where the push left it to L_e.
+
+    The carriage carries it d = max(L_e − s, 0) along the throw axis u (s the carriage's
+    position at the end of the push: the stroke L_s plus the push's travel along u); the
+    pads hold it
+    across u, and gravity's component along u does the work −m g u_z d, so the speed along
+    u becomes √(w² − 2 g u_z d) (w its speed along u at the end of the push); the speed
+    across u is kept. Drag over the few centimetres is neglected.
+
+    Args:
+        position, velocity: centre of mass and velocity at the end of the push, (n, 3).
+        axis: the throw axis u per throw, (n, 3).
+        stroke: s, the carriage position at the end of the push [m], (n,).
+        L_e: carriage position where the item leaves [m].
+
+    Returns:
+        (position, velocity) where the item leaves the carriage, each (n, 3).
+    """
+    d = np.maximum(L_e - np.asarray(stroke, float), 0.0)
+    w = np.sum(velocity * axis, axis=1)
+    w2 = np.sqrt(np.maximum(w * w - 2 * G * axis[:, 2] * d, _RIDE_MIN_SPEED2))
+    return position + d[:, None] * axis, velocity + (w2 - w)[:, None] * axis
 
 
 def predict_landing(

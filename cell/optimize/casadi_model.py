@@ -5,7 +5,8 @@ come from `cell.model.band` evaluated with the CasADi back-end
 (`cell.model.ops.casadi_ops`), and the drag constant k = ½ ρ C_d A / m from
 `cell.model.throw.drag_constant`. The push phase repeats the model's
 `launch_state` step for step (4 RK4 steps over Δt, acceleration
-f_o u / m + g - k |v| v), so the two agree to rounding (a test checks 1e-9).
+f_o u / m + g - k |v| v) and its ride on the carriage to L_e when η_ee has one
+(`cell.model.throw.ride`), so the two agree to rounding (a test checks 1e-9).
 
 The flight after the push is a fixed-step RK4 integration in normalised time:
 the flight time T after the push is an input (a decision variable of the NLP)
@@ -25,7 +26,7 @@ from cell.model.band import band_stretch, push_force, stored_energy
 from cell.model.integrate import rk4_step
 from cell.model.ops import casadi_ops
 from cell.model.params import EndEffectorParams, G
-from cell.model.throw import _PUSH_STEPS
+from cell.model.throw import _PUSH_STEPS, _RIDE_MIN_SPEED2
 
 __all__ = [
     "N_FLIGHT_STEPS",
@@ -105,6 +106,12 @@ def symbolic_throw(
     p1, v1 = _rk4(
         p0, v0, lambda v: a_push - k_drag * speed(v) * v, ee.dt / _PUSH_STEPS, _PUSH_STEPS
     )
+    if ee.L_e > 0:  # the ride on the carriage to L_e (`cell.model.throw.ride`)
+        d = ca.fmax(ee.L_e - stroke - ca.dot(p1 - p0, u), 0.0)
+        w = ca.dot(v1, u)
+        w2 = ca.sqrt(ca.fmax(w * w - 2 * G * u[2] * d, _RIDE_MIN_SPEED2))
+        p1 = p1 + d * u
+        v1 = v1 + (w2 - w) * u
     p2, v2 = _rk4(p1, v1, lambda v: gravity - k_drag * speed(v) * v, t_flight / n_steps, n_steps)
     energy = 2 * stored_energy(band_stretch(stroke, width, ee, ops), ee, ops)
     return SymbolicThrow(

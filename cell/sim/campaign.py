@@ -27,7 +27,7 @@ from cell.model.objects import ObjectParams
 from cell.sim.items import resolve_object
 from cell.sim.scene import CellScene
 
-__all__ = ["CAMPAIGN_LAND_Z_M", "throw_once", "campaign_plan", "run_campaign"]
+__all__ = ["CAMPAIGN_LAND_Z_M", "throw_once", "campaign_plan", "adhoc_plan", "run_campaign"]
 
 CAMPAIGN_LAND_Z_M = 0.1  # [m] landing plane of the campaign (above any item's half-diagonal)
 
@@ -122,6 +122,52 @@ def campaign_plan(
                 "elevation": math.radians(float(rng.uniform(15, 50))),
                 "azimuth": math.radians(float(rng.uniform(-30, 30))),
                 "throw_id": f"cal{seed:03d}-{i:04d}",
+            }
+        )
+    return plan
+
+
+ADHOC_STREAM = 0xCA1  # the ad-hoc campaign's random stream (the bench draws from 0x5C)
+
+
+def adhoc_plan(n: int, *, seed: int = 0) -> list[dict[str, Any]]:
+    """n throws of ad-hoc items (one new item each) over the cell's whole envelope.
+
+    Items are drawn as `cell.jobgen` draws a job's ad-hoc primitives (every shape,
+    20–250 g at plausible densities, 25–90 mm), from a random stream of their own; an item
+    the pads cannot hold is drawn again. Strokes run from the end-effector's shortest to
+    the longest the grip holds the item at (`cell.orchestrator.grip_stroke_limit` with the
+    scene's band), elevations 0–65°, release heights 0.5–0.9 m, azimuths ±30°.
+
+    Raises:
+        InvalidParameter: n < 1.
+    """
+    from cell.errors import CellError
+    from cell.jobgen import _adhoc_item
+    from cell.orchestrator import grip_stroke_limit
+    from cell.params import ModelParams
+
+    if n < 1:
+        raise InvalidParameter(f"ad-hoc campaign size n={n} must be ≥ 1")
+    band = ModelParams()  # the scene's band obeys the reference law
+    rng = np.random.default_rng([seed, ADHOC_STREAM])
+    plan: list[dict[str, Any]] = []
+    while len(plan) < n:
+        d = _adhoc_item(rng)
+        obj = ObjectParams(shape=d["shape"], mass=d["mass_kg"], size=tuple(d["size_m"]))
+        try:
+            s_max = grip_stroke_limit(band, obj)
+        except CellError:
+            continue
+        i = len(plan)
+        plan.append(
+            {
+                "object": obj,
+                "stroke": float(rng.uniform(band.ee.stroke_min, s_max)),
+                "position": (0.0, 0.0, float(rng.uniform(0.5, 0.9))),
+                "elevation": math.radians(float(rng.uniform(0.0, 65.0))),
+                "azimuth": math.radians(float(rng.uniform(-30, 30))),
+                "throw_id": f"adhoc{seed:03d}-{i:04d}",
             }
         )
     return plan
