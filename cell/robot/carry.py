@@ -211,7 +211,7 @@ def plan_carry(
     Returns:
         (the trajectory, its peak use of the grip, `grip_use`): at most 1/margin, or,
         when no time scaling gets it there (the path's geometry asks too much), the
-        path at GENTLE_SCALE of the limits and its use (logged as a warning).
+        path at GENTLE_SCALE of the limits and its use (logged).
 
     Raises:
         TrajectoryError: the grip cannot hold the item's weight alone within the
@@ -251,7 +251,7 @@ def plan_carry(
         # Not even a slow move keeps within the bound: the path itself (not its speed)
         # asks too much, e.g. it rolls a tall hanging item sideways. Carry it gently.
         tr, use = attempt(GENTLE_SCALE)
-        log.warning(
+        log.info(
             "no time scaling keeps the carry within the grip (use %.2f > %.2f even slowly): "
             "carrying at %.0f %% of the acceleration limits",
             use,
