@@ -55,6 +55,7 @@ figures: install
 	$(BIN)/cell gap check --json $(FIG)/gap_check.json
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --json > $(FIG)/bench_sort.json
+	$(BIN)/cell bench tradeoff --layouts 4 --seed 0 --robots panda,ur5 --scales 0.5,0.75,1.0 --workers 2 --plot $(FIG)/tradeoff.png --json > $(FIG)/tradeoff.json
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -296,9 +296,12 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     length = min(GEO.pad_length_m, height)
     force = holding_mass_kg(params.ee, stroke_m, gripped.width) * G
     half_y = min(GEO.pad_half_width_m, obj.size[1] / 2)
+    # a mesh meets the flat pads at points, not over a face: no couple to count on (a
+    # duck pinched at its neck turned 110-130° in the pads while carried)
+    radius = 0.0 if obj.shape == "mesh" else patch_torsion_radius_m(half_y, length / 2)
     return GripHold(
         force_n=force,
-        torque_nm=force * patch_torsion_radius_m(half_y, length / 2),
+        torque_nm=force * radius,
         mass_kg=obj.mass,
         inertia_xx=float(obj.inertia[0]),
         offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),
@@ -556,7 +559,7 @@ class Orchestrator:
         the grip sideways on the way, and a tall item hanging from the pads turns in
         them (cell.robot.carry). None when the grip was not taken twist-free, or when
         a waypoint has no IK (the spline between the ends is used then)."""
-        if self._frame is None or SWING_WAYPOINTS < 1:
+        if self._frame is None or SWING_WAYPOINTS < 1 or not self._turns_if_rolled():
             return []
         az, roll = self._frame
         rb = self.robot
@@ -575,6 +578,18 @@ class Orchestrator:
                 return []
             out.append(q)
         return out
+
+    def _turns_if_rolled(self) -> bool:
+        """Would the carried item turn in the pads if the grip rolled its y axis up while
+        it hangs (gravity along the pads' faces)? Then the swing is kept level."""
+        from cell.model.params import G
+        from cell.robot.carry import CARRY_MARGIN
+
+        obj, stroke = self._carried
+        h = carry_hold(self.params, obj, stroke)
+        w = obj.mass * G
+        turn = w * h.lever_m / h.torque_nm if h.torque_nm > 0 else math.inf
+        return w / h.force_n + turn > 1.0 / CARRY_MARGIN
 
     def _pick_frame(self, plan: Any) -> tuple[float, float] | None:
         """(azimuth, roll) [rad] of the grip pointing down that the release's frame swings

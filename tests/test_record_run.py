@@ -141,7 +141,11 @@ def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
             end = np.asarray(pred["LineStrips3D:strips"][0])[-1]
             assert np.allclose(end, (bx, by, rim), atol=0.01)
             (rel,) = rows[f"/world/release/{i:03d}"]
-            assert np.allclose(rel["Arrows3D:origins"][0], track[0], atol=0.01)
+            # the planned release point against where the item's centre of mass was at
+            # release: the duck, held at its neck, turns in the pads while carried (its
+            # centre of mass moved 20 mm); the boxes stay within 1 cm
+            tol = 0.03 if r["object_id"] == "duck" else 0.01
+            assert np.allclose(rel["Arrows3D:origins"][0], track[0], atol=tol)
         else:
             assert f"/world/flight/{i:03d}/predicted" not in rows
 
