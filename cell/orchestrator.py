@@ -840,8 +840,11 @@ class Orchestrator:
 
         q_high, roll = self._ik_grip_any(at(LIFT_M), stroke, obj, elevation, azimuth, rolls)
         q_near = self._ik_grip(at(APPROACH_M), stroke, obj, (elevation, azimuth, roll))
-        self._move([q_high, q_near])
+        self._move([q_high])
+        # the carriage may still be on its way in from the last throw's end stop: the
+        # grip goes down over the item only once it is at the stroke
         self.ee.wait_wound()
+        self._move([q_near])
         # the item as the plant reports it now that it rests (a mesh may still have been
         # rocking when it was first seen): over it again if it moved, then a guarded
         # descent onto it
@@ -850,9 +853,12 @@ class Orchestrator:
         p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
         roll = min(rolls, key=lambda r: abs(math.remainder(r - roll, 2 * math.pi)))
         axes = (elevation, azimuth, roll)
-        turned = abs(aimed[1] - elevation) + abs(math.remainder(aimed[2] - azimuth, 2 * math.pi))
+        u0, u1 = (axis_frame(e, a)[:, 2] for e, a in (aimed[1:], axes[:2]))
+        turned = math.acos(max(-1.0, min(1.0, float(u0 @ u1))))
         if np.linalg.norm(p - aimed[0]) > REPLAN_M or turned > REPLAN_RAD:
-            self._move([self._ik_grip(at(APPROACH_M), stroke, obj, axes)])
+            q_over = self._ik_grip(at(APPROACH_M), stroke, obj, axes)
+            if not np.allclose(q_over, self.q, atol=1e-6):
+                self._move([q_over])
         q_from, q_to = self.q.copy(), self._ik_grip(at(-PRESS_M), stroke, obj, axes)
         depth = float(np.linalg.norm(self.robot.tcp_pose(q_to)[0] - self.robot.tcp_pose(q_from)[0]))
 
