@@ -37,6 +37,7 @@ from cell.errors import (
     GraspLost,
     HardwareError,
     IKFailed,
+    InvalidInput,
     TrajectoryError,
     UnreachableTarget,
 )
@@ -82,6 +83,8 @@ LIFT_CHECK_M = 0.03  # [m] the first lift, in LIFT_CHECK_S [s], shows whether th
 LIFT_CHECK_S = 0.2
 PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still on the station
 
+
+PICKS = ("kinematic", "physical")  # how an item gets into the grip (Orchestrator's `pick`)
 
 # Why an item did not end in its bin: one of these, always (ItemResult.failure).
 FAILURES = (
@@ -402,6 +405,9 @@ class Orchestrator:
             commanded in step with the simulated one.
         observer: told of the scene, each item's start, release, flight and result
             (`cell.record.observer.RunObserver`, e.g. the Rerun recorder), or None.
+        pick: "kinematic": the item appears at the station's centre and is moved into
+            the open grip (PyBulletEndEffector.grasp); "physical": it rests at a seeded
+            random spot and yaw, and the arm grips it by contact (`_pick`).
         learn: correct the planner from each observed landing (the flywheel): an
             object's next throw aims where its earlier landings say it must
             (LandingCorrection), and an object never thrown before takes its
@@ -419,6 +425,7 @@ class Orchestrator:
         end_effector: Any = None,
         observer: Any = None,
         learn: bool = False,
+        pick: str = "kinematic",
     ) -> None:
         from cell.endeffector.pybullet_backend import PyBulletEndEffector
         from cell.optimize.bounds import ThrowBounds
@@ -438,6 +445,12 @@ class Orchestrator:
             pick_station_xy=job.pick_position[:2],
             pick_station_height=job.pick_position[2],
         )
+        if pick not in PICKS:
+            raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
+        self.pick = pick
+        # the kinematic pick moves the item into the grip: the pads, longer than a flat
+        # item, must not jam on the station's top while the fingers close
+        self.scene.ee_collides_with_station(pick == "physical")
         self.ee = PyBulletEndEffector(self.scene)
         self.hardware = end_effector
         self.bounds = ThrowBounds()
@@ -543,7 +556,11 @@ class Orchestrator:
         target = self.job.bin(spec.bin)
         sc = self.scene
         t0 = sc.t
-        item = self._spawn_at_station(index, obj)
+        if self.pick == "physical":
+            item = self._spawn_at_station(index, obj)
+        else:
+            item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
+            sc.run_for(0.05)  # let it settle on the station
         if self.observer is not None:
             self.observer.on_item_start(index, obj, target, item)
         base: dict[str, Any] = dict(
@@ -559,7 +576,10 @@ class Orchestrator:
             s_grip = grip_stroke_limit(self.params, obj)
             plan, delta = (None, 0.0) if place else self._plan(obj, target, index, s_grip)
             stroke = min(PICK_STROKE_M, s_grip) if plan is None else plan.stroke_m + delta
-            q_lift = self._pick(obj, item, stroke, *self._carry_heading(plan, target))
+            if self.pick == "physical":
+                q_lift = self._pick(obj, item, stroke, *self._carry_heading(plan, target))
+            else:
+                q_lift = self._pick_kinematic(obj, item, stroke)
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
             if plan is None:
@@ -587,6 +607,18 @@ class Orchestrator:
                 sc.remove_item(item)
 
     # -- the pick ----------------------------------------------------------------
+    def _pick_kinematic(self, obj: ObjectParams, item: Any, stroke: float) -> np.ndarray:
+        """The kinematic pick: the grip over the item, which is moved into it
+        (PyBulletEndEffector.grasp); returns the lift configuration."""
+        p_item = np.asarray(self.scene.client.getBasePositionAndOrientation(item.body)[0])
+        down = (-math.pi / 2, 0.0)
+        q_pick = self._ik(self._tcp_for_item_centre(p_item, *down, stroke, obj), *down)
+        lift = p_item + np.array([0, 0, LIFT_M])
+        q_lift = self._ik(self._tcp_for_item_centre(lift, *down, stroke, obj), *down)
+        self._move([q_lift, q_pick])
+        self.ee.grasp(stroke, item)
+        return q_lift
+
     def _spawn_at_station(self, index: int, obj: ObjectParams) -> Any:
         """The item, come to rest on the pick station at a random spot (± PICK_SCATTER_M)
         and yaw, drawn from the job's seed and the item's index (reproducible)."""

@@ -37,7 +37,8 @@ seed: 7
 @pytest.fixture
 def orch(tmp_path: Path) -> Iterator[Orchestrator]:
     items = "  - {object: cube50, count: 2, bin: far}\n  - {object: cuboid_a, count: 1, bin: near}"
-    o = Orchestrator(parse_job(JOB % items, str(tmp_path / "job.yaml")), session="pick")
+    job = parse_job(JOB % items, str(tmp_path / "job.yaml"))
+    o = Orchestrator(job, session="pick", pick="physical")
     yield o
     o.close()
 
@@ -95,7 +96,7 @@ def test_items_rest_at_a_seeded_random_spot_and_yaw(orch: Orchestrator, tmp_path
         assert p[2] == pytest.approx(sc.pick_station_height + obj.size[2] / 2, abs=1e-3)
     assert np.linalg.norm(p0[:2] - p1[:2]) > 1e-3 or abs(yaw0 - yaw1) > 1e-2  # items differ
     # the same job (seed) puts item 0 at the same pose in another scene
-    again = Orchestrator(orch.job, session="again")
+    again = Orchestrator(orch.job, session="again", pick="physical")
     try:
         p, rot = again._item_pose(again._spawn_at_station(0, obj))
         assert np.allclose(p, p0, atol=1e-6) and math.atan2(rot[1, 0], rot[0, 0]) == pytest.approx(

@@ -164,8 +164,6 @@ class CellScene:
         with tempfile.TemporaryDirectory(prefix="cell_ee_") as folder:
             self.ee_body = int(cl.loadURDF(str(write_ee_urdf(geometry, folder)), [0, 0, 1.0]))
         self.band = BandDrive(cl, self.ee_body, band, geometry)
-        # The end-effector collides with the station and the items: the pick is physical
-        # (the pads close on the item resting on the station; cell.orchestrator).
         self._mount = cl.createConstraint(
             self.ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0]
         )
@@ -305,6 +303,14 @@ class CellScene:
             jointChildFrameOrientation=orn,
             maxForce=MOUNT_FORCE_N,
         )
+
+    def ee_collides_with_station(self, collide: bool) -> None:
+        """Let the end-effector collide with the pick station (the physical pick), or not
+        (a kinematic pick moves the item into the grip: the pads, longer than a flat item,
+        must not jam on the station's top while the fingers close). It collides by default."""
+        cl = self.client
+        for link in range(-1, cl.getNumJoints(self.ee_body)):
+            cl.setCollisionFilterPair(self.ee_body, self.pick_station, link, -1, int(collide))
 
     def ee_lag(self) -> np.ndarray:
         """Where the mount holds the end-effector frame E minus where E is [m, W], shape (3,):
