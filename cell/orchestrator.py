@@ -74,6 +74,7 @@ DESCENT_MPS = 0.1  # [m/s] speed of the guarded descent onto the item
 FINGER_CLEARANCE_M = 0.01  # [m] each open pad this far outside the item's gripping width
 PRESS_M = 0.003  # [m] the guarded descent ends this far into the item's box (it stops at contact;
 # a mesh whose top lies lower is gripped there, its box's top 3 mm under the carriage's face)
+GRIP_IK_TOL = (1e-4, math.radians(0.02))  # [m], [rad] the grip's pose over the item
 REPLAN_M = 1e-3  # [m] an item found this far (or REPLAN_RAD) from where the approach aimed …
 REPLAN_RAD = math.radians(1.0)  # … gets a new approach before the descent
 MAX_TILT_RAD = math.radians(25.0)  # [rad] an item tilted more is gripped from straight above
@@ -725,11 +726,21 @@ class Orchestrator:
         self, centre: np.ndarray, stroke: float, obj: ObjectParams, axes: tuple[float, float, float]
     ) -> np.ndarray:
         """IK of the grip with the item's centre at `centre` [m, W], seated on the carriage
-        at `stroke`, the approach axis and roll `axes` (elevation, azimuth, roll [rad])."""
+        at `stroke`, the approach axis and roll `axes` (elevation, azimuth, roll [rad]).
+
+        Solved to GRIP_IK_TOL (far tighter than a release's): pads a fraction of a degree
+        off the item's sides close on its edges, whose contacts can hook it when the
+        carriage hits its end stop; the release's tolerance if that does not converge."""
         from cell.robot.ik import ReleasePose, solve_ik
 
         tcp = self._tcp_for_item_centre(centre, axes[0], axes[1], stroke, obj)
-        return solve_ik(self.robot, ReleasePose.from_angles(tcp, *axes), self.q).q
+        pose = ReleasePose.from_angles(tcp, *axes)
+        try:
+            return solve_ik(
+                self.robot, pose, self.q, tol_position_m=GRIP_IK_TOL[0], tol_axis_rad=GRIP_IK_TOL[1]
+            ).q
+        except IKFailed:
+            return solve_ik(self.robot, pose, self.q).q
 
     def _ik_grip_any(
         self,
