@@ -433,6 +433,8 @@ class Orchestrator:
         from cell.robot.model import load_robot
         from cell.sim import BinSpec, CellScene
 
+        if pick not in PICKS:
+            raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
@@ -446,8 +448,6 @@ class Orchestrator:
             pick_station_xy=job.pick_position[:2],
             pick_station_height=job.pick_position[2],
         )
-        if pick not in PICKS:
-            raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
         self.pick = pick
         # the kinematic pick moves the item into the grip: the pads, longer than a flat
         # item, must not jam on the station's top while the fingers close
@@ -855,7 +855,8 @@ class Orchestrator:
                 return self._pick_once(obj, item, stroke, heading, signed)
             except GraspLost as exc:
                 self.ee.let_go()
-                self.scene.run_for(0.1)  # the fingers open; the item settles
+                self.scene.run_for(0.1)  # the fingers open
+                self._wait_at_rest(item)
                 if attempt == PICK_ATTEMPTS or not self._on_station(item):
                     raise GraspLost(
                         f"{exc} (pick attempt {attempt} of {PICK_ATTEMPTS})", "grasp"
@@ -892,6 +893,13 @@ class Orchestrator:
         # rocking when it was first seen): over it again if it moved, then a guarded
         # descent onto it
         self._wait_at_rest(item)
+        if not self._on_station(item):
+            where = self.scene.client.getBasePositionAndOrientation(item.body)[0]
+            raise GraspLost(
+                f"{obj.name or obj.shape} is no longer on the pick station (its centre at "
+                f"{', '.join(f'{v:.3f}' for v in where)} m)",
+                "grasp",
+            )
         aimed = (p, elevation, azimuth)
         p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
         roll = min(rolls, key=lambda r: abs(math.remainder(r - roll, 2 * math.pi)))
