@@ -77,7 +77,8 @@ PRESS_M = 0.003  # [m] the guarded descent ends this far into the item's box (it
 GRIP_IK_TOL = (1e-4, math.radians(0.02))  # [m], [rad] the grip's pose over the item
 REPLAN_M = 1e-3  # [m] an item found this far (or REPLAN_RAD) from where the approach aimed …
 REPLAN_RAD = math.radians(1.0)  # … gets a new approach before the descent
-MAX_TILT_RAD = math.radians(25.0)  # [rad] an item tilted more is gripped from straight above
+MAX_TILT_RAD = math.radians(25.0)  # [rad] the grip's approach leans at most this far from vertical
+GRIP_LEANS = (1.0, 0.8, 0.6, 0.4, 0.2, 0.0)  # fractions of an item's tilt the approach follows
 TOUCH_GAP_M = 5e-4  # [m] the pads close with the carriage's face this far above the item's top
 PAD_TIP_CLEARANCE_M = 5e-4  # [m] … or with the pads' tips this far above the station (flat items)
 LIFT_CHECK_M = 0.03  # [m] the first lift, in LIFT_CHECK_S [s], shows whether the pads hold it
@@ -640,7 +641,7 @@ class Orchestrator:
 
     @staticmethod
     def _grip_axes(
-        obj: ObjectParams, rot: np.ndarray, heading: float, signed: bool, tilted: bool = True
+        obj: ObjectParams, rot: np.ndarray, heading: float, signed: bool, lean: float = 1.0
     ) -> tuple[float, float, list[float]]:
         """The grip for an item at rotation `rot` (its pose as the plant reports it):
         (elevation, azimuth [rad]) of the approach axis u, and the rolls [rad] about it
@@ -648,8 +649,9 @@ class Orchestrator:
 
         The grip comes down the item's own axis (−z), so that an item resting tilted (a
         mesh on an uneven side) ends seated square on the carriage as the throw model
-        assumes; straight down onto a sphere, an item tilted more than MAX_TILT_RAD, or
-        (`tilted` False) one whose tilted grip would put a pad on the station. Of the rolls the item's symmetry allows
+        assumes; straight down onto a sphere. `lean` < 1 turns the approach that fraction
+        of the way from straight down to the item's axis (`_grip_plan`: where the full
+        lean would put a pad on the station). Of the rolls the item's symmetry allows
         (a quarter turn for a square section, a half turn else; any for an upright
         cylinder), those that point the pads' axis (E's x) nearest the horizontal direction
         `heading` [rad] (`signed`: along it, else either way): the carry's heading is a
@@ -660,10 +662,10 @@ class Orchestrator:
         """
         from cell.frames import axis_frame
 
-        up = rot[:, 2] / np.linalg.norm(rot[:, 2])
-        if not tilted or obj.shape == "sphere" or up[2] < math.cos(MAX_TILT_RAD):
-            up = np.array([0.0, 0.0, 1.0])  # straight down onto it
-        u = -up
+        vertical = np.array([0.0, 0.0, 1.0])
+        up = vertical if obj.shape == "sphere" else rot[:, 2] / np.linalg.norm(rot[:, 2])
+        up = (1.0 - lean) * vertical + lean * up
+        u = -up / np.linalg.norm(up)
         if math.hypot(u[0], u[1]) < 1e-9:  # straight down (as ReleasePose reads it)
             elevation, azimuth = -math.pi / 2, 0.0
         else:
@@ -683,6 +685,7 @@ class Orchestrator:
                 rot @ np.array([math.cos(k * 2 * math.pi / n), math.sin(k * 2 * math.pi / n), 0])
                 for k in range(n)
             ]
+            dirs = [d - (d @ u) * u for d in dirs]  # across the axis (a leaning grip's)
 
         def off(d: np.ndarray) -> float:  # angle between d's horizontal part and the heading
             ang = math.atan2(float(d[1]), float(d[0])) - heading
@@ -704,13 +707,16 @@ class Orchestrator:
         [m] of the carriage's face from the item's top along the axis that keeps every pad
         corner (the pads open `opening` [m] from the axis) PAD_TIP_CLEARANCE_M above the
         station: down the item's axis if that lets the grip reach its top (h_min ≤ 0),
-        else straight down."""
+        else leaning less towards it (GRIP_LEANS), at most MAX_TILT_RAD from vertical."""
         from cell.frames import axis_frame
 
         geo = self.scene.geometry
         p, rot = self._item_pose(item)
-        for tilted in (True, False):
-            elevation, azimuth, rolls = self._grip_axes(obj, rot, heading, signed, tilted)
+        tilt = math.acos(max(-1.0, min(1.0, float(rot[2, 2]))))
+        for lean in GRIP_LEANS:
+            if lean * tilt > MAX_TILT_RAD and lean > 0:
+                continue
+            elevation, azimuth, rolls = self._grip_axes(obj, rot, heading, signed, lean)
             u = axis_frame(elevation, azimuth)[:, 2]
             drop = max(  # lowest pad corner below the pads' tip line on the axis [m]
                 (opening + geo.pad_thickness_m) * abs(f[2, 0]) + geo.pad_half_width_m * abs(f[2, 1])
@@ -718,7 +724,7 @@ class Orchestrator:
             )
             floor = self.scene.pick_station_height + PAD_TIP_CLEARANCE_M + drop
             h_min = (floor - p[2]) / -u[2] - obj.size[2] / 2 + geo.pad_length_m
-            if h_min <= 0 or not tilted:
+            if h_min <= 0 or lean == 0:
                 break
         return p, elevation, azimuth, rolls, float(h_min)
 
