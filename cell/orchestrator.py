@@ -37,6 +37,7 @@ from cell.errors import (
     GraspLost,
     HardwareError,
     IKFailed,
+    InvalidInput,
     TrajectoryError,
     UnreachableTarget,
 )
@@ -67,7 +68,26 @@ SETTLE_S = 0.05  # [s] wait after a move so the end-effector and item come to re
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
+# The physical pick (Orchestrator._pick)
+PICK_SCATTER_M = 0.03  # [m] items come to rest within ± this of the station's centre, in x and y
+APPROACH_M = 0.02  # [m] the carriage's face this far above the item's top ends the approach move
+DESCENT_MPS = 0.1  # [m/s] speed of the guarded descent onto the item
+FINGER_CLEARANCE_M = 0.01  # [m] each open pad this far outside the item's gripping width
+PRESS_M = 0.003  # [m] the guarded descent ends this far into the item's box (it stops at contact;
+# a mesh whose top lies lower is gripped there, its box's top 3 mm under the carriage's face)
+GRIP_IK_TOL = (1e-4, math.radians(0.02))  # [m], [rad] the grip's pose over the item
+REPLAN_M = 1e-3  # [m] an item found this far (or REPLAN_RAD) from where the approach aimed …
+REPLAN_RAD = math.radians(1.0)  # … gets a new approach before the descent
+MAX_TILT_RAD = math.radians(25.0)  # [rad] the grip's approach leans at most this far from vertical
+GRIP_LEANS = (1.0, 0.8, 0.6, 0.4, 0.2, 0.0)  # fractions of an item's tilt the approach follows
+TOUCH_GAP_M = 5e-4  # [m] the pads close with the carriage's face this far above the item's top
+PAD_TIP_CLEARANCE_M = 5e-4  # [m] … or with the pads' tips this far above the station (flat items)
+LIFT_CHECK_M = 0.03  # [m] the first lift, in LIFT_CHECK_S [s], shows whether the pads hold it
+LIFT_CHECK_S = 0.2
+PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still on the station
 
+
+PICKS = ("kinematic", "physical")  # how an item gets into the grip (Orchestrator's `pick`)
 
 # Why an item did not end in its bin: one of these, always (ItemResult.failure).
 FAILURES = (
@@ -447,6 +467,9 @@ class Orchestrator:
             commanded in step with the simulated one.
         observer: told of the scene, each item's start, release, flight and result
             (`cell.record.observer.RunObserver`, e.g. the Rerun recorder), or None.
+        pick: "kinematic": the item appears at the station's centre and is moved into
+            the open grip (PyBulletEndEffector.grasp); "physical": it rests at a seeded
+            random spot and yaw, and the arm grips it by contact (`_pick`).
         learn: correct the planner from each observed landing (the flywheel): an
             object's next throw aims where its earlier landings say it must
             (LandingCorrection), and an object never thrown before takes its
@@ -467,6 +490,7 @@ class Orchestrator:
         observer: Any = None,
         learn: bool = False,
         speed_scale: float = ARM_SPEED_SCALE,
+        pick: str = "kinematic",
     ) -> None:
         from cell.endeffector.pybullet_backend import PyBulletEndEffector
         from cell.optimize.bounds import ThrowBounds
@@ -474,10 +498,10 @@ class Orchestrator:
         from cell.sim import BinSpec, CellScene
 
         if not (0.0 < speed_scale <= 1.0):
-            from cell.errors import InvalidInput
-
             raise InvalidInput(f"speed_scale {speed_scale!r}: give a fraction in (0, 1]")
         self.speed_scale = float(speed_scale)
+        if pick not in PICKS:
+            raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
@@ -491,6 +515,10 @@ class Orchestrator:
             pick_station_xy=job.pick_position[:2],
             pick_station_height=job.pick_position[2],
         )
+        self.pick = pick
+        # the kinematic pick moves the item into the grip: the pads, longer than a flat
+        # item, must not jam on the station's top while the fingers close
+        self.scene.ee_collides_with_station(pick == "physical")
         self.ee = PyBulletEndEffector(self.scene)
         self.hardware = end_effector
         self.bounds = ThrowBounds()
@@ -715,8 +743,11 @@ class Orchestrator:
         target = self.job.bin(spec.bin)
         sc = self.scene
         t0 = sc.t
-        item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
-        sc.run_for(0.05)  # let it settle on the station
+        if self.pick == "physical":
+            item = self._spawn_at_station(index, obj)
+        else:
+            item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
+            sc.run_for(0.05)  # let it settle on the station
         if self.observer is not None:
             self.observer.on_item_start(index, obj, target, item)
         base: dict[str, Any] = dict(
@@ -733,17 +764,15 @@ class Orchestrator:
             s_grip = grip_stroke_limit(self.params, obj)
             plan, delta = (None, 0.0) if place else self._plan(obj, target, index, s_grip)
             stroke = min(PICK_STROKE_M, s_grip) if plan is None else plan.stroke_m + delta
-            p_item = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
-            down = (-math.pi / 2, 0.0)
             # Grip it turned as the release will hold it: the carry then only swings the
             # throw axis up, it does not twist the item about it (a twist in the grip
             # spoils the launch, see _pick_frame).
             self._frame = self._pick_frame(plan)
-            q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
-            lift = p_item + np.array([0, 0, LIFT_M])
-            q_lift = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj))
-            self._move([q_lift, q_pick])
-            self.ee.grasp(stroke, item)
+            if self.pick == "physical":
+                q_lift = self._pick(obj, item, stroke, *self._carry_heading(plan, target))
+                self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
+            else:
+                q_lift = self._pick_kinematic(obj, item, stroke)
             self._carried = (obj, stroke)
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
@@ -769,6 +798,347 @@ class Orchestrator:
             self.ee.item = None
             if flying is None:  # a thrown item is tidied once it is scored (_settle)
                 self._tidy(item)
+
+    # -- the pick ----------------------------------------------------------------
+    def _pick_kinematic(self, obj: ObjectParams, item: Any, stroke: float) -> np.ndarray:
+        """The kinematic pick: the grip over the item, which is moved into it
+        (PyBulletEndEffector.grasp); returns the lift configuration."""
+        p_item = np.asarray(self.scene.client.getBasePositionAndOrientation(item.body)[0])
+        down = (-math.pi / 2, 0.0)
+        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
+        lift = p_item + np.array([0, 0, LIFT_M])
+        q_lift = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj))
+        self._move([q_lift, q_pick])
+        self.ee.grasp(stroke, item)
+        return q_lift
+
+    def _spawn_at_station(self, index: int, obj: ObjectParams) -> Any:
+        """The item, come to rest on the pick station at a random spot (± PICK_SCATTER_M)
+        and yaw, drawn from the job's seed and the item's index (reproducible)."""
+        rng = np.random.default_rng([self.job.seed, index])
+        dx, dy = rng.uniform(-PICK_SCATTER_M, PICK_SCATTER_M, 2)
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        item = self.scene.spawn_item(
+            obj if obj.shape != "mesh" else obj.name, offset_xy=(dx, dy), yaw=yaw
+        )
+        self.scene.run_for(0.05)  # let it settle on the station
+        return item
+
+    def _item_pose(self, item: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The item as the plant reports it: centre [m, W] and rotation matrix (3, 3)."""
+        cl = self.scene.client
+        p, o = cl.getBasePositionAndOrientation(item.body)
+        return np.asarray(p, float), np.asarray(cl.getMatrixFromQuaternion(o)).reshape(3, 3)
+
+    @staticmethod
+    def _grip_axes(
+        obj: ObjectParams, rot: np.ndarray, heading: float, signed: bool, lean: float = 1.0
+    ) -> tuple[float, float, list[float]]:
+        """The grip for an item at rotation `rot` (its pose as the plant reports it):
+        (elevation, azimuth [rad]) of the approach axis u, and the rolls [rad] about it
+        that close the pads across the item's x axis (its gripping width).
+
+        The grip comes down the item's own axis (−z), so that an item resting tilted (a
+        mesh on an uneven side) ends seated square on the carriage as the throw model
+        assumes; straight down onto a sphere. `lean` < 1 turns the approach that fraction
+        of the way from straight down to the item's axis (`_grip_plan`: where the full
+        lean would put a pad on the station). Of the rolls the item's symmetry allows
+        (a quarter turn for a square section, a half turn else; any for an upright
+        cylinder), those that point the pads' axis (E's x) nearest the horizontal direction
+        `heading` [rad] (`signed`: along it, else either way): the carry's heading is a
+        throw's azimuth, E's x pointing the way that turns the grip up to the release's
+        roll about E's y alone (or a place's bin). Then the pads' normal forces, not
+        their friction alone, hold the item against the turn's and the carry's
+        accelerations, which would swing it about the pads' axis.
+        """
+        from cell.frames import axis_frame
+
+        vertical = np.array([0.0, 0.0, 1.0])
+        up = vertical if obj.shape == "sphere" else rot[:, 2] / np.linalg.norm(rot[:, 2])
+        up = (1.0 - lean) * vertical + lean * up
+        u = -up / np.linalg.norm(up)
+        if math.hypot(u[0], u[1]) < 1e-9:  # straight down (as ReleasePose reads it)
+            elevation, azimuth = -math.pi / 2, 0.0
+        else:
+            elevation = math.asin(max(-1.0, min(1.0, float(u[2]))))
+            azimuth = math.atan2(float(u[1]), float(u[0]))
+        a0 = axis_frame(elevation, azimuth, 0.0)
+        h = np.array([math.cos(heading), math.sin(heading), 0.0])
+        if obj.shape in ("sphere", "cylinder"):  # any roll grips it: along the heading
+            d = h - (h @ a0[:, 2]) * a0[:, 2]
+            dirs = [d, -d]
+        else:
+            square = obj.shape == "cube" or (
+                obj.shape == "cuboid" and abs(obj.size[0] - obj.size[1]) < 1e-9
+            )
+            n = 4 if square else 2
+            dirs = [
+                rot @ np.array([math.cos(k * 2 * math.pi / n), math.sin(k * 2 * math.pi / n), 0])
+                for k in range(n)
+            ]
+            dirs = [d - (d @ u) * u for d in dirs]  # across the axis (a leaning grip's)
+
+        def off(d: np.ndarray) -> float:  # angle between d's horizontal part and the heading
+            ang = math.atan2(float(d[1]), float(d[0])) - heading
+            return abs(math.remainder(ang, 2 * math.pi if signed else math.pi))
+
+        best = min(off(d) for d in dirs)
+        rolls = [
+            math.atan2(float(a0[:, 1] @ d), float(a0[:, 0] @ d))
+            for d in dirs
+            if off(d) < best + 1e-6
+        ]
+        return elevation, azimuth, rolls
+
+    def _grip_plan(
+        self, obj: ObjectParams, item: Any, heading: float, signed: bool, opening: float
+    ) -> tuple[np.ndarray, float, float, list[float], float]:
+        """The item's centre [m, W] as the plant reports it, the grip's approach axis
+        (elevation, azimuth) and rolls [rad] (`_grip_axes`), and the least standoff h_min
+        [m] of the carriage's face from the item's top along the axis that keeps every pad
+        corner (the pads open `opening` [m] from the axis) PAD_TIP_CLEARANCE_M above the
+        station: down the item's axis if that lets the grip reach its top (h_min ≤ 0),
+        else leaning less towards it (GRIP_LEANS), at most MAX_TILT_RAD from vertical."""
+        from cell.frames import axis_frame
+
+        geo = self.scene.geometry
+        p, rot = self._item_pose(item)
+        tilt = math.acos(max(-1.0, min(1.0, float(rot[2, 2]))))
+        for lean in GRIP_LEANS:
+            if lean * tilt > MAX_TILT_RAD and lean > 0:
+                continue
+            elevation, azimuth, rolls = self._grip_axes(obj, rot, heading, signed, lean)
+            u = axis_frame(elevation, azimuth)[:, 2]
+            drop = max(  # lowest pad corner below the pads' tip line on the axis [m]
+                (opening + geo.pad_thickness_m) * abs(f[2, 0]) + geo.pad_half_width_m * abs(f[2, 1])
+                for f in (axis_frame(elevation, azimuth, r) for r in rolls)
+            )
+            floor = self.scene.pick_station_height + PAD_TIP_CLEARANCE_M + drop
+            h_min = (floor - p[2]) / -u[2] - obj.size[2] / 2 + geo.pad_length_m
+            if h_min <= 0 or lean == 0:
+                break
+        return p, elevation, azimuth, rolls, float(h_min)
+
+    def _ik_grip(
+        self, centre: np.ndarray, stroke: float, obj: ObjectParams, axes: tuple[float, float, float]
+    ) -> np.ndarray:
+        """IK of the grip with the item's centre at `centre` [m, W], seated on the carriage
+        at `stroke`, the approach axis and roll `axes` (elevation, azimuth, roll [rad]).
+
+        Solved to GRIP_IK_TOL (far tighter than a release's): pads a fraction of a degree
+        off the item's sides close on its edges, whose contacts can hook it when the
+        carriage hits its end stop; the release's tolerance if that does not converge."""
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        tcp = self._tcp_for_item_centre(centre, axes[0], axes[1], stroke, obj)
+        pose = ReleasePose.from_angles(tcp, *axes)
+        try:
+            return solve_ik(
+                self.robot, pose, self.q, tol_position_m=GRIP_IK_TOL[0], tol_axis_rad=GRIP_IK_TOL[1]
+            ).q
+        except IKFailed:
+            return solve_ik(self.robot, pose, self.q).q
+
+    def _ik_grip_any(
+        self,
+        centre: np.ndarray,
+        stroke: float,
+        obj: ObjectParams,
+        elevation: float,
+        azimuth: float,
+        rolls: list[float],
+    ) -> tuple[np.ndarray, float]:
+        """`_ik_grip` at whichever of the rolls gives the configuration nearest the current
+        one, and that roll."""
+        found: list[tuple[np.ndarray, float]] = []
+        err: IKFailed | None = None
+        for roll in rolls:
+            try:
+                found.append((self._ik_grip(centre, stroke, obj, (elevation, azimuth, roll)), roll))
+            except IKFailed as exc:
+                err = err or exc
+        if not found:
+            assert err is not None
+            raise err
+        return min(found, key=lambda f: float(np.linalg.norm(f[0] - self.q)))
+
+    def _ee_touches(self, item: Any) -> bool:
+        """The end-effector touches the item or the station (the plant's contacts)."""
+        sc = self.scene
+        return any(
+            c[8] < 0.0
+            for body in (item.body, sc.pick_station)
+            for c in sc.client.getContactPoints(bodyA=sc.ee_body, bodyB=body)
+        )
+
+    def _straight(
+        self,
+        q_to: np.ndarray,
+        duration_s: float,
+        stop: Callable[[], bool] | None = None,
+        *,
+        smooth: bool = False,
+    ) -> float:
+        """A short move along the joint-space segment to q_to in `duration_s` [s] (nearby
+        configurations: the grip moves on a near-straight line), at constant speed or with
+        a smooth start and stop (3τ² − 2τ³); it ends early when `stop()` says so (a guarded
+        move). Returns the fraction of the segment done (1.0: all of it)."""
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        q0 = self.q.copy()
+        n = max(1, math.ceil(duration_s / sc.dt_s))
+        done = 1.0
+        for k in range(1, n + 1):
+            tau = k / n
+            done = tau * tau * (3 - 2 * tau) if smooth else tau
+            self.q = q0 + (q_to - q0) * done
+            sc.set_arm(self.q.tolist())
+            sc.step()
+            if stop is not None and stop():
+                break
+        return done
+
+    def _wait_at_rest(self, item: Any, timeout_s: float = 1.0) -> None:
+        """Step until the item rests (below 2 mm/s and 0.05 rad/s) or `timeout_s` [s]."""
+        sc, cl = self.scene, self.scene.client
+        t_end = sc.t + timeout_s
+        while sc.t < t_end:
+            v, w = cl.getBaseVelocity(item.body)
+            if np.linalg.norm(v) < 2e-3 and np.linalg.norm(w) < 0.05:
+                return
+            sc.step()
+
+    def _on_station(self, item: Any) -> bool:
+        """The item rests on the pick station (its centre over it, not far above it)."""
+        sc = self.scene
+        p, _ = sc.client.getBasePositionAndOrientation(item.body)
+        x0, y0 = sc.pick_station_xy
+        return (
+            abs(p[0] - x0) < 0.12
+            and abs(p[1] - y0) < 0.12
+            and sc.pick_station_height < p[2] < sc.pick_station_height + max(item.obj.size)
+        )
+
+    def _carry_heading(self, plan: Any, target: Any) -> tuple[float, bool]:
+        """Where the pads' axis (E's x) should point while the item is carried, and whether
+        its sense matters (see `_grip_rolls`): for a throw, along the azimuth, the way the
+        release's roll (0 or π, `_q_release`) turns up to about E's y alone; for a place,
+        either way along the line from the station to the bin."""
+        if plan is None:
+            x0, y0 = self.scene.pick_station_xy
+            return math.atan2(target.position[1] - y0, target.position[0] - x0), False
+        # at the release, roll 0 puts E's x at (sin e cos a, sin e sin a, −cos e): turned
+        # down about E's y it points back along the azimuth; roll π, forward
+        x_release = self.robot.tcp_pose(self._q_release)[1][:, 0]
+        return plan.azimuth_rad + (0.0 if x_release[2] > 0 else math.pi), True
+
+    def _pick(
+        self, obj: ObjectParams, item: Any, stroke: float, heading: float, signed: bool
+    ) -> np.ndarray:
+        """Pick the item off the station into the grip at `stroke` [m], by contact: returns
+        the lift configuration the arm is at, the item held by friction between the pads.
+        `heading` [rad], `signed`: where the pads' axis should point while it is carried
+        (`_carry_heading`), as far as the item's symmetry allows.
+
+        A grasp that fails (the pads close on nothing, the item slips out on the lift) is
+        tried again while the item is still on the station, PICK_ATTEMPTS in all.
+
+        Raises:
+            GraspLost: (stage "grasp") every attempt failed, or the item left the station.
+            IKFailed: no configuration reaches over the item.
+        """
+        for attempt in range(1, PICK_ATTEMPTS + 1):
+            try:
+                return self._pick_once(obj, item, stroke, heading, signed)
+            except GraspLost as exc:
+                self.ee.let_go()
+                self.scene.run_for(0.1)  # the fingers open
+                self._wait_at_rest(item)
+                if attempt == PICK_ATTEMPTS or not self._on_station(item):
+                    raise GraspLost(
+                        f"{exc} (pick attempt {attempt} of {PICK_ATTEMPTS})", "grasp"
+                    ) from exc
+                log.info("pick of %s failed (%s): trying again", obj.name or obj.shape, exc)
+        raise AssertionError("unreachable")  # pragma: no cover
+
+    def _pick_once(
+        self, obj: ObjectParams, item: Any, stroke: float, heading: float, signed: bool
+    ) -> np.ndarray:
+        """One pick: over the item (as the plant reports it) with the pads open and the
+        spool wound to `stroke`, a guarded descent until the grip touches it, the pads
+        closed by contact, and the lift; GraspLost when it did not come up in the grip."""
+        from cell.catalogue import pad_width_m
+        from cell.frames import axis_frame
+
+        opening = min(pad_width_m(obj) / 2 + FINGER_CLEARANCE_M, self.scene.geometry.finger_open_m)
+        self.ee.open_for_pick(stroke, opening)
+        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
+
+        def at(h: float) -> np.ndarray:
+            """Where the item's centre would sit in the grip with the carriage's face h out
+            from its top along the approach axis (h_min at least: the pads clear the station)."""
+            return p - axis_frame(elevation, azimuth)[:, 2] * max(h, h_min)
+
+        q_high, roll = self._ik_grip_any(at(LIFT_M), stroke, obj, elevation, azimuth, rolls)
+        q_near = self._ik_grip(at(APPROACH_M), stroke, obj, (elevation, azimuth, roll))
+        self._move([q_high])
+        # the carriage may still be on its way in from the last throw's end stop: the
+        # grip goes down over the item only once it is at the stroke
+        self.ee.wait_wound()
+        self._move([q_near])
+        # the item as the plant reports it now that it rests (a mesh may still have been
+        # rocking when it was first seen): over it again if it moved, then a guarded
+        # descent onto it
+        self._wait_at_rest(item)
+        if not self._on_station(item):
+            where = self.scene.client.getBasePositionAndOrientation(item.body)[0]
+            raise GraspLost(
+                f"{obj.name or obj.shape} is no longer on the pick station (its centre at "
+                f"{', '.join(f'{v:.3f}' for v in where)} m)",
+                "grasp",
+            )
+        aimed = (p, elevation, azimuth)
+        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
+        roll = min(rolls, key=lambda r: abs(math.remainder(r - roll, 2 * math.pi)))
+        axes = (elevation, azimuth, roll)
+        u0, u1 = (axis_frame(e, a)[:, 2] for e, a in (aimed[1:], axes[:2]))
+        turned = math.acos(max(-1.0, min(1.0, float(u0 @ u1))))
+        if np.linalg.norm(p - aimed[0]) > REPLAN_M or turned > REPLAN_RAD:
+            q_over = self._ik_grip(at(APPROACH_M), stroke, obj, axes)
+            if not np.allclose(q_over, self.q, atol=1e-6):
+                self._move([q_over])
+        q_from, q_to = self.q.copy(), self._ik_grip(at(-PRESS_M), stroke, obj, axes)
+        depth = float(np.linalg.norm(self.robot.tcp_pose(q_to)[0] - self.robot.tcp_pose(q_from)[0]))
+
+        def along(d: float) -> np.ndarray:
+            """The configuration d [m] down the descent's (near-straight) joint segment."""
+            return q_from + (q_to - q_from) * (d / depth)
+
+        touched = self._straight(q_to, depth / DESCENT_MPS, lambda: self._ee_touches(item))
+        d_touch = touched * depth
+        if touched < 1.0:
+            # back to a hair over where it touched: the mount pulls E along behind the
+            # flange (pressing on would squeeze the item onto the station with up to the
+            # mount's force), and the item must be free to slide as the pads centre it
+            d_touch -= float(np.linalg.norm(self.scene.ee_lag()))
+            self._straight(along(max(0.0, d_touch - TOUCH_GAP_M)), 0.02)
+        self.ee.close_on(item)
+        # a short lift that shows whether the pads hold it (the move on starts at LIFT_M)
+        z0 = p[2]
+        held = at(0.0)  # where the grip holds it: lifted straight up from there
+        q_check = self._ik_grip(held + [0.0, 0.0, LIFT_CHECK_M], stroke, obj, axes)
+        self._straight(q_check, LIFT_CHECK_S, smooth=True)
+        self.scene.run_for(0.05)
+        z1 = float(self.scene.client.getBasePositionAndOrientation(item.body)[0][2])
+        if not self.ee.holds_item() or z1 - z0 < LIFT_CHECK_M / 2:
+            self.ee.item = None
+            raise GraspLost(
+                f"{obj.name or obj.shape} slipped out of the grip on the lift (its centre rose "
+                f"{(z1 - z0) * 1000:.0f} mm of {LIFT_CHECK_M * 1000:.0f}; pads touching it: "
+                f"{sorted(self.ee.pads_touching(item)) or 'none'})",
+                "grasp",
+            )
+        return self._ik_grip(held + [0.0, 0.0, LIFT_M], stroke, obj, axes)
 
     def _place(
         self,

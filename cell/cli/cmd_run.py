@@ -36,6 +36,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
     p.add_argument(
+        "--pick",
+        choices=("kinematic", "physical"),
+        default="kinematic",
+        help="arm platform: how the item gets into the grip: placed there (kinematic, the "
+        "default), or gripped by contact from a random pose on the station (physical)",
+    )
+    p.add_argument(
         "--learn",
         action="store_true",
         help="correct the planner from each observed landing during the run (arm platform)",
@@ -116,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
             observer=rec,
             learn=args.learn,
             speed_scale=args.speed_scale,
+            pick=args.pick,
         )
     bar = tqdm(
         total=len(job.expanded_items()),

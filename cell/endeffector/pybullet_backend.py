@@ -1,9 +1,13 @@
 """The end-effector in the PyBullet cell (cell.sim), behind the EndEffector interface.
 
-* `grasp(L_s)`: the item is moved from the pick station into the open grip
-  (the approach is kinematic) and seated on the hoop at L_s (latch engaged);
-  the fingers close on it by contact with the band's grip force f_g, and from
-  then on friction alone holds it.
+* The physical pick (the arm's, cell.orchestrator): `open_for_pick(L_s)` opens the
+  fingers and winds the spool to L_s while the arm moves over the item; the arm
+  lowers the grip onto the item resting on the station; `close_on(item)` closes the
+  fingers on it by contact with the band's grip force f_g, and from then on friction
+  alone holds it. Nothing moves the item but its contacts.
+* `grasp(L_s)`: the kinematic pick (calibration campaigns, the platforms): the item
+  is moved into the open grip and seated on the hoop at L_s (latch engaged); the
+  fingers close on it as above.
 * `set_stroke(L_s)`: the spool winds or unwinds at `spool_speed_mps`.
 * `throw()`: the latch lets go; the band law drives the carriage, which pushes
   the item (sub-stepped at the scene's launch step) until the carriage hits its
@@ -30,6 +34,7 @@ __all__ = ["PyBulletEndEffector"]
 log = logging.getLogger(__name__)
 
 _STALL_M = 0.002  # [m] carriage lag behind the spool that means it is blocked
+FINGERS = (FINGER_LEFT, FINGER_RIGHT)
 
 
 class PyBulletEndEffector(EndEffector):
@@ -39,7 +44,8 @@ class PyBulletEndEffector(EndEffector):
         scene: the scene whose end-effector this drives.
         spool_speed_mps: carriage speed when winding or unwinding [m/s].
         place_speed_mps: carriage speed while placing [m/s].
-        close_time_s: time given to the fingers to close [s].
+        close_time_s: time given to the fingers to close [s] (the physical pick: at most,
+            they stop on the item sooner).
     """
 
     def __init__(
@@ -78,6 +84,7 @@ class PyBulletEndEffector(EndEffector):
     def _wind_to(self, stroke_m: float, speed_mps: float) -> None:
         sc = self.scene
         sc.set_timestep(sc.dt_s)
+        self.band.wind_target_m = None
         s = self.band.stroke_cmd_m
         n = max(1, int(abs(stroke_m - s) / (speed_mps * sc.dt_s)))
         for k in range(1, n + 1):
@@ -106,6 +113,86 @@ class PyBulletEndEffector(EndEffector):
             if on_top and sc.pick_station_height < p[2] < sc.pick_station_height + 0.25:
                 return it
         raise InvalidInput("no item on the pick station to grasp (spawn one first)")
+
+    # -- the physical pick -------------------------------------------------------
+    def open_for_pick(self, stroke_m: float, opening_m: float | None = None) -> None:
+        """Get ready to pick at stroke L_s [m]: the fingers open (each to `opening_m` from
+        the axis [m], None: their widest) and the spool winds to L_s at `spool_speed_mps`,
+        both over the next physics steps while the arm moves (`wait_wound` waits for it).
+
+        Raises:
+            InvalidParameter: stroke or opening out of range.
+            InvalidInput: already holding an item.
+        """
+        self._check_stroke(stroke_m)
+        widest = self.scene.geometry.finger_open_m
+        if opening_m is not None and not 0 < opening_m <= widest:
+            raise InvalidParameter(f"finger opening {opening_m} m outside 0 … {widest} m")
+        if self.item is not None:
+            raise InvalidInput("already holding an item: place or throw it first")
+        self.band.fingers_closing = False
+        self.band.open_to_m = opening_m
+        self.band.wind(stroke_m, self.spool_speed_mps)
+
+    def wait_wound(self, tolerance_m: float = 5e-4, timeout_s: float = 2.0) -> float:
+        """Step until the spool has wound to its target and the carriage is there (within
+        `tolerance_m`); returns the time waited [s]."""
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        t0 = sc.t
+        while sc.t - t0 < timeout_s and (
+            self.band.winding() or abs(self.band.position() - self.band.stroke_cmd_m) > tolerance_m
+        ):
+            sc.step()
+        return sc.t - t0
+
+    def pads_touching(self, item: Item) -> set[str]:
+        """Which pads ("left", "right") touch the item now (the plant's contacts)."""
+        cl = self.scene.client
+        links = {int(c[3]) for c in cl.getContactPoints(bodyA=self.scene.ee_body, bodyB=item.body)}
+        return {n for n, j in (("left", FINGER_LEFT), ("right", FINGER_RIGHT)) if j in links}
+
+    def close_on(self, item: Item) -> None:
+        """Close the fingers on the item between the open pads, at the stroke the carriage is
+        at (the arm holds the grip over the item): they close by contact with the band's
+        grip force f_g, and from then on friction alone holds the item.
+
+        Raises:
+            InvalidInput: already holding an item.
+            GraspLost: (stage "grasp") the pads did not both close on the item, or its
+                centre is not between them.
+        """
+        if self.item is not None:
+            raise InvalidInput("already holding an item: place or throw it first")
+        sc, cl = self.scene, self.scene.client
+        sc.set_timestep(sc.dt_s)
+        stroke_m = self.band.position()
+        self.band.fingers_closing = True
+        # until the fingers stop (on the item, or on each other), then the grip builds up
+        t0 = sc.t
+        while sc.t - t0 < self.close_time_s:
+            sc.step()
+            moving = max(abs(cl.getJointState(sc.ee_body, j)[1]) for j in FINGERS)
+            if sc.t - t0 > 0.01 and moving < 0.01:
+                break
+        sc.run_for(0.02)
+        touching = self.pads_touching(item)
+        if len(touching) < 2 or not self._in_grip(item, stroke_m):
+            opening = self.band.width()
+            self.band.fingers_closing = False
+            raise GraspLost(
+                f"the fingers did not close on item {item.obj.name or item.body} "
+                f"(width {item.obj.width * 1000:.0f} mm; pads closed to {opening * 1000:.0f} mm, "
+                f"touching it: {sorted(touching) or 'none'})",
+                "grasp",
+            )
+        self.item = item
+        self._grasp_stroke_m = stroke_m
+
+    def let_go(self) -> None:
+        """Open the fingers and forget the item (a pick that failed, before a retry)."""
+        self.band.fingers_closing = False
+        self.item = None
 
     # -- the interface ---------------------------------------------------------
     def grasp(self, stroke_m: float, item: Item | None = None) -> None:
@@ -211,6 +298,7 @@ class PyBulletEndEffector(EndEffector):
         sc.set_timestep(sc.launch_dt_s)
         sc.refresh_contacts(self.item)  # the pads' contacts as they are now (see there)
         sc.track(self.item)
+        self.band.wind_target_m = None
         self.band.latched = False
         stop = sc.geometry.end_stop_m - 1e-3
         t_end = sc.t + 0.2
@@ -231,6 +319,7 @@ class PyBulletEndEffector(EndEffector):
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         tr = sc.track(self.item)
+        self.band.wind_target_m = None
         end = sc.geometry.end_stop_m - 0.002
         step_m = self.place_speed_mps * sc.dt_s
         blocked = False

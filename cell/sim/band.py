@@ -82,8 +82,16 @@ class BandDrive:
         self.latched = True
         self.fingers_closing = False
         self.stroke_cmd_m = ee.stroke_max
+        self.wind_target_m: float | None = None  # spool winding towards it (see `wind`)
+        self.open_to_m: float | None = None  # open fingers stop at this opening (None: widest)
+        self.wind_speed_mps = 0.0
         for j in (FINGER_LEFT, FINGER_RIGHT):
-            client.changeDynamics(body, j, lateralFriction=geometry.pad_friction)
+            client.changeDynamics(
+                body,
+                j,
+                lateralFriction=geometry.pad_friction,
+                spinningFriction=geometry.pad_spin_friction_m,
+            )
         for j in (-1, BAND_JOINT, FINGER_LEFT, FINGER_RIGHT):
             client.changeDynamics(body, j, linearDamping=0.0, angularDamping=0.0)
         gear = client.createConstraint(
@@ -140,9 +148,17 @@ class BandDrive:
         )
 
     # -- per sub-step ----------------------------------------------------------
-    def apply(self) -> None:
-        """Apply the band force, the latch and the finger grip for the next physics step."""
+    def apply(self, dt_s: float = 0.0) -> None:
+        """Apply the band force, the latch and the finger grip for the next physics step
+        of dt_s [s] (the spool winds by its speed times dt_s towards a `wind` target)."""
         cl = self.client
+        if self.wind_target_m is not None and self.latched:
+            ds = self.wind_target_m - self.stroke_cmd_m
+            step = self.wind_speed_mps * dt_s
+            if abs(ds) <= step:
+                self.stroke_cmd_m, self.wind_target_m = self.wind_target_m, None
+            else:
+                self.stroke_cmd_m += step if ds > 0 else -step
         s = float(cl.getJointState(self.body, BAND_JOINT)[0])
         a = self.width()
         _, _, push, grip = self.law(s, a)
@@ -168,12 +184,35 @@ class BandDrive:
                 cl.setJointMotorControl2(
                     self.body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
                 )
-            else:
+            elif self.open_to_m is None:
                 cl.setJointMotorControl2(
                     self.body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
                 )
+            else:
+                cl.setJointMotorControl2(
+                    self.body,
+                    j,
+                    cl.POSITION_CONTROL,
+                    targetPosition=self.open_to_m,
+                    force=2.0,
+                    maxVelocity=_FINGER_SPEED,
+                )
 
     # -- commands --------------------------------------------------------------
+    def wind(self, stroke_m: float, speed_mps: float) -> None:
+        """Wind (or unwind) the spool to a stroke [m] at a speed [m/s] over the next
+        physics steps, whatever else moves meanwhile (the arm): the latch is engaged
+        first, holding the carriage where it is."""
+        if not self.latched:
+            self.stroke_cmd_m = self.position()
+            self.latched = True
+        self.wind_target_m = float(stroke_m)
+        self.wind_speed_mps = float(speed_mps)
+
+    def winding(self) -> bool:
+        """The spool is still on its way to a `wind` target."""
+        return self.wind_target_m is not None
+
     def reset(self, stroke_m: float, opening_m: float) -> None:
         """Put the carriage at a stroke and the fingers at an opening (no item), latched."""
         cl = self.client
@@ -181,4 +220,6 @@ class BandDrive:
         for j in (FINGER_LEFT, FINGER_RIGHT):
             cl.resetJointState(self.body, j, opening_m, 0.0)
         self.stroke_cmd_m = stroke_m
+        self.wind_target_m = None
+        self.open_to_m = None
         self.latched = True

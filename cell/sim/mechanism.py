@@ -66,6 +66,23 @@ class EEGeometry:
     pad_friction: float = 1.2
 
     @property
+    def pad_spin_friction_m(self) -> float:
+        """The pads' torsional ("spinning") friction coefficient [m] for PyBullet.
+
+        A pad pressed flat on an item's face resists a twist about its normal with
+        μ r̄ N, r̄ the mean distance of the pad's face from its centre (uniform pressure):
+        without it, the engine's few contact points, loaded unevenly, let a gripped item
+        pivot about the pads' axis under its own weight. PyBullet combines the coefficient
+        as s_pad μ_item + s_item μ_pad, so s_pad = μ_pad r̄ gives μ_pad μ_item r̄ (its
+        combined lateral friction times r̄) against an item of small s_item.
+        """
+        import numpy as np
+
+        u = (np.arange(64) + 0.5) / 64 - 0.5  # midpoints over the face, in units of its sides
+        y, z = np.meshgrid(u * 2 * self.pad_half_width_m, u * self.pad_length_m)
+        return self.pad_friction * float(np.hypot(y, z).mean())
+
+    @property
     def moving_mass_kg(self) -> float:
         """Mass that the band drives besides the item [kg]."""
         return self.band_mass_kg + 2 * self.finger_mass_kg

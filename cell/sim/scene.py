@@ -164,10 +164,6 @@ class CellScene:
         with tempfile.TemporaryDirectory(prefix="cell_ee_") as folder:
             self.ee_body = int(cl.loadURDF(str(write_ee_urdf(geometry, folder)), [0, 0, 1.0]))
         self.band = BandDrive(cl, self.ee_body, band, geometry)
-        # The pick is kinematic (the item is moved into the grip): the pads, longer
-        # than a flat item, must not jam on the station's top while the fingers close.
-        for link in range(-1, cl.getNumJoints(self.ee_body)):
-            cl.setCollisionFilterPair(self.ee_body, self.pick_station, link, -1, 0)
         self._mount = cl.createConstraint(
             self.ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0]
         )
@@ -308,6 +304,20 @@ class CellScene:
             maxForce=MOUNT_FORCE_N,
         )
 
+    def ee_collides_with_station(self, collide: bool) -> None:
+        """Let the end-effector collide with the pick station (the physical pick), or not
+        (a kinematic pick moves the item into the grip: the pads, longer than a flat item,
+        must not jam on the station's top while the fingers close). It collides by default."""
+        cl = self.client
+        for link in range(-1, cl.getNumJoints(self.ee_body)):
+            cl.setCollisionFilterPair(self.ee_body, self.pick_station, link, -1, int(collide))
+
+    def ee_lag(self) -> np.ndarray:
+        """Where the mount holds the end-effector frame E minus where E is [m, W], shape (3,):
+        E lags the arm's flange while the mount constraint pulls it along."""
+        p, _ = self.client.getBasePositionAndOrientation(self.ee_body)
+        return np.asarray(self._mount_pose[0], float) - np.asarray(p, float)
+
     def held_bodies(self) -> set[int]:
         """Item bodies in contact with the end-effector."""
         return {int(c[2]) for c in self.client.getContactPoints(bodyA=self.ee_body)} - {
@@ -395,6 +405,8 @@ class CellScene:
         at_pick_station: bool = True,
         position: Sequence[float] | None = None,
         orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
+        offset_xy: Sequence[float] = (0.0, 0.0),
+        yaw: float = 0.0,
     ) -> Item:
         """Add an item: on the pick station (dropped onto any item already there), or at a pose.
 
@@ -402,7 +414,9 @@ class CellScene:
             what: catalogue id or object parameters.
             at_pick_station: put it on the pick station (ignored when position is given).
             position: centre of mass [m, W].
-            orientation: quaternion (x, y, z, w) [W].
+            orientation: quaternion (x, y, z, w) [W] (ignored on the pick station).
+            offset_xy: on the pick station: where from the station's centre [m, W].
+            yaw: on the pick station: the item's turn about the vertical [rad].
         """
         from cell.sim.items import resolve_object
 
@@ -411,10 +425,11 @@ class CellScene:
             if not at_pick_station:
                 raise InvalidInput("spawn_item: give a position or at_pick_station=True")
             position = (
-                self.pick_station_xy[0],
-                self.pick_station_xy[1],
+                self.pick_station_xy[0] + float(offset_xy[0]),
+                self.pick_station_xy[1] + float(offset_xy[1]),
                 self._station_top() + obj.size[2] / 2 + 1e-3,
             )
+            orientation = (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2)))
         item = spawn_item(self.client, what, position, orientation)
         self.items.append(item)
         return item
@@ -541,7 +556,7 @@ class CellScene:
         for _ in range(n):
             if self._arm_motion is not None:
                 self.set_arm(self._arm_motion(self.t))
-            self.band.apply()
+            self.band.apply(self._dt_now)
             for it in self.items:
                 if it.body not in self._kept:
                     apply_drag(cl, it.body, it.drag_c)
