@@ -63,6 +63,12 @@ log = logging.getLogger(__name__)
 PICK_STROKE_M = (
     0.045  # [m] stroke while carrying: grip force enough to hold items through arm moves
 )
+# The pads' couple against a twist about their axis, in units of F r̄ (F their friction
+# force, r̄ the contact patch's mean radius). The pads' torsional friction alone gives 1
+# (cell.sim.mechanism); measured in the scene, with gravity turning tall boxes in the
+# grip (tests/test_carry.py), the pads held up to 4.6 F r̄ and let go at 6.9 F r̄: the
+# engine's contact points add their own couple. 4 is taken.
+PAD_COUPLE_FACTOR = 4.0
 SWING_WAYPOINTS = 2  # waypoints that keep the carry's swing free of twist (see _swing)
 SETTLE_S = 0.05  # [s] wait after a move so the end-effector and item come to rest
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
@@ -321,7 +327,7 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     radius = 0.0 if obj.shape == "mesh" else patch_torsion_radius_m(half_y, length / 2)
     return GripHold(
         force_n=force,
-        torque_nm=force * radius,
+        torque_nm=PAD_COUPLE_FACTOR * force * radius,
         mass_kg=obj.mass,
         inertia_xx=float(obj.inertia[0]),
         offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),

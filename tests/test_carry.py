@@ -207,7 +207,7 @@ def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():
     params = load_params(scene_params_path())
     stroke = 0.07
     short = ObjectParams(shape="cuboid", mass=0.06, size=(0.05, 0.05, 0.05), name="")
-    tall = ObjectParams(shape="cuboid", mass=0.07, size=(0.04, 0.04, 0.08), name="")
+    tall = ObjectParams(shape="cuboid", mass=0.09, size=(0.04, 0.04, 0.12), name="")
     for obj, turns in ((short, False), (tall, True)):
         h = carry_hold(params, obj, stroke)
         use = obj.mass * G / h.force_n + obj.mass * G * h.lever_m / h.torque_nm
