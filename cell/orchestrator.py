@@ -819,8 +819,9 @@ class Orchestrator:
         return q_lift
 
     def _spawn_at_station(self, index: int, obj: ObjectParams) -> Any:
-        """The item, come to rest on the pick station at a random spot (± PICK_SCATTER_M)
-        and yaw, drawn from the job's seed and the item's index (reproducible)."""
+        """The item, set down on the pick station at a random spot (± PICK_SCATTER_M) and
+        yaw drawn from the job's seed and the item's index (reproducible); it settles while
+        the arm comes over it (`_pick_once` waits for it to rest before the descent)."""
         rng = np.random.default_rng([self.job.seed, index])
         dx, dy = rng.uniform(-PICK_SCATTER_M, PICK_SCATTER_M, 2)
         yaw = float(rng.uniform(-math.pi, math.pi))
@@ -1027,7 +1028,7 @@ class Orchestrator:
 
     def _carry_heading(self, plan: Any, target: Any) -> tuple[float, bool]:
         """Where the pads' axis (E's x) should point while the item is carried, and whether
-        its sense matters (see `_grip_rolls`): for a throw, along the azimuth, the way the
+        its sense matters (see `_grip_axes`): for a throw, along the azimuth, the way the
         release's roll (0 or π, `_q_release`) turns up to about E's y alone; for a place,
         either way along the line from the station to the bin."""
         if plan is None:
