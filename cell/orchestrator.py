@@ -779,7 +779,6 @@ class Orchestrator:
                 self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
             else:
                 q_lift = self._pick_kinematic(obj, item, stroke)
-            self._carried = (obj, stroke)
             if self.hardware is not None:
                 self.hardware.grasp(stroke)
             if plan is None:
@@ -816,6 +815,7 @@ class Orchestrator:
         q_lift = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj))
         self._move([q_lift, q_pick])
         self.ee.grasp(stroke, item)
+        self._carried = (obj, stroke)
         return q_lift
 
     def _spawn_at_station(self, index: int, obj: ObjectParams) -> Any:
@@ -1130,6 +1130,7 @@ class Orchestrator:
             d_touch -= float(np.linalg.norm(self.scene.ee_lag()))
             self._straight(along(max(0.0, d_touch - TOUCH_GAP_M)), 0.02)
         self.ee.close_on(item)
+        self._carried = (obj, stroke)
         # a short lift that shows whether the pads hold it (the move on starts at LIFT_M)
         z0 = p[2]
         held = at(0.0)  # where the grip holds it: lifted straight up from there
