@@ -640,19 +640,21 @@ class Orchestrator:
         roll = self._roll_of(self._q_release, plan.elevation_rad, plan.azimuth_rad)
         return (float(plan.azimuth_rad), roll)
 
-    def _ik_frame(self, tcp: np.ndarray) -> np.ndarray:
+    def _ik_frame(self, tcp: np.ndarray, seed: np.ndarray | None = None) -> np.ndarray:
         """IK for the grip pointing down at `tcp` [m, W], in the item's frame
-        (`self._frame`: (azimuth, roll), else the roll is free)."""
-        from cell.robot.ik import ReleasePose, solve_ik
+        (`self._frame`: (azimuth, roll), else the roll is free), from `seed` (default:
+        where the arm is)."""
+        from cell.robot.ik import ReleasePose, solve_ik, solve_release_ik
 
+        q0 = self.q if seed is None else seed
         if self._frame is not None:
             az, roll = self._frame
             try:
                 pose = ReleasePose.from_angles(tcp, -math.pi / 2, az, roll)
-                return solve_ik(self.robot, pose, self.q).q
+                return solve_ik(self.robot, pose, q0).q
             except IKFailed:
                 log.info("no IK for the twist-free grip at %s: the roll is left free", tcp)
-        return self._ik(tcp, -math.pi / 2, 0.0)
+        return solve_release_ik(self.robot, tcp, -math.pi / 2, 0.0, q0).q
 
     def _ik_release(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
         """IK for the release, at the roll the item was gripped for (`self._frame`)."""
@@ -811,12 +813,28 @@ class Orchestrator:
         p_item = np.asarray(self.scene.client.getBasePositionAndOrientation(item.body)[0])
         down = (-math.pi / 2, 0.0)
         q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
-        lift = p_item + np.array([0, 0, LIFT_M])
-        q_lift = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj))
+        q_lift = self._lift_q(p_item, stroke, obj, q_pick)
         self._move([q_lift, q_pick])
         self.ee.grasp(stroke, item)
         self._carried = (obj, stroke)
         return q_lift
+
+    def _lift_q(
+        self, p_item: np.ndarray, stroke: float, obj: ObjectParams, q_pick: np.ndarray
+    ) -> np.ndarray:
+        """The configuration LIFT_M over the pick (IK from the pick's), or as high as the
+        arm reaches: a tall item gripped at a long stroke puts the flange up to 0.3 m over
+        the item, and 0.15 m more can be out of the arm's reach."""
+        down = (-math.pi / 2, 0.0)
+        err: IKFailed | None = None
+        for up in (LIFT_M, LIFT_M / 2, LIFT_M / 4):
+            lift = p_item + np.array([0, 0, up])
+            try:
+                return self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj), q_pick)
+            except IKFailed as exc:
+                err = err or exc
+        assert err is not None
+        raise err
 
     def _spawn_at_station(self, index: int, obj: ObjectParams) -> Any:
         """The item, set down on the pick station at a random spot (± PICK_SCATTER_M) and

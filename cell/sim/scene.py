@@ -435,10 +435,13 @@ class CellScene:
         return item
 
     def _station_top(self) -> float:
-        """Height above which a new item fits on the pick station (over any item there) [m]."""
+        """Height above which a new item fits on the pick station (over any item resting
+        there; not over one flying past, which is still being tracked) [m]."""
         top = self.pick_station_height
         x0, y0 = self.pick_station_xy
         for it in self.items:
+            if it.body in self._trackers or it.body in self._kept:
+                continue
             p, _ = self.client.getBasePositionAndOrientation(it.body)
             if abs(p[0] - x0) < 0.15 and abs(p[1] - y0) < 0.15 and p[2] > top - 0.05:
                 top = max(top, p[2] + float(np.linalg.norm(it.obj.size)) / 2)
