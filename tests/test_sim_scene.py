@@ -93,3 +93,22 @@ def test_snapshot_writes_a_picture_of_the_cell(tmp_path):
     img = np.asarray(Image.open(path))
     assert img.shape == (120, 160, 3)
     assert img.std() > 10  # not a blank frame
+
+
+def test_a_new_item_goes_on_the_station_not_onto_an_item_flying_over_it(scene):
+    """An item resting on the station is stacked on; one flying past it (tracked since its
+    release) is not: the next item still rests on the station's top."""
+    x0, y0 = scene.pick_station_xy
+    top = scene.pick_station_height
+    flying = scene.spawn_item("cube50", position=(x0, y0, top + 0.25))
+    scene.track(flying)  # released: the loop watches it while it flies
+    new = scene.spawn_item("cube30")
+    z_new = scene.client.getBasePositionAndOrientation(new.body)[0][2]
+    assert z_new == pytest.approx(top + new.obj.size[2] / 2 + 1e-3, abs=1e-6)
+    scene.remove_item(new)
+    scene.remove_item(flying)
+    resting = scene.spawn_item("cube50")
+    scene.run_for(0.2)
+    stacked = scene.spawn_item("cube30")
+    z_stacked = scene.client.getBasePositionAndOrientation(stacked.body)[0][2]
+    assert z_stacked > top + resting.obj.size[2]  # on top of the resting one
