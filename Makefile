@@ -28,8 +28,8 @@ test: lint
 bench: install
 	$(BIN)/cell bench
 
-# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores, 27 of them the
-# random-layout benchmark). The JSON beside
+# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 16 of them the
+# random-layout benchmark, 11 its speed trade-off). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
