@@ -101,6 +101,9 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # Ctrl-C as a terminal delivers it: an ignored SIGINT is inherited through exec,
+        # and the test harness may have left it ignored (the run then ends with code 0)
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
         deadline = time.time() + 240
@@ -116,6 +119,7 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path):
             if n >= 2:
                 break
         assert n >= 2, "the run recorded no throws in time"
+        assert proc.poll() is None, "the run ended before it could be interrupted"
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     finally:
