@@ -644,29 +644,25 @@ class Orchestrator:
         """IK for the grip pointing down at `tcp` [m, W], in the item's frame
         (`self._frame`: (azimuth, roll), else the roll is free), from `seed` (default:
         where the arm is)."""
+        az = 0.0 if self._frame is None else self._frame[0]
+        return self._ik_gripped(tcp, -math.pi / 2, az, seed)
+
+    def _ik_gripped(
+        self, tcp: np.ndarray, elevation: float, azimuth: float, seed: np.ndarray | None = None
+    ) -> np.ndarray:
+        """IK at the roll the item was gripped for (`self._frame`); without one, or when that
+        roll has no solution, the roll `solve_release_ik` chooses. From `seed` (default:
+        where the arm is)."""
         from cell.robot.ik import ReleasePose, solve_ik, solve_release_ik
 
         q0 = self.q if seed is None else seed
         if self._frame is not None:
-            az, roll = self._frame
-            try:
-                pose = ReleasePose.from_angles(tcp, -math.pi / 2, az, roll)
-                return solve_ik(self.robot, pose, q0).q
-            except IKFailed:
-                log.info("no IK for the twist-free grip at %s: the roll is left free", tcp)
-        return solve_release_ik(self.robot, tcp, -math.pi / 2, 0.0, q0).q
-
-    def _ik_release(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
-        """IK for the release, at the roll the item was gripped for (`self._frame`)."""
-        from cell.robot.ik import ReleasePose, solve_ik
-
-        if self._frame is not None:
             pose = ReleasePose.from_angles(tcp, elevation, azimuth, self._frame[1])
             try:
-                return solve_ik(self.robot, pose, self.q).q
+                return solve_ik(self.robot, pose, q0).q
             except IKFailed:
-                pass
-        return self._ik(tcp, elevation, azimuth)
+                log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
 
     def _roll_of(self, q: np.ndarray, elevation: float, azimuth: float) -> float:
         """The roll (0 or π) of the release configuration q: its pads' axis against roll 0's."""
@@ -1054,8 +1050,8 @@ class Orchestrator:
             return math.atan2(target.position[1] - y0, target.position[0] - x0), False
         # at the release, roll 0 puts E's x at (sin e cos a, sin e sin a, −cos e): turned
         # down about E's y it points back along the azimuth; roll π, forward
-        x_release = self.robot.tcp_pose(self._q_release)[1][:, 0]
-        return plan.azimuth_rad + (0.0 if x_release[2] > 0 else math.pi), True
+        roll = self._roll_of(self._q_release, plan.elevation_rad, plan.azimuth_rad)
+        return plan.azimuth_rad + math.pi - roll, True
 
     def _pick(
         self, obj: ObjectParams, item: Any, stroke: float, heading: float, signed: bool
@@ -1353,7 +1349,7 @@ class Orchestrator:
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj)
         try:  # IK from the lift pose the arm is at; _plan checked one exists from before
-            q_rel = self._ik_release(tcp, plan.elevation_rad, plan.azimuth_rad)
+            q_rel = self._ik_gripped(tcp, plan.elevation_rad, plan.azimuth_rad)
         except IKFailed:
             q_rel = self._q_release
         self._move([q_lift, *self._swing(q_lift, q_rel, plan), q_rel])

@@ -103,26 +103,10 @@ def item_motion(
     Returns:
         (f, alpha, rotations), shapes (k, 3), (k, 3), (k, 3, 3).
     """
-    import pinocchio as pin
-
-    m, d, fr = robot.model, robot.data, robot.tcp_frame
-    r_local = np.asarray(offset_tcp_m, float)
-    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-    k = len(qs)
-    f_out, al_out, rots = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3, 3))
-    for i, (q, dq, ddq) in enumerate(zip(qs, dqs, ddqs, strict=True)):
-        pin.forwardKinematics(m, d, q, dq, ddq)
-        pin.updateFramePlacements(m, d)
-        a_o = np.array(pin.getFrameClassicalAcceleration(m, d, fr, lwa).linear)
-        alpha = np.array(pin.getFrameAcceleration(m, d, fr, lwa).angular)
-        w = np.array(pin.getFrameVelocity(m, d, fr, lwa).angular)
-        rot = np.array(d.oMf[fr].rotation)
-        r = rot @ r_local
-        a = a_o + np.cross(alpha, r) + np.cross(w, np.cross(w, r))
-        f_out[i] = rot.T @ (a - _GRAVITY)
-        al_out[i] = rot.T @ alpha
-        rots[i] = rot
-    return f_out, al_out, rots
+    a, alpha, rots = _point_motion(robot, qs, dqs, ddqs, offset_tcp_m)
+    rt = np.transpose(rots, (0, 2, 1))
+    f = np.einsum("kij,kj->ki", rt, a - _GRAVITY)
+    return f, np.einsum("kij,kj->ki", rt, alpha), rots
 
 
 def grip_use(traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> float:
@@ -157,22 +141,38 @@ def item_accelerations(
     Returns:
         Shape (k, 3).
     """
+    return _point_motion(robot, qs, dqs, ddqs, offset_tcp_m)[0]
+
+
+def _point_motion(
+    robot: Robot,
+    qs: np.ndarray,
+    dqs: np.ndarray,
+    ddqs: np.ndarray,
+    offset_tcp_m: Sequence[float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(acceleration of the point [m/s², W], ee_tcp's angular acceleration [rad/s², W],
+    ee_tcp's rotations in W), shapes (k, 3), (k, 3), (k, 3, 3):
+    a = a_o + α × r + ω × (ω × r), from Pinocchio's frame kinematics."""
     import pinocchio as pin
 
-    m, d, f = robot.model, robot.data, robot.tcp_frame
+    m, d, fr = robot.model, robot.data, robot.tcp_frame
     r_local = np.asarray(offset_tcp_m, float)
-    out = np.empty((len(qs), 3))
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    k = len(qs)
+    acc, alphas, rots = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3, 3))
     for i, (q, dq, ddq) in enumerate(zip(qs, dqs, ddqs, strict=True)):
         pin.forwardKinematics(m, d, q, dq, ddq)
         pin.updateFramePlacements(m, d)
-        a_o = np.array(pin.getFrameClassicalAcceleration(m, d, f, lwa).linear)
-        spatial_a = pin.getFrameAcceleration(m, d, f, lwa)
-        w = np.array(pin.getFrameVelocity(m, d, f, lwa).angular)
-        alpha = np.array(spatial_a.angular)
-        r = d.oMf[f].rotation @ r_local
-        out[i] = a_o + np.cross(alpha, r) + np.cross(w, np.cross(w, r))
-    return out
+        a_o = np.array(pin.getFrameClassicalAcceleration(m, d, fr, lwa).linear)
+        alpha = np.array(pin.getFrameAcceleration(m, d, fr, lwa).angular)
+        w = np.array(pin.getFrameVelocity(m, d, fr, lwa).angular)
+        rot = np.array(d.oMf[fr].rotation)
+        r = rot @ r_local
+        acc[i] = a_o + np.cross(alpha, r) + np.cross(w, np.cross(w, r))
+        alphas[i] = alpha
+        rots[i] = rot
+    return acc, alphas, rots
 
 
 def peak_specific_force(
