@@ -9,7 +9,7 @@ switched-on model effects, as YAML.
                                           # optional: m_eff = κ √(m + m_b) (a / 0.05 m)^β
     note: free text on how the file was made
 
-The mass rule (fitted by `cell calibrate`, see cell.sim.calibrate) gives an
+The mass rule (fitted by `cell calibrate`, see cell.workflows.calibrate) gives an
 object the file does not list (an ad-hoc item of a job, a catalogue object
 outside the campaign) the effective mass the identified objects follow, so
 every item is planned with the same model of the scene.

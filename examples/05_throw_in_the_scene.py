@@ -12,7 +12,7 @@ from cell.model import ThrowBatch, predict_landing
 from cell.orchestrator import scene_params_path
 from cell.params import load_params
 from cell.sim import BinSpec, CellScene
-from cell.sim.campaign import throw_once
+from cell.workflows.campaign import throw_once
 
 params = load_params(scene_params_path())
 with CellScene(None, [BinSpec("bin", (0.0, 1.5), (0.3, 0.3), 0.15)]) as scene:

@@ -47,8 +47,8 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
 
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
-    from cell.sim.campaign import campaign_plan, run_campaign, throw_once
     from cell.sim.scene import CellScene
+    from cell.workflows.campaign import campaign_plan, run_campaign, throw_once
 
     log_path = args.out / "scene_throws.csv"
     if log_path.is_file():

@@ -10,7 +10,7 @@ from typing import Any
 def throw_or_die_once(unit: tuple[str, dict[str, Any]]) -> dict[str, Any]:
     """One scene throw's log record; the worker process running throw 2 dies the first
     time (no exception: the process is gone, as when a node is lost)."""
-    from cell.sim.campaign import campaign_records
+    from cell.workflows.campaign import campaign_records
 
     marker, setting = unit
     if setting["throw_id"].endswith("-0002") and not Path(marker).exists():

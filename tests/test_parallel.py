@@ -56,7 +56,7 @@ def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ra
     from parallel_units import throw_or_die_once
 
     from cell.log.store import ThrowStore
-    from cell.sim.campaign import campaign_plan
+    from cell.workflows.campaign import campaign_plan
 
     marker = tmp_path / "died"
     plan = campaign_plan(5, seed=2)
@@ -87,8 +87,8 @@ def test_a_unit_that_raises_is_reported_by_name(local_ray):
 
 
 def test_a_scene_campaign_on_ray_throws_what_the_serial_one_throws(local_ray):
-    from cell.sim.campaign import campaign_plan
-    from cell.sim.campaign import run_campaign as scene_campaign
+    from cell.workflows.campaign import campaign_plan
+    from cell.workflows.campaign import run_campaign as scene_campaign
 
     plan = campaign_plan(6, seed=3)
     a = scene_campaign(plan)
@@ -145,8 +145,8 @@ def test_cli_calibrate_on_two_workers_writes_what_the_serial_run_writes(
 def test_cli_calibrate_refuses_a_store_that_holds_the_campaign_already(tmp_path, capsys):
     from cell.cli import main
     from cell.log.store import ThrowStore
-    from cell.sim.campaign import campaign_plan
-    from cell.sim.campaign import run_campaign as scene_campaign
+    from cell.workflows.campaign import campaign_plan
+    from cell.workflows.campaign import run_campaign as scene_campaign
 
     db = tmp_path / "s.sqlite"
     with ThrowStore(db) as store:

@@ -105,9 +105,9 @@ def test_fitted_law_reproduces_held_out_heavy_and_wide_items_in_the_scene():
     from cell.log.table import ThrowTable
     from cell.model.grip import max_grip_stroke
     from cell.sim import CellScene
-    from cell.sim.calibrate import calibrate_table
-    from cell.sim.campaign import adhoc_plan, campaign_plan, run_campaign, throw_once
     from cell.sim.mechanism import DEFAULT_GEOMETRY
+    from cell.workflows.calibrate import calibrate_table
+    from cell.workflows.campaign import adhoc_plan, campaign_plan, run_campaign, throw_once
 
     table = run_campaign(campaign_plan(56, seed=11))
     adhoc = run_campaign(adhoc_plan(64, seed=11))
@@ -179,7 +179,7 @@ def test_the_calibration_never_throws_an_item_the_bench_draws():
     """Hold-out: the ad-hoc campaign (stream 0xCA1) and the bench (stream 0x5C) draw
     different items at every seed the README quotes."""
     from cell.jobgen import _adhoc_item
-    from cell.sim.campaign import adhoc_plan
+    from cell.workflows.campaign import adhoc_plan
 
     cal = {(p["object"].shape, p["object"].mass, p["object"].size) for p in adhoc_plan(160, seed=1)}
     for seed in (0, 1, 100):

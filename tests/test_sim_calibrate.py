@@ -9,8 +9,8 @@ from cell.catalogue import catalogue
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
-from cell.sim.calibrate import extend_objects, gap_summary, mass_rule
-from cell.sim.campaign import campaign_plan, run_campaign
+from cell.workflows.calibrate import extend_objects, gap_summary, mass_rule
+from cell.workflows.campaign import campaign_plan, run_campaign
 
 
 def test_mass_rule_recovers_kappa_and_band_mass():

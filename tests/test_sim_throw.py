@@ -13,7 +13,7 @@ from cell.errors import InvalidParameter
 from cell.model import DEFAULT_EE, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 from cell.sim import BinSpec, CellScene
-from cell.sim.campaign import throw_once
+from cell.workflows.campaign import throw_once
 
 SCENE_PARAMS = Path(__file__).resolve().parents[1] / "robots" / "cell_scene" / "ee_params.yaml"
 BIN = BinSpec("target", (0.0, 0.0), (0.3, 0.3), 0.1)

@@ -36,7 +36,7 @@ def echo(k: int) -> int:
 
 def _chunk_cpu_s(n_chunks: int) -> tuple[float, list[dict]]:  # type: ignore[type-arg]
     """Mean CPU time of a calibrate unit [s], and the records of the last one."""
-    from cell.sim.campaign import CHUNK, campaign_plan, throw_chunk
+    from cell.workflows.campaign import CHUNK, campaign_plan, throw_chunk
 
     plan = campaign_plan(CHUNK * n_chunks, seed=11)
     cpu = []

@@ -42,7 +42,7 @@ def scene_reach_errors(
     from cell.orchestrator import grip_stroke_limit, scene_params_path
     from cell.params import load_params
     from cell.sim import CellScene
-    from cell.sim.campaign import throw_once
+    from cell.workflows.campaign import throw_once
 
     params = load_params(params_path or scene_params_path())
     rng = np.random.default_rng([seed, 0x5C])

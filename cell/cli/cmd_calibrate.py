@@ -132,9 +132,9 @@ def run(args: argparse.Namespace) -> int:
     from cell.errors import InvalidInput
     from cell.log.csvio import ThrowTable, write_throws_csv
     from cell.params import save_params
-    from cell.sim.calibrate import calibrate_table
-    from cell.sim.campaign import adhoc_plan, campaign_plan, run_campaign
     from cell.sim.mechanism import DEFAULT_GEOMETRY
+    from cell.workflows.calibrate import calibrate_table
+    from cell.workflows.campaign import adhoc_plan, campaign_plan, run_campaign
 
     if args.snapshot:
         _snapshot(args.snapshot)

@@ -1,6 +1,6 @@
 """Calibration in the scene: identify the η_ee (and η_o) the planner uses for the scene.
 
-A campaign of catalogue throws is made in the scene (cell.sim.campaign), and
+A campaign of catalogue throws is made in the scene (cell.workflows.campaign), and
 the two-stage identification (cell.identify, thesis Algorithm 1) fits the
 nominal model to their landings. The simulated launch comes out of the band
 physics (energy of the stretched band shared with the moving carriage,
@@ -27,7 +27,7 @@ envelope's edges (heavy items to 250 g, wide ones to 90 mm, elevations 0–65°)
 * the ratio of the model's push to the band's energy changes with the grip width, so
   the rule gets a width factor (a / a_ref)^β, and κ, m_b and β are fitted
   (`fit_mass_rule`) to the landings of ad-hoc items thrown over the whole envelope
-  (`cell.sim.campaign.adhoc_plan`, a random stream of its own: never the bench's).
+  (`cell.workflows.campaign.adhoc_plan`, a random stream of its own: never the bench's).
 """
 
 from __future__ import annotations
