@@ -1,12 +1,14 @@
-"""The sort loop: pick, decide, plan, move, release, observe, record.
+"""The arm as a platform of the item loop (`cell.loop`): pick, decide, plan, move, release.
 
-For each item of a job the orchestrator spawns it at the pick station, moves
+For each item of a job the orchestrator has the item set on the pick station, moves
 the arm over it (Pinocchio IK + a toppra path), grasps it, decides to place
 (bin within reach) or throw (beyond), plans the release (throw optimisation
 plus the learned ΔL_s when a residual model is given), moves to the release
-configuration (toppra through pick → lift → release), commands the
-end-effector, watches the item to rest in the PyBullet plant, scores it and
-appends the throw to the log store, each in its own transaction.
+configuration (toppra through pick → lift → release) and commands the
+end-effector; the loop (`cell.loop.ItemLoop`) watches the item to rest in the
+plant, scores it and appends the throw to the log store, each in its own
+transaction. No PyBullet call is made here: the plant (`cell.sim.CellScene`)
+reports where items are and what touches them.
 
 A failure on one item (no IK solution, unreachable bin, item dropped) is
 recorded with its reason and the run goes on.
@@ -23,10 +25,9 @@ from __future__ import annotations
 
 import logging
 import math
-import time
 import uuid
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -35,27 +36,21 @@ from cell.errors import (
     CannotGrip,
     CellError,
     GraspLost,
-    HardwareError,
     IKFailed,
     InvalidInput,
     TrajectoryError,
     UnreachableTarget,
 )
 from cell.jobs import ItemSpec, Job
-from cell.log.records import throw_record
+from cell.loop import FAILURES, Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
 
 __all__ = [
-    "FAILURES",
-    "InFlight",
-    "failure_of",
+    "FAILURES",  # re-exported from cell.loop, where it is defined
     "ItemResult",
     "RunSummary",
     "Orchestrator",
-    "run_items",
-    "sorted_throw_record",
-    "summarise",
 ]
 
 log = logging.getLogger(__name__)
@@ -94,204 +89,6 @@ PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still o
 
 
 PICKS = ("kinematic", "physical")  # how an item gets into the grip (Orchestrator's `pick`)
-
-# Why an item did not end in its bin: one of these, always (ItemResult.failure).
-FAILURES = (
-    "unreachable",  # no release within the cell's bounds lands it in the bin
-    "cannot_grip",  # too wide, too thin or too heavy for the pads, refused before the pick
-    "grasp_failed",  # the fingers did not close on it
-    "dropped_while_carried",  # it left the grip between the pick and the release
-    "ik",  # no arm configuration or move reaches the planned pose
-    "missed_bin",  # released, but it came to rest outside its bin
-)
-
-
-@dataclass
-class InFlight:
-    """A released item the loop is not waiting for: `score(outcome)` makes its
-    ItemResult (and records the throw) once the plant says where it came to rest.
-
-    Attributes:
-        base: the result's index, object_id and target_bin.
-        obj: the item's parameters.
-        item: the scene's item.
-        score: Outcome → (ItemResult, landing point [m, W]).
-    """
-
-    base: dict[str, Any]
-    obj: ObjectParams
-    item: Any
-    score: Callable[[Any], tuple[Any, Any]]
-
-    @property
-    def index(self) -> int:
-        return int(self.base["index"])
-
-
-def failure_of(exc: BaseException) -> str:
-    """The FAILURES entry for an error that stopped an item before its release."""
-    if isinstance(exc, UnreachableTarget):
-        return "unreachable"
-    if isinstance(exc, CannotGrip):
-        return "cannot_grip"
-    if isinstance(exc, GraspLost):
-        return "grasp_failed" if exc.stage == "grasp" else "dropped_while_carried"
-    if isinstance(exc, (IKFailed, TrajectoryError)):
-        return "ik"
-    return "missed_bin"
-
-
-@dataclass(frozen=True)
-class ItemResult:
-    """What became of one item.
-
-    Attributes:
-        index: item number in the job (0-based).
-        object_id: catalogue id (or ad-hoc name).
-        target_bin: where the job wanted it.
-        action: "place", "throw" or "failed".
-        failure: why it is not in its bin, one of FAILURES ("" when it is).
-        reason: the full message of that failure ("" when there is none).
-        bin_id: the bin it came to rest in ("" for none).
-        in_bin: True when that is the target bin.
-        landing_error_m: throws: distance of the crossing of the rim plane from the
-            bin centre; places: distance of the rest point from the bin centre [m].
-        stroke_m: commanded stroke at release [m] (NaN for failures before planning).
-        delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
-        cycle_time_s: simulated arm time for this item [s].
-        throw_id: the log id of the throw ("" for places and failures).
-    """
-
-    index: int
-    object_id: str
-    target_bin: str
-    action: str
-    failure: str = ""
-    reason: str = ""
-    bin_id: str = ""
-    in_bin: bool = False
-    landing_error_m: float = math.nan
-    stroke_m: float = math.nan
-    delta_stroke_m: float = 0.0
-    cycle_time_s: float = 0.0
-    throw_id: str = ""
-
-
-@dataclass(frozen=True)
-class RunSummary:
-    """The closing table of a run (JSON keys as `cell run --json`)."""
-
-    items: int
-    placed: int
-    thrown: int
-    failed: int
-    in_bin: int
-    in_bin_rate: float
-    mean_landing_error_m: float
-    p95_landing_error_m: float
-    mean_cycle_time_s: float
-    items_per_hour: float
-    sim_time_s: float
-    wall_time_s: float
-    results: list[ItemResult] = field(default_factory=list)
-    failures: dict[str, int] = field(default_factory=dict)
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain values, item results as a list of dicts."""
-        d = asdict(self)
-        d["results"] = [asdict(r) for r in self.results]
-        return d
-
-
-def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
-    """The closing figures of a list of item results."""
-    n = len(results)
-    errs = np.array([r.landing_error_m for r in results if np.isfinite(r.landing_error_m)])
-    cyc = np.array([r.cycle_time_s for r in results])
-    sim_time = float(np.sum([r.cycle_time_s for r in results]))
-    in_bin = sum(r.in_bin for r in results)
-    return RunSummary(
-        items=n,
-        placed=sum(r.action == "place" for r in results),
-        thrown=sum(r.action == "throw" for r in results),
-        failed=sum(r.action == "failed" for r in results),
-        in_bin=in_bin,
-        in_bin_rate=in_bin / n if n else 0.0,
-        mean_landing_error_m=float(errs.mean()) if errs.size else math.nan,
-        p95_landing_error_m=float(np.percentile(errs, 95)) if errs.size else math.nan,
-        mean_cycle_time_s=float(cyc.mean()) if cyc.size else math.nan,
-        items_per_hour=3600.0 * in_bin / sim_time if sim_time > 0 else 0.0,
-        sim_time_s=sim_time,
-        wall_time_s=wall_time_s,
-        results=list(results),
-        failures={k: c for k in FAILURES if (c := sum(r.failure == k for r in results))},
-    )
-
-
-def sorted_throw_record(
-    session: str,
-    throw_id: str,
-    obj: ObjectParams,
-    plan: Any,
-    stroke_m: float,
-    released_at: np.ndarray,
-    target: Any,
-    out: Any,
-    cross: Any,
-    *,
-    platform: str = "arm",
-    rotor_rpm: float = 0.0,
-) -> dict[str, Any]:
-    """The throw-log row of a sort throw: the release as planned and observed, the
-    crossing of the target bin's rim plane, and which bin it came to rest in (shared by
-    the arm orchestrator and the platform runner)."""
-    return throw_record(
-        throw_id,
-        obj,
-        stroke_m=stroke_m,
-        position_m=released_at,
-        elevation_rad=plan.elevation_rad,
-        azimuth_rad=plan.azimuth_rad,
-        roll_rad=plan.roll_rad,
-        base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
-        platform=platform,
-        rotor_rpm=rotor_rpm,
-        land_z_m=target.rim_height,
-        landed_xy_m=cross[:2],
-        session=session,
-        time_s=time.time(),
-        t_flight_s=float(cross[2]),
-        target_bin=target.id,
-        bin_id=out.bin_id or "",
-    )
-
-
-def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
-    """(failure, reason) of a released item; both empty when it rests in its bin."""
-    if bin_id == target_id:
-        return "", ""
-    where = f"in bin {bin_id!r}" if bin_id else "outside every bin"
-    return (
-        "missed_bin",
-        f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",
-    )
-
-
-def run_items(
-    job: Job,
-    run_item: Callable[[int, ItemSpec], ItemResult],
-    on_item: Callable[[ItemResult], None] | None = None,
-) -> RunSummary:
-    """Run every item of a job through `run_item`, reporting each to `on_item`, and
-    summarise (shared by the arm orchestrator and the platform runner)."""
-    t_wall = time.perf_counter()
-    results: list[ItemResult] = []
-    for i, spec in enumerate(job.expanded_items()):
-        res = run_item(i, spec)
-        results.append(res)
-        if on_item is not None:
-            on_item(res)
-    return summarise(results, time.perf_counter() - t_wall)
 
 
 def as_gripped(obj: ObjectParams) -> ObjectParams:
@@ -498,7 +295,7 @@ class Orchestrator:
         speed_scale: float = ARM_SPEED_SCALE,
         pick: str = "kinematic",
     ) -> None:
-        from cell.endeffector.pybullet_backend import PyBulletEndEffector
+        from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
         from cell.robot.model import load_robot
         from cell.sim import BinSpec, CellScene
@@ -521,12 +318,12 @@ class Orchestrator:
             pick_station_xy=job.pick_position[:2],
             pick_station_height=job.pick_position[2],
         )
-        self.pick = pick
+        self.pick_mode = pick
         # the kinematic pick moves the item into the grip: the pads, longer than a flat
         # item, must not jam on the station's top while the fingers close
         self.scene.ee_collides_with_station(pick == "physical")
-        self.ee = PyBulletEndEffector(self.scene)
-        self.hardware = end_effector
+        self.effector = make_in_step(self.scene, end_effector)  # commands, in step
+        self.ee = self.effector.sim  # the plant's end-effector: the physical pick's steps
         self.bounds = ThrowBounds()
         self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
         self._q_release = np.zeros(0)
@@ -542,9 +339,15 @@ class Orchestrator:
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
         self._frame: tuple[float, float] | None = None  # the grip's (azimuth, roll) now
-        self._flying: list[InFlight] = []  # thrown, not yet at rest
-        self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
-        self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
+        self.loop = ItemLoop(
+            job,
+            self,
+            self.scene,
+            store=store,
+            session=self.session,
+            observer=observer,
+            wait_for=self._same_kind if learn else None,
+        )
         if observer is not None:
             observer.on_scene(self.scene, job)
 
@@ -575,11 +378,9 @@ class Orchestrator:
         self, centre: np.ndarray, elevation: float, azimuth: float, stroke: float, obj: ObjectParams
     ) -> np.ndarray:
         """TCP position [m, W] that puts the gripped item's centre at `centre`."""
-        from cell.sim import EE_TO_TCP_M
-        from cell.sim.scene import release_orientation
+        from cell.sim.frames import tcp_for_item_centre
 
-        u = release_orientation(elevation, azimuth)[:, 2]
-        return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke - obj.size[2] / 2)
+        return tcp_for_item_centre(centre, elevation, azimuth, stroke, obj)
 
     def _ik(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
         from cell.robot.ik import solve_release_ik
@@ -707,7 +508,7 @@ class Orchestrator:
         if settle_s > 0:
             sc.run_for(settle_s)
         self.q = np.asarray(waypoints[-1], float)
-        self._land()
+        self.loop.land()
         return float(traj.duration) + settle_s
 
     def _carry_path(self, waypoints: list[np.ndarray]) -> Any:
@@ -724,89 +525,117 @@ class Orchestrator:
         )
         return traj
 
-    # -- one item --------------------------------------------------------------
+    # -- the platform's steps (cell.loop.Platform) -----------------------------
+    name = "arm"
+    overlaps = True  # the next pick starts while a thrown item flies
+    rotor_rpm = 0.0
+
     def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
         """Pick, decide, plan, move, release, observe and record one item, and wait
-        for it to come to rest.
+        for it to come to rest (`cell.loop.ItemLoop.run_item`)."""
+        return self.loop.run_item(index, spec)
 
-        Its `cycle_time_s` is the simulated time from the start of its pick until it
-        is scored (`run` instead goes on with the next pick while a thrown item flies).
-        """
-        from dataclasses import replace as dc_replace
+    def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
+        """Sort every item of the job (`cell.loop.ItemLoop.run`): the next pick starts
+        as soon as an item is thrown; with `learn`, an item waits for the landing of an
+        earlier throw of the same object (or class) still in flight, to learn from it."""
+        return self.loop.run(on_item)
 
-        t0 = self.scene.t
-        res = self._run_item(index, spec)
-        if isinstance(res, InFlight):
-            res = self._wait_for(res)
-        if self.observer is not None and index in self._flights:
-            self.observer.on_flight(index, *self._flights.pop(index))
-        return dc_replace(res, cycle_time_s=self.scene.t - t0)
+    def present(self, index: int, obj: ObjectParams) -> Any:
+        """The item on the pick station: at its centre (kinematic pick), or at a seeded
+        random spot and yaw (physical pick, `_spawn_at_station`)."""
+        if self.pick_mode == "physical":
+            return self._spawn_at_station(index, obj)
+        item = self.scene.spawn_item(obj if obj.shape != "mesh" else obj.name)
+        self.scene.run_for(0.05)  # let it settle on the station
+        return item
 
-    def _run_item(self, index: int, spec: ItemSpec) -> ItemResult | InFlight:
-        obj = spec.obj
-        target = self.job.bin(spec.bin)
-        sc = self.scene
-        t0 = sc.t
-        if self.pick == "physical":
-            item = self._spawn_at_station(index, obj)
-        else:
-            item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
-            sc.run_for(0.05)  # let it settle on the station
-        if self.observer is not None:
-            self.observer.on_item_start(index, obj, target, item)
-        base: dict[str, Any] = dict(
-            index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
+    def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
+        """Place (a bin within the job's place reach, or the job's policy) or throw, and
+        the throw's plan, made before the pick: the end-effector grasps at the stroke it
+        will throw with, so the item sits on the band carriage as the plan assumes."""
+        dist = math.hypot(*target.position)
+        place = self.job.policy == "place" or (
+            self.job.policy == "auto" and dist <= self.job.place_reach_m
         )
-        flying: InFlight | None = None
-        try:
-            dist = math.hypot(*target.position)
-            place = self.job.policy == "place" or (
-                self.job.policy == "auto" and dist <= self.job.place_reach_m
+        s_grip = grip_stroke_limit(self.params, obj)
+        if place:
+            return Decision("place", min(PICK_STROKE_M, s_grip), state={"target": target})
+        plan, delta = self._plan(obj, target, index, s_grip)
+        return Decision(
+            "throw",
+            plan.stroke_m + delta,
+            plan,
+            delta,
+            model_obj=self._model_obj,
+            ee_params=self.params.ee,
+            state={"target": target, "aim": self._aim, "q_release": self._q_release},
+        )
+
+    def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        """Grip the item turned as the release will hold it: the carry then only swings
+        the throw axis up, it does not twist the item about it (a twist in the grip
+        spoils the launch, see `_pick_frame`)."""
+        self._q_release = d.state.get("q_release", self._q_release)
+        self._frame = self._pick_frame(d.plan)
+        if self.pick_mode == "physical":
+            heading = self._carry_heading(d.plan, d.state["target"])
+            d.state["q_lift"] = self._pick(obj, item, d.stroke_m, *heading)
+            self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
+        else:
+            d.state["q_lift"] = self._pick_kinematic(obj, item, d.stroke_m)
+        self.effector.grasp(d.stroke_m)  # held in the plant already: the hardware winds
+
+    def carry(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        """To the release pose: over the bin and down into it (a place), or along the
+        twist-free swing to the release configuration (a throw); the item still held."""
+        q_lift = d.state["q_lift"]
+        if d.action == "place":
+            self._carry_to_place(d, obj, q_lift)
+        else:
+            plan = d.plan
+            centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+            tcp = self._tcp_for_item_centre(
+                centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj
             )
-            # Plan before the pick: the end-effector grasps at the stroke it will throw
-            # with, so the item sits on the band carriage as the plan assumes.
-            s_grip = grip_stroke_limit(self.params, obj)
-            plan, delta = (None, 0.0) if place else self._plan(obj, target, index, s_grip)
-            stroke = min(PICK_STROKE_M, s_grip) if plan is None else plan.stroke_m + delta
-            # Grip it turned as the release will hold it: the carry then only swings the
-            # throw axis up, it does not twist the item about it (a twist in the grip
-            # spoils the launch, see _pick_frame).
-            self._frame = self._pick_frame(plan)
-            if self.pick == "physical":
-                q_lift = self._pick(obj, item, stroke, *self._carry_heading(plan, target))
-                self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
-            else:
-                q_lift = self._pick_kinematic(obj, item, stroke)
-            if self.hardware is not None:
-                self.hardware.grasp(stroke)
-            if plan is None:
-                return self._place(base, item, obj, target, q_lift, t0, stroke)
-            flying = self._throw(base, item, obj, target, q_lift, t0, plan, delta)
-            return flying
-        except HardwareError:
-            raise  # the end-effector failed: the run stops (torque off), not just this item
-        except CellError as exc:
-            log.info("item %d (%s) failed: %s", index, obj.name, exc)
-            return ItemResult(
-                **base,
-                action="failed",
-                failure=failure_of(exc),
-                reason=f"{type(exc).__name__}: {exc}",
-                cycle_time_s=sc.t - t0,
-            )
-        finally:
-            # Bins keep what lands in them, as real bins do (later items land on earlier
-            # ones); an item anywhere else (on the floor, still on the station, in the
-            # grip) is taken away, as an operator would before the next pick.
-            self.ee.item = None
-            if flying is None:  # a thrown item is tidied once it is scored (_settle)
-                self._tidy(item)
+            try:  # IK from the lift pose the arm is at; _plan checked one exists from before
+                q_rel = self._ik_gripped(tcp, plan.elevation_rad, plan.azimuth_rad)
+            except IKFailed:
+                q_rel = d.state["q_release"]
+            self._move([q_lift, *self._swing(q_lift, q_rel, plan), q_rel])
+        self._check_held(obj)
+
+    def release(self, d: Decision) -> None:
+        """Open the latch: slowly to place, at once to throw (a hardware end-effector
+        first for a throw, after the simulated one for a place)."""
+        if d.action == "place":
+            self.effector.place()
+        else:
+            self.effector.throw()
+
+    def after_place(self, d: Decision) -> None:
+        """Back up out of the bin."""
+        self._move([d.state["q_above"]])
+
+    def finish(self, d: Decision | None) -> None:
+        """Nothing of the item is held any more."""
+        self.ee.item = None
+
+    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
+        """The flywheel: learn from the throw's observed crossing."""
+        if self.learn:
+            self._learn_from(obj, d.plan, crossing, d.state["aim"])
+
+    def _same_kind(self, obj: ObjectParams, other: ObjectParams) -> bool:
+        """Is `other` (in flight) the same object or class as `obj` (learning waits)?"""
+        keys = {obj.name or "", self._class_key(obj)}
+        return bool({other.name or "", self._class_key(other)} & keys)
 
     # -- the pick ----------------------------------------------------------------
     def _pick_kinematic(self, obj: ObjectParams, item: Any, stroke: float) -> np.ndarray:
         """The kinematic pick: the grip over the item, which is moved into it
         (PyBulletEndEffector.grasp); returns the lift configuration."""
-        p_item = np.asarray(self.scene.client.getBasePositionAndOrientation(item.body)[0])
+        p_item = self.scene.item_position(item)
         down = (-math.pi / 2, 0.0)
         q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
         q_lift = self._lift_q(p_item, stroke, obj, q_pick)
@@ -847,9 +676,7 @@ class Orchestrator:
 
     def _item_pose(self, item: Any) -> tuple[np.ndarray, np.ndarray]:
         """The item as the plant reports it: centre [m, W] and rotation matrix (3, 3)."""
-        cl = self.scene.client
-        p, o = cl.getBasePositionAndOrientation(item.body)
-        return np.asarray(p, float), np.asarray(cl.getMatrixFromQuaternion(o)).reshape(3, 3)
+        return self.scene.item_pose(item)
 
     @staticmethod
     def _grip_axes(
@@ -983,15 +810,6 @@ class Orchestrator:
             raise err
         return min(found, key=lambda f: float(np.linalg.norm(f[0] - self.q)))
 
-    def _ee_touches(self, item: Any) -> bool:
-        """The end-effector touches the item or the station (the plant's contacts)."""
-        sc = self.scene
-        return any(
-            c[8] < 0.0
-            for body in (item.body, sc.pick_station)
-            for c in sc.client.getContactPoints(bodyA=sc.ee_body, bodyB=body)
-        )
-
     def _straight(
         self,
         q_to: np.ndarray,
@@ -1021,24 +839,13 @@ class Orchestrator:
 
     def _wait_at_rest(self, item: Any, timeout_s: float = 1.0) -> None:
         """Step until the item rests (below 2 mm/s and 0.05 rad/s) or `timeout_s` [s]."""
-        sc, cl = self.scene, self.scene.client
+        sc = self.scene
         t_end = sc.t + timeout_s
         while sc.t < t_end:
-            v, w = cl.getBaseVelocity(item.body)
+            v, w = sc.item_velocity(item)
             if np.linalg.norm(v) < 2e-3 and np.linalg.norm(w) < 0.05:
                 return
             sc.step()
-
-    def _on_station(self, item: Any) -> bool:
-        """The item rests on the pick station (its centre over it, not far above it)."""
-        sc = self.scene
-        p, _ = sc.client.getBasePositionAndOrientation(item.body)
-        x0, y0 = sc.pick_station_xy
-        return (
-            abs(p[0] - x0) < 0.12
-            and abs(p[1] - y0) < 0.12
-            and sc.pick_station_height < p[2] < sc.pick_station_height + max(item.obj.size)
-        )
 
     def _carry_heading(self, plan: Any, target: Any) -> tuple[float, bool]:
         """Where the pads' axis (E's x) should point while the item is carried, and whether
@@ -1075,7 +882,7 @@ class Orchestrator:
                 self.ee.let_go()
                 self.scene.run_for(0.1)  # the fingers open
                 self._wait_at_rest(item)
-                if attempt == PICK_ATTEMPTS or not self._on_station(item):
+                if attempt == PICK_ATTEMPTS or not self.scene.on_station(item):
                     raise GraspLost(
                         f"{exc} (pick attempt {attempt} of {PICK_ATTEMPTS})", "grasp"
                     ) from exc
@@ -1111,8 +918,8 @@ class Orchestrator:
         # rocking when it was first seen): over it again if it moved, then a guarded
         # descent onto it
         self._wait_at_rest(item)
-        if not self._on_station(item):
-            where = self.scene.client.getBasePositionAndOrientation(item.body)[0]
+        if not self.scene.on_station(item):
+            where = self.scene.item_position(item)
             raise GraspLost(
                 f"{obj.name or obj.shape} is no longer on the pick station (its centre at "
                 f"{', '.join(f'{v:.3f}' for v in where)} m)",
@@ -1135,7 +942,7 @@ class Orchestrator:
             """The configuration d [m] down the descent's (near-straight) joint segment."""
             return q_from + (q_to - q_from) * (d / depth)
 
-        touched = self._straight(q_to, depth / DESCENT_MPS, lambda: self._ee_touches(item))
+        touched = self._straight(q_to, depth / DESCENT_MPS, lambda: self.scene.ee_touches(item))
         d_touch = touched * depth
         if touched < 1.0:
             # back to a hair over where it touched: the mount pulls E along behind the
@@ -1151,7 +958,7 @@ class Orchestrator:
         q_check = self._ik_grip(held + [0.0, 0.0, LIFT_CHECK_M], stroke, obj, axes)
         self._straight(q_check, LIFT_CHECK_S, smooth=True)
         self.scene.run_for(0.05)
-        z1 = float(self.scene.client.getBasePositionAndOrientation(item.body)[0][2])
+        z1 = float(self.scene.item_position(item)[2])
         if not self.ee.holds_item() or z1 - z0 < LIFT_CHECK_M / 2:
             self.ee.item = None
             raise GraspLost(
@@ -1162,50 +969,21 @@ class Orchestrator:
             )
         return self._ik_grip(held + [0.0, 0.0, LIFT_M], stroke, obj, axes)
 
-    def _place(
-        self,
-        base: dict,
-        item: Any,
-        obj: ObjectParams,
-        target: Any,
-        q_lift: np.ndarray,
-        t0: float,
-        stroke: float,
-    ) -> ItemResult:
+    def _carry_to_place(self, d: Decision, obj: ObjectParams, q_lift: np.ndarray) -> None:
+        """Over the bin, then down into it on a short move of its own (a spline through
+        both would cut the corner and sweep the item through the bin's wall)."""
         sc = self.scene
         down = (-math.pi / 2, 0.0)
-        bx, by = target.position
+        target = d.state["target"]
         # a spot on the bin's floor clear of what it holds (its centre while it is empty)
         sx, sy, surface_z = sc.place_spot(target.id, obj)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
-        q_above = self._ik_frame(self._tcp_for_item_centre(above, *down, stroke, obj))
-        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *down, stroke, obj))
+        q_above = self._ik_frame(self._tcp_for_item_centre(above, *down, d.stroke_m, obj))
+        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *down, d.stroke_m, obj))
         self._move([q_lift, q_above])
-        # Down into the bin on its own short move: a spline through q_above and q_down
-        # would cut the corner and sweep the item through the bin's wall.
         self._move([q_down])
-        self._check_held(obj)
-        self.ee.place()
-        if self.hardware is not None:
-            self.hardware.place()
-        t_release = sc.t
-        out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
-        err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
-        cyc = t_release - t0
-        self._flights[base["index"]] = (out, out.rest_xyz)  # for the observer, in order
-        self._move([q_above])
-        return ItemResult(
-            **base,
-            action="place",
-            bin_id=out.bin_id or "",
-            in_bin=out.bin_id == target.id,
-            failure=missed_bin(out.bin_id, target.id, err)[0],
-            reason=missed_bin(out.bin_id, target.id, err)[1],
-            landing_error_m=err,
-            stroke_m=stroke,
-            cycle_time_s=cyc,
-        )
+        d.state["q_above"] = q_above
 
     def _check_held(self, obj: ObjectParams) -> None:
         """GraspLost when the item is no longer between the pads at the release pose."""
@@ -1332,197 +1110,7 @@ class Orchestrator:
         for key in (obj.name or "", self._class_key(obj)):
             self.corrections.setdefault(key, LandingCorrection()).add(lr, turn)
 
-    def _throw(
-        self,
-        base: dict,
-        item: Any,
-        obj: ObjectParams,
-        target: Any,
-        q_lift: np.ndarray,
-        t0: float,
-        plan: Any,
-        delta: float,
-    ) -> InFlight:
-        sc = self.scene
-        bx, by = target.position
-        stroke = plan.stroke_m + delta
-        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-        tcp = self._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj)
-        try:  # IK from the lift pose the arm is at; _plan checked one exists from before
-            q_rel = self._ik_gripped(tcp, plan.elevation_rad, plan.azimuth_rad)
-        except IKFailed:
-            q_rel = self._q_release
-        self._move([q_lift, *self._swing(q_lift, q_rel, plan), q_rel])
-        self._check_held(obj)
-        if self.hardware is not None:
-            self.hardware.throw()
-        released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
-        if self.observer is not None:
-            self.observer.on_release(
-                base["index"], plan, self._model_obj, self.params.ee, stroke, released_at
-            )
-        self.ee.throw()
-        t_release = sc.t
-        aim = self._aim
-
-        def score(out: Any) -> tuple[ItemResult, Any]:
-            cross = out.crossing(target.rim_height)
-            err = math.hypot(cross[0] - bx, cross[1] - by)
-            if self.learn:
-                self._learn_from(obj, plan, cross, aim)
-            throw_id = f"{self.session}-{base['index']:04d}"
-            if self.store is not None:
-                self.store.append(
-                    sorted_throw_record(
-                        self.session, throw_id, obj, plan, stroke, released_at, target, out, cross
-                    ),
-                    track=out.track,
-                )
-            failure, reason = missed_bin(out.bin_id, target.id, err)
-            res = ItemResult(
-                **base,
-                action="throw",
-                bin_id=out.bin_id or "",
-                in_bin=out.bin_id == target.id,
-                failure=failure,
-                reason=reason,
-                landing_error_m=err,
-                stroke_m=stroke,
-                delta_stroke_m=delta,
-                cycle_time_s=t_release - t0,
-                throw_id=throw_id,
-            )
-            return res, (cross[0], cross[1], target.rim_height)
-
-        return InFlight(base, obj, item, score)
-
-    # -- items in flight ---------------------------------------------------------
-    def _tidy(self, item: Any) -> None:
-        """Bins keep what lands in them, as real bins do (later items land on earlier
-        ones); an item anywhere else (on the floor, still on the station, in the grip)
-        is taken away, as an operator would."""
-        if self.scene.in_bin(item) is not None:
-            self.scene.keep(item)
-        else:
-            self.scene.remove_item(item)
-
-    def _settle(self, f: InFlight, out: Any) -> ItemResult:
-        """Score an item whose flight ended (`out`: its Outcome, or the NoLanding error)."""
-        try:
-            if isinstance(out, CellError):
-                raise out
-            res, landing = f.score(out)
-            self._flights[f.index] = (out, landing)
-        except CellError as exc:
-            log.info("item %d (%s) failed: %s", f.index, f.obj.name, exc)
-            res = ItemResult(
-                **f.base,
-                action="failed",
-                failure=failure_of(exc),
-                reason=f"{type(exc).__name__}: {exc}",
-            )
-        finally:
-            self._tidy(f.item)
-        return res
-
-    def _poll(self, f: InFlight) -> ItemResult | None:
-        """The item's result once its flight has ended, else None (non-blocking)."""
-        try:
-            out = self.scene.outcome_if_settled(f.item, timeout_s=self.job.item_time_limit_s)
-        except CellError as exc:
-            return self._settle(f, exc)
-        return None if out is None else self._settle(f, out)
-
-    def _wait_for(self, f: InFlight) -> ItemResult:
-        """Step the scene until the item's flight has ended; its result."""
-        sc = self.scene
-        sc.set_timestep(sc.dt_s)
-        while (res := self._poll(f)) is None:
-            sc.step()
-        return res
-
-    def _land(self) -> None:
-        """Score every item in flight that has come to rest (called between moves)."""
-        for f in list(self._flying):
-            res = self._poll(f)
-            if res is not None:
-                self._flying.remove(f)
-                self._scored[f.index] = res
-
-    # -- the run ---------------------------------------------------------------
-    def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
-        """Sort every item of the job; `on_item` is called after each, in job order.
-
-        The next pick starts as soon as an item is thrown: the physics keeps stepping
-        the thrown item while the arm moves on, and it is scored when it comes to
-        rest. An item's `cycle_time_s` runs from the start of its pick to the start of
-        the next one; the last item's, until everything thrown has come to rest.
-        With `learn`, an item waits for the landing of an earlier throw of the same
-        object (or class) that is still in flight, so that it learns from it.
-        """
-        from dataclasses import replace as dc_replace
-
-        t_wall = time.perf_counter()
-        sc = self.scene
-        starts: list[float] = []
-        results: list[ItemResult] = []
-        self._flying, self._scored, self._flights = [], {}, {}
-
-        def emit(t_end: float | None = None) -> None:
-            while (i := len(results)) in self._scored and (i + 1 < len(starts) or t_end):
-                t_next = starts[i + 1] if i + 1 < len(starts) else float(t_end or sc.t)
-                res = dc_replace(self._scored.pop(i), cycle_time_s=t_next - starts[i])
-                results.append(res)
-                if self.observer is not None:
-                    if i in self._flights:
-                        self.observer.on_flight(i, *self._flights.pop(i))
-                    self.observer.on_item_done(res)
-                if on_item is not None:
-                    on_item(res)
-
-        try:
-            for i, spec in enumerate(self.job.expanded_items()):
-                if self.learn:
-                    self._wait_for_kin(spec.obj)
-                starts.append(sc.t)
-                emit()
-                res = self._run_item(i, spec)
-                if isinstance(res, InFlight):
-                    self._flying.append(res)
-                else:
-                    self._scored[i] = res
-                self._land()
-            self._land_all()
-        except HardwareError:
-            # the run stops; what was thrown before the fault still lands and is recorded
-            self._land_all()
-            emit(t_end=sc.t)
-            raise
-        except BaseException:
-            emit(t_end=sc.t)  # report what was scored; an item still in flight is lost
-            raise
-        emit(t_end=sc.t)
-        return summarise(results, time.perf_counter() - t_wall)
-
-    def _land_all(self) -> None:
-        """Step the scene until every thrown item has come to rest, scoring each."""
-        sc = self.scene
-        sc.set_timestep(sc.dt_s)
-        while self._flying:
-            sc.step()
-            self._land()
-
-    def _wait_for_kin(self, obj: ObjectParams) -> None:
-        """Let in-flight throws of the same object or class land first (learning)."""
-        keys = {obj.name or "", self._class_key(obj)}
-        sc = self.scene
-        sc.set_timestep(sc.dt_s)
-        while any({f.obj.name or "", self._class_key(f.obj)} & keys for f in self._flying):
-            sc.step()
-            self._land()
-
     def close(self) -> None:
         """Close the scene and any hardware end-effector."""
         self.scene.close()
-        if self.hardware is not None:
-            self.hardware.close()
+        self.effector.close()

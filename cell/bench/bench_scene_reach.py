@@ -33,7 +33,7 @@ def scene_reach_errors(
             the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
         params_path: the parameter file to predict with (default: the shipped scene file).
     """
-    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.endeffector.factory import make_end_effector
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
     from cell.log.table import ThrowTable
@@ -49,7 +49,7 @@ def scene_reach_errors(
     errs: list[float] = []
     rows: list[dict] = []
     with CellScene(robot=None) as sc:
-        ee = PyBulletEndEffector(sc)
+        ee = make_end_effector("pybullet", plant=sc)
         k = 0
         while len(errs) < n and k < 4 * n:
             k += 1

@@ -71,11 +71,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _snapshot(path: str) -> None:
-    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.endeffector.factory import make_end_effector
     from cell.sim import CellScene
 
     with CellScene() as sc:
-        ee = PyBulletEndEffector(sc)
+        ee = make_end_effector("pybullet", plant=sc)
         for k, name in enumerate(("cube50", "cyl50", "sphere55", "duck", "rock_000")):
             sc.spawn_item(name, position=(0.38 + 0.07 * (k % 2), -0.48 + 0.05 * k, 0.3))
         sc.spawn_item("cuboid_b")

@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 from cell.endeffector.base import EndEffector
+from cell.endeffector.instep import InStep
 from cell.errors import InvalidInput
-from cell.kinds import HARDWARE_EE_BACKENDS
+from cell.kinds import EE_BACKENDS, SIM_EE_BACKEND
 
-__all__ = ["EE_KINDS", "DEFAULT_DYNAMIXEL_CONFIG", "make_end_effector"]
+__all__ = ["EE_KINDS", "DEFAULT_DYNAMIXEL_CONFIG", "make_end_effector", "make_in_step"]
 
-EE_KINDS = HARDWARE_EE_BACKENDS
-"""The hardware back-ends this factory makes (the simulated one rides a scene)."""
+EE_KINDS = EE_BACKENDS
+"""The back-ends this factory makes: the simulated one (on a plant) and the hardware ones."""
 
 
 def _default_config() -> Path:
@@ -33,17 +35,19 @@ def make_end_effector(
     port: str | None = None,
     emulate: bool = False,
     time_scale: float = 1.0,
-) -> EndEffector:
+    plant: Any = None,
+) -> Any:
     """An end-effector back-end, connected and ready.
 
     Args:
-        kind: back-end name, one of EE_KINDS.
+        kind: back-end name, one of EE_KINDS ("pybullet": the plant's simulated one).
         config_path: hardware description (Dynamixel: YAML; default
             robots/throwing_ee/dynamixel.yaml).
         port: serial port overriding the configuration's.
         emulate: drive an emulated bus on a pseudo-terminal instead of hardware;
             it stops when the end-effector is closed.
         time_scale: emulated seconds per real second (emulate only).
+        plant: the PyBullet cell whose end-effector body to drive ("pybullet" only).
 
     Returns:
         The end-effector; close it (or use `with`) to turn torque off.
@@ -52,6 +56,12 @@ def make_end_effector(
         InvalidInput: unknown kind or bad configuration file.
         HardwareError: the hardware cannot be reached.
     """
+    if kind == SIM_EE_BACKEND:
+        if plant is None:
+            raise InvalidInput("the pybullet end-effector rides a scene: give its plant")
+        from cell.endeffector.pybullet_backend import PyBulletEndEffector
+
+        return PyBulletEndEffector(plant)
     if kind == "dynamixel":
         from cell.endeffector.dynamixel import DynamixelEndEffector, EmulatedBus, load_config
 
@@ -70,3 +80,15 @@ def make_end_effector(
             emu.stop()
             raise
     raise InvalidInput(f"unknown end-effector kind {kind!r}; valid: {list(EE_KINDS)}")
+
+
+def make_in_step(plant: Any, hardware: EndEffector | None = None) -> InStep:
+    """The end-effector a platform commands: the plant's simulated one (built here, on
+    the plant's scene) and, when given, a hardware one driven in step with it
+    (`cell.endeffector.instep.InStep`).
+
+    Args:
+        plant: the PyBullet cell (`cell.sim.CellScene`) whose end-effector body to drive.
+        hardware: a connected hardware end-effector (from `make_end_effector`), or None.
+    """
+    return InStep(make_end_effector(SIM_EE_BACKEND, plant=plant), hardware)

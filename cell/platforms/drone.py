@@ -31,11 +31,11 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidParameter, MissingDependency
-from cell.frames import quat_from_matrix
 from cell.model.objects import ObjectParams
 from cell.platforms.downwash import DownwashLaw, air_velocity
+from cell.sim.frames import ee_pose_for_item_centre
 from cell.sim.mechanism import DEFAULT_GEOMETRY, EEGeometry
-from cell.sim.scene import CellScene, release_orientation
+from cell.sim.scene import CellScene
 
 __all__ = [
     "DEFAULT_RELEASE_DEPTH_M",
@@ -160,9 +160,7 @@ class DronePlatform:
         Returns:
             (position [m], quaternion x y z w) of E in W.
         """
-        r = release_orientation(elevation, azimuth, roll)
-        pos = self.release_point - r[:, 2] * (stroke_m + obj.size[2] / 2)
-        return [float(v) for v in pos], quat_from_matrix(r)
+        return ee_pose_for_item_centre(self.release_point, elevation, azimuth, stroke_m, obj, roll)
 
     def air_velocity(self, points: np.ndarray) -> np.ndarray:
         """Downwash air velocity at points [m/s, W], shape (n, 3)."""

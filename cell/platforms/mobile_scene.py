@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.frames import quat_from_matrix
 from cell.model.objects import ObjectParams
 from cell.platforms.mobile import BaseTrajectory
-from cell.sim.scene import CellScene, release_orientation
+from cell.sim.frames import ee_pose_for_item_centre
+from cell.sim.scene import CellScene
 
 __all__ = ["MovingBaseScene"]
 
@@ -57,9 +57,10 @@ class MovingBaseScene(CellScene):
             stroke_m: the stroke the item will be gripped at [m].
             obj: the item (its size sets where E sits behind its centre).
         """
-        r = release_orientation(elevation, azimuth, roll)
-        self._offset = -r[:, 2] * (stroke_m + obj.size[2] / 2)
-        self._orn = quat_from_matrix(r)
+        origin, self._orn = ee_pose_for_item_centre(
+            (0, 0, 0), elevation, azimuth, stroke_m, obj, roll
+        )
+        self._offset = np.asarray(origin, float)  # E from the item's centre [m, W]
         p0, _, _ = drive.sample(0.0)
         self.hold_ee((p0 + self._offset).tolist(), self._orn, teleport=True)
         self._pending = drive

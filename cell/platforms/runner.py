@@ -1,9 +1,10 @@
 """Sort jobs on the drone and moving-base platforms (`platform: drone | mobile`).
 
-`PlatformRunner` runs a job in the PyBullet cell with the same per-item
-results and closing summary as the arm's `cell.orchestrator.Orchestrator`
-(`RunSummary`, the `cell run --json` keys), so `cell run` can hand a job with
-another platform to it. Every item is thrown (neither platform places).
+`PlatformRunner` is the platform of the item loop (`cell.loop.ItemLoop`) for a
+drone or a moving base, as `cell.orchestrator.Orchestrator` is the arm's: the same
+per-item results, throw records with their flight tracks, and closing summary
+(`RunSummary`, the `cell run --json` keys). Every item is thrown (neither platform
+places).
 
 * drone: the end-effector hangs under the iris hovering at the job's height
   (`DroneScene`); a loader puts each item into the grip (the grasp); the throw
@@ -34,10 +35,10 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import CellError, HardwareError, InvalidInput
+from cell.errors import InvalidInput
 from cell.jobs import ItemSpec, Job
+from cell.loop import Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
-from cell.orchestrator import failure_of, missed_bin, sorted_throw_record
 from cell.params import ModelParams, load_params
 from cell.platforms.downwash import DEFAULT_DRONE_LAW, DownwashLaw, predict_drone_landing
 from cell.platforms.mobile import MobilePlatform
@@ -79,7 +80,7 @@ class PlatformRunner:
         law: DownwashLaw = DEFAULT_DRONE_LAW,
         end_effector: Any = None,
     ) -> None:
-        from cell.endeffector.pybullet_backend import PyBulletEndEffector
+        from cell.endeffector.factory import make_in_step
         from cell.orchestrator import scene_params_path
         from cell.sim import BinSpec
 
@@ -113,7 +114,11 @@ class PlatformRunner:
 
             self.scene = MovingBaseScene(**kw)
             self.mobile = MobilePlatform(job.base_speed_mps)
-        self.ee = PyBulletEndEffector(self.scene)
+        self.effector = make_in_step(self.scene)  # the plant's end-effector, by the factory
+        self.ee = self.effector.sim
+        self.name = job.platform
+        self.rotor_rpm = job.rotor_rpm if job.platform == "drone" else 0.0
+        self.loop = ItemLoop(job, self, self.scene, store=store, session=self.session)
 
     # -- planning ----------------------------------------------------------------
     def plan_drone(self, obj: ObjectParams, goal: np.ndarray) -> tuple[Any, np.ndarray]:
@@ -160,108 +165,68 @@ class PlatformRunner:
             plan = plan_throw(obj, aim, ee, bounds, current=p0)
         return plan, xy
 
-    # -- one item ----------------------------------------------------------------
-    def run_item(self, index: int, spec: ItemSpec) -> Any:
-        """Load, plan, release, observe and record one item; returns its ItemResult
-        (cycle time: to the moment the next item can be loaded)."""
-        from dataclasses import replace as dc_replace
+    # -- the platform's steps (cell.loop.Platform) -------------------------------
+    overlaps = False  # the next item is loaded once this one rests
+    name: str  # the job's platform ("drone" or "mobile"), set at construction
+    rotor_rpm: float  # the drone's rotor speed (0 for the moving base)
 
-        t0 = self.scene.t
-        res = self._run_item(index, spec)
-        return dc_replace(res, cycle_time_s=self.scene.t - t0)
+    def present(self, index: int, obj: ObjectParams) -> Any:
+        """The item at the pick station (the loader takes it into the grip)."""
+        return self.scene.spawn_item(obj if obj.shape != "mesh" else obj.name)
 
-    def _run_item(self, index: int, spec: ItemSpec) -> Any:
-        from cell.orchestrator import ItemResult
-
-        obj = spec.obj
-        target = self.job.bin(spec.bin)
-        sc = self.scene
-        t0 = sc.t
-        item = sc.spawn_item(obj if obj.shape != "mesh" else obj.name)
-        base: dict[str, Any] = dict(
-            index=index, object_id=obj.name or obj.shape, target_bin=spec.bin
-        )
+    def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
+        """Throw (neither platform places): the drone's plan corrected for the downwash,
+        or the moving base's with its velocity at the job's speed toward the target."""
         model_obj = self.params.model_object(obj)
         goal = np.array([*target.position, target.rim_height])
-        try:
-            if self.mobile is None:
-                plan, _ = self.plan_drone(model_obj, goal)
-                sc.hold_at_release(plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj)
-                self.ee.grasp(plan.stroke_m, item)
-                released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
-                self.ee.throw()
-            else:
-                plan = self.mobile.plan(model_obj, goal, self.params.ee, free_velocity=False)
-                drive = self.mobile.arrival(plan)
-                sc.start_drive(drive, plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj)
-                self.ee.grasp(plan.stroke_m, item)
-                sc.drive_to_release()
-                released_at = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
-                self.ee.throw()
-            t_release = sc.t
-            out = sc.watch_until_rest(item, timeout_s=self.job.item_time_limit_s)
-            cross = out.crossing(target.rim_height)
-            err = math.hypot(cross[0] - goal[0], cross[1] - goal[1])
-            throw_id = f"{self.session}-{index:04d}"
-            if self.store is not None:
-                self.store.append(
-                    sorted_throw_record(
-                        self.session,
-                        throw_id,
-                        obj,
-                        plan,
-                        plan.stroke_m,
-                        released_at,
-                        target,
-                        out,
-                        cross,
-                        platform=self.job.platform,
-                        rotor_rpm=self.job.rotor_rpm if self.job.platform == "drone" else 0.0,
-                    ),
-                    track=out.track,
-                )
-            return ItemResult(
-                **base,
-                action="throw",
-                bin_id=out.bin_id or "",
-                in_bin=out.bin_id == target.id,
-                failure=missed_bin(out.bin_id, target.id, err)[0],
-                reason=missed_bin(out.bin_id, target.id, err)[1],
-                landing_error_m=err,
-                stroke_m=plan.stroke_m,
-                cycle_time_s=t_release - t0,
-                throw_id=throw_id,
-            )
-        except HardwareError:
-            raise  # the end-effector failed: the run stops (torque off), not just this item
-        except CellError as exc:
-            log.info("item %d (%s) failed: %s", index, obj.name, exc)
-            self.ee.item = None
-            return ItemResult(
-                **base,
-                action="failed",
-                failure=failure_of(exc),
-                reason=f"{type(exc).__name__}: {exc}",
-                cycle_time_s=sc.t - t0,
-            )
-        finally:
-            if self.mobile is not None:
-                sc.stop_drive()
-            if sc.in_bin(item) is not None:
-                sc.keep(item)  # bins keep what lands in them
-            else:
-                sc.remove_item(item)
+        if self.mobile is None:
+            plan, _ = self.plan_drone(model_obj, goal)
+        else:
+            plan = self.mobile.plan(model_obj, goal, self.params.ee, free_velocity=False)
+        return Decision("throw", plan.stroke_m, plan, model_obj=model_obj, ee_params=self.params.ee)
+
+    def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        """The loader puts the item into the grip with the end-effector at its release
+        pose (drone), or at the start of the base's drive (mobile)."""
+        plan = d.plan
+        if self.mobile is None:
+            self.scene.hold_at_release(plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj)
+        else:
+            drive = self.mobile.arrival(plan)
+            self.scene.start_drive(drive, plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj)
+        self.effector.grasp(plan.stroke_m, item)
+
+    def carry(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        """The drone hovers at the release point; the base drives to it, arriving with
+        the planned velocity (the latch opens while it moves)."""
+        if self.mobile is not None:
+            self.scene.drive_to_release()
+
+    def release(self, d: Decision) -> None:
+        """Open the latch at once."""
+        self.effector.throw()
+
+    def after_place(self, d: Decision) -> None:
+        """Neither platform places."""
+
+    def finish(self, d: Decision | None) -> None:
+        """The base stops; nothing is held any more."""
+        if self.mobile is not None:
+            self.scene.stop_drive()
+        self.ee.item = None
+
+    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
+        """No learning on these platforms."""
 
     # -- the run -------------------------------------------------------------------
-    def run(self, on_item: Callable[[Any], None] | None = None) -> Any:
-        """Throw every item of the job; `on_item` is called after each (progress).
+    def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
+        """Load, plan, release, observe and record one item (`cell.loop.ItemLoop`);
+        its cycle time runs to the moment the next item can be loaded."""
+        return self.loop.run_item(index, spec)
 
-        Returns:
-            The `cell.orchestrator.RunSummary`.
-        """
-        from cell.orchestrator import run_items
-
-        return run_items(self.job, self.run_item, on_item)
+    def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
+        """Throw every item of the job; `on_item` is called after each (progress)."""
+        return self.loop.run(on_item)
 
     def close(self) -> None:
         """Close the scene."""

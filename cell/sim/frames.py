@@ -12,7 +12,11 @@ not repeated here.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from cell.errors import InvalidParameter, MissingDependency
 from cell.frames import axis_frame, quat_from_matrix
@@ -26,7 +30,10 @@ __all__ = [
     "PANDA_READY",
     "DEFAULT_BINS",
     "panda_urdf",
+    "ee_pose_for_item_centre",
+    "item_behind_ee_m",
     "release_orientation",
+    "tcp_for_item_centre",
     "quat_from_matrix",
 ]
 
@@ -92,3 +99,42 @@ release_orientation = axis_frame
 """Orientation of E whose +z is the throw axis u(e, a) [MODEL.md], rolled by `roll`
 (`cell.frames.axis_frame`: with roll 0 the grip's x axis lies in the vertical plane of
 the throw, the lower finger carrying the item's weight). Rotation matrix of E in W."""
+
+
+def item_behind_ee_m(stroke_m: float, obj: Any) -> float:
+    """How far along the throw axis the gripped item's centre of mass sits from E [m]:
+    on the carriage's face at the stroke, L_s + size_z / 2."""
+    return float(stroke_m) + float(obj.size[2]) / 2
+
+
+def ee_pose_for_item_centre(
+    centre: Sequence[float] | np.ndarray,
+    elevation: float,
+    azimuth: float,
+    stroke_m: float,
+    obj: Any,
+    roll: float = 0.0,
+) -> tuple[list[float], list[float]]:
+    """The pose of E that puts the gripped item's centre of mass at `centre` [m, W] with
+    the throw axis along u(e, a) and the roll of `cell.frames.axis_frame`: every
+    platform's release pose (the arm's scene, the drone, the moving base, a campaign).
+
+    Returns:
+        (position [m], quaternion x y z w) of E in W.
+    """
+    r = release_orientation(elevation, azimuth, roll)
+    pos = np.asarray(centre, float) - r[:, 2] * item_behind_ee_m(stroke_m, obj)
+    return [float(v) for v in pos], quat_from_matrix(r)
+
+
+def tcp_for_item_centre(
+    centre: Sequence[float] | np.ndarray,
+    elevation: float,
+    azimuth: float,
+    stroke_m: float,
+    obj: Any,
+) -> np.ndarray:
+    """The TCP (`ee_tcp`) position [m, W] that puts the gripped item's centre of mass at
+    `centre` with the throw axis along u(e, a): what the arm's IK aims at."""
+    u = release_orientation(elevation, azimuth)[:, 2]
+    return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke_m - obj.size[2] / 2)

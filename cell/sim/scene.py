@@ -39,6 +39,7 @@ from cell.sim.frames import (
     FLANGE_YAW_RAD,
     MOUNT_FORCE_N,
     PANDA_READY,
+    ee_pose_for_item_centre,
     panda_urdf,
     quat_from_matrix,
     release_orientation,
@@ -345,9 +346,7 @@ class CellScene:
         Returns:
             (position [m], quaternion x y z w) of E in W.
         """
-        r = release_orientation(elevation, azimuth, roll)
-        pos = np.asarray(p0, float) - r[:, 2] * (stroke_m + obj.size[2] / 2)
-        return [float(v) for v in pos], quat_from_matrix(r)
+        return ee_pose_for_item_centre(p0, elevation, azimuth, stroke_m, obj, roll)
 
     def ee_pose_for_tcp(
         self, p0: Sequence[float], elevation: float, azimuth: float, roll: float = 0.0
@@ -433,6 +432,46 @@ class CellScene:
         item = spawn_item(self.client, what, position, orientation)
         self.items.append(item)
         return item
+
+    def item_position(self, item: Item) -> np.ndarray:
+        """The item's centre of mass now [m, W]."""
+        p, _ = self.client.getBasePositionAndOrientation(item.body)
+        return np.asarray(p, float)
+
+    def item_pose(self, item: Item) -> tuple[np.ndarray, np.ndarray]:
+        """The item's centre of mass [m, W] and rotation matrix (3, 3) [W] now."""
+        p, o = self.client.getBasePositionAndOrientation(item.body)
+        rot = np.asarray(self.client.getMatrixFromQuaternion(o), float).reshape(3, 3)
+        return np.asarray(p, float), rot
+
+    def item_velocity(self, item: Item) -> tuple[np.ndarray, np.ndarray]:
+        """The item's linear [m/s, W] and angular [rad/s, W] velocity now."""
+        v, w = self.client.getBaseVelocity(item.body)
+        return np.asarray(v, float), np.asarray(w, float)
+
+    def ee_touches(self, item: Item) -> bool:
+        """The end-effector touches the item or the pick station (the plant's contacts)."""
+        return any(
+            c[8] < 0.0
+            for body in (item.body, self.pick_station)
+            for c in self.client.getContactPoints(bodyA=self.ee_body, bodyB=body)
+        )
+
+    def on_station(self, item: Item) -> bool:
+        """The item rests on the pick station (its centre over it, not far above it)."""
+        p = self.item_position(item)
+        x0, y0 = self.pick_station_xy
+        h = self.pick_station_height
+        return abs(p[0] - x0) < 0.12 and abs(p[1] - y0) < 0.12 and h < p[2] < h + max(item.obj.size)
+
+    def tidy(self, item: Item) -> None:
+        """Bins keep what lands in them, as real bins do (later items land on earlier
+        ones); an item anywhere else (on the floor, still on the station, in the grip) is
+        taken away, as an operator would."""
+        if self.in_bin(item) is not None:
+            self.keep(item)
+        else:
+            self.remove_item(item)
 
     def _station_top(self) -> float:
         """Height above which a new item fits on the pick station (over any item resting

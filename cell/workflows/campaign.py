@@ -1,11 +1,11 @@
 """Throw campaigns in the scene and the calibration that identifies the scene's η_ee.
 
-`throw_once` makes one throw the way the cell would (grasp at the pick
-station, the gripped item's centre of mass at the release point p0 as
-MODEL.md defines it, +z of the end-effector along the throw axis, latch
-released) and returns its THROW_LOG.md record; the landing is where the item's centre of mass crosses
-the plane z = land_z while descending (MODEL.md), taken from the simulated
-track. The campaign holds the end-effector kinematically at each release pose
+`throw_once` makes one throw through the cell's item loop (`cell.loop`, with the
+`ReleasePose` platform) the way the cell would (grasp at the pick station, the
+gripped item's centre of mass at the release point p0 as MODEL.md defines it, +z of
+the end-effector along the throw axis, latch released) and returns its THROW_LOG.md
+record; the landing is where the item's centre of mass crosses the plane z = land_z
+while descending (MODEL.md), taken from the simulated track. The campaign holds the end-effector kinematically at each release pose
 without the arm (the arm does not touch the launch: the release is from rest),
 which keeps a throw to a few hundredths of a second of wall time.
 """
@@ -14,15 +14,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from cell.catalogue import catalogue
+from cell.endeffector.factory import make_end_effector
 from cell.endeffector.pybullet_backend import PyBulletEndEffector
 from cell.errors import InvalidParameter
 from cell.log.records import throw_record
 from cell.log.table import ThrowTable
+from cell.loop import Decision, ItemLoop
 from cell.model.objects import ObjectParams
 from cell.sim.items import resolve_object
 from cell.sim.scene import CellScene
@@ -30,6 +33,62 @@ from cell.sim.scene import CellScene
 __all__ = ["CAMPAIGN_LAND_Z_M", "throw_once", "campaign_plan", "adhoc_plan", "run_campaign"]
 
 CAMPAIGN_LAND_Z_M = 0.1  # [m] landing plane of the campaign (above any item's half-diagonal)
+
+
+@dataclass
+class ReleasePose:
+    """The campaign's platform of the item loop (`cell.loop.Platform`): the end-effector
+    held kinematically at one release pose, without an arm (the arm does not touch a
+    launch from rest); the item is put into the grip there.
+
+    Attributes:
+        scene: a CellScene (robot=None).
+        ee: its end-effector.
+        what: catalogue id or object parameters of the item.
+        stroke: L_s [m].
+        position: release point p0 [m, W]: the gripped item's centre of mass (MODEL.md).
+        elevation, azimuth, roll: throw axis and roll [rad].
+    """
+
+    scene: CellScene
+    ee: PyBulletEndEffector
+    what: str | ObjectParams
+    stroke: float
+    position: Sequence[float]
+    elevation: float
+    azimuth: float = 0.0
+    roll: float = 0.0
+    name = "arm"  # the release pose of an arm, without the arm
+    overlaps = False
+    rotor_rpm = 0.0
+
+    def present(self, index: int, obj: ObjectParams) -> Any:
+        return self.scene.spawn_item(self.what)
+
+    def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
+        return Decision("throw", self.stroke)
+
+    def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        pose = self.scene.ee_pose_for_release(
+            self.position, self.elevation, self.azimuth, self.stroke, obj, self.roll
+        )
+        self.scene.hold_ee(*pose, teleport=True)
+        self.ee.grasp(self.stroke, item)
+
+    def carry(self, d: Decision, obj: ObjectParams, item: Any) -> None:
+        """Held at the release pose already."""
+
+    def release(self, d: Decision) -> None:
+        self.ee.throw()
+
+    def after_place(self, d: Decision) -> None:
+        """A campaign only throws."""
+
+    def finish(self, d: Decision | None) -> None:
+        self.ee.item = None
+
+    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
+        """A campaign does not learn as it throws (its landings are identified after)."""
 
 
 def throw_once(
@@ -46,7 +105,8 @@ def throw_once(
     throw_id: str = "sim",
     track: list[np.ndarray] | None = None,
 ) -> dict[str, Any]:
-    """One throw in a scene without an arm; returns its THROW_LOG.md record.
+    """One throw in a scene without an arm, through the item loop (`ReleasePose`, then
+    `cell.loop.ItemLoop.throw_to_plane`); returns its THROW_LOG.md record.
 
     Args:
         scene: a CellScene with robot=None.
@@ -57,24 +117,16 @@ def throw_once(
         elevation, azimuth, roll: throw axis and roll [rad].
         land_z: landing plane [m].
         throw_id: the record's id.
-        track: if given, the (k, 4) track t, x, y, z is appended to it.
+        track: if given, the (k, 4) track t, x, y, z up to the crossing is appended to it.
 
     Raises:
         NoLanding: the item did not cross the plane in free flight.
     """
     obj, _ = resolve_object(what)
-    pos, orn = scene.ee_pose_for_release(position, elevation, azimuth, stroke, obj, roll)
-    scene.hold_ee(pos, orn, teleport=True)
-    item = scene.spawn_item(what)
-    try:
-        ee.grasp(stroke, item)
-        tr = scene.track(item)
-        ee.throw()
-        x, y, t = scene.watch_until_crossing(item, land_z)
-        if track is not None:
-            track.append(np.asarray(tr.samples))
-    finally:
-        scene.remove_item(item)
+    pf = ReleasePose(scene, ee, what, stroke, position, elevation, azimuth, roll)
+    _, (x, y, t), samples = ItemLoop(None, pf, scene).throw_to_plane(0, obj, land_z)
+    if track is not None:
+        track.append(samples)
     return throw_record(
         throw_id,
         obj,
@@ -252,7 +304,7 @@ def campaign_records(
         scene if scene is not None else CellScene(robot=None, bins=(), pick_station_xy=(-1.0, -1.0))
     )
     try:
-        ee = PyBulletEndEffector(sc)
+        ee = make_end_effector("pybullet", plant=sc)
         records = []
         for k, p in enumerate(plan):
             records.append(
