@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from cell.identify import IdentifyResult
+    from cell.log.table import ThrowTable
+    from cell.workflows.calibrate import GapSummary, MassRule
 
 DEFAULT_OUTPUT = Path("ee_params.yaml")
 
@@ -125,22 +130,15 @@ def _open_store(path: str, plan: list[dict]) -> Any:  # type: ignore[type-arg]
     return store
 
 
-def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
+def _check_args(args: argparse.Namespace) -> None:
+    """Refuse bad counts, --gui with workers, bad outputs and a missing rerun-sdk, before
+    any throw.
 
-    from cell.cli.common import print_json
+    Raises:
+        InvalidInput: naming the flag and what is valid.
+    """
     from cell.errors import InvalidInput
-    from cell.log.csvio import ThrowTable, write_throws_csv
-    from cell.params import save_params
-    from cell.sim.mechanism import DEFAULT_GEOMETRY
-    from cell.workflows.calibrate import calibrate_table
-    from cell.workflows.campaign import adhoc_plan, campaign_plan, run_campaign
 
-    if args.snapshot:
-        _snapshot(args.snapshot)
-        if args.n == 0:
-            print(f"snapshot written to {args.snapshot}")
-            return 0
     if args.n < 1:
         raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
     if args.adhoc < 0 or 0 < args.adhoc < 4:
@@ -157,7 +155,16 @@ def run(args: argparse.Namespace) -> int:
         from cell.record.stream import import_rerun
 
         import_rerun()
-    plan = campaign_plan(args.n, seed=args.seed)
+
+
+def _throw_campaign(args: argparse.Namespace, plan: list[dict]) -> ThrowTable:  # type: ignore[type-arg]
+    """Throw the catalogue campaign (in the GUI with --gui), appending each chunk of throws
+    to the --db store as it arrives; if the campaign stops, say how many were appended."""
+    from tqdm import tqdm
+
+    from cell.log.csvio import ThrowTable
+    from cell.workflows.campaign import run_campaign
+
     store = _open_store(args.db, plan) if args.db else None
     appended = [0]
 
@@ -195,34 +202,58 @@ def run(args: argparse.Namespace) -> int:
             scene.close()
         if store is not None:
             store.close()
-    adhoc = None
-    if args.adhoc:
-        aplan = adhoc_plan(args.adhoc, seed=args.seed)
-        with tqdm(total=len(aplan), desc="ad-hoc throws", disable=args.json or None) as bar:
-            adhoc = run_campaign(
-                aplan,
-                progress=lambda k: bar.update(k - bar.n),
-                workers=args.workers,
-                address=args.ray_address,
-            )
-    if args.log:
-        write_throws_csv(table, args.log)
-    with tqdm(desc="identify", unit="it", disable=args.json or None) as bar:
-        res, nominal, fitted, rule = calibrate_table(
+    return table
+
+
+def _throw_adhoc(args: argparse.Namespace) -> ThrowTable | None:
+    """Throw the --adhoc items over the whole envelope (None with --adhoc 0)."""
+    from tqdm import tqdm
+
+    from cell.workflows.campaign import adhoc_plan, run_campaign
+
+    if not args.adhoc:
+        return None
+    aplan = adhoc_plan(args.adhoc, seed=args.seed)
+    with tqdm(total=len(aplan), desc="ad-hoc throws", disable=args.json or None) as bar:
+        return run_campaign(
+            aplan,
+            progress=lambda k: bar.update(k - bar.n),
+            workers=args.workers,
+            address=args.ray_address,
+        )
+
+
+def _identify(
+    table: ThrowTable, adhoc: ThrowTable | None, quiet: bool
+) -> tuple[IdentifyResult, GapSummary, GapSummary, MassRule]:
+    """Identify the scene's parameters and the mass rule (`calibrate_table`), with a
+    progress bar unless quiet."""
+    from tqdm import tqdm
+
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+    from cell.workflows.calibrate import calibrate_table
+
+    with tqdm(desc="identify", unit="it", disable=quiet or None) as bar:
+        return calibrate_table(
             table,
             adhoc=adhoc,
             # the scene's carriage runs on to its end stop before the item flies free
             release_m=DEFAULT_GEOMETRY.end_stop_m,
             progress=lambda i, r: bar.update(1),
         )
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    save_params(res.params, out)
-    if args.record:
-        from cell.record.calibrate import record_calibration
 
-        record_calibration(args.record, table, res.params)
-    summary = {
+
+def _summary(
+    table: ThrowTable,
+    out: Path,
+    res: IdentifyResult,
+    nominal: GapSummary,
+    fitted: GapSummary,
+    rule: MassRule,
+    adhoc: ThrowTable | None,
+) -> dict[str, Any]:
+    """The result as `--json` prints it."""
+    return {
         "throws": len(table),
         "output": str(out),
         "nominal_gap": nominal.as_dict(),
@@ -237,9 +268,18 @@ def run(args: argparse.Namespace) -> int:
             "adhoc_reach_err_rms": rule.rms_reach_error,
         },
     }
-    if args.json:
-        print_json(summary)
-        return 0
+
+
+def _print_summary(
+    table: ThrowTable,
+    out: Path,
+    nominal: GapSummary,
+    fitted: GapSummary,
+    rule: MassRule,
+    adhoc: ThrowTable | None,
+) -> None:
+    """Print the result as text: the gap before and after the fit, per object, and the
+    mass rule."""
     print(f"{len(table)} throws in the scene; parameters written to {out}")
     print(
         f"nominal model vs scene: landing RMSE {nominal.rmse_m:.3f} m, reach error "
@@ -261,4 +301,38 @@ def run(args: argparse.Namespace) -> int:
         f"effective mass rule m_eff = {rule.kappa:.4f} sqrt(m + {rule.band_mass_kg:.4f} kg) "
         f"(a / 0.05 m)^{rule.width_exponent:.3f} ({fit}) for the objects outside the campaign"
     )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Throw the campaign (and the ad-hoc one), identify the parameters, write them to -o
+    and print the gap before and after the fit (or only render --snapshot with --n 0)."""
+    from cell.cli.common import print_json
+    from cell.log.csvio import write_throws_csv
+    from cell.params import save_params
+    from cell.workflows.campaign import campaign_plan
+
+    if args.snapshot:
+        _snapshot(args.snapshot)
+        if args.n == 0:
+            print(f"snapshot written to {args.snapshot}")
+            return 0
+    _check_args(args)
+    plan = campaign_plan(args.n, seed=args.seed)
+    table = _throw_campaign(args, plan)
+    adhoc = _throw_adhoc(args)
+    if args.log:
+        write_throws_csv(table, args.log)
+    res, nominal, fitted, rule = _identify(table, adhoc, args.json)
+    out = Path(args.output)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    save_params(res.params, out)
+    if args.record:
+        from cell.record.calibrate import record_calibration
+
+        record_calibration(args.record, table, res.params)
+    summary = _summary(table, out, res, nominal, fitted, rule, adhoc)
+    if args.json:
+        print_json(summary)
+        return 0
+    _print_summary(table, out, nominal, fitted, rule, adhoc)
     return 0

@@ -184,6 +184,336 @@ def _shrink(before: float, after: float) -> float:
     return 100.0 * (1.0 - after / before) if before > 0 else 0.0
 
 
+def _baseline(
+    prob: GapProblem, identify: bool
+) -> tuple[Score | None, np.ndarray, np.ndarray, float]:
+    """The configured model on held-out throws (with `identify`, its band stiffness
+    refitted on the training throws of every fold).
+
+    Returns:
+        (the identified baseline's score, or None without `identify`; the residual on
+        all throws (n, 2) [m]; the per-throw held-out squared miss [m²]; the RMSE of the
+        fit on all throws [m]).
+    """
+    all_idx = np.arange(len(prob))
+    if identify:
+        identified = score_set(prob, [BandStiffness])
+        r0 = prob.residual(all_idx, identified.full.effects)
+        return identified, r0, identified.heldout, identified.full.train_rmse_m
+    r0 = prob.residual(all_idx)
+    return None, r0, np.sum(r0 * r0, axis=1), rmse(r0)
+
+
+def _score_members(
+    prob: GapProblem,
+    prefix: list[type[Effect]],
+    identified: Score | None,
+    tick: Callable[[str], None],
+) -> tuple[dict[str, Score], dict[str, type[Effect]], dict[str, dict[str, float]]]:
+    """Fit and score every member of every applicable family alone (on top of the
+    identified band law, if any).
+
+    The member that predicts held-out throws best stands for its effect; one at a bound
+    or implausible only when every member is.
+
+    Returns:
+        (each effect's score, the member standing for it, and for families of several
+        laws each law's held-out RMSE [m], all by effect name).
+    """
+    scores: dict[str, Score] = {}
+    members: dict[str, type[Effect]] = {}
+    member_rank: dict[str, tuple[bool, float]] = {}
+    laws: dict[str, dict[str, float]] = {}
+    for family in applicable_families(prob):
+        for cls in family:
+            tick(cls.name + (f" ({cls.law})" if cls.law else ""))
+            warm = None
+            if identified is not None:
+                neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
+                warm = np.r_[identified.full.x, neutral]
+            sc = score_set(prob, prefix + [cls], warm=warm)
+            if len(family) > 1:
+                laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
+            stretched = bool(_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible())
+            rank = (stretched, sc.heldout_rmse_m)
+            if cls.name not in scores or rank < member_rank[cls.name]:
+                scores[cls.name] = sc
+                members[cls.name] = cls
+                member_rank[cls.name] = rank
+    return scores, members, laws
+
+
+class _Selection:
+    """Effects joining the verdict one at a time, best first, and the tests they took.
+
+    Args:
+        prob: the problem.
+        prefix: the effect classes under every fit (the band law when identifying).
+        scores: each effect's score alone (`_score_members`); the sets tried as pairs are
+            added as they are scored.
+        members: the family member standing for each effect.
+        tracks: the tracks' evidence or None.
+        floor_m: the noise floor F [m].
+        tick: the progress callback.
+
+    Attributes:
+        ranked: the effects' scores alone, best held-out RMSE first.
+        tests: per candidate set ("a+b"), its cut [m] with interval, refusal, permutation
+            control, whether it passes and (after `mark_joined`) whether it joined.
+    """
+
+    def __init__(
+        self,
+        prob: GapProblem,
+        prefix: list[type[Effect]],
+        scores: dict[str, Score],
+        members: dict[str, type[Effect]],
+        tracks: dict[str, Any] | None,
+        floor_m: float,
+        tick: Callable[[str], None],
+    ) -> None:
+        self.prob = prob
+        self.prefix = prefix
+        self.scores = scores
+        self.members = members
+        self.tracks = tracks
+        self.floor_m = floor_m
+        self.tick = tick
+        self.ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
+        self.perm_cache: dict[tuple[str, ...], Score] = {}
+        self.tests: dict[str, dict[str, Any]] = {}
+
+    def refuse(self, cand: Score) -> str | None:
+        """Why one of a candidate set's effects may not join (`refusal`), or None."""
+        for e in cand.full.effects:
+            if isinstance(e, BandStiffness):
+                continue
+            why = refusal(e, self.tracks, self.floor_m)
+            if why:
+                return f"{e.name}: {why}"
+        return None
+
+    def _survives_permutation(self, cand: Score, cut: float, t: dict[str, Any]) -> bool:
+        """The permutation control of a candidate whose newest effect hangs on a logged
+        quantity: shuffling it between throws must take away PERM_SHARE of the cut [m],
+        with an interval above zero. Records the control in t."""
+        newest = _cls(cand.names[-1], self.members)
+        self.tick(f"permutation {newest.name}")
+        classes = [_cls(nm, self.members) for nm in cand.names]
+        key = cand.names
+        if key not in self.perm_cache:
+            self.perm_cache[key] = score_set(self.prob, classes, permute=True, warm=None)
+        ps = self.perm_cache[key]
+        gain, plo, _ = bootstrap_cut(ps.heldout, cand.heldout, seed=self.prob.seed + 1)
+        survive = gain >= PERM_SHARE * cut and plo > 0
+        t["permutation"] = {
+            "quantity": newest.hangs_on,
+            "heldout_rmse_m": ps.heldout_rmse_m,
+            "gain_over_shuffled_m": gain,
+            "survives": bool(survive),
+        }
+        return survive
+
+    def passes(self, prev_sq: np.ndarray, cand: Score) -> bool:
+        """Whether a candidate set joins over the misses before it (prev_sq [m²] per
+        throw): it cuts MIN_CUT of the held-out RMSE left with a bootstrap interval above
+        zero, is not refused and survives the permutation control. Records the tests."""
+        prev = float(np.sqrt(prev_sq.mean()))
+        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=self.prob.seed)
+        t: dict[str, Any] = {
+            "cut_m": cut,
+            "cut_ci_m": [lo, hi],
+            "cut_share": cut / prev if prev > 0 else 0.0,
+        }
+        ok = cut >= MIN_CUT * prev and lo > 0
+        why = self.refuse(cand)
+        if why:
+            t["refused"] = why
+            ok = False
+        newest = _cls(cand.names[-1], self.members)
+        if ok and newest.hangs_on is not None:
+            ok = ok and self._survives_permutation(cand, cut, t)
+        t["passes"] = bool(ok)
+        self.tests["+".join(_public(cand.names))] = t
+        return ok
+
+    def join(self, base_sq: np.ndarray) -> tuple[list[Score], np.ndarray]:
+        """Join the best single effect that passes, then partners while a real gap is left
+        (held-out RMSE above VERDICT_RATIO F) and fewer than MAX_EFFECTS have joined.
+
+        Args:
+            base_sq: the baseline's per-throw held-out squared miss [m²].
+
+        Returns:
+            (the joined sets in order, each holding the ones before it; the per-throw
+            held-out squared miss after the last [m²]).
+        """
+        chosen: list[Score] = []
+        cur_sq = base_sq
+        for s in self.ranked:
+            if self.passes(cur_sq, s):
+                chosen.append(s)
+                cur_sq = s.heldout
+                break
+        while chosen and len(chosen[-1].names) < MAX_EFFECTS:
+            A = float(np.sqrt(cur_sq.mean()))
+            if A <= VERDICT_RATIO * self.floor_m:
+                break
+            best = self._partner(chosen[-1], cur_sq)
+            if best is None:
+                break
+            chosen.append(best)
+            cur_sq = best.heldout
+        return chosen, cur_sq
+
+    def _pairs(self, last: Score) -> list[Score]:
+        """The chosen effects scored together with each likely partner, best first.
+
+        Partners: PAIR_TRIES of the best single effects and as many of those that best fit
+        what the chosen ones leave (`_partners`), each warm-started from the chosen
+        effects' and its own solution.
+        """
+        have = last.names
+        tries = PAIR_TRIES[min(len(_public(have)), len(PAIR_TRIES)) - 1]
+        combos: list[Score] = []
+        rest = [sc for sc in self.ranked if sc.names[-1] not in have]
+        quick = _partners(self.prob, last, [_cls(sc.names[-1], self.members) for sc in rest])
+        pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
+        for sc in [sc for sc in rest if sc.names[-1] in pick]:
+            classes = [_cls(nm, self.members) for nm in have] + [_cls(sc.names[-1], self.members)]
+            warm = np.concatenate([last.full.x, sc.full.x[len(self.prefix) :]])
+            self.tick("+".join(_public(classes_names(classes))))
+            combo = score_set(self.prob, classes, warm=warm)
+            self.scores["+".join(_public(combo.names))] = combo
+            combos.append(combo)
+        combos.sort(key=lambda c: c.heldout_rmse_m)
+        return combos
+
+    def _partner(self, last: Score, cur_sq: np.ndarray) -> Score | None:
+        """The best of the two best pairs that passes (or None), each tested against the
+        chosen effects alone refitted from where the pair put them (drop-one), so that a
+        partner only joins for what it adds itself."""
+        n_have = len(last.full.x)
+        for combo in self._pairs(last)[:2]:
+            prev = [_cls(nm, self.members) for nm in last.names]
+            drop = score_set(self.prob, prev, warm=combo.full.x[:n_have])
+            prev_sq = drop.heldout if drop.heldout.mean() < cur_sq.mean() else cur_sq
+            if self.passes(prev_sq, combo):
+                return combo
+        return None
+
+    def mark_joined(self, chosen: list[Score]) -> None:
+        """Record in every test whether its set joined."""
+        joined = {"+".join(_public(c.names)) for c in chosen}
+        for key, t in self.tests.items():
+            t["joins"] = key in joined
+
+
+def _verdict(B: float, A: float, F: float, chosen: list[Score]) -> list[str]:
+    """The verdict's effects, or ["none"] or ["unknown"].
+
+    Args:
+        B: the baseline's held-out RMSE [m].
+        A: the held-out RMSE with the joined effects [m].
+        F: the noise floor [m].
+        chosen: the joined sets (`_Selection.join`).
+    """
+    if B <= NONE_RATIO * F:
+        return ["none"]
+    if chosen and A <= VERDICT_RATIO * F:
+        return _public(chosen[-1].names)
+    if not chosen and B <= VERDICT_RATIO * F:
+        return ["none"]
+    return ["unknown"]
+
+
+def _candidate(
+    s: Score,
+    base_sq: np.ndarray,
+    B: float,
+    laws: dict[str, dict[str, float]],
+    tracks: dict[str, Any] | None,
+    F: float,
+    seed: int,
+) -> dict[str, Any]:
+    """The report's entry for one effect alone: its law, held-out score, shrink over the
+    baseline (B [m], base_sq [m²] per throw) with interval, parameters with intervals, and
+    why it may not join."""
+    _, lo, hi = _shrink_ci(base_sq, s.heldout, seed)
+    eff = s.full.effects[-1]
+    ci = s.full.ci[-len(eff.bounds) :] if s.full.ci is not None else None
+    return {
+        "effect": eff.name,
+        "law": eff.law,
+        "phase": eff.phase,
+        "heldout_rmse_m": s.heldout_rmse_m,
+        "shrink_pct": _shrink(B, s.heldout_rmse_m),
+        "shrink_ci_pct": [lo, hi],
+        "fit_rmse_m": s.full.train_rmse_m,
+        "params": eff.params(),
+        "params_ci95": (
+            {k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci, strict=True)}
+            if ci is not None
+            else {}
+        ),
+        "laws_heldout_rmse_m": laws.get(eff.name, {}),
+        "at_bound": _at_bound(eff),
+        "implausible": eff.implausible(),
+        "refused": refusal(eff, tracks, F),
+    }
+
+
+def _verdict_report(
+    verdict: list[str],
+    chosen: list[Score],
+    B: float,
+    base_sq: np.ndarray,
+    v_sq: np.ndarray,
+    seed: int,
+) -> dict[str, Any]:
+    """The report's verdict: its effects, held-out RMSE [m], shrink over the baseline
+    with interval [%], parameters, laws and intervals (an `unknown` verdict names the
+    effects that joined as partial)."""
+    public_effects = (
+        [e for e in chosen[-1].full.effects if e.name != BandStiffness.name] if chosen else []
+    )
+    A_v = float(np.sqrt(v_sq.mean()))
+    _, slo, shi = _shrink_ci(base_sq, v_sq, seed)
+    return {
+        "effects": verdict,
+        "heldout_rmse_m": A_v,
+        "shrink_pct": _shrink(B, A_v),
+        "shrink_ci_pct": [slo, shi],
+        "params": ({e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}),
+        "laws": ({e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}),
+        "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
+        "partial_effects": ([e.name for e in public_effects] if verdict[0] == "unknown" else []),
+    }
+
+
+def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
+    """The report's account of the noise floor: its method and each estimate [m]."""
+    return {
+        "method": nf.method,
+        "repeats_m": nf.repeats_m,
+        "repeat_dof": nf.repeat_dof,
+        "neighbours_m": nf.neighbours_m,
+        "model_m": nf.model_m,
+    }
+
+
+def _rules() -> dict[str, float]:
+    """The rules' thresholds, as the report states them."""
+    return {
+        "agree_share": AGREE_SHARE,
+        "scale_agree": SCALE_AGREE,
+        "none_ratio": NONE_RATIO,
+        "verdict_ratio": VERDICT_RATIO,
+        "min_cut_share": MIN_CUT,
+        "permutation_share": PERM_SHARE,
+    }
+
+
 def diagnose(
     prob: GapProblem,
     *,
@@ -204,147 +534,19 @@ def diagnose(
         The diagnosis.
     """
     tick = progress or (lambda s: None)
-    n = len(prob)
-    all_idx = np.arange(n)
+    all_idx = np.arange(len(prob))
     prefix: list[type[Effect]] = [BandStiffness] if identify else []
     tick("baseline")
-    identified: Score | None = None
-    if identify:
-        identified = score_set(prob, prefix)
-        r0 = prob.residual(all_idx, identified.full.effects)
-        base_sq = identified.heldout
-        fit_rmse = identified.full.train_rmse_m
-    else:
-        r0 = prob.residual(all_idx)
-        base_sq = np.sum(r0 * r0, axis=1)
-        fit_rmse = rmse(r0)
+    identified, r0, base_sq, fit_rmse = _baseline(prob, identify)
     B = float(np.sqrt(base_sq.mean()))
     tick("noise floor")
     nf = noise_floor(prob, r0, prob.landing(all_idx, identified.full.effects if identified else ()))
     F = nf.floor_m
-    scores: dict[str, Score] = {}
-    members: dict[str, type[Effect]] = {}
-    member_rank: dict[str, tuple[bool, float]] = {}
-    laws: dict[str, dict[str, float]] = {}
-    for family in applicable_families(prob):
-        for cls in family:
-            tick(cls.name + (f" ({cls.law})" if cls.law else ""))
-            warm = None
-            if identified is not None:
-                neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
-                warm = np.r_[identified.full.x, neutral]
-            sc = score_set(prob, prefix + [cls], warm=warm)
-            if len(family) > 1:
-                laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
-            # the member that predicts held-out throws best; one at a bound or implausible
-            # only when every member is
-            stretched = bool(_at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible())
-            rank = (stretched, sc.heldout_rmse_m)
-            if cls.name not in scores or rank < member_rank[cls.name]:
-                scores[cls.name] = sc
-                members[cls.name] = cls
-                member_rank[cls.name] = rank
-    ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
-
-    def refuse(cand: Score) -> str | None:
-        for e in cand.full.effects:
-            if isinstance(e, BandStiffness):
-                continue
-            why = refusal(e, tracks, F)
-            if why:
-                return f"{e.name}: {why}"
-        return None
-
-    perm_cache: dict[tuple[str, ...], Score] = {}
-    tests: dict[str, dict[str, Any]] = {}
-
-    def passes(prev_sq: np.ndarray, cand: Score) -> bool:
-        prev = float(np.sqrt(prev_sq.mean()))
-        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=prob.seed)
-        t: dict[str, Any] = {
-            "cut_m": cut,
-            "cut_ci_m": [lo, hi],
-            "cut_share": cut / prev if prev > 0 else 0.0,
-        }
-        ok = cut >= MIN_CUT * prev and lo > 0
-        why = refuse(cand)
-        if why:
-            t["refused"] = why
-            ok = False
-        newest = _cls(cand.names[-1], members)
-        if ok and newest.hangs_on is not None:
-            tick(f"permutation {newest.name}")
-            classes = [_cls(nm, members) for nm in cand.names]
-            key = cand.names
-            if key not in perm_cache:
-                perm_cache[key] = score_set(prob, classes, permute=True, warm=None)
-            ps = perm_cache[key]
-            gain, plo, _ = bootstrap_cut(ps.heldout, cand.heldout, seed=prob.seed + 1)
-            survive = gain >= PERM_SHARE * cut and plo > 0
-            t["permutation"] = {
-                "quantity": newest.hangs_on,
-                "heldout_rmse_m": ps.heldout_rmse_m,
-                "gain_over_shuffled_m": gain,
-                "survives": bool(survive),
-            }
-            ok = ok and survive
-        t["passes"] = bool(ok)
-        tests["+".join(_public(cand.names))] = t
-        return ok
-
-    chosen: list[Score] = []
-    cur_sq = base_sq
-    if B > NONE_RATIO * F:
-        for s in ranked:
-            if passes(cur_sq, s):
-                chosen.append(s)
-                cur_sq = s.heldout
-                break
-        while chosen and len(chosen[-1].names) < MAX_EFFECTS:
-            A = float(np.sqrt(cur_sq.mean()))
-            if A <= VERDICT_RATIO * F:
-                break
-            have = chosen[-1].names
-            n_have = len(chosen[-1].full.x)
-            tries = PAIR_TRIES[min(len(_public(have)), len(PAIR_TRIES)) - 1]
-            combos: list[Score] = []
-            rest = [sc for sc in ranked if sc.names[-1] not in have]
-            quick = _partners(prob, chosen[-1], [_cls(sc.names[-1], members) for sc in rest])
-            pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
-            for sc in [sc for sc in rest if sc.names[-1] in pick]:
-                classes = [_cls(nm, members) for nm in have] + [_cls(sc.names[-1], members)]
-                warm = np.concatenate([chosen[-1].full.x, sc.full.x[len(prefix) :]])
-                tick("+".join(_public(classes_names(classes))))
-                combo = score_set(prob, classes, warm=warm)
-                scores["+".join(_public(combo.names))] = combo
-                combos.append(combo)
-            combos.sort(key=lambda c: c.heldout_rmse_m)
-            best: Score | None = None
-            for combo in combos[:2]:
-                # drop-one: the chosen effects alone, refitted from where the pair put them,
-                # so that a partner only joins for what it adds itself
-                prev = [_cls(nm, members) for nm in have]
-                drop = score_set(prob, prev, warm=combo.full.x[:n_have])
-                prev_sq = drop.heldout if drop.heldout.mean() < cur_sq.mean() else cur_sq
-                if passes(prev_sq, combo):
-                    best = combo
-                    break
-            if best is None:
-                break
-            chosen.append(best)
-            cur_sq = best.heldout
-    joined = {"+".join(_public(c.names)) for c in chosen}
-    for key, t in tests.items():
-        t["joins"] = key in joined
-    A = float(np.sqrt(cur_sq.mean()))
-    if B <= NONE_RATIO * F:
-        verdict = ["none"]
-    elif chosen and A <= VERDICT_RATIO * F:
-        verdict = _public(chosen[-1].names)
-    elif not chosen and B <= VERDICT_RATIO * F:
-        verdict = ["none"]
-    else:
-        verdict = ["unknown"]
+    scores, members, laws = _score_members(prob, prefix, identified, tick)
+    sel = _Selection(prob, prefix, scores, members, tracks, F, tick)
+    chosen, cur_sq = sel.join(base_sq) if B > NONE_RATIO * F else ([], base_sq)
+    sel.mark_joined(chosen)
+    verdict = _verdict(B, float(np.sqrt(cur_sq.mean())), F, chosen)
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -353,80 +555,21 @@ def diagnose(
         v_res = prob.residual(all_idx, chosen[-1].full.effects)
     else:
         v_res = r0
-    public_effects = (
-        [e for e in chosen[-1].full.effects if e.name != BandStiffness.name] if chosen else []
-    )
-    A_v = float(np.sqrt(v_sq.mean()))
-    _, slo, shi = _shrink_ci(base_sq, v_sq, prob.seed)
-    candidates = []
-    for s in ranked:
-        _, lo, hi = _shrink_ci(base_sq, s.heldout, prob.seed)
-        eff = s.full.effects[-1]
-        ci = s.full.ci[-len(eff.bounds) :] if s.full.ci is not None else None
-        candidates.append(
-            {
-                "effect": eff.name,
-                "law": eff.law,
-                "phase": eff.phase,
-                "heldout_rmse_m": s.heldout_rmse_m,
-                "shrink_pct": _shrink(B, s.heldout_rmse_m),
-                "shrink_ci_pct": [lo, hi],
-                "fit_rmse_m": s.full.train_rmse_m,
-                "params": eff.params(),
-                "params_ci95": (
-                    {k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci, strict=True)}
-                    if ci is not None
-                    else {}
-                ),
-                "laws_heldout_rmse_m": laws.get(eff.name, {}),
-                "at_bound": _at_bound(eff),
-                "implausible": eff.implausible(),
-                "refused": refusal(eff, tracks, F),
-            }
-        )
-    if identified is not None:
-        extra_id = {"band_stiffness_factor": identified.full.effects[0].params()["factor"]}
-    else:
-        extra_id = {}
     report: dict[str, Any] = {
-        "throws": n,
+        "throws": len(prob),
         "noise_floor_m": F,
         "baseline": {"fit_rmse_m": fit_rmse, "heldout_rmse_m": B},
         "where": {},
-        "candidates": candidates,
-        "verdict": {
-            "effects": verdict,
-            "heldout_rmse_m": A_v,
-            "shrink_pct": _shrink(B, A_v),
-            "shrink_ci_pct": [slo, shi],
-            "params": (
-                {e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}
-            ),
-            "laws": (
-                {e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}
-            ),
-            "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
-            "partial_effects": (
-                [e.name for e in public_effects] if verdict[0] == "unknown" else []
-            ),
-        },
-        "noise": {
-            "method": nf.method,
-            "repeats_m": nf.repeats_m,
-            "repeat_dof": nf.repeat_dof,
-            "neighbours_m": nf.neighbours_m,
-            "model_m": nf.model_m,
-        },
-        "tests": tests,
-        "identified": extra_id,
-        "rules": {
-            "agree_share": AGREE_SHARE,
-            "scale_agree": SCALE_AGREE,
-            "none_ratio": NONE_RATIO,
-            "verdict_ratio": VERDICT_RATIO,
-            "min_cut_share": MIN_CUT,
-            "permutation_share": PERM_SHARE,
-        },
+        "candidates": [_candidate(s, base_sq, B, laws, tracks, F, prob.seed) for s in sel.ranked],
+        "verdict": _verdict_report(verdict, chosen, B, base_sq, v_sq, prob.seed),
+        "noise": _noise_report(nf),
+        "tests": sel.tests,
+        "identified": (
+            {"band_stiffness_factor": identified.full.effects[0].params()["factor"]}
+            if identified is not None
+            else {}
+        ),
+        "rules": _rules(),
     }
     return Diagnosis(
         report=report,

@@ -331,6 +331,150 @@ def phase_evidence(tracks: dict[str, Any], floor_m: float) -> dict[str, Any]:
     return {"shares": shares, "significant": sig, "phase": phase}
 
 
+def _half_landings(
+    prob: GapProblem,
+    hv: np.ndarray,
+    kk: np.ndarray,
+    lz: np.ndarray,
+    back: np.ndarray,
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Each half's free flight carried back to the release, and its track's own landing.
+
+    Args:
+        prob: the problem.
+        hv: the halves' fits of the tracked throws (`TrackFit.halves[:, :, idx]`).
+        kk: their drag constants [1/m].
+        lz: their landing planes [m].
+        back: time from the release to the first kept sample [s], shape (m, 1).
+
+    Returns:
+        (per half, the landing [m] of the nominal flight from the release state the half's
+        acceleration, linear in time, extrapolates back to; per half, the landing [m] of the
+        nominal flight from the half's last state), each shape (m, 2).
+    """
+    gvec = np.array([0.0, 0.0, -G])
+    rel_land, bent_land = [], []
+    for h in range(2):
+        p0h, v0h, pe, ve, ah, jh = (np.nan_to_num(x) for x in hv[h])
+        acc0 = gvec + ah - kk[:, None] * np.linalg.norm(v0h, axis=1)[:, None] * v0h
+        v_rel = v0h - acc0 * back + 0.5 * jh * back**2
+        p_rel = p0h - v0h * back + 0.5 * acc0 * back**2 - jh * back**3 / 6
+        rel_land.append(fly(p_rel, v_rel, kk, lz, step=prob.step).position[:, :2])
+        bent_land.append(fly(pe, ve, kk, lz, step=prob.step).position[:, :2])
+    return rel_land, bent_land
+
+
+def _bend(
+    prob: GapProblem,
+    fit: TrackFit,
+    idx: np.ndarray,
+    hv: np.ndarray,
+    kk: np.ndarray,
+    has_h: np.ndarray,
+) -> tuple[float, float]:
+    """The bend: each half's nominal flight from its first kept state against its own last
+    state (no extrapolation: what the tracks see of a flight effect directly).
+
+    Returns:
+        (the bend's split-half RMS [m], its z-score) (`_cross_rms`).
+    """
+    t_span = np.nan_to_num(fit_span(fit, idx))
+    bends = []
+    for h in range(2):
+        p0h, v0h, pe = (np.nan_to_num(x) for x in (hv[h, 0], hv[h, 1], hv[h, 2]))
+        nom = sample_path(p0h, v0h, kk, t_span[:, None], step=prob.step)[:, 0, :]
+        bends.append(pe - nom)
+    return _cross_rms(bends[0][has_h], bends[1][has_h])
+
+
+def _launch_share(
+    prob: GapProblem,
+    idx: np.ndarray,
+    hv: np.ndarray,
+    own: np.ndarray,
+    kk: np.ndarray,
+    lz: np.ndarray,
+    back: np.ndarray,
+    rel_land: list[np.ndarray],
+) -> tuple[float, float, float]:
+    """The launch share on the tracked throws from this launcher with both halves fitted
+    (own): the landing difference between the halves' release states and the model's
+    launch state under the nominal flight.
+
+    Returns:
+        (the share's split-half RMS [m], its z-score, the median launch speed of the first
+        half carried back to the release against the model's [%]); NaN when no throw has
+        a logged stroke.
+    """
+    if not own.any():
+        return float("nan"), float("nan"), float("nan")
+    sub = prob.batch.take(idx[own])
+    push, pm, ax = launch_overrides(sub, prob.ee, list(prob.base_effects))
+    p_m, v_m = launch_state(sub, prob.ee, push=push, push_mass=pm, axis=ax)
+    mod_land = fly(p_m, v_m, kk[own], lz[own], step=prob.step).position[:, :2]
+    launch_m, launch_z = _cross_rms(rel_land[0][own] - mod_land, rel_land[1][own] - mod_land)
+    v0h = hv[0, 1, own]
+    v_back = v0h - (np.array([0.0, 0.0, -G]) * back[own])
+    sp_mod = np.linalg.norm(v_m, axis=1)
+    speed_pct = float(np.nanmedian(100 * (np.linalg.norm(v_back, axis=1) / sp_mod - 1)))
+    return launch_m, launch_z, speed_pct
+
+
+def _apparent_gravity(
+    prob: GapProblem, fit: TrackFit, idx: np.ndarray
+) -> tuple[float, float, float, bool]:
+    """The tracks' apparent gravity, and whether it shows a measurement gap (off g by more
+    than 1.5 % and 4 standard errors, alike for every object).
+
+    Returns:
+        (median ratio to g, its standard error, the spread of the objects' medians,
+        whether it is a measurement gap).
+    """
+    g = fit.g_ratio[idx]
+    g = g[np.isfinite(g)]
+    g_med = float(np.median(g)) if g.size else float("nan")
+    g_se = float(1.2533 * np.std(g) / np.sqrt(max(g.size, 1))) if g.size else float("nan")
+    per_obj = []
+    for o in np.unique(prob.groups[idx]):
+        go = fit.g_ratio[idx][prob.groups[idx] == o]
+        go = go[np.isfinite(go)]
+        if go.size >= 3:
+            per_obj.append(np.median(go))
+    spread = float(np.std(per_obj)) if len(per_obj) >= 2 else 0.0
+    measurement = (
+        np.isfinite(g_med)
+        and abs(g_med - 1) > max(0.015, 4 * g_se)
+        and spread < 0.3 * abs(g_med - 1)
+    )
+    return g_med, g_se, spread, bool(measurement)
+
+
+def _evidence(r: dict[str, Any]) -> str:
+    """The tracks' evidence in words, from `track_phase`'s figures."""
+    speed_pct, launch_m = r["launch_speed_pct"], r["launch_m"]
+    parts = []
+    if np.isfinite(speed_pct):
+        parts.append(
+            f"launch speed from tracks is {abs(speed_pct):.1f}% "
+            f"{'below' if speed_pct < 0 else 'above'} the model"
+        )
+    parts.append(
+        f"launch accounts for {launch_m:.3f} m of landing miss"
+        if np.isfinite(launch_m)
+        else "no launch comparison (no stroke logged)"
+    )
+    parts.append(
+        f"the flight after launch bends {r['bend_m']:.3f} m off the nominal path over the tracks "
+        f"(z {r['bend_z']:.1f}; {r['flight_m']:.3f} m at the landing from the release)"
+    )
+    parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
+    parts.append(
+        f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, spread over "
+        f"objects {r['g_ratio_object_spread']:.3f})"
+    )
+    return "; ".join(parts)
+
+
 def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     """Each phase's share of the landing miss on the tracked throws, and the phase it points to.
 
@@ -355,46 +499,13 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     hv = fit.halves[:, :, idx]
     t_rel0 = np.where(prob.has_stroke[idx], prob.ee.dt, fit.t0[idx])
     back = np.clip(fit.t0[idx] - t_rel0, 0.0, None)[:, None]
-    gvec = np.array([0.0, 0.0, -G])
-    rel_land, bent_land = [], []
-    for h in range(2):
-        p0h, v0h, pe, ve, ah, jh = (np.nan_to_num(x) for x in hv[h])
-        acc0 = gvec + ah - kk[:, None] * np.linalg.norm(v0h, axis=1)[:, None] * v0h
-        v_rel = v0h - acc0 * back + 0.5 * jh * back**2
-        p_rel = p0h - v0h * back + 0.5 * acc0 * back**2 - jh * back**3 / 6
-        rel_land.append(fly(p_rel, v_rel, kk, lz, step=prob.step).position[:, :2])
-        bent_land.append(fly(pe, ve, kk, lz, step=prob.step).position[:, :2])
+    rel_land, bent_land = _half_landings(prob, hv, kk, lz, back)
     has_h = np.all(np.isfinite(hv[:, 0, :, 0]), axis=0)
-    # the bend: each half's nominal flight from its first kept state against its own last
-    # state (no extrapolation: what the tracks see of a flight effect directly)
-    t_span = np.nan_to_num(fit_span(fit, idx))
-    bends = []
-    for h in range(2):
-        p0h, v0h, pe = (np.nan_to_num(x) for x in (hv[h, 0], hv[h, 1], hv[h, 2]))
-        nom = sample_path(p0h, v0h, kk, t_span[:, None], step=prob.step)[:, 0, :]
-        bends.append(pe - nom)
-    bend_m, bend_z = _cross_rms(bends[0][has_h], bends[1][has_h])
+    bend_m, bend_z = _bend(prob, fit, idx, hv, kk, has_h)
     # the track's touchdown: nominal flight from the state fitted to its last samples
     end_land = fly(fit.p1[idx], fit.v1[idx], kk, lz, step=prob.step).position[:, :2]
-    logged = prob.observed[idx]
-    out: dict[str, Any] = {"tracked": n_tr}
-    launch_m = launch_z = float("nan")
-    speed_pct = float("nan")
     own = prob.has_stroke[idx] & has_h
-    if own.any():
-        sub = b.take(idx[own])
-        push, pm, ax = launch_overrides(sub, prob.ee, list(prob.base_effects))
-        p_m, v_m = launch_state(sub, prob.ee, push=push, push_mass=pm, axis=ax)
-        mod_land = fly(p_m, v_m, kk[own], lz[own], step=prob.step).position[:, :2]
-        launch_m, launch_z = _cross_rms(rel_land[0][own] - mod_land, rel_land[1][own] - mod_land)
-        p0h, v0h = hv[0, 0, own], hv[0, 1, own]
-        sp_obs = 0.5 * (
-            np.linalg.norm(hv[0, 1, own], axis=1) + np.linalg.norm(hv[1, 1, own], axis=1)
-        )
-        v_back = v0h - (gvec * back[own])
-        sp_mod = np.linalg.norm(v_m, axis=1)
-        speed_pct = float(np.nanmedian(100 * (np.linalg.norm(v_back, axis=1) / sp_mod - 1)))
-        del p0h, sp_obs
+    launch_m, launch_z, speed_pct = _launch_share(prob, idx, hv, own, kk, lz, back, rel_land)
     flight_land_m, flight_z = _cross_rms(
         (bent_land[0] - rel_land[0])[has_h], (bent_land[1] - rel_land[1])[has_h]
     )
@@ -403,66 +514,25 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     t_rel = (fit.t1[idx] - fit.t0[idx])[:, None]
     p_last = sample_path(fit.p0[idx], fit.v0[idx], kk, t_rel, step=prob.step)[:, 0, :]
     flight_m = _rms(np.linalg.norm(p_last - fit.p1[idx], axis=1))
-    landing_m = _rms(np.linalg.norm(logged - end_land, axis=1))
-    g = fit.g_ratio[idx]
-    g = g[np.isfinite(g)]
-    g_med = float(np.median(g)) if g.size else float("nan")
-    g_se = float(1.2533 * np.std(g) / np.sqrt(max(g.size, 1))) if g.size else float("nan")
-    per_obj = []
-    for o in np.unique(prob.groups[idx]):
-        go = fit.g_ratio[idx][prob.groups[idx] == o]
-        go = go[np.isfinite(go)]
-        if go.size >= 3:
-            per_obj.append(np.median(go))
-    spread = float(np.std(per_obj)) if len(per_obj) >= 2 else 0.0
-    measurement = (
-        np.isfinite(g_med)
-        and abs(g_med - 1) > max(0.015, 4 * g_se)
-        and spread < 0.3 * abs(g_med - 1)
-    )
+    landing_m = _rms(np.linalg.norm(prob.observed[idx] - end_land, axis=1))
+    g_med, g_se, spread, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
-    if measurement:
-        phase = "measurement"
-    else:
-        phase = max(finite, key=lambda p: finite[p])
-    parts = []
-    if np.isfinite(speed_pct):
-        parts.append(
-            f"launch speed from tracks is {abs(speed_pct):.1f}% "
-            f"{'below' if speed_pct < 0 else 'above'} the model"
-        )
-    parts.append(
-        f"launch accounts for {launch_m:.3f} m of landing miss"
-        if np.isfinite(launch_m)
-        else "no launch comparison (no stroke logged)"
-    )
-    parts.append(
-        f"the flight after launch bends {bend_m:.3f} m off the nominal path over the tracks "
-        f"(z {bend_z:.1f}; {flight_land_m:.3f} m at the landing from the release)"
-    )
-    parts.append(f"logged landings lie {landing_m:.3f} m from the tracks' touchdowns")
-    parts.append(
-        f"apparent gravity is {g_med:.3f} g (±{g_se:.3f}, spread over objects {spread:.3f})"
-    )
-    out.update(
-        {
-            "phase": phase,
-            "evidence": "; ".join(parts),
-            "launch_m": launch_m,
-            "flight_m": flight_land_m,
-            "flight_path_m": flight_m,
-            "landing_m": landing_m,
-            "launch_speed_pct": speed_pct,
-            "g_ratio": g_med,
-            "g_ratio_se": g_se,
-            "g_ratio_object_spread": spread,
-            "measurement": bool(measurement),
-            "launch_z": launch_z,
-            "flight_z": flight_z,
-            "bend_m": bend_m,
-            "bend_z": bend_z,
-            "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
-        }
-    )
-    return out
+    phase = "measurement" if measurement else max(finite, key=lambda p: finite[p])
+    figures = {
+        "launch_m": launch_m,
+        "flight_m": flight_land_m,
+        "flight_path_m": flight_m,
+        "landing_m": landing_m,
+        "launch_speed_pct": speed_pct,
+        "g_ratio": g_med,
+        "g_ratio_se": g_se,
+        "g_ratio_object_spread": spread,
+        "measurement": measurement,
+        "launch_z": launch_z,
+        "flight_z": flight_z,
+        "bend_m": bend_m,
+        "bend_z": bend_z,
+        "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
+    }
+    return {"tracked": n_tr, "phase": phase, "evidence": _evidence(figures), **figures}

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -227,6 +227,324 @@ def _wrap_near(q: np.ndarray, ref: np.ndarray, lo: np.ndarray, hi: np.ndarray) -
     return out
 
 
+_Best = tuple[float, float, float, np.ndarray]  # (score, position error [m], axis error [rad], q)
+_Found = tuple[float, np.ndarray, float, float, float]  # (|q - q_cur|, q, ep [m], th, roll [rad])
+
+
+@dataclass(frozen=True)
+class _Descent:
+    """The settings of the damped-least-squares descents of one solve, resolved once.
+
+    Attributes:
+        pose: the target.
+        r_des: its full orientation (the target when the roll is fixed), shape (3, 3).
+        six: the roll is fixed (a 6-D task; else 5-D).
+        q_cur: the configuration the null-space pull draws towards [rad], shape (n,).
+        tol_position_m: success tolerance on the position [m].
+        tol_axis_rad: success tolerance on the axis and roll [rad].
+        stop_p: position error at which a descent stops [m].
+        stop_a: angle error at which a descent stops [rad].
+        max_iterations: iterations per seed.
+        half: the iteration after which the null-space pull stops and far-off seeds quit.
+        lam2: the DLS damping λ² [-].
+        null_gain: null-space pull per iteration.
+        eye_m: the identity of the task's size (5 or 6).
+    """
+
+    pose: ReleasePose
+    r_des: np.ndarray
+    six: bool
+    q_cur: np.ndarray
+    tol_position_m: float
+    tol_axis_rad: float
+    stop_p: float
+    stop_a: float
+    max_iterations: int
+    half: int
+    lam2: float
+    null_gain: float
+    eye_m: np.ndarray
+
+    @classmethod
+    def of(
+        cls,
+        pose: ReleasePose,
+        q_cur: np.ndarray,
+        tol_position_m: float,
+        tol_axis_rad: float,
+        max_iterations: int,
+        damping: float,
+        null_gain: float,
+    ) -> _Descent:
+        """The settings from `solve_ik`'s arguments."""
+        six = pose.roll is not None
+        return cls(
+            pose=pose,
+            r_des=pose.rotation(),
+            six=six,
+            q_cur=q_cur,
+            tol_position_m=tol_position_m,
+            tol_axis_rad=tol_axis_rad,
+            # Stop tighter than the tolerance: DLS converges fast near the solution.
+            stop_p=0.05 * tol_position_m,
+            stop_a=0.05 * tol_axis_rad,
+            max_iterations=max_iterations,
+            half=max_iterations // 2,
+            lam2=damping * damping,
+            null_gain=null_gain,
+            eye_m=np.eye(6 if six else 5),
+        )
+
+    def within(self, ep: float, th: float, roll: float) -> bool:
+        """Whether errors (position [m], axis and roll [rad]) meet the tolerances."""
+        return ep <= self.tol_position_m and th <= self.tol_axis_rad and roll <= self.tol_axis_rad
+
+
+@dataclass
+class _Search:
+    """What the search over seeds has found so far.
+
+    Attributes:
+        best: the attempt of lowest score (for the error when nothing converges).
+        found: converged solutions.
+        ends: each seed's best (score, q) of its descent.
+        iterations: DLS iterations spent.
+        tried: seeds started.
+    """
+
+    best: _Best
+    found: list[_Found] = field(default_factory=list)
+    ends: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    iterations: int = 0
+    tried: int = 0
+
+
+def _check_settings(
+    tol_position_m: float,
+    tol_axis_rad: float,
+    damping: float,
+    max_iterations: int,
+    random_seeds: int,
+    solutions: int,
+    null_gain: float,
+) -> None:
+    """Refuse solver settings out of range (see `solve_ik`).
+
+    Raises:
+        InvalidInput: naming the setting and its range.
+    """
+    for name, v in (
+        ("tol_position_m", tol_position_m),
+        ("tol_axis_rad", tol_axis_rad),
+        ("damping", damping),
+    ):
+        if not (math.isfinite(v) and v > 0.0):
+            raise InvalidInput(f"{name} must be a positive number, got {v!r}")
+    if max_iterations < 1 or random_seeds < 0 or solutions < 1 or not (0.0 <= null_gain < 1.0):
+        raise InvalidInput(
+            "need max_iterations >= 1, random_seeds >= 0, solutions >= 1 and "
+            f"0 <= null_gain < 1; got {max_iterations}, {random_seeds}, {solutions}, {null_gain}"
+        )
+
+
+def _current_configuration(robot: Robot, q_current: np.ndarray | None) -> np.ndarray:
+    """The current configuration [rad] (home if None), checked against the limits and
+    clamped onto them.
+
+    Raises:
+        InvalidInput: wrong shape, or outside the limits by more than 1e-6 rad.
+    """
+    lim = robot.limits
+    q_cur = robot.home.copy() if q_current is None else np.asarray(q_current, dtype=float)
+    lim.check_position(q_cur, name="q_current", tol=1e-6)
+    return np.clip(q_cur, lim.lower, lim.upper)
+
+
+def _seeds(
+    robot: Robot,
+    q_cur: np.ndarray,
+    p_des: np.ndarray,
+    random_seeds: int,
+    rng: np.random.Generator | None,
+) -> Iterator[np.ndarray]:
+    """The seeds in order: the current configuration, home (if different), then
+    `random_seeds` random configurations, every other one with its base joint turned to
+    face the target. Lazy: the random ones are drawn only when the first seeds fail."""
+    lim = robot.limits
+    yield q_cur
+    if not np.allclose(robot.home, q_cur):
+        yield robot.home
+    g = rng if rng is not None else np.random.default_rng(0)
+    rand = robot.random_configuration(g, random_seeds)
+    # Every other random seed turns the base joint so the arm faces the target: the
+    # base yaw is the one joint whose right value is known in advance.
+    p_home = robot.tcp_pose(robot.home)[0]
+    turn = math.atan2(p_des[1], p_des[0]) - math.atan2(p_home[1], p_home[0])
+    q0 = (robot.home[0] + turn + math.pi) % (2 * math.pi) - math.pi
+    rand[::2, 0] = np.clip(q0 + g.normal(0.0, 0.2, rand[::2].shape[0]), lim.lower[0], lim.upper[0])
+    yield from rand
+
+
+def _orientation_error(d: _Descent, r: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The orientation error at a tool rotation r, shape (3, 3).
+
+    Returns:
+        (rotation vector w the descent turns by [rad], axis error th [rad], the angle the
+        descent drives to zero [rad]: the full rotation's with a fixed roll, else th).
+    """
+    if d.six:
+        w = _log3(d.r_des @ r.T)
+        th = _axis_error(r[:, 2], d.pose.axis, r[:, 0])[1]
+        ang = math.sqrt(float(w @ w))
+    else:
+        w, th = _axis_error(r[:, 2], d.pose.axis, r[:, 0])
+        ang = th
+    return w, th, ang
+
+
+def _dls_step(
+    d: _Descent,
+    jac: np.ndarray,
+    r: np.ndarray,
+    e_p: np.ndarray,
+    w: np.ndarray,
+    q: np.ndarray,
+    k: int,
+) -> np.ndarray:
+    """One damped-least-squares step dq [rad], no joint moving more than 0.5 rad.
+
+    Args:
+        d: the descent's settings.
+        jac: the tool's frame Jacobian (world-aligned), shape (6, n).
+        r: the tool's rotation, shape (3, 3).
+        e_p: position error [m], shape (3,).
+        w: orientation error (rotation vector) [rad], shape (3,).
+        q: the configuration [rad], shape (n,).
+        k: the iteration (the null-space pull acts in the first half).
+    """
+    if d.six:
+        jt = jac
+        err = np.concatenate([e_p, w])
+    else:
+        # Only rotations about axes perpendicular to z move the throw axis.
+        jt = np.concatenate([jac[:3], r[:, :2].T @ jac[3:]])
+        err = np.concatenate([e_p, r[:, :2].T @ w])
+    a = jt @ jt.T + (d.lam2 + 0.01 * float(err @ err)) * d.eye_m
+    if k < d.half:
+        # J⁺e + (I - J⁺J) z = z + J⁺(e - J z), with J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹. The
+        # pull stops halfway: at a joint limit it can fight the clamp.
+        z0 = d.null_gain * (d.q_cur - q)
+        dq = z0 + jt.T @ np.linalg.solve(a, err - jt @ z0)
+    else:
+        dq = jt.T @ np.linalg.solve(a, err)
+    step = float(np.max(np.abs(dq)))
+    if step > 0.5:
+        dq *= 0.5 / step
+    return dq
+
+
+def _descend(robot: Robot, d: _Descent, seed: np.ndarray, s: _Search) -> tuple[float, np.ndarray]:
+    """Damped least squares from one seed, joints clamped to their limits at every step.
+
+    Updates the search's best attempt and its iteration count.
+
+    Returns:
+        The seed's best (score, q): score = position error / tolerance + angle error /
+        tolerance.
+    """
+    import pinocchio as pin
+
+    model, data, fid = robot.model, robot.data, robot.tcp_frame
+    lim = robot.limits
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    q = np.array(seed, dtype=float)
+    seed_best = (math.inf, q)
+    for k in range(d.max_iterations):
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacement(model, data, fid)
+        oMf = data.oMf[fid]
+        r = oMf.rotation
+        e_p = d.pose.position - oMf.translation
+        w, th, ang = _orientation_error(d, r)
+        ep = math.sqrt(float(e_p @ e_p))
+        score = ep / d.tol_position_m + ang / d.tol_axis_rad
+        if score < seed_best[0]:
+            seed_best = (score, q)
+        if score < s.best[0]:
+            s.best = (score, ep, th, q)
+        if ep < d.stop_p and ang < d.stop_a:
+            break
+        if k == d.half and score > 100.0:
+            break  # far off after half the budget: a new seed is a better bet
+        s.iterations += 1
+        jac = pin.getFrameJacobian(model, data, fid, world)
+        dq = _dls_step(d, jac, r, e_p, w, q, k)
+        q = np.clip(q + dq, lim.lower, lim.upper)
+    return seed_best
+
+
+def _near_current(
+    robot: Robot, d: _Descent, q: np.ndarray
+) -> tuple[np.ndarray, float, float, float]:
+    """q shifted by multiples of 2π towards the current configuration (within the limits),
+    with its errors (position [m], axis [rad], roll [rad])."""
+    lim = robot.limits
+    q = _wrap_near(q, d.q_cur, lim.lower, lim.upper)
+    ep, th, roll = pose_error(robot, q, d.pose)
+    return q, ep, th, roll
+
+
+def _search_seeds(
+    robot: Robot, d: _Descent, seeds: Iterator[np.ndarray], solutions: int
+) -> _Search:
+    """Descend from each seed in turn; stop at once if the first converges, else once
+    `solutions` seeds have."""
+    s = _Search(best=(math.inf, math.inf, math.inf, d.q_cur))
+    for seed in seeds:
+        s.tried += 1
+        seed_best = _descend(robot, d, seed, s)
+        s.ends.append(seed_best)
+        if seed_best[0] > 2.0:
+            continue
+        q, ep, th, roll = _near_current(robot, d, seed_best[1])
+        if d.within(ep, th, roll):
+            s.found.append((float(np.linalg.norm(q - d.q_cur)), q, ep, th, roll))
+            if s.tried == 1 or len(s.found) >= solutions:
+                break
+    return s
+
+
+def _polish_ends(robot: Robot, d: _Descent, s: _Search, polish: int) -> None:
+    """Refine the `polish` closest ends with the bounded solve, adding those that converge.
+
+    DLS with clamping stalls where the solution lies on a joint limit; a bounded
+    trust-region solve from the closest ends handles the limits as constraints. Ends far
+    off (score > 200: ~0.2 m or ~100°) are not worth it: the pose is out of reach.
+    """
+    for _, q_end in [e for e in sorted(s.ends, key=lambda e: e[0]) if e[0] < 200.0][:polish]:
+        q, ep, th, roll = _near_current(robot, d, _bounded_solve(robot, d.pose, q_end))
+        if d.within(ep, th, roll):
+            s.found.append((float(np.linalg.norm(q - d.q_cur)), q, ep, th, roll))
+        elif ep / d.tol_position_m + max(th, roll) / d.tol_axis_rad < s.best[0]:
+            s.best = (ep / d.tol_position_m + max(th, roll) / d.tol_axis_rad, ep, th, q)
+
+
+def _no_solution(d: _Descent, s: _Search) -> IKNoSolution:
+    """The error for a search with no converged seed: the pose, the best residual and
+    the tolerances."""
+    pose, best = d.pose, s.best
+    return IKNoSolution(
+        f"IK failed for position {np.round(pose.position, 4).tolist()} m, axis "
+        f"{np.round(pose.axis, 4).tolist()}{'' if not d.six else f', roll {pose.roll:.4f} rad'}: "
+        f"best residual {best[1] * 1e3:.2f} mm, {math.degrees(best[2]):.2f}° after "
+        f"{s.tried} seeds (tolerance {d.tol_position_m * 1e3:.2f} mm, "
+        f"{math.degrees(d.tol_axis_rad):.2f}°)",
+        position_error_m=best[1],
+        axis_error_rad=best[2],
+        q_best=best[3],
+    )
+
+
 def solve_ik(
     robot: Robot,
     pose: ReleasePose,
@@ -276,144 +594,24 @@ def solve_ik(
             setting is out of range.
         IKNoSolution (an IKFailed): no seed converged; carries the best residual.
     """
-    import pinocchio as pin
-
-    for name, v in (
-        ("tol_position_m", tol_position_m),
-        ("tol_axis_rad", tol_axis_rad),
-        ("damping", damping),
-    ):
-        if not (math.isfinite(v) and v > 0.0):
-            raise InvalidInput(f"{name} must be a positive number, got {v!r}")
-    if max_iterations < 1 or random_seeds < 0 or solutions < 1 or not (0.0 <= null_gain < 1.0):
-        raise InvalidInput(
-            "need max_iterations >= 1, random_seeds >= 0, solutions >= 1 and "
-            f"0 <= null_gain < 1; got {max_iterations}, {random_seeds}, {solutions}, {null_gain}"
-        )
-    lim = robot.limits
-    q_cur = robot.home.copy() if q_current is None else np.asarray(q_current, dtype=float)
-    lim.check_position(q_cur, name="q_current", tol=1e-6)
-    q_cur = np.clip(q_cur, lim.lower, lim.upper)
-    model, data, fid = robot.model, robot.data, robot.tcp_frame
-    six = pose.roll is not None
-    r_des = pose.rotation()
-    u = pose.axis
-    p_des = pose.position
-    # Stop tighter than the tolerance: DLS converges fast near the solution.
-    stop_p, stop_a = 0.05 * tol_position_m, 0.05 * tol_axis_rad
-    eye_m = np.eye(6 if six else 5)
-    half = max_iterations // 2
-    lam2 = damping * damping
-    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-    def seeds() -> Iterator[np.ndarray]:
-        yield q_cur
-        if not np.allclose(robot.home, q_cur):
-            yield robot.home
-        g = rng if rng is not None else np.random.default_rng(0)
-        rand = robot.random_configuration(g, random_seeds)
-        # Every other random seed turns the base joint so the arm faces the target: the
-        # base yaw is the one joint whose right value is known in advance.
-        p_home = robot.tcp_pose(robot.home)[0]
-        turn = math.atan2(p_des[1], p_des[0]) - math.atan2(p_home[1], p_home[0])
-        q0 = (robot.home[0] + turn + math.pi) % (2 * math.pi) - math.pi
-        rand[::2, 0] = np.clip(
-            q0 + g.normal(0.0, 0.2, rand[::2].shape[0]), lim.lower[0], lim.upper[0]
-        )
-        yield from rand
-
-    found: list[tuple[float, np.ndarray, float, float, float]] = []
-    ends: list[tuple[float, np.ndarray]] = []
-    best = (math.inf, math.inf, math.inf, q_cur)  # (score, position error, axis error, q)
-    iters = 0
-    tried = 0
-    for seed in seeds():
-        tried += 1
-        q = np.array(seed, dtype=float)
-        seed_best = (math.inf, q)
-        for k in range(max_iterations):
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacement(model, data, fid)
-            oMf = data.oMf[fid]
-            r = oMf.rotation
-            e_p = p_des - oMf.translation
-            if six:
-                w = _log3(r_des @ r.T)
-                th = _axis_error(r[:, 2], u, r[:, 0])[1]
-                ang = math.sqrt(float(w @ w))
-            else:
-                w, th = _axis_error(r[:, 2], u, r[:, 0])
-                ang = th
-            ep = math.sqrt(float(e_p @ e_p))
-            score = ep / tol_position_m + ang / tol_axis_rad
-            if score < seed_best[0]:
-                seed_best = (score, q)
-            if score < best[0]:
-                best = (score, ep, th, q)
-            if ep < stop_p and ang < stop_a:
-                break
-            if k == half and score > 100.0:
-                break  # far off after half the budget: a new seed is a better bet
-            iters += 1
-            jac = pin.getFrameJacobian(model, data, fid, world)
-            if six:
-                jt = jac
-                err = np.concatenate([e_p, w])
-            else:
-                # Only rotations about axes perpendicular to z move the throw axis.
-                jt = np.concatenate([jac[:3], r[:, :2].T @ jac[3:]])
-                err = np.concatenate([e_p, r[:, :2].T @ w])
-            a = jt @ jt.T + (lam2 + 0.01 * float(err @ err)) * eye_m
-            if k < half:
-                # J⁺e + (I - J⁺J) z = z + J⁺(e - J z), with J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹. The
-                # pull stops halfway: at a joint limit it can fight the clamp.
-                z0 = null_gain * (q_cur - q)
-                dq = z0 + jt.T @ np.linalg.solve(a, err - jt @ z0)
-            else:
-                dq = jt.T @ np.linalg.solve(a, err)
-            step = float(np.max(np.abs(dq)))
-            if step > 0.5:
-                dq *= 0.5 / step
-            q = np.clip(q + dq, lim.lower, lim.upper)
-        ends.append(seed_best)
-        if seed_best[0] > 2.0:
-            continue
-        q = _wrap_near(seed_best[1], q_cur, lim.lower, lim.upper)
-        ep, th, roll = pose_error(robot, q, pose)
-        if ep <= tol_position_m and th <= tol_axis_rad and roll <= tol_axis_rad:
-            found.append((float(np.linalg.norm(q - q_cur)), q, ep, th, roll))
-            if tried == 1 or len(found) >= solutions:
-                break
-    if not found and polish > 0:
-        # DLS with clamping stalls where the solution lies on a joint limit; a bounded
-        # trust-region solve from the closest ends handles the limits as constraints.
-        # Ends far off (score > 200: ~0.2 m or ~100°) are not worth it: the pose is out of reach.
-        for _, q_end in [e for e in sorted(ends, key=lambda e: e[0]) if e[0] < 200.0][:polish]:
-            q = _wrap_near(_bounded_solve(robot, pose, q_end), q_cur, lim.lower, lim.upper)
-            ep, th, roll = pose_error(robot, q, pose)
-            if ep <= tol_position_m and th <= tol_axis_rad and roll <= tol_axis_rad:
-                found.append((float(np.linalg.norm(q - q_cur)), q, ep, th, roll))
-            elif ep / tol_position_m + max(th, roll) / tol_axis_rad < best[0]:
-                best = (ep / tol_position_m + max(th, roll) / tol_axis_rad, ep, th, q)
-    if not found:
-        raise IKNoSolution(
-            f"IK failed for position {np.round(p_des, 4).tolist()} m, axis "
-            f"{np.round(u, 4).tolist()}{'' if not six else f', roll {pose.roll:.4f} rad'}: "
-            f"best residual {best[1] * 1e3:.2f} mm, {math.degrees(best[2]):.2f}° after "
-            f"{tried} seeds (tolerance {tol_position_m * 1e3:.2f} mm, "
-            f"{math.degrees(tol_axis_rad):.2f}°)",
-            position_error_m=best[1],
-            axis_error_rad=best[2],
-            q_best=best[3],
-        )
-    _, q, ep, th, roll = min(found, key=lambda f: f[0])
+    _check_settings(
+        tol_position_m, tol_axis_rad, damping, max_iterations, random_seeds, solutions, null_gain
+    )
+    q_cur = _current_configuration(robot, q_current)
+    d = _Descent.of(pose, q_cur, tol_position_m, tol_axis_rad, max_iterations, damping, null_gain)
+    s = _search_seeds(robot, d, _seeds(robot, q_cur, pose.position, random_seeds, rng), solutions)
+    if not s.found and polish > 0:
+        _polish_ends(robot, d, s, polish)
+    if not s.found:
+        raise _no_solution(d, s)
+    _, q, ep, th, roll = min(s.found, key=lambda f: f[0])
     return IKResult(
         q=q,
         position_error_m=ep,
         axis_error_rad=th,
         roll_error_rad=roll,
-        iterations=iters,
-        seeds_tried=tried,
+        iterations=s.iterations,
+        seeds_tried=s.tried,
     )
 
 
