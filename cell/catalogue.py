@@ -127,17 +127,19 @@ def get_object(name: str) -> ObjectParams:
     return cat[name].params
 
 
-PAD_HALF_WIDTH_M = 0.012  # [m] half width of a finger pad across the grip (cell.sim.mechanism)
-
-
-def pad_width_m(obj: ObjectParams, pad_half_width_m: float = PAD_HALF_WIDTH_M) -> float:
+def pad_width_m(obj: ObjectParams, pad_half_width_m: float | None = None) -> float:
     """The width [m] the pads close to on an object: its extent along x within the
-    pads' strip |y| ≤ pad half width. A box's or cylinder's is its size_x; a mesh's can
-    be far less (a flat rock 48 mm wide is 16 mm thick where the pads meet it: the pads
-    in the scene close to 19 mm on it)."""
+    pads' strip |y| ≤ pad half width (default: the end-effector description's pads,
+    cell.sim.mechanism). A box's or cylinder's is its size_x; a mesh's can be far less
+    (a flat rock 48 mm wide is 16 mm thick where the pads meet it: the pads in the scene
+    close to 19 mm on it)."""
     entry = catalogue().get(obj.name or "")
     if obj.shape != "mesh" or entry is None or not obj.mesh:
         return obj.width
+    if pad_half_width_m is None:
+        from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+        pad_half_width_m = DEFAULT_GEOMETRY.pad_half_width_m
     v = mesh_vertices(obj.mesh, entry.mesh_scale)
     strip = v[np.abs(v[:, 1]) <= pad_half_width_m]
     return float(np.ptp(strip[:, 0])) if len(strip) >= 3 else obj.width

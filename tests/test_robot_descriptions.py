@@ -41,15 +41,29 @@ def test_end_effector_names_and_geometry_are_the_interface():
     joints = {j.get("name"): j for j in root.findall("joint")}
     assert set(EE_LINKS) <= links
     assert set(EE_JOINTS) | {"ee_tcp_joint"} <= set(joints)
+
+    def xyz(el, tag):
+        return [float(v) for v in el.find(tag).get("xyz").split()]
+
     band = joints["ee_band_joint"]
     assert band.get("type") == "prismatic"
-    assert band.find("axis").get("xyz") == "0 0 1"
+    assert band.find("parent").get("link") == "ee_base"
+    assert xyz(band, "axis") == [0, 0, 1]
+    # the stroke's zero, the plate face E, 15 mm in front of the flange
+    assert xyz(band, "origin") == pytest.approx([0.0, 0.0, 0.015])
     lim = band.find("limit")
-    # Stroke range of MODEL.md (0.03 ... 0.11) inside the joint range, up to L_t = 0.16.
-    assert float(lim.get("lower")) == pytest.approx(0.03)
-    assert float(lim.get("upper")) == pytest.approx(0.16)
-    tcp = [float(v) for v in joints["ee_tcp_joint"].find("origin").get("xyz").split()]
-    assert tcp == pytest.approx([0.0, 0.0, 0.145])
+    # MODEL.md's stroke range (0.03 ... 0.11) inside the carriage's travel, whose end stop
+    # (0.138) lies past the point where the band goes slack for every catalogue width.
+    assert float(lim.get("lower")) == pytest.approx(0.02)
+    assert float(lim.get("upper")) == pytest.approx(0.138)
+    for name, axis in (("ee_finger_left_joint", [-1, 0, 0]), ("ee_finger_right_joint", [1, 0, 0])):
+        pad = joints[name]
+        assert pad.get("type") == "prismatic" and pad.find("parent").get("link") == "ee_band"
+        assert xyz(pad, "axis") == axis
+        assert [float(pad.find("limit").get(k)) for k in ("lower", "upper")] == [0.0, 0.06]
+    tcp = joints["ee_tcp_joint"]
+    assert tcp.get("type") == "fixed" and tcp.find("parent").get("link") == "ee_base"
+    assert xyz(tcp, "origin") == pytest.approx([0.0, 0.0, 0.145])
 
 
 def _box(m, s):
@@ -57,58 +71,39 @@ def _box(m, s):
     return m / 12 * np.diag([y * y + z * z, x * x + z * z, x * x + y * y])
 
 
-def _cyl_y(m, r, h):
-    a = m / 12 * (3 * r * r + h * h)
-    return np.diag([a, m * r * r / 2, a])
-
-
-def _combine(parts):
-    mass = sum(m for m, _, _ in parts)
-    com = sum(m * np.asarray(c) for m, c, _ in parts) / mass
-    inertia = np.zeros((3, 3))
-    for m, c, ic in parts:
-        d = np.asarray(c) - com
-        inertia += ic + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return mass, com, inertia
+# The README's parts: mass [kg], box [m] and its centre in the link frame [m], and where the
+# link's mass sits (its inertial origin) [m].
+EE_PARTS = {
+    "ee_base": (0.6, (0.08, 0.06, 0.03), (0, 0, 0), (0, 0, 0.015)),
+    "ee_band": (0.008, (0.04, 0.04, 0.004), (0, 0, -0.002), (0, 0, 0)),
+    "ee_finger_left": (0.002, (0.004, 0.024, 0.03), (-0.002, 0, 0.015), (0, 0, 0)),
+    "ee_finger_right": (0.002, (0.004, 0.024, 0.03), (0.002, 0, 0.015), (0, 0, 0)),
+}
 
 
 def test_end_effector_inertias_are_those_of_its_drawn_shapes():
     """Recompute every link's inertia from the shapes and masses the README lists."""
     root = ET.parse(end_effector_urdf()).getroot()
-    expected = {
-        "ee_base": _combine(
-            [
-                (0.060, (0, 0, 0.0075), _box(0.060, (0.12, 0.08, 0.015))),
-                (0.224, (0, 0, 0.0275), _box(0.224, (0.05, 0.08, 0.025))),
-            ]
-        ),
-        "ee_finger_left": _combine(
-            [
-                (0.018, (0, 0, 0.08), _box(0.018, (0.012, 0.03, 0.16))),
-                (0.004, (0, 0, 0.16), _cyl_y(0.004, 0.01, 0.03)),
-            ]
-        ),
-        "ee_band": _combine(
-            [
-                (0.007, (0, 0, 0), _box(0.007, (0.02, 0.03, 0.004))),
-                (0.005, (0, 0, 0), _box(0.005, (0.06, 0.025, 0.001))),
-            ]
-        ),
-    }
-    expected["ee_finger_right"] = expected["ee_finger_left"]
     total = 0.0
     for link in root.findall("link"):
+        name = link.get("name")
         inertial = link.find("inertial")
-        assert inertial is not None, link.get("name")
+        assert inertial is not None, name
         m_urdf = float(inertial.find("mass").get("value"))
         total += m_urdf
-        if link.get("name") not in expected:
+        if name not in EE_PARTS:
             assert m_urdf == 0.0
             continue
-        m, c, inertia = expected[link.get("name")]
-        assert m_urdf == pytest.approx(m, abs=1e-9), link.get("name")
+        m, size, centre, mass_at = EE_PARTS[name]
+        assert m_urdf == pytest.approx(m, abs=1e-12), name
+        # one box, drawn where it collides
+        for tag in ("collision", "visual"):
+            (el,) = link.findall(tag)
+            assert [float(v) for v in el.find("geometry/box").get("size").split()] == list(size)
+            xyz = [float(v) for v in el.find("origin").get("xyz").split()]
+            np.testing.assert_allclose(xyz, centre, atol=1e-12, err_msg=name)
         xyz = [float(v) for v in inertial.find("origin").get("xyz").split()]
-        np.testing.assert_allclose(xyz, c, atol=1e-5, err_msg=link.get("name"))
+        np.testing.assert_allclose(xyz, mass_at, atol=1e-12, err_msg=name)
         el = inertial.find("inertia")
         got = np.array(
             [
@@ -117,9 +112,9 @@ def test_end_effector_inertias_are_those_of_its_drawn_shapes():
                 [float(el.get("ixz")), float(el.get("iyz")), float(el.get("izz"))],
             ]
         )
-        np.testing.assert_allclose(got, inertia, rtol=1e-3, atol=1e-10, err_msg=link.get("name"))
-    # The whole end-effector: ~0.35 kg (PLA and two servos).
-    assert total == pytest.approx(0.340, abs=1e-9)
+        np.testing.assert_allclose(got, _box(m, size), rtol=1e-4, atol=1e-12, err_msg=name)
+    # housing 0.6 kg, carriage 8 g, two pads of 2 g
+    assert total == pytest.approx(0.612, abs=1e-12)
 
 
 @pytest.mark.parametrize("robot", sorted(MOUNTS))

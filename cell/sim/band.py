@@ -69,7 +69,7 @@ class BandDrive:
 
     Args:
         client: a pybullet BulletClient.
-        body: the end-effector multibody (joints as in cell.sim.mechanism).
+        body: the end-effector multibody (joints as in cell.sim.mechanism: DRIVEN_JOINTS).
         ee: the band's parameters (the law the plant obeys).
         geometry: the mechanism's geometry.
     """

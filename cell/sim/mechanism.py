@@ -1,21 +1,30 @@
-"""The throwing end-effector as a PyBullet multibody (its URDF, generated).
+"""The throwing end-effector's simulated mechanism, as its description states it.
 
-End-effector frame E (the base link `ee_base`): origin on the base plate's
-front face, +z the throw axis (the approach axis u of MODEL.md), x across the
-band (the grip width), y completing a right-handed frame.
+`robots/throwing_ee/throwing_ee.urdf` is the one description of the end-effector: the
+PyBullet scene loads it as the end-effector's body and the planner loads it inside each
+arm's composite. `EEGeometry` holds the numbers the cell's code needs from it (dimensions,
+masses, the stroke range and end stop, the pads' friction), read from that file by
+`load_ee_geometry`; `DEFAULT_GEOMETRY` is the file's.
 
-Links and joints (names shared with `robots/throwing_ee`):
+End-effector frame E: the plate face, FLANGE_TO_EE_M along z from the description's
+`ee_base` (cell.sim.frames), +z the throw axis (the approach axis u of MODEL.md), x
+across the band (the grip width), y completing a right-handed frame. The end-effector
+body's base frame in PyBullet is E: `ee_base`'s mass is lumped there (its inertial
+origin), and PyBullet puts a body's base frame at its inertial frame.
 
-* `ee_base`: the housing and base plate (mount side at z < 0).
+Links and joints (`DRIVEN_JOINTS` in PyBullet's joint order):
+
+* `ee_base`: the housing (mount side at z < 0 in E).
 * `ee_band` on the prismatic `ee_band_joint` along +z: the band carriage (the
-  hoop and the moving part of the band, mass `BAND_MASS_KG`). Its joint value
-  is the position of the carriage face, i.e. the stroke L_s [m]. The band force
-  law drives it (cell.sim.band); its upper joint limit is the end stop where
-  the rope that ties the hoop catches it once the band is slack.
+  hoop and the moving part of the band). Its joint value is the position of the
+  carriage face, i.e. the stroke L_s [m] from E. The band force law drives it
+  (cell.sim.band); its upper joint limit is the end stop where the rope that ties
+  the hoop catches it once the band is slack.
 * `ee_finger_left` / `ee_finger_right` on the prismatic
   `ee_finger_left_joint` / `ee_finger_right_joint`, riding on the carriage:
   pads that close on the item across x. Joint value = distance of the pad's
   inner face from the throw axis [m].
+* `ee_tcp` (fixed): the grip centre, the planner's TCP.
 
 The item sits on the carriage face between the pads, its centre of mass at
 z = L_s + size_z/2 in E.
@@ -23,47 +32,57 @@ z = L_s + size_z/2 in E.
 
 from __future__ import annotations
 
-import tempfile
+import math
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["EEGeometry", "DEFAULT_GEOMETRY", "ee_urdf_text", "write_ee_urdf"]
+from cell.errors import InvalidParameter
+
+__all__ = ["EEGeometry", "DEFAULT_GEOMETRY", "DRIVEN_JOINTS", "load_ee_geometry"]
+
+DRIVEN_JOINTS = ("ee_band_joint", "ee_finger_left_joint", "ee_finger_right_joint")
+"""The joints the scene drives (band carriage, pads), in PyBullet's joint order: indices
+0, 1, 2 of the end-effector's body (cell.sim.band's BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)."""
 
 
 @dataclass(frozen=True)
 class EEGeometry:
-    """Dimensions and masses of the simulated end-effector (SI).
+    """Dimensions and masses of the simulated end-effector (SI), as its description
+    (robots/throwing_ee/throwing_ee.urdf) states them: build it with `load_ee_geometry`.
 
     Attributes:
-        band_mass_kg: moving mass of the carriage (hoop plus band) [kg].
+        band_mass_kg: moving mass of the carriage (hoop plus band) [kg]: `ee_band`'s mass.
         finger_mass_kg: mass of each finger pad [kg] (moves with the carriage).
-        base_mass_kg: mass of the housing [kg].
-        carriage_half_xy_m: half side of the carriage plate [m].
+        base_mass_kg: mass of the housing [kg]: `ee_base`'s mass.
+        carriage_half_xy_m: half side of the carriage plate [m] (`ee_band`'s box).
         carriage_thickness_m: carriage plate thickness [m].
-        pad_length_m: finger pad length along the throw axis [m]: no longer than the
-            shortest catalogue box (0.03 m), so that a placed item touches down before
-            the pads; the largest sphere (0.07 m) is then held 5 mm below its equator,
-            where friction still holds it.
-        pad_thickness_m: finger pad thickness across x [m].
-        pad_half_width_m: half width of a pad along y [m].
-        finger_open_m: widest pad opening from the axis [m].
-        end_stop_m: carriage position where the rope catches it [m].
-        stroke_lower_m: lowest carriage position [m].
-        pad_friction: Coulomb friction of the pads (latex band on plastic).
+        pad_length_m: finger pad length along the throw axis [m] (the pad box's z): no
+            longer than the shortest catalogue box (0.03 m), so that a placed item
+            touches down before the pads; the largest sphere (0.07 m) is then held 5 mm
+            below its equator, where friction still holds it.
+        pad_thickness_m: finger pad thickness across x [m] (the pad box's x).
+        pad_half_width_m: half width of a pad along y [m] (half the pad box's y).
+        finger_open_m: widest pad opening from the axis [m] (the pad joints' upper limit).
+        end_stop_m: carriage position where the rope catches it [m] (`ee_band_joint`'s
+            upper limit).
+        stroke_lower_m: lowest carriage position [m] (`ee_band_joint`'s lower limit).
+        pad_friction: Coulomb friction of the pads (latex band on plastic): the pads'
+            `<contact><lateral_friction>`.
     """
 
-    band_mass_kg: float = 0.008
-    finger_mass_kg: float = 0.002
-    base_mass_kg: float = 0.6
-    carriage_half_xy_m: float = 0.02
-    carriage_thickness_m: float = 0.004
-    pad_length_m: float = 0.03
-    pad_thickness_m: float = 0.004
-    pad_half_width_m: float = 0.012
-    finger_open_m: float = 0.06
-    end_stop_m: float = 0.138
-    stroke_lower_m: float = 0.02
-    pad_friction: float = 1.2
+    band_mass_kg: float
+    finger_mass_kg: float
+    base_mass_kg: float
+    carriage_half_xy_m: float
+    carriage_thickness_m: float
+    pad_length_m: float
+    pad_thickness_m: float
+    pad_half_width_m: float
+    finger_open_m: float
+    end_stop_m: float
+    stroke_lower_m: float
+    pad_friction: float
 
     @property
     def pad_spin_friction_m(self) -> float:
@@ -88,78 +107,183 @@ class EEGeometry:
         return self.band_mass_kg + 2 * self.finger_mass_kg
 
 
-DEFAULT_GEOMETRY = EEGeometry()
+def _floats(text: str | None, n: int, what: str, path: Path) -> tuple[float, ...]:
+    try:
+        vals = tuple(float(v) for v in (text or "").split())
+    except ValueError:
+        vals = ()
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        raise InvalidParameter(f"{path}: {what} must be {n} finite number(s), got {text!r}")
+    return vals
 
 
-def _box_inertia(m: float, x: float, y: float, z: float) -> str:
-    ixx = m / 12 * (y * y + z * z)
-    iyy = m / 12 * (x * x + z * z)
-    izz = m / 12 * (x * x + y * y)
-    return f'<inertia ixx="{ixx:.3e}" iyy="{iyy:.3e}" izz="{izz:.3e}" ixy="0" ixz="0" iyz="0"/>'
+def _origin_xyz(el: ET.Element, what: str, path: Path) -> tuple[float, ...]:
+    """The xyz of an element's <origin> (zero without one); its rpy must be zero."""
+    o = el.find("origin")
+    if o is None:
+        return (0.0, 0.0, 0.0)
+    if any(_floats(o.get("rpy", "0 0 0"), 3, f"{what} origin rpy", path)):
+        raise InvalidParameter(f"{path}: {what}: the simulated mechanism has no rotated frames")
+    return _floats(o.get("xyz", "0 0 0"), 3, f"{what} origin xyz", path)
 
 
-def _link(name: str, m: float, size: tuple[float, float, float], xyz: tuple, rgba: str) -> str:
-    # The inertial frame stays at the link frame so that PyBullet's base and
-    # constraint frames (which are inertial frames) coincide with the URDF frames.
-    sx, sy, sz = size
-    o = f'<origin xyz="{xyz[0]:.5f} {xyz[1]:.5f} {xyz[2]:.5f}"/>'
-    box = f'<geometry><box size="{sx:.5f} {sy:.5f} {sz:.5f}"/></geometry>'
-    return (
-        f'<link name="{name}"><inertial><origin xyz="0 0 0"/><mass value="{m}"/>{_box_inertia(m, sx, sy, sz)}'
-        f"</inertial><visual>{o}{box}<material name='{name}_m'><color rgba='{rgba}'/>"
-        f"</material></visual><collision>{o}{box}</collision></link>"
-    )
+class _Description:
+    """The links and joints of the end-effector's URDF, looked up with clear errors."""
 
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        try:
+            root = ET.parse(path).getroot()
+        except (OSError, ET.ParseError) as exc:
+            raise InvalidParameter(f"{path}: cannot read the end-effector's URDF ({exc})") from None
+        self.links = {lk.get("name", ""): lk for lk in root.findall("link")}
+        self.joints = {j.get("name", ""): j for j in root.findall("joint")}
 
-def ee_urdf_text(geo: EEGeometry = DEFAULT_GEOMETRY) -> str:
-    """The end-effector's URDF as text."""
-    g = geo
-    c = g.carriage_half_xy_m
-    t = g.carriage_thickness_m
-    housing = _link("ee_base", g.base_mass_kg, (0.08, 0.06, 0.03), (0, 0, -0.015), "0.2 0.2 0.25 1")
-    carriage = _link(
-        "ee_band", g.band_mass_kg, (2 * c, 2 * c, t), (0, 0, -t / 2), "0.85 0.55 0.1 1"
-    )
-    pad = (g.pad_thickness_m, 2 * g.pad_half_width_m, g.pad_length_m)
-    left = _link(
-        "ee_finger_left",
-        g.finger_mass_kg,
-        pad,
-        (-g.pad_thickness_m / 2, 0, g.pad_length_m / 2),
-        "0.6 0.6 0.65 1",
-    )
-    right = _link(
-        "ee_finger_right",
-        g.finger_mass_kg,
-        pad,
-        (g.pad_thickness_m / 2, 0, g.pad_length_m / 2),
-        "0.6 0.6 0.65 1",
-    )
+    def link(self, name: str) -> ET.Element:
+        if name not in self.links:
+            raise InvalidParameter(f"{self.path}: no link {name!r}")
+        return self.links[name]
 
-    def joint(name: str, parent: str, child: str, axis: str, lo: float, hi: float) -> str:
-        return (
-            f'<joint name="{name}" type="prismatic"><parent link="{parent}"/>'
-            f'<child link="{child}"/><origin xyz="0 0 0"/><axis xyz="{axis}"/>'
-            f'<limit lower="{lo}" upper="{hi}" effort="1000" velocity="100"/>'
-            f'<dynamics damping="0" friction="0"/></joint>'
+    def mass(self, link: str) -> float:
+        """The link's mass [kg], positive."""
+        el = self.link(link).find("inertial/mass")
+        if el is None:
+            raise InvalidParameter(f"{self.path}: link {link!r} has no inertial mass")
+        (m,) = _floats(el.get("value"), 1, f"link {link!r} mass", self.path)
+        if m <= 0:
+            raise InvalidParameter(f"{self.path}: link {link!r} mass {m} kg must be > 0")
+        return m
+
+    def inertial_origin(self, link: str) -> tuple[float, ...]:
+        el = self.link(link).find("inertial")
+        if el is None:
+            raise InvalidParameter(f"{self.path}: link {link!r} has no <inertial>")
+        return _origin_xyz(el, f"link {link!r} inertial", self.path)
+
+    def box(self, link: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """(size [m], centre [m] in the link frame) of the link's one collision box."""
+        cols = self.link(link).findall("collision")
+        box = cols[0].find("geometry/box") if len(cols) == 1 else None
+        if box is None:
+            raise InvalidParameter(f"{self.path}: link {link!r} must have one collision box")
+        size = _floats(box.get("size"), 3, f"link {link!r} box size", self.path)
+        if min(size) <= 0:
+            raise InvalidParameter(f"{self.path}: link {link!r} box size {size} must be > 0")
+        return size, _origin_xyz(cols[0], f"link {link!r} collision", self.path)
+
+    def friction(self, link: str) -> float:
+        el = self.link(link).find("contact/lateral_friction")
+        if el is None:
+            raise InvalidParameter(
+                f"{self.path}: link {link!r} needs <contact><lateral_friction value=.../>"
+            )
+        (mu,) = _floats(el.get("value"), 1, f"link {link!r} lateral_friction", self.path)
+        if mu <= 0:
+            raise InvalidParameter(f"{self.path}: link {link!r} friction {mu} must be > 0")
+        return mu
+
+    def prismatic(
+        self, name: str, parent: str, child: str, axis: tuple[float, float, float]
+    ) -> tuple[tuple[float, ...], float, float]:
+        """(origin xyz [m], lower [m], upper [m]) of a prismatic joint, checked."""
+        if name not in self.joints:
+            raise InvalidParameter(f"{self.path}: no joint {name!r}")
+        j = self.joints[name]
+        par, chi, ax = j.find("parent"), j.find("child"), j.find("axis")
+        got = (
+            j.get("type"),
+            par.get("link") if par is not None else None,
+            chi.get("link") if chi is not None else None,
+            _floats(ax.get("xyz") if ax is not None else "1 0 0", 3, f"{name} axis", self.path),
         )
+        if got != ("prismatic", parent, child, axis):
+            raise InvalidParameter(
+                f"{self.path}: joint {name!r} must be prismatic from {parent!r} to {child!r} "
+                f"along {axis}, got type, parent, child, axis = {got}"
+            )
+        lim = j.find("limit")
+        if lim is None:
+            raise InvalidParameter(f"{self.path}: joint {name!r} has no <limit>")
+        (lo,) = _floats(lim.get("lower"), 1, f"joint {name!r} lower limit", self.path)
+        (hi,) = _floats(lim.get("upper"), 1, f"joint {name!r} upper limit", self.path)
+        if not lo < hi:
+            raise InvalidParameter(f"{self.path}: joint {name!r} limits [{lo}, {hi}] are empty")
+        return _origin_xyz(j, f"joint {name!r}", self.path), lo, hi
 
-    joints = (
-        joint("ee_band_joint", "ee_base", "ee_band", "0 0 1", g.stroke_lower_m, g.end_stop_m)
-        + joint("ee_finger_left_joint", "ee_band", "ee_finger_left", "-1 0 0", 0.0, g.finger_open_m)
-        + joint(
-            "ee_finger_right_joint", "ee_band", "ee_finger_right", "1 0 0", 0.0, g.finger_open_m
+
+def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
+    """The simulated end-effector's numbers, read from its description.
+
+    Besides reading them, this checks what the scene relies on: the links and prismatic
+    joints of the module's docstring; `ee_base`'s mass at the carriage's seat E (the
+    origin of `ee_band_joint`), the carriage's and each pad's at its link frame (PyBullet's
+    base and link frames are the inertial frames: the mount, the band force and the pads'
+    gear act there); both pads alike.
+
+    Args:
+        path: the URDF (default robots/throwing_ee/throwing_ee.urdf).
+
+    Returns:
+        The EEGeometry of that file.
+
+    Raises:
+        InvalidParameter: the file is missing, unreadable, or not that mechanism; the
+            message names the file and the element.
+    """
+    from cell.robot.composite import end_effector_urdf
+
+    path = Path(path) if path is not None else end_effector_urdf()
+    d = _Description(path)
+    seat, lower, end_stop = d.prismatic("ee_band_joint", "ee_base", "ee_band", (0.0, 0.0, 1.0))
+    if d.inertial_origin("ee_base") != seat:
+        raise InvalidParameter(
+            f"{path}: ee_base's inertial origin {d.inertial_origin('ee_base')} must be "
+            f"ee_band_joint's origin {seat} (E, where the scene holds the end-effector)"
         )
-    )
-    return (
-        f'<?xml version="1.0"?><robot name="throwing_ee">{housing}{carriage}{left}{right}'
-        f"{joints}</robot>"
+    pads = []
+    for side, axis in (("left", (-1.0, 0.0, 0.0)), ("right", (1.0, 0.0, 0.0))):
+        link = f"ee_finger_{side}"
+        origin, lo, hi = d.prismatic(f"{link}_joint", "ee_band", link, axis)
+        if origin != (0.0, 0.0, 0.0) or lo != 0.0:
+            raise InvalidParameter(
+                f"{path}: joint {link + '_joint'!r} must start at the carriage's frame "
+                f"(origin 0 0 0) with its lower limit 0 (a pad closed on the axis)"
+            )
+        size, centre = d.box(link)
+        if centre != (axis[0] * size[0] / 2, 0.0, size[2] / 2):
+            raise InvalidParameter(
+                f"{path}: link {link!r}: the pad's box must have its inner face on the joint "
+                f"(x = 0) and start at the carriage face (z = 0): centre "
+                f"{(axis[0] * size[0] / 2, 0.0, size[2] / 2)}, got {centre}"
+            )
+        pads.append((d.mass(link), size, d.friction(link), hi))
+    if pads[0] != pads[1]:
+        raise InvalidParameter(
+            f"{path}: the two pads must have the same mass, box, friction and opening; "
+            f"got (left) {pads[0]} and (right) {pads[1]}"
+        )
+    for link in ("ee_band", "ee_finger_left", "ee_finger_right"):
+        if d.inertial_origin(link) != (0.0, 0.0, 0.0):
+            raise InvalidParameter(f"{path}: link {link!r}: its mass must sit at its frame")
+    carriage, _ = d.box("ee_band")
+    if carriage[0] != carriage[1]:
+        raise InvalidParameter(f"{path}: the carriage plate (ee_band's box) must be square")
+    pad_mass, (pad_x, pad_y, pad_z), mu, opening = pads[0]
+    return EEGeometry(
+        band_mass_kg=d.mass("ee_band"),
+        finger_mass_kg=pad_mass,
+        base_mass_kg=d.mass("ee_base"),
+        carriage_half_xy_m=carriage[0] / 2,
+        carriage_thickness_m=carriage[2],
+        pad_length_m=pad_z,
+        pad_thickness_m=pad_x,
+        pad_half_width_m=pad_y / 2,
+        finger_open_m=opening,
+        end_stop_m=end_stop,
+        stroke_lower_m=lower,
+        pad_friction=mu,
     )
 
 
-def write_ee_urdf(geo: EEGeometry = DEFAULT_GEOMETRY, folder: str | Path | None = None) -> Path:
-    """Write the URDF to a file (in a temporary folder by default) and return its path."""
-    d = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="cell_ee_"))
-    path = d / "throwing_ee_sim.urdf"
-    path.write_text(ee_urdf_text(geo))
-    return path
+DEFAULT_GEOMETRY = load_ee_geometry()
+"""The end-effector of robots/throwing_ee/throwing_ee.urdf."""

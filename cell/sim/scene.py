@@ -1,9 +1,11 @@
 """The PyBullet cell: floor, arm with the throwing end-effector, pick station, bins, items.
 
 World frame W: z up, the floor is z = 0, the arm's base at `robot_base_xyz`.
-The end-effector (cell.sim.mechanism) is a multibody of its own, held at its
-mount pose by a fixed constraint whose target follows the arm's flange
-(`panda_link8`; frames in cell.sim.frames); without an arm (`robot=None`) the target is set directly with `hold_ee` (calibration
+The end-effector is a multibody of its own, loaded from its description
+(robots/throwing_ee/throwing_ee.urdf, the file the planner's composite includes;
+cell.sim.mechanism reads its numbers), held at its mount pose by a fixed constraint
+whose target follows the arm's flange (`panda_link8`; frames in cell.sim.frames);
+without an arm (`robot=None`) the target is set directly with `hold_ee` (calibration
 campaigns do this: the end-effector held kinematically at the release pose).
 The arm is kinematic (joint positions are set, not simulated) and has no
 collisions: its motion is the planner's business, the scene checks what
@@ -19,7 +21,6 @@ import contextlib
 import logging
 import os
 import sys
-import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -29,7 +30,7 @@ import numpy as np
 from cell.errors import InvalidInput, InvalidParameter, MissingDependency, NoLanding
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
-from cell.sim.band import BandDrive
+from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT, BandDrive
 from cell.sim.bins import BinSpec, build_bin, which_bin
 from cell.sim.drag import apply_drag
 from cell.sim.frames import (
@@ -45,7 +46,7 @@ from cell.sim.frames import (
     release_orientation,
 )
 from cell.sim.items import Item, spawn_item
-from cell.sim.mechanism import DEFAULT_GEOMETRY, EEGeometry, write_ee_urdf
+from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
 from cell.sim.settle import Outcome, Tracker, crossing
 
 # the frame constants and helpers are re-exported for callers that import them from here
@@ -96,13 +97,13 @@ class CellScene:
         dt_s: physics step outside the launch [s].
         launch_dt_s: physics step during the launch push [s].
         band: the band law the plant obeys (MODEL.md parameters).
-        geometry: the mechanism's dimensions and masses.
         pick_station_xy: centre of the pick station [m, W].
         pick_station_height: its top surface height [m].
         robot_base_xyz: the arm's base position [m, W].
 
     Raises:
-        InvalidParameter: a bad step or an unknown robot.
+        InvalidParameter: a bad step, an unknown robot, or an end-effector description
+            (robots/throwing_ee/throwing_ee.urdf) that is not the mechanism the scene drives.
     """
 
     def __init__(
@@ -114,7 +115,6 @@ class CellScene:
         dt_s: float = 1e-3,
         launch_dt_s: float = 2.5e-4,
         band: EndEffectorParams = DEFAULT_EE,
-        geometry: EEGeometry = DEFAULT_GEOMETRY,
         pick_station_xy: tuple[float, float] = (0.45, -0.4),
         pick_station_height: float = 0.2,
         robot_base_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
@@ -161,10 +161,8 @@ class CellScene:
                 [pick_station_xy[0], pick_station_xy[1], pick_station_height / 2],
             )
         )
-        self.geometry = geometry
-        with tempfile.TemporaryDirectory(prefix="cell_ee_") as folder:
-            self.ee_body = int(cl.loadURDF(str(write_ee_urdf(geometry, folder)), [0, 0, 1.0]))
-        self.band = BandDrive(cl, self.ee_body, band, geometry)
+        self.ee_body, self.geometry = self._load_end_effector()
+        self.band = BandDrive(cl, self.ee_body, band, self.geometry)
         self._mount = cl.createConstraint(
             self.ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0]
         )
@@ -183,6 +181,31 @@ class CellScene:
             self._load_arm(robot, robot_base_xyz)
 
     # -- construction ----------------------------------------------------------
+    def _load_end_effector(self) -> tuple[int, EEGeometry]:
+        """The end-effector's body from its description, E at (0, 0, 1) m until mounted,
+        and the geometry read from the same file.
+
+        PyBullet puts the body's base frame at `ee_base`'s inertial frame, which the
+        description puts at E (the plate face); loadURDF places the link frame, so the
+        base is then set to E's pose.
+        """
+        from cell.robot.composite import end_effector_urdf
+
+        cl = self.client
+        path = end_effector_urdf()
+        geometry = load_ee_geometry(path)
+        body = int(cl.loadURDF(str(path), [0, 0, 1.0]))
+        cl.resetBasePositionAndOrientation(body, [0, 0, 1.0], [0, 0, 0, 1])
+        names = [
+            cl.getJointInfo(body, j)[1].decode() for j in (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)
+        ]
+        if names != list(DRIVEN_JOINTS):
+            raise InvalidParameter(
+                f"{path}: PyBullet numbers its joints {names} where the scene drives "
+                f"{list(DRIVEN_JOINTS)}: keep the joints in that order in the file"
+            )
+        return body, geometry
+
     def _load_arm(self, robot: str, base_xyz: tuple[float, float, float]) -> None:
         """The arm from the composite URDF Pinocchio plans with (robots/<arm>_throwing):
         kinematic and collision-free; its end-effector links are hidden, and the
