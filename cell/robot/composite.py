@@ -10,6 +10,7 @@ and PyBullet both load it without a package search path.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import tempfile
@@ -281,8 +282,8 @@ def cache_dir() -> Path:
 def composite_urdf(robot: str) -> Path:
     """Write (if changed) and return the composite URDF of an arm with the end-effector.
 
-    The file is `<cache>/robots/<robot>_throwing.urdf`; it is rewritten atomically only when
-    its content would change, so concurrent processes may call this freely.
+    The file is `<cache>/robots/<robot>_throwing-<hash of its content>.urdf`, written
+    atomically when missing, so concurrent processes (of any version) may call this freely.
 
     Args:
         robot: "panda" or "ur5".
@@ -295,7 +296,10 @@ def composite_urdf(robot: str) -> Path:
         MissingDependency: example-robot-data or robots/ is missing.
     """
     text = composite_urdf_text(robot)
-    path = cache_dir() / f"{MOUNTS[robot]}.urdf"
+    # named by its content: processes of different versions (or descriptions) never load
+    # each other's file while one of them rewrites it
+    digest = hashlib.sha256(text.encode()).hexdigest()[:12]
+    path = cache_dir() / f"{MOUNTS[robot]}-{digest}.urdf"
     try:
         if path.read_text() == text:
             return path
