@@ -57,11 +57,7 @@ def make_end_effector(
         HardwareError: the hardware cannot be reached.
     """
     if kind == SIM_EE_BACKEND:
-        if plant is None:
-            raise InvalidInput("the pybullet end-effector rides a scene: give its plant")
-        from cell.endeffector.pybullet_backend import PyBulletEndEffector
-
-        return PyBulletEndEffector(plant)
+        return _simulated(plant)
     if kind == "dynamixel":
         from cell.endeffector.dynamixel import DynamixelEndEffector, EmulatedBus, load_config
 
@@ -91,4 +87,13 @@ def make_in_step(plant: Any, hardware: EndEffector | None = None) -> InStep:
         plant: the PyBullet cell (`cell.sim.CellScene`) whose end-effector body to drive.
         hardware: a connected hardware end-effector (from `make_end_effector`), or None.
     """
-    return InStep(make_end_effector(SIM_EE_BACKEND, plant=plant), hardware)
+    return InStep(_simulated(plant), hardware)
+
+
+def _simulated(plant: Any) -> Any:
+    """The plant's simulated end-effector."""
+    if plant is None:
+        raise InvalidInput("the pybullet end-effector rides a scene: give its plant")
+    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+
+    return PyBulletEndEffector(plant)
