@@ -172,4 +172,35 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "sim_time_s": sim,
         "wall_time_s": sum(lay["wall_time_s"] for lay in layouts),
         "failures": {f: c for f in FAILURES if (c := sum(it["failure"] == f for it in items))},
+        **repeat_figures(layouts),
+    }
+
+
+def repeat_figures(layouts: list[dict[str, Any]]) -> dict[str, Any]:
+    """How an object's second throw in a layout lands against its first (the flywheel's
+    measure; without `--learn` the baseline): the pairs' count, the median landing error
+    of the first and of the second throws [m], and the share of pairs whose second lands
+    closer."""
+    pairs: list[tuple[float, float]] = []
+    for lay in layouts:
+        first: dict[str, float] = {}
+        done: set[str] = set()
+        for it in lay["items"]:
+            oid, err = it["object_id"], it["landing_error_m"]
+            if it["action"] != "throw" or not math.isfinite(err) or oid in done:
+                continue
+            if oid in first:
+                pairs.append((first[oid], err))
+                done.add(oid)
+            else:
+                first[oid] = err
+    a = sorted(p[0] for p in pairs)
+    b = sorted(p[1] for p in pairs)
+    return {
+        "repeat_pairs": len(pairs),
+        "repeat_first_median_error_m": a[len(a) // 2] if a else math.nan,
+        "repeat_second_median_error_m": b[len(b) // 2] if b else math.nan,
+        "repeat_second_closer_rate": (
+            sum(q < p for p, q in pairs) / len(pairs) if pairs else math.nan
+        ),
     }
