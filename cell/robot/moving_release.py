@@ -178,14 +178,18 @@ def grip_move(
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
     iterations: int = 6,
+    gentle: bool = False,
 ) -> Trajectory:
     """Ruckig from rest at q0 to (q1, dq1), the fastest whose use of the grip stays within
     1/CARRY_MARGIN (`cell.robot.carry.grip_use`): bisection on a factor s that scales the
     acceleration and jerk limits. None for `hold`: the move at the given scales.
 
+    With `gentle`, a move whose path asks too much of the grip at any speed (it turns a
+    hanging item) is made at GENTLE_SCALE of the limits instead, as `plan_carry` does.
+
     Raises:
-        TrajectoryError: no move at all (see plan_move), or the grip cannot hold the
-            item even at the slowest factor tried (2 % of the limits).
+        TrajectoryError: no move at all (see plan_move), or (without `gentle`) the grip
+            cannot hold the item even at the slowest factor tried (2 % of the limits).
     """
     from cell.robot.carry import CARRY_MARGIN, grip_use
 
@@ -215,6 +219,11 @@ def grip_move(
             lo, found = mid, tr
         else:
             hi = mid
+    if found is None and gentle:
+        from cell.robot.carry import GENTLE_SCALE
+
+        log.info("no speed keeps the move within the grip: moving at %.0f %%", 100 * GENTLE_SCALE)
+        return attempt(GENTLE_SCALE)[0]
     if found is None:
         raise TrajectoryError(
             f"no ruckig move to the release keeps the item in the grip (use {best[1]:.2f} "
@@ -654,7 +663,7 @@ def choose_release(
     )
     q_static = solve(tcp, sp.elevation_rad, sp.azimuth_rad)
     kw: dict[str, Any] = dict(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
-    t_static = grip_move(rb, q0, q_static, None, hold, **kw).duration + SETTLE_S
+    t_static = grip_move(rb, q0, q_static, None, hold, gentle=True, **kw).duration + SETTLE_S
     static_cycle = t_static + COAST_S + move_time(q_static, q0, rb)
     dirs = release_directions(rb, sp, q0, q_static) if directions is None else directions
     if criterion not in ("cycle", "release"):
