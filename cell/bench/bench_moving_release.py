@@ -2,10 +2,15 @@
 
 For random throws (an object, a bin, a lift pose over the pick station) it plans the
 static release (`plan_facing`) and lets `choose_release` try releases on the move; it
-reports the time each saves and flies, in the scene, the moving throw the planner
-chose (by the time to the release) and the same plan made static (the same machinery,
-`release_in_scene` with a vanishing grip velocity), and prints the plant's release
-velocity against the planned one and each landing against the model's prediction.
+reports the time each saves (to the release, and over the out-and-back cycle) and flies
+in the scene, all by the same machinery (`release_in_scene`, the static ones with a
+vanishing grip velocity): the moving throw chosen by the time to the release, the same
+plan made static, and the static plan. Columns: the plant's release velocity against
+the planned one; the moving landing against its prediction (`predict_moving_landing`,
+and `predict_landing` with σ's base velocity: "world-frame"); the same plan made static
+against the model (an unplanned throw: it may hit a bin's wall); the motion's shift of
+the landing against the release formulation applied to the measured static launch
+(`motion_shift_error`); the static plan's landing against its prediction; in the bin.
 
     python -m cell.bench.bench_moving_release [n] [seed]
 """

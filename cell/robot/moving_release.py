@@ -1,35 +1,42 @@
 """Release on the move: the arm throws while its end-effector moves (issue 16).
 
 The moving base's formulation (cell.platforms.mobile) applied to the arm: the grip
-centre moves at a velocity v_rel [m/s, W] at the release, the model's launch is the
-band's push along the throw axis plus v_rel (σ's base velocity vx_mps, vy_mps, vz_mps,
-`cell.model.predict_landing`), and the arm arrives at the release configuration with
-the joint velocity that gives v_rel.
+centre moves at a velocity v_rel [m/s, W] at the release, the launch is the band's push
+along the throw axis plus v_rel (σ's base velocity vx_mps, vy_mps, vz_mps), and the arm
+arrives at the release configuration with the joint velocity that gives v_rel.
 
-The motion has three parts, one joint trajectory q(t) (`MovingReleaseMotion`):
+The motion, one joint trajectory q(t) (`MovingReleaseMotion`):
 
-1. approach: ruckig from rest at q_start to (q_rel, q̇_rel) with zero acceleration,
-   q̇_rel = J(q_rel)⁺ [v_rel; 0] (`release_joint_velocity`: the grip's angular velocity
-   held at zero, so the throw axis does not turn at the release and every point of the
-   end-effector, the item's centre included, moves at v_rel). Ruckig's non-zero target
-   states: its `calculate` gives a trajectory whose state at t = duration is the target
-   (position, velocity, acceleration) exactly; past the duration `at_time` goes on with
-   the target's acceleration (pantor/ruckig#59), so the follow-up is planned separately,
-   and with a target velocity it may overshoot the target position on the way
+1. approach: ruckig from rest at q_start to the run-in's first state, at its velocity
+   and zero acceleration (`grip_move`: slowed until the pads hold the item, see
+   `cell.robot.carry`; a fast approach slid the item off the carriage). Ruckig's
+   non-zero target states: `calculate` returns a trajectory whose state at t = duration
+   is the target exactly (tested); past the duration `at_time` goes on with the
+   target's acceleration (pantor/ruckig#59), so what follows is planned separately; and
+   with a target velocity the move may overshoot the target position on the way
    (moveit/moveit#3376): `plan_move` checks the position extrema against the limits.
-   The release instant is the approach's duration; the latch opens then.
-2. coast: the grip centre goes on along the straight line at v_rel, the axis fixed
-   (resolved rate, q̇ = J⁺ [v_rel; 0]), for COAST_S while the band pushes the item out:
-   the model takes the base velocity as constant during the push.
-3. stop: ruckig's velocity interface brakes from the coast's end state to rest
-   (`plan_stop`).
+2. run-in: RUN_IN_S on the straight line at v_rel, the axis fixed (resolved rate,
+   q̇ = J⁺ [v_rel; 0], `CoastTrajectory`), ending at (q_rel, q̇_rel), q̇_rel =
+   J(q_rel)⁺ [v_rel; 0] (`release_joint_velocity`: the grip's angular velocity held at
+   zero, so the throw axis does not turn and every point of the end-effector, the
+   item's centre included, moves at v_rel). The latch opens at its end: the release
+   instant `t_release_s`.
+3. coast: COAST_S more on the line at v_rel while the band pushes the item out (it
+   leaves the carriage ~35 ms after the latch, `leave_time_s`).
+4. stop: ruckig's velocity interface brakes from the coast's end to rest (`plan_stop`).
 
-`plan_moving_throw` plans the release state for an item and a bin with v_rel given (the
-release pose of the static plan, the stroke and the azimuth polished on the model so the
-moving launch lands on the goal), `choose_release` tries a few v_rel and keeps the one
-with the shortest cycle, or the static release when none is shorter, and
-`release_in_scene` runs a motion in the PyBullet cell and opens the latch at the planned
-instant while the arm moves.
+The landing (`predict_moving_landing`): the model's launch for the plan made static,
+taken in the end-effector's frame (inertial while it moves at v_rel), then v_rel added
+to the velocity and v_rel × `leave_time_s` to the position, and the model's flight.
+`predict_landing` with σ's base velocity (the moving base's use) carries the item only
+the push's fitted ee.dt (~9 ms) along and lands 10-20 mm short at 0.5-0.75 m/s.
+
+`plan_moving_throw` plans the release for an item and a bin with v_rel given (the
+static plan's release point, the stroke and azimuth polished to land on the goal),
+`choose_release` tries a few v_rel and keeps the soonest (by the cycle, or by the time
+to the release) or the static release when none is sooner, and `release_in_scene` runs
+a motion in the PyBullet cell and opens the latch at the planned instant while the arm
+moves.
 """
 
 from __future__ import annotations
@@ -571,7 +578,7 @@ class ReleaseChoice:
         moving: the chosen moving throw, or None when the static release is faster.
         static_q: the static release configuration [rad].
         static_to_release_s: the static move's duration to the release [s] (ruckig,
-            rest to rest, then SETTLE_S).
+            rest to rest, within the grip as `grip_move`, then SETTLE_S).
         static_cycle_s: that, the push (COAST_S) and the move back to q_start [s].
         candidates: (v_release, MovingThrow or the reason it was refused) tried.
     """
@@ -633,10 +640,10 @@ def choose_release(
 
     The cycle is from rest at q_start (the lift pose) through the release to rest back
     at q_start: static = rest-to-rest move to the release + SETTLE_S + the push
-    (COAST_S) + the move back; moving = approach + coast + stop + the move back (ruckig
-    for all). Each moving candidate lands on the goal by the model (predicted miss ≤
-    MISS_TOL, so within the bin); the one with the shortest cycle wins if it is shorter
-    than the static one.
+    (COAST_S) + the move back; moving = approach + run-in + coast + stop + the move back
+    (ruckig for all). Each moving candidate lands on the goal by the model
+    (`predict_moving_landing` within MISS_TOL, so within the bin) and is within the
+    joint limits all along; the soonest wins if it is sooner than the static release.
 
     Args:
         robot, obj, static_plan, q_start, ee, bounds, ik, hold: see `plan_moving_throw`
