@@ -286,8 +286,14 @@ class PyBulletEndEffector(EndEffector):
             self.band.reset(self.band.position(), self.band.width() / 2)
         self._wind_to(stroke_m, self.spool_speed_mps)
 
-    def throw(self) -> None:
+    def throw(self, *, keep_launch_step: bool = False) -> None:
         """Disengage the latch; returns once the carriage has hit its end stop.
+
+        Args:
+            keep_launch_step: stay at the launch's physics step afterwards (a release on
+                the move, `cell.robot.moving_release`: the mount drags E a few steps'
+                travel behind the arm, so a change of step while the arm moves jolts E,
+                and the item may still touch the pads).
 
         Raises:
             InvalidInput: no item in the grip.
@@ -305,7 +311,8 @@ class PyBulletEndEffector(EndEffector):
         while sc.t < t_end and self.band.position() < stop:
             sc.step()
         sc.run_for(0.01)  # let the carriage settle on its stop and the item clear the pads
-        sc.set_timestep(sc.dt_s)
+        if not keep_launch_step:
+            sc.set_timestep(sc.dt_s)
         self.last_released, self.item = self.item, None
 
     def place(self) -> None:

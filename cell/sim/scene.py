@@ -615,6 +615,11 @@ class CellScene:
             self.client.setPhysicsEngineParameter(fixedTimeStep=dt_s)
             self._dt_now = dt_s
 
+    @property
+    def dt_now(self) -> float:
+        """The physics step in use now [s] (`dt_s`, or `launch_dt_s` during a launch)."""
+        return self._dt_now
+
     def step(self, n: int = 1) -> None:
         """Advance n physics steps: band law, drag on every item, then the physics."""
         cl = self.client
