@@ -167,7 +167,10 @@ def test_carrying_at_the_static_limit_slides_the_item():
     """Without the measured carry margin (asking the pads for all they hold at rest) the
     same kind of carry lets the item slide: the margin is needed, not decoration."""
     held, drift, _ = _carry(0.7, 1.0)
-    assert (not held) or drift > 5e-3
+    # a slide: at least twice the 1 mm the computed limit keeps an item within (measured:
+    # 3.4 mm with the description's end-effector, 5-6 mm with the earlier generated one,
+    # whose contacts the engine solved in another order)
+    assert (not held) or drift > 2e-3
 
 
 def _turn_in_grip_deg(obj, stroke_m: float) -> float:

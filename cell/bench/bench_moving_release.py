@@ -52,7 +52,7 @@ def scenario(
     from cell.optimize.plan import plan_facing
     from cell.orchestrator import carry_hold
     from cell.robot.ik import solve_release_ik
-    from cell.robot.moving_release import tcp_for_item_centre
+    from cell.sim.frames import tcp_for_item_centre
 
     obj = get_object(obj_name)
     mo = params.model_object(obj)
@@ -66,7 +66,7 @@ def scenario(
             scene.pick_station_height + obj.size[2] / 2 + LIFT_M,
         ]
     )
-    tcp0 = tcp_for_item_centre(lift, -math.pi / 2, 0.0, sp.stroke_m, obj.size[2])
+    tcp0 = tcp_for_item_centre(lift, -math.pi / 2, 0.0, sp.stroke_m, obj)
     q0 = solve_release_ik(robot, tcp0, -math.pi / 2, 0.0, np.asarray(scene.ready_q)).q
     return Scenario(obj, mo, goal, sp, q0, carry_hold(params, obj, sp.stroke_m))
 
@@ -75,7 +75,7 @@ def fly(scene: Any, ee: Any, sc: Scenario, stroke_m: float, motion: Any) -> tupl
     """Grip the item at the start, run the motion (`release_in_scene`) and watch the item
     come to rest: (its Outcome, whose track's times count from the tracker's start, the
     step after the latch; the SceneRelease)."""
-    from cell.robot.moving_release import release_in_scene
+    from cell.sim.release import release_in_scene
 
     scene.set_arm(sc.q_start, teleport=True)
     item = scene.spawn_item(sc.obj)

@@ -34,7 +34,7 @@ the push's fitted ee.dt (~9 ms) along and lands 10-20 mm short at 0.5-0.75 m/s.
 `plan_moving_throw` plans the release for an item and a bin with v_rel given (the
 static plan's release point, the stroke and azimuth polished to land on the goal),
 `choose_release` tries a few v_rel and keeps the soonest (by the cycle, or by the time
-to the release) or the static release when none is sooner, and `release_in_scene` runs
+to the release) or the static release when none is sooner, and `cell.sim.release.release_in_scene` runs
 a motion in the PyBullet cell and opens the latch at the planned instant while the arm
 moves.
 """
@@ -50,12 +50,14 @@ from typing import Any
 import numpy as np
 
 from cell.errors import IKFailed, InvalidInput, TrajectoryError, UnreachableTarget
+from cell.frames import axis_frame
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.robot.carry import GripHold
 from cell.robot.model import Robot
 from cell.robot.motion import move_time, plan_move, plan_stop, release_joint_velocity
 from cell.robot.trajectory import Trajectory, as_robot, joint_vector
+from cell.sim.frames import tcp_for_item_centre
 
 __all__ = [
     "COAST_S",
@@ -64,12 +66,9 @@ __all__ = [
     "MovingReleaseMotion",
     "MovingThrow",
     "ReleaseChoice",
-    "SceneRelease",
     "choose_release",
     "plan_moving_release",
     "plan_moving_throw",
-    "release_in_scene",
-    "tcp_for_item_centre",
     "throw_axis",
 ]
 
@@ -83,25 +82,8 @@ DEFAULT_SPEEDS_MPS = (0.25, 0.5, 0.75, 1.0)  # candidate grip speeds at release 
 
 
 def throw_axis(elevation: float, azimuth: float) -> np.ndarray:
-    """The throw axis u(e, a) in W, shape (3,)."""
-    ce = math.cos(elevation)
-    return np.array([ce * math.cos(azimuth), ce * math.sin(azimuth), math.sin(elevation)])
-
-
-def tcp_for_item_centre(
-    centre: np.ndarray | Sequence[float],
-    elevation: float,
-    azimuth: float,
-    stroke_m: float,
-    size_z_m: float,
-) -> np.ndarray:
-    """The TCP position [m, W] that puts the gripped item's centre at `centre`: the item's
-    centre lies L_s + size_z/2 from E along u, the TCP EE_TO_TCP_M (as the orchestrator's
-    `_tcp_for_item_centre`)."""
-    from cell.sim import EE_TO_TCP_M
-
-    u = throw_axis(elevation, azimuth)
-    return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke_m - size_z_m / 2)
+    """The throw axis u(e, a) in W, shape (3,): `cell.frames.axis_frame`'s z."""
+    return axis_frame(elevation, azimuth)[:, 2]
 
 
 # -- the coast ---------------------------------------------------------------------
@@ -552,9 +534,7 @@ def plan_moving_throw(
     v = np.asarray(v_release, float).reshape(-1)
     plan = _moving_sigma(obj, static_plan, v, ee, bounds or ThrowBounds())
     centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-    tcp = tcp_for_item_centre(
-        centre, plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj.size[2]
-    )
+    tcp = tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, plan.stroke_m, obj)
     q_rel = (ik or _default_ik(rb, q0))(tcp, plan.elevation_rad, plan.azimuth_rad)
     motion = plan_moving_release(
         rb,
@@ -666,7 +646,7 @@ def choose_release(
     solve = ik or _default_ik(rb, q0)
     sp = static_plan
     tcp = tcp_for_item_centre(
-        [sp.x_m, sp.y_m, sp.z_m], sp.elevation_rad, sp.azimuth_rad, sp.stroke_m, obj.size[2]
+        [sp.x_m, sp.y_m, sp.z_m], sp.elevation_rad, sp.azimuth_rad, sp.stroke_m, obj
     )
     q_static = solve(tcp, sp.elevation_rad, sp.azimuth_rad)
     kw: dict[str, Any] = dict(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
@@ -697,84 +677,6 @@ def choose_release(
     if best is not None and key(best) >= (static_cycle if criterion == "cycle" else t_static):
         best = None
     return ReleaseChoice(best, q_static, t_static, static_cycle, cands)
-
-
-# -- in the scene --------------------------------------------------------------------
-@dataclass(frozen=True)
-class SceneRelease:
-    """What the plant did at a release on the move.
-
-    Attributes:
-        t_latch_s: scene time the latch opened [s].
-        t_planned_s: scene time the plan put it at [s].
-        v_item_mps: the item's centre-of-mass velocity at the latch instant [m/s, W].
-        v_ee_mps: the end-effector body's velocity at the item's centre then [m/s, W].
-        released_at: the item's centre then [m, W].
-        throw_done_s: time from the latch to the item's last contact with the
-            end-effector, or to the end of the push if later [s].
-    """
-
-    t_latch_s: float
-    t_planned_s: float
-    v_item_mps: np.ndarray
-    v_ee_mps: np.ndarray
-    released_at: np.ndarray
-    throw_done_s: float
-
-
-def release_in_scene(scene: Any, ee: Any, motion: MovingReleaseMotion) -> SceneRelease:
-    """Drive the arm along the motion in the scene and open the latch at the release
-    instant while it moves; returns once the arm is at rest again (the item flies on).
-
-    The arm must be at rest at motion.q_start with the item gripped. The motion's clock
-    is set so that the release instant falls on a physics step: the latch then opens at
-    the start of that step. Each step sets the arm to q(t) (`CellScene.set_arm_motion`)
-    and the mount pulls the end-effector along.
-
-    Raises:
-        TrajectoryError: the item still touches the end-effector at the coast's end (the
-            arm would brake with it still in the pads).
-    """
-    sc = ee.scene if scene is None else scene
-    ldt = sc.launch_dt_s
-    # The whole release runs at the launch's physics step, set while the arm is at rest:
-    # the mount drags E a few steps' travel behind where it holds it (measured: ~4 steps),
-    # so a change of step while the arm moves changes that lag at once and jolts E
-    # (at a 0.25 m/s release: E at 0.9 m/s along the axis for a moment, and the item
-    # slid in the pads and left 0.04 m/s faster). Each step sets the mount to q at the
-    # step's end.
-    sc.set_timestep(ldt)
-    m = int(math.ceil(motion.t_release_s / ldt - 1e-9))
-    t0 = sc.t + m * ldt - motion.t_release_s  # q(t − t0): the release after m steps
-    sc.set_arm_motion(lambda t: motion.state(t - t0 + sc.dt_now)[0])
-    try:
-        sc.step(m)
-        cl = sc.client
-        item = ee.item
-        p_item = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
-        v_item = np.asarray(cl.getBaseVelocity(item.body)[0])
-        v_e, w_e = (np.asarray(x) for x in cl.getBaseVelocity(sc.ee_body))
-        v_ee = v_e + np.cross(w_e, p_item - sc.ee_pose()[0])
-        t_latch = sc.t
-        ee.throw(keep_launch_step=True)
-        done = sc.t - t_latch
-        t_coast_end = t0 + motion.t_release_s + motion.coast.duration
-        while sc.t < t_coast_end - 1e-9:
-            sc.step()
-            if cl.getContactPoints(bodyA=item.body, bodyB=sc.ee_body):
-                done = sc.t - t_latch
-        if cl.getContactPoints(bodyA=item.body, bodyB=sc.ee_body):
-            raise TrajectoryError(
-                f"the item still touches the end-effector {motion.coast.duration} s after the "
-                "latch opened, when the arm starts to brake: lengthen the coast"
-            )
-        sc.set_timestep(sc.dt_s)
-        sc.run_for(max(sc.dt_s, t0 + motion.duration_s - sc.t))
-    finally:
-        sc.set_arm_motion(None)
-        sc.set_timestep(sc.dt_s)
-    sc.set_arm(motion.q_end)
-    return SceneRelease(t_latch, t0 + motion.t_release_s, v_item, v_ee, p_item, done)
 
 
 def leave_time_s(
