@@ -60,6 +60,7 @@ __all__ = [
     "Platform",
     "RunSummary",
     "failure_of",
+    "landing",
     "missed_bin",
     "sorted_throw_record",
     "summarise",
@@ -133,6 +134,8 @@ class Decision:
         delta_stroke_m: learned ΔL_s included in `stroke_m` [m].
         model_obj: the item as the plan modelled it (for an observer).
         ee_params: the end-effector parameters the plan used (for an observer).
+        moving: the latch opens while the platform moves; the release point is known
+            once it has (`Platform.release` returns it).
         state: the platform's own data for the later steps (poses, configurations).
     """
 
@@ -142,6 +145,7 @@ class Decision:
     delta_stroke_m: float = 0.0
     model_obj: Any = None
     ee_params: Any = None
+    moving: bool = False
     state: dict[str, Any] = field(default_factory=dict)
 
 
@@ -170,8 +174,9 @@ class Platform(Protocol):
         """Take the end-effector to the release pose, the item still held (GraspLost)."""
         ...
 
-    def release(self, decision: Decision) -> None:
-        """Open the latch: slowly for a place, at once for a throw."""
+    def release(self, decision: Decision) -> np.ndarray | None:
+        """Open the latch: slowly for a place, at once for a throw. A release on the move
+        returns the item's centre at the latch [m, W]; None: where it was held."""
         ...
 
     def after_place(self, decision: Decision) -> None:
@@ -301,9 +306,11 @@ def sorted_throw_record(
     *,
     platform: str = "arm",
     rotor_rpm: float = 0.0,
+    land_z_m: float | None = None,
 ) -> dict[str, Any]:
     """The throw-log row of a sort throw: the release as planned and observed, the
-    crossing of the target bin's rim plane, and which bin it came to rest in."""
+    crossing of the landing plane (the target bin's rim plane unless `land_z_m` says
+    otherwise, see `landing`), and which bin it came to rest in."""
     return throw_record(
         throw_id,
         obj,
@@ -315,7 +322,7 @@ def sorted_throw_record(
         base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
         platform=platform,
         rotor_rpm=rotor_rpm,
-        land_z_m=target.rim_height,
+        land_z_m=target.rim_height if land_z_m is None else land_z_m,
         landed_xy_m=cross[:2],
         session=session,
         time_s=time.time(),
@@ -323,6 +330,22 @@ def sorted_throw_record(
         target_bin=target.id,
         bin_id=out.bin_id or "",
     )
+
+
+def landing(out: Any, rim_z: float) -> tuple[tuple[float, float, float], float]:
+    """Where a thrown item landed: ((x [m], y [m], t [s] since release), plane z [m]).
+
+    The crossing of the target's rim plane going down (MODEL.md's landing); when the
+    track never goes below that plane (it came down on the pile a low-rimmed bin holds,
+    or on something else as high), the touchdown, on the plane of its height.
+    """
+    from cell.errors import NoLanding
+
+    try:
+        return out.crossing(rim_z), rim_z
+    except NoLanding:
+        x, y, z = out.touchdown_xyz
+        return (float(x), float(y), float(out.t_touchdown)), float(z)
 
 
 def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
@@ -536,19 +559,26 @@ class ItemLoop:
     ) -> InFlight:
         """Open the latch at once; the item in flight, scored and recorded once it rests."""
         released_at = self.plant.item_position(item)
-        if self.observer is not None:
+        if self.observer is not None and not d.moving:
             self.observer.on_release(
                 base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at
             )
-        self.platform.release(d)
+        at = self.platform.release(d)
+        if at is not None:
+            released_at = at
+        if self.observer is not None and d.moving:
+            self.observer.on_release(
+                base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at
+            )
         t_release = self.plant.t
         bx, by = target.position
         pf = self.platform
 
         def score(out: Any) -> tuple[ItemResult, Any]:
-            cross = out.crossing(target.rim_height)
+            cross, land_z = landing(out, target.rim_height)
             err = math.hypot(cross[0] - bx, cross[1] - by)
-            pf.landed(d, obj, cross)
+            if land_z == target.rim_height:
+                pf.landed(d, obj, cross)
             throw_id = f"{self.session}-{base['index']:04d}"
             if self.store is not None:
                 self.store.append(
@@ -564,11 +594,12 @@ class ItemLoop:
                         cross,
                         platform=pf.name,
                         rotor_rpm=pf.rotor_rpm,
+                        land_z_m=land_z,
                     ),
                     track=out.track,
                 )
             res = _scored(base, "throw", d, out, target, err, t_release - t0, throw_id)
-            return res, (cross[0], cross[1], target.rim_height)
+            return res, (cross[0], cross[1], land_z)
 
         return InFlight(base, obj, item, d, score)
 

@@ -89,6 +89,9 @@ PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still o
 
 
 PICKS = ("kinematic", "physical")  # how an item gets into the grip (Orchestrator's `pick`)
+# how a throw is released (Orchestrator's `release`): "auto" lets the planner choose a release
+# on the move where it is sooner (cell.robot.moving_release), "static" always stops to release
+RELEASES = ("auto", "static")
 
 
 def as_gripped(obj: ObjectParams) -> ObjectParams:
@@ -273,6 +276,8 @@ class Orchestrator:
         pick: "kinematic": the item appears at the station's centre and is moved into
             the open grip (PyBulletEndEffector.grasp); "physical": it rests at a seeded
             random spot and yaw, and the arm grips it by contact (`_pick`).
+        release: "auto": the planner releases a throw on the move where that is sooner
+            than stopping and lands in the bin by the model; "static": always stop.
         learn: correct the planner from each observed landing (the flywheel): an
             object's next throw aims where its earlier landings say it must
             (LandingCorrection), and an object never thrown before takes its
@@ -294,6 +299,7 @@ class Orchestrator:
         learn: bool = False,
         speed_scale: float = ARM_SPEED_SCALE,
         pick: str = "kinematic",
+        release: str = "auto",
     ) -> None:
         from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
@@ -319,6 +325,10 @@ class Orchestrator:
             pick_station_height=job.pick_position[2],
         )
         self.pick_mode = pick
+        if release not in RELEASES:
+            raise InvalidInput(f"release {release!r}: valid are {list(RELEASES)}")
+        self.release_mode = release
+        self._presented: Any = None  # the item the plant presented last
         # the kinematic pick moves the item into the grip: the pads, longer than a flat
         # item, must not jam on the station's top while the fingers close
         self.scene.ee_collides_with_station(pick == "physical")
@@ -414,13 +424,15 @@ class Orchestrator:
             out.append(q)
         return out
 
-    def _turns_if_rolled(self) -> bool:
-        """Would the carried item turn in the pads if the grip rolled its y axis up while
-        it hangs (gravity along the pads' faces)? Then the swing is kept level."""
+    def _turns_if_rolled(self, obj: ObjectParams | None = None, stroke: float = 0.0) -> bool:
+        """Would the carried item (or `obj` at `stroke` [m]) turn in the pads if the grip
+        rolled its y axis up while it hangs (gravity along the pads' faces)? Then the
+        swing is kept level."""
         from cell.model.params import G
         from cell.robot.carry import CARRY_MARGIN
 
-        obj, stroke = self._carried
+        if obj is None:
+            obj, stroke = self._carried
         h = carry_hold(self.params, obj, stroke)
         w = obj.mass * G
         turn = w * h.lever_m / h.torque_nm if h.torque_nm > 0 else math.inf
@@ -545,9 +557,11 @@ class Orchestrator:
         """The item on the pick station: at its centre (kinematic pick), or at a seeded
         random spot and yaw (physical pick, `_spawn_at_station`)."""
         if self.pick_mode == "physical":
-            return self._spawn_at_station(index, obj)
+            self._presented = self._spawn_at_station(index, obj)
+            return self._presented
         item = self.scene.spawn_item(obj if obj.shape != "mesh" else obj.name)
         self.scene.run_for(0.05)  # let it settle on the station
+        self._presented = item
         return item
 
     def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
@@ -562,7 +576,7 @@ class Orchestrator:
         if place:
             return Decision("place", min(PICK_STROKE_M, s_grip), state={"target": target})
         plan, delta = self._plan(obj, target, index, s_grip)
-        return Decision(
+        d = Decision(
             "throw",
             plan.stroke_m + delta,
             plan,
@@ -571,6 +585,58 @@ class Orchestrator:
             ee_params=self.params.ee,
             state={"target": target, "aim": self._aim, "q_release": self._q_release},
         )
+        mt = self._moving_choice(obj, plan, delta) if self._may_release_moving(obj, d) else None
+        if mt is not None:
+            d.plan, d.stroke_m, d.moving = mt.plan, mt.plan.stroke_m + delta, True
+            d.state.update(moving=mt, q_release=mt.motion.q_release)
+        return d
+
+    def _may_release_moving(self, obj: ObjectParams, d: Decision) -> bool:
+        """A release on the move is considered (`release="auto"`) unless a hardware
+        end-effector rides along (its latch's timing is not modelled), a residual model
+        corrects the stroke (it learned on static releases), or the item would turn in
+        the pads on the way (the moving approach has no level swing)."""
+        return (
+            self.release_mode == "auto"
+            and self.effector.hardware is None
+            and self.residual is None
+            and not self._turns_if_rolled(obj, d.stroke_m)
+        )
+
+    def _moving_choice(self, obj: ObjectParams, plan: Any, delta: float) -> Any:
+        """The release on the move that the planner prefers to the static one by cycle
+        time, landing in the bin by the model (`cell.robot.moving_release.choose_release`,
+        from where the lift over the presented item will be), or None."""
+        from cell.robot.moving_release import choose_release
+
+        stroke = plan.stroke_m + delta
+        self._frame = self._pick_frame(plan)
+        try:
+            p_item = self.scene.item_position(self._presented)
+            down = (-math.pi / 2, 0.0)
+            q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
+            q_lift = self._lift_q(p_item, stroke, obj, q_pick)
+            choice = choose_release(
+                self.robot,
+                self._model_obj,
+                plan,
+                q_lift,
+                self.params.ee,
+                bounds=self.bounds_now,
+                ik=lambda t, e, a: self._ik_gripped(t, e, a, q_lift),
+                hold=carry_hold(self.params, obj, stroke),
+                criterion="cycle",
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+        except (IKFailed, TrajectoryError) as exc:
+            log.info("no release on the move for %s: %s", obj.name or obj.shape, exc)
+            return None
+        finally:
+            self._frame = None
+        if choice.moving is not None:
+            log.info("%s: release on the move saves %.2f s", obj.name or obj.shape, choice.saved_s)
+        return choice.moving
 
     def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
         """Grip the item turned as the release will hold it: the carry then only swings
@@ -592,6 +658,21 @@ class Orchestrator:
         q_lift = d.state["q_lift"]
         if d.action == "place":
             self._carry_to_place(d, obj, q_lift)
+        elif d.moving:
+            # the move is the release's own (approach, latch on the move, coast, stop),
+            # planned from where the pick left the arm
+            from cell.robot.moving_release import plan_moving_release
+
+            mt = d.state["moving"]
+            d.state["motion"] = plan_moving_release(
+                self.robot,
+                self.q,
+                mt.motion.q_release,
+                mt.motion.v_release,
+                hold=carry_hold(self.params, obj, d.stroke_m),
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
         else:
             plan = d.plan
             centre = np.array([plan.x_m, plan.y_m, plan.z_m])
@@ -605,13 +686,24 @@ class Orchestrator:
             self._move([q_lift, *self._swing(q_lift, q_rel, plan), q_rel])
         self._check_held(obj)
 
-    def release(self, d: Decision) -> None:
+    def release(self, d: Decision) -> np.ndarray | None:
         """Open the latch: slowly to place, at once to throw (a hardware end-effector
-        first for a throw, after the simulated one for a place)."""
+        first for a throw, after the simulated one for a place); on the move, at the
+        planned instant while the arm moves (`cell.sim.release.release_in_scene`): then
+        the item's centre at the latch [m, W] is returned."""
         if d.action == "place":
             self.effector.place()
-        else:
+            return None
+        if not d.moving:
             self.effector.throw()
+            return None
+        from cell.sim.release import release_in_scene
+
+        motion = d.state["motion"]
+        rel = release_in_scene(self.scene, self.ee, motion)
+        self.q = np.asarray(motion.q_end, float)
+        self.loop.land()
+        return np.asarray(rel.released_at, float)
 
     def after_place(self, d: Decision) -> None:
         """Back up out of the bin."""

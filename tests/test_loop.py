@@ -181,3 +181,34 @@ def _obj(name: str):
     from cell.sim.items import resolve_object
 
     return resolve_object(name)[0]
+
+
+def test_a_landing_on_a_pile_above_the_rim_is_scored_at_its_touchdown():
+    """A throw into a low-rimmed bin can come down on the items the bin holds, above its
+    rim plane: it is scored where it touched down (on that height's plane), not failed
+    for never crossing the rim's plane; a normal descent is scored at the crossing."""
+    from cell.loop import landing
+    from cell.sim.settle import Outcome
+
+    t = np.linspace(0.0, 1.0, 101)
+    x = 2.0 * t
+    z_high = 1.0 - 0.9 * t  # ends at 0.10 m, never below a 0.05 m rim
+    common = dict(touchdown_speed=3.0, touchdown_body=7, bin_id="b", rested=True, t_rest=1.2)
+    pile = Outcome(
+        touchdown_xyz=(2.0, 0.0, 0.10),
+        rest_xyz=(2.0, 0.0, 0.10),
+        t_touchdown=1.0,
+        track=np.c_[t, x, 0 * t, z_high],
+        **common,
+    )
+    (lx, ly, lt), plane = landing(pile, 0.05)
+    assert (lx, ly, lt, plane) == (2.0, 0.0, 1.0, 0.10)
+    through = Outcome(
+        touchdown_xyz=(2.0, 0.0, 0.0),
+        rest_xyz=(2.0, 0.0, 0.0),
+        t_touchdown=1.0,
+        track=np.c_[t, x, 0 * t, 1.0 - t],
+        **common,
+    )
+    (lx, _, lt), plane = landing(through, 0.05)
+    assert plane == 0.05 and lx == pytest.approx(1.9) and lt == pytest.approx(0.95)

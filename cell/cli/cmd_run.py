@@ -43,6 +43,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "default), or gripped by contact from a random pose on the station (physical)",
     )
     p.add_argument(
+        "--release",
+        choices=("auto", "static"),
+        default="auto",
+        help="arm platform: release a throw on the move where the planner finds that sooner "
+        "and landing in the bin (auto, the default), or always stop to release (static)",
+    )
+    p.add_argument(
         "--learn",
         action="store_true",
         help="correct the planner from each observed landing during the run (arm platform)",
@@ -124,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
             learn=args.learn,
             speed_scale=args.speed_scale,
             pick=args.pick,
+            release=args.release,
         )
     bar = tqdm(
         total=len(job.expanded_items()),
