@@ -190,8 +190,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _refit(args: argparse.Namespace, job: Any) -> Any:
     """The job's parameters with its objects' η_o refitted from the store's earlier sort
-    throws (`cell.identify.refit`), one line per refitted object on stderr; the file's
-    parameters when the store has no usable throw or cannot be read (said on stderr).
+    throws (`cell.identify.refit.sort_throws`, which says what it leaves out and why), one
+    line per object on stderr; the file's parameters when the store has no usable throw or
+    cannot be read, or when the job plans with a residual model (said on stderr).
     --learn-save writes them to a new file; the input parameter file is never written.
 
     Raises:
@@ -218,7 +219,14 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
     path = default_db_path(args.db)
     say = "cell run --learn:"
     objects = {spec.obj.name or spec.obj.shape: spec.obj for spec in job.items}
-    if not path.exists() or path.stat().st_size == 0:
+    if job.residual:
+        print(
+            f"{say} no refit: the job's residual model ({job.residual}) learned ΔL_s against "
+            f"the η_o of {source}, and would correct again what a refit corrects; planning "
+            "with that file",
+            file=sys.stderr,
+        )
+    elif not path.exists() or path.stat().st_size == 0:
         print(f"{say} no throw store at {path} yet: planning with {source}", file=sys.stderr)
     else:
         try:
