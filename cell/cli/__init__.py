@@ -64,6 +64,7 @@ _OUTPUT_OPTIONS = (
     ("report", "--report"),
     ("snapshot", "--snapshot"),
     ("record", "--record"),
+    ("learn_save", "--learn-save"),
 )
 
 

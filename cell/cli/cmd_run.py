@@ -52,7 +52,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--learn",
         action="store_true",
-        help="correct the planner from each observed landing during the run (arm platform)",
+        help="learn from the throws: before the run, refit each of the job's objects' "
+        "effective mass and extents from its earlier sort throws in the --db store (the "
+        "parameter file is not changed); during it, correct each aim from the landings "
+        "so far (arm platform)",
+    )
+    p.add_argument(
+        "--learn-save",
+        metavar="EE.yaml",
+        help="with --learn: write the parameters this run plans with (the file's, with the "
+        "refitted objects) to this new file (never the input parameter file)",
     )
     p.add_argument(
         "--speed-scale",
@@ -109,6 +118,11 @@ def run(args: argparse.Namespace) -> int:
 
         cfg = args.ee_config or job.ee_config or None
         hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
+    if args.learn_save and not args.learn:
+        raise InvalidInput("--learn-save writes what --learn refits: add --learn")
+    params = None
+    if args.learn and job.platform == "arm":
+        params = _refit(args, job)
     rec = _recorder(args, job)
     store = _store(args)
     orch: Any
@@ -129,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
             end_effector=hardware,
             observer=rec,
             learn=args.learn,
+            params=params,
             speed_scale=args.speed_scale,
             pick=args.pick,
             release=args.release,
@@ -179,6 +194,84 @@ def run(args: argparse.Namespace) -> int:
         print("cell run: no item came to rest in its target bin", file=sys.stderr)
         return EXIT_NOTHING_SORTED
     return 0
+
+
+def _refit(args: argparse.Namespace, job: Any) -> Any:
+    """The job's parameters with its objects' η_o refitted from the store's earlier sort
+    throws (`cell.identify.refit.sort_throws`, which says what it leaves out and why), one
+    line per object on stderr; the file's parameters when the store has no usable throw or
+    cannot be read, or when the job plans with a residual model (said on stderr).
+    --learn-save writes them to a new file; the input parameter file is never written.
+
+    Raises:
+        InvalidInput: --learn-save names the input parameter file, or cannot be written.
+    """
+    import sqlite3
+
+    from cell.cli.common import check_output_path
+    from cell.errors import CellError, InvalidInput
+    from cell.identify.refit import refit_objects, sort_throws
+    from cell.log.store import ThrowStore, default_db_path
+    from cell.orchestrator import scene_params_path
+    from cell.params import load_params, save_params
+
+    source = job.params or scene_params_path()
+    if args.learn_save:
+        out = check_output_path(args.learn_save, "--learn-save")
+        if source and out.resolve() == Path(source).resolve():
+            raise InvalidInput(
+                f"--learn-save {args.learn_save}: that is the parameter file this run reads "
+                f"({source}); --learn never changes it: give a new file"
+            )
+    params = load_params(source)
+    path = default_db_path(args.db)
+    say = "cell run --learn:"
+    objects = {spec.obj.name or spec.obj.shape: spec.obj for spec in job.items}
+    if job.residual:
+        print(
+            f"{say} no refit: the job's residual model ({job.residual}) learned ΔL_s against "
+            f"the η_o of {source}, and would correct again what a refit corrects; planning "
+            "with that file",
+            file=sys.stderr,
+        )
+    elif not path.exists() or path.stat().st_size == 0:
+        print(f"{say} no throw store at {path} yet: planning with {source}", file=sys.stderr)
+    else:
+        try:
+            with ThrowStore(path, read_only=True) as store:
+                found = sort_throws(store, objects)
+            if found.table is None:
+                print(
+                    f"{say} {path} holds no earlier sort throw of this job's objects: "
+                    f"planning with {source}",
+                    file=sys.stderr,
+                )
+            else:
+                params, report = refit_objects(found.table, params)
+                n = sum(r.throws for r in report.refitted)
+                print(
+                    f"{say} refitted {len(report.refitted)} object(s) from {n} earlier "
+                    f"throw(s) in {path} (η_ee kept from {source}):",
+                    file=sys.stderr,
+                )
+                for r in report.objects:
+                    print(f"  {r.line()}", file=sys.stderr)
+            if found.left_out:
+                print(
+                    f"{say} left out: "
+                    + "; ".join(f"{n} row(s): {why}" for why, n in found.left_out.items()),
+                    file=sys.stderr,
+                )
+        except (CellError, sqlite3.Error, ValueError) as exc:
+            print(
+                f"{say} cannot refit from {path} ({type(exc).__name__}: {exc}): planning "
+                f"with {source}",
+                file=sys.stderr,
+            )
+    if args.learn_save:
+        save_params(params, args.learn_save)
+        print(f"{say} wrote the parameters of this run to {args.learn_save}", file=sys.stderr)
+    return params
 
 
 def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
