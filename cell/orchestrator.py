@@ -111,7 +111,7 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     the friction force of the grip model, the couple of the pads' contact patches (as
     long as the pads and the item overlap along the throw axis, as wide as both along
     y), and where the item's centre of mass sits above that patch."""
-    from cell.model.grip import holding_mass_kg
+    from cell.model.grip import grip_friction, holding_mass_kg
     from cell.model.params import G
     from cell.robot.carry import GripHold, patch_torsion_radius_m
     from cell.sim import EE_TO_TCP_M
@@ -120,19 +120,28 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     gripped = as_gripped(obj)
     height = obj.size[2]
     length = min(GEO.pad_length_m, height)
-    force = holding_mass_kg(params.ee, stroke_m, gripped.width) * G
+    mu = grip_friction(obj, GEO.pad_length_m)
+    force = holding_mass_kg(params.ee, stroke_m, gripped.width, mu) * G
     half_y = min(GEO.pad_half_width_m, obj.size[1] / 2)
-    # a mesh meets the flat pads at points, not over a face: no couple to count on (a
-    # duck pinched at its neck turned 110-130° in the pads while carried)
-    radius = 0.0 if obj.shape == "mesh" else patch_torsion_radius_m(half_y, length / 2)
+    # a mesh or a sphere meets the flat pads at points, not over a face: no couple to
+    # count on (a duck pinched at its neck turned 110-130° in the pads while carried)
+    point = obj.shape in ("mesh", "sphere")
+    radius = 0.0 if point else patch_torsion_radius_m(half_y, length / 2)
+    lever, base_half, inertia = (height - length) / 2, obj.size[1] / 2, float(obj.inertia[0])
+    if obj.shape == "sphere":
+        # held at two points: at its equator (R ≤ L_p), on the line through its centre, so
+        # a turn about the pads' axis moves nothing and the sphere need not turn with the
+        # grip (no I α to supply); else at the pads' edges, R − L_p below its centre; it
+        # meets the carriage's face at one point (no base to right it)
+        lever, base_half, inertia = max(0.0, height / 2 - GEO.pad_length_m), 0.0, 0.0
     return GripHold(
         force_n=force,
         torque_nm=PAD_COUPLE_FACTOR * force * radius,
         mass_kg=obj.mass,
-        inertia_xx=float(obj.inertia[0]),
+        inertia_xx=inertia,
         offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),
-        lever_m=(height - length) / 2,
-        base_half_m=obj.size[1] / 2,
+        lever_m=lever,
+        base_half_m=base_half,
     )
 
 
@@ -143,7 +152,7 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
         CannotGrip: the item is too wide for the pads, or too heavy for its width at
             every stroke; the message says what the cell can hold instead.
     """
-    from cell.model.grip import GRIP_SAFETY, holding_mass_kg, max_grip_stroke
+    from cell.model.grip import GRIP_SAFETY, grip_friction, holding_mass_kg, max_grip_stroke
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     ee = params.ee
@@ -155,9 +164,10 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
             f"{name} is {obj.width * 1000:.0f} mm wide across the pads; they open to "
             f"{widest * 1000:.0f} mm: turn it so a narrower side faces the pads, or sort it by hand"
         )
-    s_max = max_grip_stroke(ee, obj)
+    mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
+    s_max = max_grip_stroke(ee, obj, friction=mu)
     if s_max is None:
-        hold = holding_mass_kg(ee, ee.stroke_min, obj.width) / GRIP_SAFETY
+        hold = holding_mass_kg(ee, ee.stroke_min, obj.width, mu) / GRIP_SAFETY
         if obj.width <= ee.d:
             why = (
                 f"the band closes the pads only on items wider than its anchor spacing "
@@ -175,12 +185,27 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     return s_max
 
 
-def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float) -> Any:
-    """`bounds` with the stroke capped at what the grip holds the item at [m]."""
+MIN_THROW_STROKE_RANGE_M = 1e-3  # [m] a throw needs at least this much stroke to choose from
+
+
+def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float, what: str = "") -> Any:
+    """`bounds` with the stroke capped at what the grip holds the item at [m].
+
+    Raises:
+        CannotGrip: the grip holds it only at (about) the shortest stroke, so no throw is
+            left to plan; the message names `what` and what the cell can do instead.
+    """
     from dataclasses import replace as dc_replace
 
     lo = params.ee.stroke_min if bounds.stroke_min is None else bounds.stroke_min
-    return dc_replace(bounds, stroke_min=lo, stroke_max=min(stroke_max_m, params.ee.stroke_max))
+    hi = min(stroke_max_m, params.ee.stroke_max)
+    if hi - lo < MIN_THROW_STROKE_RANGE_M:
+        raise CannotGrip(
+            f"{what or 'the item'}: the pads hold it only at the shortest stroke "
+            f"({lo * 1000:.0f} mm), too weak a throw to plan: place it in a bin within "
+            "reach, grip it across a narrower side, or sort it by hand"
+        )
+    return dc_replace(bounds, stroke_min=lo, stroke_max=hi)
 
 
 def check_sortable(
@@ -204,7 +229,7 @@ def check_sortable(
         return
     b = bounds or ThrowBounds()
     if b.stroke_max is None or s_max < b.stroke_max:
-        b = grip_bounds(b, params, s_max)
+        b = grip_bounds(b, params, s_max, obj.name or obj.shape)
     goal = (*bin_spec.position, bin_spec.rim_height)
     plan_facing(params.model_object(obj), goal, params.ee, b)
 
@@ -1145,7 +1170,7 @@ class Orchestrator:
         bounds = self.bounds_now
         plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
-            bounds = grip_bounds(bounds, self.params, stroke_max_m)
+            bounds = grip_bounds(bounds, self.params, stroke_max_m, obj.name or obj.shape)
             plan = plan_facing(model_obj, goal, self.params.ee, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:

@@ -17,13 +17,40 @@ from cell.model.band import band_angle, band_force, band_stretch
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams, G
 
-__all__ = ["PAD_FRICTION", "GRIP_SAFETY", "holding_mass_kg", "max_grip_stroke"]
+__all__ = [
+    "PAD_FRICTION",
+    "GRIP_SAFETY",
+    "grip_friction",
+    "holding_mass_kg",
+    "max_grip_stroke",
+]
 
 # Coulomb friction between a pad and an item. The scene's pads have 1.2 and its items 0.7;
 # Bullet combines two bodies' coefficients as their product, 0.84, and the scene holds
 # 0.70-0.71 of what 1.2 predicts at every width and stroke measured (30-50 mm, 0.045-0.09 m).
 PAD_FRICTION = 1.2 * 0.7
 GRIP_SAFETY = 1.6  # weight multiple the grip must hold: carrying accelerates up to ~0.6 g
+
+
+def grip_friction(obj: ObjectParams, pad_length_m: float, friction: float = PAD_FRICTION) -> float:
+    """The friction coefficient the pads hold `obj` with along the throw axis.
+
+    Flat pads touch a box or a cylinder's side flat: μ. A sphere of radius R longer than
+    the pads (R > L_p, the pads reach from the carriage's face, where the sphere sits, to
+    L_p) is touched at the pads' edges below its equator, where its surface faces back
+    toward the carriage: the contact normal leans θ off the horizontal, sin θ = (R − L_p)/R,
+    and the squeeze pushes the sphere out along the axis. Along the axis the pads then
+    hold N (μ cos θ − sin θ) per pad instead of μ N: returned as that coefficient (0 when
+    the squeeze alone would push it out).
+    """
+    if obj.shape != "sphere":
+        return friction
+    r = obj.size[0] / 2
+    if r <= pad_length_m:
+        return friction
+    sin_t = (r - pad_length_m) / r
+    cos_t = float(np.sqrt(1.0 - sin_t * sin_t))
+    return max(0.0, friction * cos_t - sin_t)
 
 
 def holding_mass_kg(

@@ -661,8 +661,13 @@ def choose_release(
 
     cands: list[tuple[np.ndarray, MovingThrow | str]] = []
     best: MovingThrow | None = None
+    bar = static_cycle if criterion == "cycle" else t_static
     for d in dirs:
-        for s in speeds_mps:
+        # speeds in rising order: a direction is left once a speed is refused or no
+        # sooner than the one before it (in the cell's measurements the time rises, or the
+        # joint limits refuse, monotonically with the speed along a direction)
+        last = math.inf
+        for s in sorted(speeds_mps):
             v = s * np.asarray(d, float)
             try:
                 mt = plan_moving_throw(
@@ -670,11 +675,14 @@ def choose_release(
                 )
             except (UnreachableTarget, IKFailed, TrajectoryError) as exc:
                 cands.append((v, f"{type(exc).__name__}: {exc}"))
-                continue
+                break
             cands.append((v, mt))
             if best is None or key(mt) < key(best):
                 best = mt
-    if best is not None and key(best) >= (static_cycle if criterion == "cycle" else t_static):
+            if key(mt) >= min(last, bar):
+                break
+            last = key(mt)
+    if best is not None and key(best) >= bar:
         best = None
     return ReleaseChoice(best, q_static, t_static, static_cycle, cands)
 
