@@ -225,6 +225,7 @@ class ItemResult:
         delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
         cycle_time_s: simulated time for this item [s] (see the module docstring).
         throw_id: the log id of the throw ("" for places and failures).
+        moving: the latch opened while the platform moved (a release on the move).
     """
 
     index: int
@@ -240,6 +241,7 @@ class ItemResult:
     delta_stroke_m: float = 0.0
     cycle_time_s: float = 0.0
     throw_id: str = ""
+    moving: bool = False
 
 
 @dataclass(frozen=True)
@@ -383,6 +385,7 @@ def _scored(
         delta_stroke_m=d.delta_stroke_m,
         cycle_time_s=cycle_time_s,
         throw_id=throw_id,
+        moving=d.moving,
     )
 
 

@@ -71,7 +71,7 @@ def test_factory_emulated_end_effector_stops_its_bus() -> None:
         ee.grasp(0.06)
         assert ee.stroke() == pytest.approx(0.06, abs=2e-5)
         ee.throw()
-    with pytest.raises(InvalidInput, match="valid: \\['dynamixel'"):
+    with pytest.raises(InvalidInput, match="valid: \\['pybullet', 'dynamixel'"):
         make_end_effector("gripper3000")
 
 

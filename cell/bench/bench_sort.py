@@ -123,6 +123,7 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
                 "reason": r.reason,
                 "landing_error_m": float(r.landing_error_m),
                 "cycle_time_s": float(r.cycle_time_s),
+                "moving": bool(r.moving),
             }
         )
     out["sim_time_s"] = float(summary.sim_time_s)
@@ -172,6 +173,8 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "sim_time_s": sim,
         "wall_time_s": sum(lay["wall_time_s"] for lay in layouts),
         "failures": {f: c for f in FAILURES if (c := sum(it["failure"] == f for it in items))},
+        "thrown": sum(it["action"] == "throw" for it in items),
+        "released_moving": sum(bool(it.get("moving")) for it in items),
         **repeat_figures(layouts),
     }
 
