@@ -22,7 +22,7 @@ import numpy as np
 from cell.errors import InvalidInput
 from cell.identify.algorithm import IdentifyOptions, _stage2
 from cell.identify.problem import ThrowData
-from cell.log.table import ThrowTable
+from cell.log.table import REQUIRED_COLUMNS, ThrowTable
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
@@ -235,24 +235,10 @@ def _refit(
 
 # The columns the model reads from a throw: a row with any of them not a finite number
 # cannot be refitted on (a NaN release would make every residual NaN).
-MODEL_COLUMNS = (
-    "mass_kg",
-    "size_x_m",
-    "size_y_m",
-    "size_z_m",
-    "stroke_m",
-    "x_m",
-    "y_m",
-    "z_m",
-    "elevation_rad",
-    "azimuth_rad",
-    "roll_rad",
-    "vx_mps",
-    "vy_mps",
-    "vz_mps",
-    "land_z_m",
-    "landed_x_m",
-    "landed_y_m",
+MODEL_COLUMNS = tuple(
+    c
+    for c in REQUIRED_COLUMNS
+    if c not in ("throw_id", "object_id", "shape", "platform", "rotor_rpm")
 )
 
 

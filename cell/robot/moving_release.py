@@ -401,13 +401,7 @@ def _moving_sigma(
     from cell.model.band import band_state
 
     return replace(
-        static_plan,
-        vx_mps=float(sigma[3]),
-        vy_mps=float(sigma[4]),
-        vz_mps=float(sigma[5]),
-        elevation_rad=float(sigma[7]),
-        azimuth_rad=float(sigma[8]),
-        stroke_m=float(sigma[9]),
+        _sigma_plan(static_plan, sigma),
         pred_x_m=float(xy[0]),
         pred_y_m=float(xy[1]),
         miss_m=float(miss),
