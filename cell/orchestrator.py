@@ -122,7 +122,9 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     length = min(GEO.pad_length_m, height)
     mu = grip_friction(obj, GEO.pad_length_m)
     force = holding_mass_kg(params.ee, stroke_m, gripped.width, mu) * G
-    half_y = min(GEO.pad_half_width_m, obj.size[1] / 2)
+    # a cylinder standing on the carriage meets each flat pad along a line (its side,
+    # along the throw axis): the patch has no width
+    half_y = 0.0 if obj.shape == "cylinder" else min(GEO.pad_half_width_m, obj.size[1] / 2)
     # a mesh or a sphere meets the flat pads at points, not over a face: no couple to
     # count on (a duck pinched at its neck turned 110-130° in the pads while carried)
     point = obj.shape in ("mesh", "sphere")

@@ -217,3 +217,22 @@ def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():
         assert (use > 1.0) is turns, (obj.size, use)
         turned = _turn_in_grip_deg(obj, stroke)
         assert (turned > 10.0) if turns else (turned < 2.0), (obj.size, turned)
+
+
+def test_the_pads_couple_of_a_cylinder_is_that_of_a_line_contact():
+    """A cylinder standing on the carriage touches each flat pad along a line of its side
+    (length L = the pads' overlap with it): the mean arm of the friction against a turn
+    about the pads' axis is then L/4, not that of a face as for a box."""
+    from cell.model.objects import ObjectParams
+    from cell.orchestrator import PAD_COUPLE_FACTOR, scene_params_path
+    from cell.params import load_params
+    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
+
+    params = load_params(scene_params_path())
+    cyl = ObjectParams(shape="cylinder", mass=0.15, size=(0.065, 0.065, 0.2))
+    box = ObjectParams(shape="cuboid", mass=0.15, size=(0.065, 0.065, 0.2))
+    h_cyl, h_box = carry_hold(params, cyl, 0.05), carry_hold(params, box, 0.05)
+    length = min(GEO.pad_length_m, 0.2)
+    r_line = h_cyl.torque_nm / (PAD_COUPLE_FACTOR * h_cyl.force_n)
+    assert r_line == pytest.approx(length / 4, rel=0.03)  # n-point quadrature of |z|
+    assert h_box.torque_nm > 1.3 * h_cyl.torque_nm  # the box's face has width as well
