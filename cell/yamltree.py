@@ -15,7 +15,7 @@ import yaml
 
 from cell.errors import JobError
 
-__all__ = ["Checker", "Node", "to_tree"]
+__all__ = ["Checker", "Node", "shown", "to_tree"]
 
 
 class Node:
@@ -54,6 +54,22 @@ def to_tree(node: yaml.Node, path: str) -> Node:
     return Node(value, line)
 
 
+def shown(value: Any, limit: int = 60) -> str:
+    """A value as an error message quotes it: lists and mappings with their plain values
+    (not the tree's nodes), cut to `limit` characters."""
+
+    def plain(v: Any) -> Any:
+        v = v.value if isinstance(v, Node) else v
+        if isinstance(v, list):
+            return [plain(x) for x in v]
+        if isinstance(v, dict):
+            return {k: plain(x) for k, x in v.items()}
+        return v
+
+    text = repr(plain(value))
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 class Checker:
     def __init__(self, path: str) -> None:
         self.path = path
@@ -86,7 +102,7 @@ class Checker:
         if isinstance(v, str) and _SCIENTIFIC.fullmatch(v.strip()):
             v = float(v)  # YAML 1.1 reads 5e-2 (no dot) as text; the parameter loader does not
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-            raise self.fail(node, fp, f"{v!r} must be a number")
+            raise self.fail(node, fp, f"{shown(v)} must be a number")
         v = float(v)
         if lo is not None and (v <= lo if strict_lo else v < lo):
             raise self.fail(node, fp, f"{v} must be {'>' if strict_lo else '≥'} {lo}")
@@ -97,13 +113,13 @@ class Checker:
     def integer(self, node: Node, fp: str, lo: int, hi: int) -> int:
         v = node.value
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            raise self.fail(node, fp, f"{v!r} must be a whole number from {lo} to {hi}")
+            raise self.fail(node, fp, f"{shown(v)} must be a whole number from {lo} to {hi}")
         return int(v)
 
     def text(self, node: Node, fp: str, choices: tuple[str, ...] | None = None) -> str:
         v = node.value
         if not isinstance(v, str) or not v:
-            raise self.fail(node, fp, f"{v!r} must be a non-empty text")
+            raise self.fail(node, fp, f"{shown(v)} must be a non-empty text")
         if choices and v not in choices:
             raise self.fail(node, fp, f"{v!r} is not valid; choose one of {', '.join(choices)}")
         return v

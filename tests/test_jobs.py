@@ -77,3 +77,23 @@ def test_missing_file_and_empty_file(tmp_path):
     (tmp_path / "empty.yaml").write_text("")
     with pytest.raises(JobError, match="empty"):
         load_job(tmp_path / "empty.yaml")
+
+
+def test_a_list_where_a_number_belongs_is_quoted_by_its_values():
+    """The message shows what the file says ([1, 2]), not the reader's internal nodes."""
+    import re
+
+    from cell.errors import JobError
+    from cell.jobs import parse_job
+
+    text = """
+bins:
+  - {id: a, position_m: [1.5, 0.0], size_m: [0.3, 0.3], rim_height_m: [1, 2]}
+items:
+  - {object: cube50, bin: a}
+"""
+    with pytest.raises(JobError) as err:
+        parse_job(text, "job.yaml")
+    msg = str(err.value)
+    assert "[1, 2] must be a number" in msg and "rim_height_m" in msg, msg
+    assert not re.search(r"object at 0x", msg)
