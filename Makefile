@@ -28,8 +28,8 @@ test: lint
 bench: install
 	$(BIN)/cell bench
 
-# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 16 of them the
-# random-layout benchmark, 11 its speed trade-off). The JSON beside
+# Every figure and quoted figure in README.md and docs/ (about 50 min on 2 cores: 18 of them the
+# random-layout benchmark, 13 its speed trade-off). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
@@ -54,6 +54,7 @@ figures: install
 	$(BIN)/cell gap $(TMP)/scene.csv --identify --report docs/scene_gap/identified.html --json docs/scene_gap/identified.json
 	$(BIN)/cell gap check --json $(FIG)/gap_check.json
 	$(BIN)/cell bench --json > $(FIG)/bench.json
+	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --json > $(FIG)/bench_sort.json
 	$(BIN)/cell bench tradeoff --layouts 4 --seed 0 --robots panda,ur5 --scales 0.5,0.75,1.0 --workers 2 --plot $(FIG)/tradeoff.png --json > $(FIG)/tradeoff.json
 

@@ -89,3 +89,30 @@ def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
     assert float(reach) == pytest.approx(
         _json("docs/figures/bench.json")["scene_reach_err_pct"], abs=0.05
     )
+
+
+def test_the_moving_releases_and_repeat_throws_are_the_last_generated_bench_sort() -> None:
+    bench = _json("docs/figures/bench_sort.json")
+    moving, thrown = _quoted(r"(\d+) of the (\d+)\s+throws were released on the move")
+    assert (int(moving), int(thrown)) == (bench["released_moving"], bench["thrown"])
+    pairs, second, first, closer = _quoted(
+        r"\((\d+) pairs, without `--learn`\) lands at a median ([\d.]+) mm from its\s+bin's "
+        r"centre against ([\d.]+) mm for its first, closer in (\d+) % of the pairs"
+    )
+    assert int(pairs) == bench["repeat_pairs"]
+    assert float(second) == pytest.approx(1000 * bench["repeat_second_median_error_m"], abs=0.05)
+    assert float(first) == pytest.approx(1000 * bench["repeat_first_median_error_m"], abs=0.05)
+    assert int(closer) == round(100 * bench["repeat_second_closer_rate"])
+
+
+def test_the_tradeoff_caption_is_the_last_generated_tradeoff() -> None:
+    points = _json("docs/figures/tradeoff.json")["points"]
+    for p in points:
+        scale = f"{p['speed_scale']:g}"
+        rate_h, rate, lo, hi = _quoted(
+            rf"×{re.escape(scale)}: ([\d,]+) items per hour at ([\d.]+) \(([\d.]+)–([\d.]+)\)"
+        )
+        assert int(rate_h.replace(",", "")) == round(p["items_per_hour"])
+        assert float(rate) == pytest.approx(p["in_bin_rate"], abs=5e-4)
+        assert float(lo) == pytest.approx(p["in_bin_rate_lo"], abs=5e-3)
+        assert float(hi) == pytest.approx(p["in_bin_rate_hi"], abs=5e-3)
