@@ -645,10 +645,7 @@ class Orchestrator:
         stroke = plan.stroke_m + delta
         self._frame = self._pick_frame(plan)
         try:
-            p_item = self.scene.item_position(self._presented)
-            down = (-math.pi / 2, 0.0)
-            q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
-            q_lift = self._lift_q(p_item, stroke, obj, q_pick)
+            _, q_lift = self._over_item(self._presented, stroke, obj)
             choice = choose_release(
                 self.robot,
                 self._model_obj,
@@ -760,14 +757,21 @@ class Orchestrator:
     def _pick_kinematic(self, obj: ObjectParams, item: Any, stroke: float) -> np.ndarray:
         """The kinematic pick: the grip over the item, which is moved into it
         (PyBulletEndEffector.grasp); returns the lift configuration."""
-        p_item = self.scene.item_position(item)
-        down = (-math.pi / 2, 0.0)
-        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
-        q_lift = self._lift_q(p_item, stroke, obj, q_pick)
+        q_pick, q_lift = self._over_item(item, stroke, obj)
         self._move([q_lift, q_pick])
         self.ee.grasp(stroke, item)
         self._carried = (obj, stroke)
         return q_lift
+
+    def _over_item(
+        self, item: Any, stroke: float, obj: ObjectParams
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(pick, lift) configurations of the grip pointing down over the item where the
+        plant has it, the pick putting the item's centre where the gripped item's will be."""
+        p_item = self.scene.item_position(item)
+        down = (-math.pi / 2, 0.0)
+        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
+        return q_pick, self._lift_q(p_item, stroke, obj, q_pick)
 
     def _lift_q(
         self, p_item: np.ndarray, stroke: float, obj: ObjectParams, q_pick: np.ndarray

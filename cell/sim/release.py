@@ -66,8 +66,8 @@ def release_in_scene(scene: Any, ee: Any, motion: Any) -> SceneRelease:
         sc.step(m)
         cl = sc.client
         item = ee.item
-        p_item = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
-        v_item = np.asarray(cl.getBaseVelocity(item.body)[0])
+        p_item = sc.item_position(item)
+        v_item = sc.item_velocity(item)[0]
         v_e, w_e = (np.asarray(x) for x in cl.getBaseVelocity(sc.ee_body))
         v_ee = v_e + np.cross(w_e, p_item - sc.ee_pose()[0])
         t_latch = sc.t
