@@ -42,6 +42,7 @@ from cell.errors import (
     UnreachableTarget,
 )
 from cell.jobs import ItemSpec, Job
+from cell.kinds import PICKS, RELEASES
 from cell.loop import FAILURES, Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
@@ -86,12 +87,6 @@ PAD_TIP_CLEARANCE_M = 5e-4  # [m] … or with the pads' tips this far above the 
 LIFT_CHECK_M = 0.03  # [m] the first lift, in LIFT_CHECK_S [s], shows whether the pads hold it
 LIFT_CHECK_S = 0.2
 PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still on the station
-
-
-PICKS = ("kinematic", "physical")  # how an item gets into the grip (Orchestrator's `pick`)
-# how a throw is released (Orchestrator's `release`): "auto" lets the planner choose a release
-# on the move where it is sooner (cell.robot.moving_release), "static" always stops to release
-RELEASES = ("auto", "static")
 
 
 def as_gripped(obj: ObjectParams) -> ObjectParams:

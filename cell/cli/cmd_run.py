@@ -11,7 +11,7 @@ from typing import Any
 
 from cell.cli.common import to_jsonable
 from cell.jobs import load_job
-from cell.kinds import EE_BACKENDS
+from cell.kinds import EE_BACKENDS, PICKS, RELEASES
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -37,14 +37,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
     p.add_argument(
         "--pick",
-        choices=("kinematic", "physical"),
+        choices=PICKS,
         default="kinematic",
         help="arm platform: how the item gets into the grip: placed there (kinematic, the "
         "default), or gripped by contact from a random pose on the station (physical)",
     )
     p.add_argument(
         "--release",
-        choices=("auto", "static"),
+        choices=RELEASES,
         default="auto",
         help="arm platform: release a throw on the move where the planner finds that sooner "
         "and landing in the bin (auto, the default), or always stop to release (static)",
