@@ -105,6 +105,37 @@ def test_grip_use_of_a_tall_item_hanging_sideways_is_the_closed_form():
     assert grip_use(rest, rb, hold) == pytest.approx(expect, rel=0.02)
 
 
+def test_the_lift_over_a_pick_stays_on_the_picks_ik_branch():
+    """A UR5 grip folded back over the station (the pick's configuration after a throw
+    behind the arm) reaches 0.15 m up only on another IK branch, 4.2 rad away in a
+    joint: the lift comes lower, on the pick's own branch, instead of swinging round."""
+    job = parse_job(
+        "cell: {robot: ur5}\n"
+        "bins:\n  - {id: far, position_m: [1.6, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.1}\n"
+        "items:\n  - {object: cube50, bin: far}\n",
+        "lift.yaml",
+    )
+    orc = Orchestrator(job)
+    try:
+        obj = job.items[0].obj
+        q_pick = np.array([2.597, -3.043, 0.734, -5.545, -1.571, -5.257])
+        p_tcp, _ = orc.robot.tcp_pose(q_pick)
+        stroke = 0.05
+        down = (-math.pi / 2, 0.0)
+        # the item's centre under this grip: the TCP's offset undone
+        p_item = p_tcp - (orc._tcp_for_item_centre(np.zeros(3), *down, stroke, obj))
+        q_lift = orc._lift_q(p_item, stroke, obj, q_pick)
+        rise = orc.robot.tcp_pose(q_lift)[0] - p_tcp
+        assert rise[2] >= LIFT_M / 4 - 1e-3 and np.hypot(*rise[:2]) < 2e-3
+        # the move between them (a straight line in joint space) stays near the vertical
+        # over the item and never lower than the pick: the arm does not swing round
+        for f in np.linspace(0.0, 1.0, 21):
+            p = orc.robot.tcp_pose(q_pick + f * (q_lift - q_pick))[0]
+            assert np.hypot(*(p - p_tcp)[:2]) < 0.03 and p[2] > p_tcp[2] - 1e-3
+    finally:
+        orc.close()
+
+
 WIDTH_M = 0.03
 STROKE_M = 0.06
 JOB = """
@@ -236,3 +267,38 @@ def test_the_pads_couple_of_a_cylinder_is_that_of_a_line_contact():
     r_line = h_cyl.torque_nm / (PAD_COUPLE_FACTOR * h_cyl.force_n)
     assert r_line == pytest.approx(length / 4, rel=0.03)  # n-point quadrature of |z|
     assert h_box.torque_nm > 1.3 * h_cyl.torque_nm  # the box's face has width as well
+
+
+def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
+    """After a throw behind the UR5, the level swing's waypoints toward a bin on its
+    right were solved from the previous waypoint and, where that did not converge, from
+    home: the carry went 4.4 rad round in a joint between waypoints a third of the swing
+    apart (4.6 s, and items flung from the pads). No joint may move more than π between
+    two of the carry's waypoints, and every item lands in its bin."""
+    job = parse_job(
+        "cell: {robot: ur5}\n"
+        "bins:\n"
+        "  - {id: back, position_m: [-1.972, -0.915], size_m: [0.335, 0.33], rim_height_m: 0.14}\n"
+        "  - {id: far, position_m: [1.532, -2.13], size_m: [0.312, 0.4], rim_height_m: 0.192}\n"
+        "items:\n"
+        "  - {object: cube50, bin: back}\n"
+        "  - {object: sphere40, count: 2, bin: far}\n",
+        "swing.yaml",
+    )
+    orc = Orchestrator(job)
+    steps: list[float] = []
+    move = orc._move
+
+    def recorded(waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
+        if orc.ee.item is not None:
+            path = [orc.q, *waypoints]
+            steps.extend(float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:]))
+        return move(waypoints, settle_s)
+
+    orc._move = recorded  # type: ignore[method-assign]
+    try:
+        summary = orc.run()
+    finally:
+        orc.close()
+    assert steps and max(steps) < math.pi, steps
+    assert [r.in_bin for r in summary.results] == [True] * 3, summary.results
