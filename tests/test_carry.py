@@ -292,7 +292,9 @@ def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
     def recorded(waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
         if orc.ee.item is not None:
             path = [orc.q, *waypoints]
-            steps.extend(float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:]))
+            steps.extend(
+                float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:], strict=True)
+            )
         return move(waypoints, settle_s)
 
     orc._move = recorded  # type: ignore[method-assign]
