@@ -116,3 +116,30 @@ def test_the_tradeoff_caption_is_the_last_generated_tradeoff() -> None:
         assert float(rate) == pytest.approx(p["in_bin_rate"], abs=5e-4)
         assert float(lo) == pytest.approx(p["in_bin_rate_lo"], abs=5e-3)
         assert float(hi) == pytest.approx(p["in_bin_rate_hi"], abs=5e-3)
+
+
+def test_the_flywheel_figures_are_the_last_generated_ones() -> None:
+    fw = _json("docs/figures/flywheel.json")
+    for name, pattern in (
+        (
+            "bins",
+            r"`tasks/bins.yaml` run twice into a fresh store the thrown items'\s+mean "
+            r"landing error goes ([\d.]+) → ([\d.]+) mm \((\d+)/(\d+) → (\d+)/\d+ in their bins\)",
+        ),
+        (
+            "random_3_ur5",
+            r"--seed 3 --robot ur5` \((\d+) items\) ([\d.]+) → ([\d.]+) mm over the "
+            r"(\d+) items thrown both times \((\d+)/\d+ → (\d+)/\d+ in their bins\)",
+        ),
+    ):
+        f = fw[name]
+        g = _quoted(pattern)
+        if name == "bins":
+            first, second, in1, n, in2 = g
+            assert int(n) == f["items"]
+        else:
+            n, first, second, both, in1, in2 = g
+            assert int(n) == f["items"] and int(both) == f["thrown_both"]
+        assert float(first) == pytest.approx(1000 * f["mean_landing_error_first_m"], abs=0.05)
+        assert float(second) == pytest.approx(1000 * f["mean_landing_error_second_m"], abs=0.05)
+        assert (int(in1), int(in2)) == (f["in_bin_first"], f["in_bin_second"])
