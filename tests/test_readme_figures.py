@@ -120,26 +120,32 @@ def test_the_tradeoff_caption_is_the_last_generated_tradeoff() -> None:
 
 def test_the_flywheel_figures_are_the_last_generated_ones() -> None:
     fw = _json("docs/figures/flywheel.json")
-    for name, pattern in (
-        (
-            "bins",
-            r"`tasks/bins.yaml` run twice into a fresh store the thrown items'\s+mean "
-            r"landing error goes ([\d.]+) → ([\d.]+) mm \((\d+)/(\d+) → (\d+)/\d+ in their bins\)",
-        ),
-        (
-            "random_3_ur5",
-            r"--seed 3 --robot ur5` \((\d+) items\) ([\d.]+) → ([\d.]+) mm over the "
-            r"(\d+) items thrown both times \((\d+)/\d+ → (\d+)/\d+ in their bins\)",
-        ),
-    ):
-        f = fw[name]
-        g = _quoted(pattern)
-        if name == "bins":
-            first, second, in1, n, in2 = g
-            assert int(n) == f["items"]
+    num, frac = r"([\d.]+)", r"(\d+)/(\d+)"
+    bins = _quoted(
+        rf"`tasks/bins.yaml` run twice into a fresh store the thrown items' mean landing error "
+        rf"goes {num} → {num} mm \({frac} → {frac} in their bins; median {num} → {num} mm, "
+        rf"(\d+) of (\d+) closer\)".replace(" ", r"\s+")
+    )
+    layout = _quoted(
+        rf"--seed 3 --robot ur5` \((\d+) items\) {num} → {num} mm over the (\d+) items thrown "
+        rf"both times \({frac} → {frac} in their bins; median {num} → {num} mm, (\d+) of "
+        rf"(\d+) closer\)".replace(" ", r"\s+")
+    )
+    for f, g in ((fw["bins"], bins), (fw["random_3_ur5"], layout)):
+        if f is fw["bins"]:
+            m1, m2, in1, n1, in2, n2, d1, d2, closer, both = g
         else:
-            n, first, second, both, in1, in2 = g
-            assert int(n) == f["items"] and int(both) == f["thrown_both"]
-        assert float(first) == pytest.approx(1000 * f["mean_landing_error_first_m"], abs=0.05)
-        assert float(second) == pytest.approx(1000 * f["mean_landing_error_second_m"], abs=0.05)
-        assert (int(in1), int(in2)) == (f["in_bin_first"], f["in_bin_second"])
+            n1, m1, m2, both, in1, _, in2, n2, d1, d2, closer, _ = g
+        assert int(n1) == int(n2) == f["items"] and int(both) == f["thrown_both"]
+        assert (int(in1), int(in2), int(closer)) == (
+            f["in_bin_first"],
+            f["in_bin_second"],
+            f["second_closer"],
+        )
+        for quoted, key in (
+            (m1, "mean_landing_error_first_m"),
+            (m2, "mean_landing_error_second_m"),
+            (d1, "median_landing_error_first_m"),
+            (d2, "median_landing_error_second_m"),
+        ):
+            assert float(quoted) == pytest.approx(1000 * f[key], abs=0.05)
