@@ -96,6 +96,11 @@ LIFT_CHECK_S = 0.2
 PICK_ATTEMPTS = 2  # a failed grasp is tried once more while the item is still on the station
 
 
+def joint_gap(qa: np.ndarray, qb: np.ndarray) -> float:
+    """The largest joint move between two configurations [rad]."""
+    return float(np.max(np.abs(np.asarray(qb) - np.asarray(qa))))
+
+
 def as_gripped(obj: ObjectParams) -> ObjectParams:
     """The item as the pads see it: a mesh is as wide as it is where the pads meet it."""
     from dataclasses import replace as dc_replace
@@ -457,21 +462,20 @@ class Orchestrator:
         poses = [
             ReleasePose.from_angles(p0 + f * (p1 - p0), e0 + f * (e1 - e0), az, roll) for f in fs
         ]
-        gap = float(np.max(np.abs(q_rel - q_lift)))
+        gap = joint_gap(q_lift, q_rel)
         for chained in (True, False):
             out: list[np.ndarray] = []
             try:
                 for f, pose in zip(fs, poses, strict=True):
-                    seed = (
-                        (out[-1] if out else q_lift) if chained else q_lift + f * (q_rel - q_lift)
-                    )
+                    if chained:  # from the previous waypoint (the lift for the first)
+                        seed = out[-1] if out else q_lift
+                    else:  # from the joint line between the ends
+                        seed = q_lift + f * (q_rel - q_lift)
                     out.append(solve_ik(rb, pose, seed, random_seeds=0, solutions=1).q)
             except IKFailed:
                 continue
             path = [q_lift, *out, q_rel]
-            travel = sum(
-                float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:], strict=True)
-            )
+            travel = sum(joint_gap(a, b) for a, b in zip(path[:-1], path[1:], strict=True))
             if travel <= SWING_MAX_DETOUR * gap + 1e-9:
                 return out
             log.info("the level swing goes round (%.1f rad in a joint for %.1f)", travel, gap)
@@ -803,7 +807,7 @@ class Orchestrator:
         branch, a swing of the whole arm away."""
         down = (-math.pi / 2, 0.0)
         err: IKFailed | None = None
-        far: list[np.ndarray] = []
+        far: list[tuple[float, np.ndarray]] = []  # (joint gap from the pick, lift)
         for up in (LIFT_M, LIFT_M / 2, LIFT_M / 4):
             lift = p_item + np.array([0, 0, up])
             try:
@@ -811,12 +815,13 @@ class Orchestrator:
             except IKFailed as exc:
                 err = err or exc
                 continue
-            if float(np.max(np.abs(q - q_pick))) <= LIFT_MAX_DQ_RAD:
+            gap = joint_gap(q_pick, q)
+            if gap <= LIFT_MAX_DQ_RAD:
                 return q
-            far.append(q)
+            far.append((gap, q))
         if far:  # no lift on the pick's own branch: the nearest other (a long way round)
             log.info("no lift over the pick within %.1f rad of its joints", LIFT_MAX_DQ_RAD)
-            return min(far, key=lambda q: float(np.max(np.abs(q - q_pick))))
+            return min(far, key=lambda gq: gq[0])[1]
         assert err is not None
         raise err
 
