@@ -120,32 +120,33 @@ def test_the_tradeoff_caption_is_the_last_generated_tradeoff() -> None:
 
 def test_the_flywheel_figures_are_the_last_generated_ones() -> None:
     fw = _json("docs/figures/flywheel.json")
-    num, frac = r"([\d.]+)", r"(\d+)/(\d+)"
-    bins = _quoted(
-        rf"`tasks/bins.yaml` run twice into a fresh store the thrown items' mean landing error "
-        rf"goes {num} → {num} mm \({frac} → {frac} in their bins; median {num} → {num} mm, "
-        rf"(\d+) of (\d+) closer\)".replace(" ", r"\s+")
+    # the same named groups in both sentences; a number quoted twice must agree ((?P=…))
+    tail = (
+        r"\((?P<in1>\d+)/(?P<n>\d+) → (?P<in2>\d+)/(?P=n) in their bins; median (?P<d1>[\d.]+) "
+        r"→ (?P<d2>[\d.]+) mm, (?P<closer>\d+) of (?P<both>\d+) closer\)"
     )
-    layout = _quoted(
-        rf"--seed 3 --robot ur5` \((\d+) items\) {num} → {num} mm over the (\d+) items thrown "
-        rf"both times \({frac} → {frac} in their bins; median {num} → {num} mm, (\d+) of "
-        rf"(\d+) closer\)".replace(" ", r"\s+")
-    )
-    for f, g in ((fw["bins"], bins), (fw["random_3_ur5"], layout)):
-        if f is fw["bins"]:
-            m1, m2, in1, n1, in2, n2, d1, d2, closer, both = g
-        else:
-            n1, m1, m2, both, in1, _, in2, n2, d1, d2, closer, _ = g
-        assert int(n1) == int(n2) == f["items"] and int(both) == f["thrown_both"]
-        assert (int(in1), int(in2), int(closer)) == (
+    sentences = {
+        "bins": r"`tasks/bins.yaml` run twice into a fresh store the thrown items' mean landing "
+        r"error goes (?P<m1>[\d.]+) → (?P<m2>[\d.]+) mm " + tail,
+        "random_3_ur5": r"--seed 3 --robot ur5` \((?P<n0>\d+) items\) (?P<m1>[\d.]+) → "
+        r"(?P<m2>[\d.]+) mm over the (?P<both0>\d+) items thrown both times " + tail,
+    }
+    for name, pattern in sentences.items():
+        m = re.search(pattern.replace(" ", r"\s+"), README)
+        assert m, f"the README no longer quotes the flywheel's {name} figures"
+        g, f = m.groupdict(), fw[name]
+        assert int(g["n"]) == f["items"] and int(g["both"]) == f["thrown_both"]
+        assert int(g.get("n0") or g["n"]) == f["items"]
+        assert int(g.get("both0") or g["both"]) == f["thrown_both"]
+        assert (int(g["in1"]), int(g["in2"]), int(g["closer"])) == (
             f["in_bin_first"],
             f["in_bin_second"],
             f["second_closer"],
         )
-        for quoted, key in (
-            (m1, "mean_landing_error_first_m"),
-            (m2, "mean_landing_error_second_m"),
-            (d1, "median_landing_error_first_m"),
-            (d2, "median_landing_error_second_m"),
+        for group, key in (
+            ("m1", "mean_landing_error_first_m"),
+            ("m2", "mean_landing_error_second_m"),
+            ("d1", "median_landing_error_first_m"),
+            ("d2", "median_landing_error_second_m"),
         ):
-            assert float(quoted) == pytest.approx(1000 * f[key], abs=0.05)
+            assert float(g[group]) == pytest.approx(1000 * f[key], abs=0.05)
