@@ -197,6 +197,85 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
 MIN_THROW_STROKE_RANGE_M = 1e-3  # [m] a throw needs at least this much stroke to choose from
 
 
+# A launch slower than this [m/s] (the model's launch speed) is thrown flat, with the throw
+# axis at most SLOW_LAUNCH_MAX_ELEVATION_RAD up. Measured in the scene (ad-hoc items
+# 30-171 g): launched at 0.58-0.84 m/s at 35-60°, items fell back onto the pads (reach 17-66 %
+# short of the model's, or no landing); at 10° a 100 g box launched at 0.72 m/s landed within
+# 3 % of the model, and at 1.0 m/s and faster the model's reach holds at every elevation.
+LAUNCH_SPEED_MIN_MPS = 1.0
+SLOW_LAUNCH_MAX_ELEVATION_RAD = math.radians(20.0)
+
+
+def clean_launch(speed_mps: float, elevation_rad: float) -> bool:
+    """Does an item launched at `speed_mps` [m/s] with the throw axis at `elevation_rad`
+    leave the pads as the model has it (fast enough, or flat enough not to fall back)?"""
+    return speed_mps >= LAUNCH_SPEED_MIN_MPS or elevation_rad <= SLOW_LAUNCH_MAX_ELEVATION_RAD
+
+
+def launch_stroke_limit(params: ModelParams, obj: ObjectParams, elevation_max_rad: float) -> float:
+    """The longest stroke [m] at which the model launches `obj` at LAUNCH_SPEED_MIN_MPS
+    or faster at every elevation up to `elevation_max_rad` (the steepest is the slowest).
+
+    Raises:
+        UnreachableTarget: even the shortest stroke launches it slower (too heavy to
+            throw steeply); the message says what the cell can do instead.
+    """
+    from cell.model.throw import longest_stroke_launching
+
+    ee, name = params.ee, obj.name or obj.shape
+    s_max = longest_stroke_launching(
+        ee, params.model_object(obj), LAUNCH_SPEED_MIN_MPS, elevation_max_rad
+    )
+    if s_max is None or s_max < ee.stroke_min + MIN_THROW_STROKE_RANGE_M:
+        raise UnreachableTarget(
+            f"{name} ({obj.mass * 1000:.0f} g) is too heavy to throw steeply: the band "
+            f"launches it slower than {LAUNCH_SPEED_MIN_MPS:.1f} m/s at every stroke, and a "
+            "slow steep launch falls back onto the pads; place it in a bin within reach, or "
+            "sort it by hand"
+        )
+    return s_max
+
+
+def plan_clean(
+    params: ModelParams, obj: ObjectParams, model_obj: ObjectParams, goal: Any, bounds: Any
+) -> Any:
+    """`plan_facing` within the launches the pads release cleanly (`clean_launch`): the
+    planner's throw when it is one; else the same goal thrown flat (a slow launch at most
+    SLOW_LAUNCH_MAX_ELEVATION_RAD up); else at strokes that launch at least
+    LAUNCH_SPEED_MIN_MPS (`launch_stroke_limit`).
+
+    Raises:
+        UnreachableTarget: no clean launch within the bounds lands on the goal.
+    """
+    from dataclasses import replace as dc_replace
+
+    from cell.optimize.plan import plan_facing
+
+    plan = plan_facing(model_obj, goal, params.ee, bounds)
+    if clean_launch(launch_speed_mps(params, model_obj, plan), plan.elevation_rad):
+        return plan
+    flat = dc_replace(
+        bounds,
+        elevation_min=min(bounds.elevation_min, SLOW_LAUNCH_MAX_ELEVATION_RAD),
+        elevation_max=min(bounds.elevation_max, SLOW_LAUNCH_MAX_ELEVATION_RAD),
+    )
+    try:
+        return plan_facing(model_obj, goal, params.ee, flat)
+    except UnreachableTarget:
+        pass
+    s_fast = launch_stroke_limit(params, obj, bounds.elevation_max)
+    if bounds.stroke_max is not None:  # a cap the bounds already have (the grip's)
+        s_fast = min(s_fast, bounds.stroke_max)
+    return plan_facing(model_obj, goal, params.ee, grip_bounds(bounds, params, s_fast))
+
+
+def launch_speed_mps(params: ModelParams, model_obj: ObjectParams, plan: Any) -> float:
+    """The model's launch speed [m/s] of a static throw plan (the push and the ride)."""
+    from cell.model.throw import launch_state
+
+    return float(np.linalg.norm(launch_state(plan.to_batch(model_obj), params.ee)[1][0]))
+
+
 def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float, what: str = "") -> Any:
     """`bounds` with the stroke capped at what the grip holds the item at [m].
 
@@ -230,7 +309,6 @@ def check_sortable(
     bin: the pads cannot hold it, or (for a throw) no release within the bounds lands
     it there by the planner's model of the scene."""
     from cell.optimize.bounds import ThrowBounds
-    from cell.optimize.plan import plan_facing
 
     s_max = grip_stroke_limit(params, obj)
     dist = math.hypot(*bin_spec.position)
@@ -240,7 +318,7 @@ def check_sortable(
     if b.stroke_max is None or s_max < b.stroke_max:
         b = grip_bounds(b, params, s_max, obj.name or obj.shape)
     goal = (*bin_spec.position, bin_spec.rim_height)
-    plan_facing(params.model_object(obj), goal, params.ee, b)
+    plan_clean(params, obj, params.model_object(obj), goal, b)
 
 
 def scene_params_path() -> str | None:
@@ -642,7 +720,9 @@ class Orchestrator:
             ee_params=self.params.ee,
             state={"target": target, "aim": self._aim, "q_release": self._q_release},
         )
-        mt = self._moving_choice(obj, plan, delta) if self._may_release_moving(obj, d) else None
+        mt = None
+        if self._may_release_moving(obj, d):
+            mt = self._moving_choice(obj, plan, delta, s_grip)
         if mt is not None:
             d.plan, d.stroke_m, d.moving = mt.plan, mt.plan.stroke_m + delta, True
             d.state.update(moving=mt, q_release=mt.motion.q_release)
@@ -660,10 +740,13 @@ class Orchestrator:
             and not self._turns_if_rolled(obj, d.stroke_m)
         )
 
-    def _moving_choice(self, obj: ObjectParams, plan: Any, delta: float) -> Any:
+    def _moving_choice(
+        self, obj: ObjectParams, plan: Any, delta: float, stroke_max_m: float
+    ) -> Any:
         """The release on the move that the planner prefers to the static one by cycle
         time, landing in the bin by the model (`cell.robot.moving_release.choose_release`,
-        from where the lift over the presented item will be), or None."""
+        from where the lift over the presented item will be, its stroke at most
+        `stroke_max_m`: what the grip holds), or None."""
         from cell.robot.moving_release import choose_release
 
         stroke = plan.stroke_m + delta
@@ -676,7 +759,7 @@ class Orchestrator:
                 plan,
                 q_lift,
                 self.params.ee,
-                bounds=self.bounds_now,
+                bounds=grip_bounds(self.bounds_now, self.params, stroke_max_m),
                 ik=lambda t, e, a: self._ik_gripped(t, e, a, q_lift),
                 hold=carry_hold(self.params, obj, stroke),
                 criterion="cycle",
@@ -1216,8 +1299,6 @@ class Orchestrator:
         self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float
     ) -> tuple[Any, float]:
 
-        from cell.optimize.plan import plan_facing
-
         goal = (*target.position, target.rim_height)
         # Identified η_o where the parameter file has them (seen objects), else the
         # catalogue's; with a residual, only those the residual was trained with, so
@@ -1226,16 +1307,16 @@ class Orchestrator:
         model_obj = self.params.model_object(obj) if use_identified else obj
         self._model_obj = model_obj  # what the plan assumed (for an observer)
         bounds = self.bounds_now
-        plan = plan_facing(model_obj, goal, self.params.ee, bounds)
+        plan = plan_clean(self.params, obj, model_obj, goal, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = grip_bounds(bounds, self.params, stroke_max_m, obj.name or obj.shape)
-            plan = plan_facing(model_obj, goal, self.params.ee, bounds)
+            plan = plan_clean(self.params, obj, model_obj, goal, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
             if aim is not None:
                 try:
-                    plan = plan_facing(model_obj, tuple(aim), self.params.ee, bounds)
+                    plan = plan_clean(self.params, obj, model_obj, tuple(aim), bounds)
                     self._aim = aim
                 except UnreachableTarget:
                     log.info(

@@ -43,6 +43,7 @@ __all__ = [
     "throw_axis",
     "drag_constant",
     "launch_state",
+    "longest_stroke_launching",
     "ride",
     "predict_landing",
     "reference_landing",
@@ -318,6 +319,33 @@ def ride(
     w = np.sum(velocity * axis, axis=1)
     w2 = np.sqrt(np.maximum(w * w - 2 * G * axis[:, 2] * d, _RIDE_MIN_SPEED2))
     return position + d[:, None] * axis, velocity + (w2 - w)[:, None] * axis
+
+
+def longest_stroke_launching(
+    ee: EndEffectorParams, obj: ObjectParams, speed_min_mps: float, elevation_rad: float
+) -> float | None:
+    """The longest stroke [m] in the end-effector's range at which the model launches
+    `obj` (its mass as the push drives it: the effective mass of the parameter file,
+    `ModelParams.model_object`) at `speed_min_mps` or faster with the throw axis at
+    `elevation_rad` (gravity along the axis slows a steep launch), or None when even
+    the shortest stroke launches it slower.
+
+    The launch speed falls as the stroke grows (less band stretch): the strokes are
+    searched on a 0.5 mm grid.
+    """
+    strokes = np.arange(ee.stroke_min, ee.stroke_max + 1e-12, 5e-4)
+    batch = ThrowBatch.build(
+        stroke=strokes,
+        position=np.zeros((strokes.size, 3)),
+        elevation=elevation_rad,
+        azimuth=0.0,
+        shape=obj.code,
+        mass=obj.mass,
+        size=obj.size,
+    )
+    speed = np.linalg.norm(launch_state(batch, ee)[1], axis=1)
+    ok = strokes[speed >= speed_min_mps]
+    return float(ok.max()) if ok.size else None
 
 
 def predict_landing(
