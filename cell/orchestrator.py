@@ -827,7 +827,8 @@ class Orchestrator:
         if not self._keeps_over_station(traj.parts[0], float(self.robot.tcp_pose(q_over)[0][2])):
             log.info("the approach to the pick dips over the station: over the lift instead")
             return False
-        self._follow(traj, q_pick, SETTLE_S)
+        # no settle: the grasp that follows holds the arm still while the pads close
+        self._follow(traj, q_pick, 0.0)
         return True
 
     def _keeps_over_station(self, traj: Any, z_min: float) -> bool:
