@@ -75,6 +75,9 @@ LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 # IK branch: the straight lift would swing the arm round (a UR5 grip folded back over the
 # station took 3.4 s to come up 0.15 m, 1.2 s to come up 0.075 m on its own branch)
 LIFT_MAX_DQ_RAD = 1.0
+# The empty arm's approach to a (kinematic) pick passes, without stopping, the point where
+# the open pads' tips are this far over the item's top, and goes straight down from there
+PICK_OVER_CLEARANCE_M = 0.02
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
 # The physical pick (Orchestrator._pick)
@@ -645,6 +648,11 @@ class Orchestrator:
             # The spline through the waypoints leaves the joint limits between them: stop
             # at each instead (a straight joint-space segment stays inside the limit box).
             return sum(self._move([w], settle_s) for w in waypoints)
+        return self._follow(traj, waypoints[-1], settle_s)
+
+    def _follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
+        """Step the scene along a joint trajectory ending at rest at q_end [rad], then
+        `settle_s` [s] more; returns the time taken [s]."""
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
@@ -654,7 +662,7 @@ class Orchestrator:
             sc.step()
         if settle_s > 0:
             sc.run_for(settle_s)
-        self.q = np.asarray(waypoints[-1], float)
+        self.q = np.asarray(q_end, float)
         self.loop.land()
         return float(traj.duration) + settle_s
 
@@ -865,10 +873,61 @@ class Orchestrator:
         """The kinematic pick: the grip over the item, which is moved into it
         (PyBulletEndEffector.grasp); returns the lift configuration."""
         q_pick, q_lift = self._over_item(item, stroke, obj)
-        self._move([q_lift, q_pick])
+        if not self._approach(item, stroke, obj, q_pick):
+            self._move([q_lift, q_pick])
         self.ee.grasp(stroke, item)
         self._carried = (obj, stroke)
         return q_lift
+
+    def _approach(self, item: Any, stroke: float, obj: ObjectParams, q_pick: np.ndarray) -> bool:
+        """The empty arm to the pick without stopping over it: anywhere to the point
+        the pads' length and PICK_OVER_CLEARANCE_M over the pick, then down
+        the straight joint-space segment onto the item (`plan_approach`). Taken only if,
+        until that point, the grip stays at least that high wherever it is over the
+        station or within the grip's reach of it (`_keeps_over_station`); else (or when
+        no IK or move is found) False, and nothing has moved."""
+        from cell.robot.motion import plan_approach
+
+        over = self.scene.geometry.pad_length_m + PICK_OVER_CLEARANCE_M
+        p_item = self.scene.item_position(item)
+        down = (-math.pi / 2, 0.0)
+        try:
+            tcp = self._tcp_for_item_centre(p_item + np.array([0, 0, over]), *down, stroke, obj)
+            q_over = self._ik_frame(tcp, q_pick)
+            if joint_gap(q_pick, q_over) > LIFT_MAX_DQ_RAD:  # another IK branch
+                return False
+            traj = plan_approach(
+                self.q,
+                q_over,
+                q_pick,
+                self.robot,
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+        except (IKFailed, TrajectoryError) as exc:
+            log.info("no straight approach to the pick (%s): over the lift instead", exc)
+            return False
+        if not self._keeps_over_station(traj.parts[0], float(self.robot.tcp_pose(q_over)[0][2])):
+            log.info("the approach to the pick dips over the station: over the lift instead")
+            return False
+        # no settle: the grasp that follows holds the arm still while the pads close
+        self._follow(traj, q_pick, 0.0)
+        return True
+
+    def _keeps_over_station(self, traj: Any, z_min: float) -> bool:
+        """Does the grip centre stay at least z_min [m] high (1 mm tolerance) wherever it
+        passes over the pick station's top, widened by the grip's reach (the carriage's
+        half side and the open pads), along `traj` (sampled every physics step)?"""
+        sc, geo = self.scene, self.scene.geometry
+        lo, hi = sc.pick_station_bounds()
+        reach = geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m
+        ts = np.arange(0.0, traj.duration + sc.dt_s, sc.dt_s)
+        for q in traj.sample_many(ts)[0]:
+            p = self.robot.tcp_pose(q)[0]
+            near = np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach)
+            if near and p[2] < z_min - 1e-3:
+                return False
+        return True
 
     def _over_item(
         self, item: Any, stroke: float, obj: ObjectParams

@@ -113,10 +113,13 @@ def test_a_cube_thrown_into_a_low_rimmed_bin_stays_in():
 
 
 @pytest.mark.xfail(
-    strict=True,
-    reason="open: a 100 g cylinder 200 mm tall (50 mm wide) leaves the pads on its carry to "
-    "a release 1.8 m out; the pads' couple on a cylinder's line contact is below its weight's "
-    "lever, the carry goes gently on the level swing, and it still turns out of them",
+    strict=False,
+    reason="open: a 100 g cylinder 200 mm tall (50 mm wide) may leave the pads on its carry "
+    "to a release 1.8 m out; the pads' couple on a cylinder's line contact is below its "
+    "weight's lever, the carry goes gently on the level swing. Marginal: whether it turns out "
+    "of them flips with the pick's timing (kept with the straight approach to the pick and "
+    "the grasp that ends once the pads stop; dropped with that approach and the full 0.15 s "
+    "grasp, and before it)",
 )
 def test_a_tall_cylinder_is_carried_to_its_release():
     item = "{shape: cylinder, mass_kg: 0.1, size_m: [0.05, 0.05, 0.2], bin: edge_bin}"

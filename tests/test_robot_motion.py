@@ -6,8 +6,10 @@ import pytest
 from cell.errors import InvalidInput, TrajectoryError
 from cell.robot.model import load_robot
 from cell.robot.motion import (
+    ChainTrajectory,
     check_limits,
     move_time,
+    plan_approach,
     plan_move,
     plan_path,
     plan_stop,
@@ -231,3 +233,56 @@ def test_a_move_ending_exactly_on_a_joint_limit_is_allowed():
     q1[5] = robot.limits.upper[5]
     traj = plan_move(robot.home, None, q1, None, robot)
     assert traj.end_state()[0][5] == pytest.approx(robot.limits.upper[5], abs=1e-9)
+
+
+def bang_bang_time(dq, robot):
+    """Per-joint rest-to-rest time under the velocity and acceleration limits alone (no
+    jerk limit): a lower bound on any move of that joint travel [s]."""
+    d, v, a = np.abs(dq), robot.limits.velocity, robot.limits.acceleration
+    return float(np.max(np.where(d <= v * v / a, 2 * np.sqrt(d / a), d / v + v / a)))
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_approach_passes_over_the_point_then_runs_down_the_segment_within_all_limits(name):
+    """The empty arm's approach: within the description's limits on dense samples, through
+    q_over, then on the straight segment to q_to, forward only, ending there at rest; no
+    quicker than the per-joint bang-bang bound, and no slower than stopping at q_over."""
+    robot = load_robot(name)
+    lim = robot.limits
+    rng = np.random.default_rng(3)
+    lo, hi = lim.lower + 0.2, lim.upper - 0.2
+    for _ in range(4):
+        q0 = rng.uniform(lo, hi)
+        q_to = np.clip(q0 + rng.uniform(-1.2, 1.2, robot.dof), lo, hi)
+        q_over = q_to + rng.uniform(-0.1, 0.1, robot.dof)
+        traj = plan_approach(q0, q_over, q_to, robot)
+        assert isinstance(traj, ChainTrajectory) and len(traj.parts) == 2
+        ts, q, dq, ddq = dense(traj)
+        assert np.all(np.abs(dq) <= lim.velocity * (1 + RTOL))
+        assert np.all(np.abs(ddq) <= lim.acceleration * (1 + RTOL))
+        assert np.all(q >= lim.lower - 1e-9) and np.all(q <= lim.upper + 1e-9)
+        np.testing.assert_allclose(q[0], q0, atol=1e-9)
+        np.testing.assert_allclose(dq[0], 0.0, atol=1e-9)
+        np.testing.assert_allclose(q[-1], q_to, atol=1e-8)
+        np.testing.assert_allclose(dq[-1], 0.0, atol=1e-8)
+        t1 = traj.parts[0].duration
+        np.testing.assert_allclose(traj.sample(t1)[0], q_over, atol=1e-8)
+        # from q_over on: on the segment, moving forward along it
+        seg = q_to - q_over
+        u = seg / np.linalg.norm(seg)
+        rel = q[ts >= t1] - q_over
+        along = rel @ u
+        assert np.max(np.linalg.norm(rel - np.outer(along, u), axis=1)) < 1e-6
+        assert np.all(np.diff(along) >= -1e-9)
+        # continuous in position and velocity where the parts meet (dense samples)
+        assert np.max(np.abs(np.diff(q, axis=0))) < np.max(lim.velocity) * (ts[1] - ts[0]) * 1.01
+        assert traj.duration >= bang_bang_time(q_to - q0, robot) - 1e-9
+        stop = plan_move(q0, None, q_over, None, robot).duration
+        stop += plan_move(q_over, None, q_to, None, robot).duration
+        assert traj.duration <= stop + 1e-9
+
+
+def test_approach_without_a_segment_is_invalid_input():
+    robot = load_robot("panda")
+    with pytest.raises(InvalidInput, match="no segment"):
+        plan_approach(robot.home, robot.home + 0.1, robot.home + 0.1, robot)

@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 
 _STALL_M = 0.002  # [m] carriage lag behind the spool that means it is blocked
 FINGERS = (FINGER_LEFT, FINGER_RIGHT)
+GRIP_BUILD_S = 0.02  # [s] the closed pads' grip builds up this long before the item is lifted
 
 
 class PyBulletEndEffector(EndEffector):
@@ -230,7 +231,15 @@ class PyBulletEndEffector(EndEffector):
         cl.changeConstraint(seat, maxForce=50.0)
         self.band.fingers_closing = True
         try:
-            sc.run_for(self.close_time_s)
+            # until the fingers stop on the item (close_time_s at most), then the grip
+            # builds up for GRIP_BUILD_S, as in close_on
+            t0 = sc.t
+            while sc.t - t0 < self.close_time_s:
+                sc.step()
+                moving = max(abs(cl.getJointState(sc.ee_body, j)[1]) for j in FINGERS)
+                if sc.t - t0 > 0.01 and moving < 0.01:
+                    break
+            sc.run_for(GRIP_BUILD_S)
         finally:
             cl.removeConstraint(seat)
         sc.run_for(0.01)

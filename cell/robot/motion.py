@@ -8,6 +8,8 @@ Two planners, one result type:
 - `plan_move` (ruckig 0.19): a jerk-limited, time-optimal move from one joint state to
   another, which may end with a nonzero joint velocity (a release while moving: the
   thesis §4.2's secondary trajectory reaching the gripper's pose with nonzero velocity).
+- `plan_approach` (ruckig): an empty arm's move to a configuration over a pick that it
+  passes without stopping, on into a straight joint-space descent to the pick.
 
 Limits come from the robot description (`Robot.limits`: URDF position and velocity limits,
 acceleration and jerk limits from robots/<mount>/mount.yaml). Both planners check the result
@@ -37,9 +39,11 @@ from cell.robot.trajectory import (
 )
 
 __all__ = [
+    "ChainTrajectory",
     "Trajectory",
     "check_limits",
     "move_time",
+    "plan_approach",
     "plan_move",
     "plan_path",
     "plan_stop",
@@ -220,8 +224,9 @@ def _ruckig(
     jmax: np.ndarray,
     *,
     velocity_interface: bool,
+    phase: bool = False,
 ) -> Trajectory:
-    from ruckig import ControlInterface, InputParameter, Result, Ruckig
+    from ruckig import ControlInterface, InputParameter, Result, Ruckig, Synchronization
     from ruckig import Trajectory as RTrajectory
 
     n = rb.dof
@@ -229,6 +234,8 @@ def _ruckig(
     inp = InputParameter(n)
     if velocity_interface:
         inp.control_interface = ControlInterface.Velocity
+    if phase:  # all joints on one profile: a straight joint-space line where ruckig can
+        inp.synchronization = Synchronization.Phase
     inp.current_position = p0.tolist()
     inp.current_velocity = v0.tolist()
     inp.current_acceleration = a0.tolist()
@@ -259,6 +266,123 @@ def _ruckig(
     if not math.isfinite(traj.duration):
         raise TrajectoryError("ruckig returned a trajectory of infinite duration")
     return traj
+
+
+class ChainTrajectory(Trajectory):
+    """Trajectories one after the other, each starting in the state the one before ends in.
+
+    Args:
+        parts: the trajectories, in order (at least one).
+    """
+
+    def __init__(self, parts: Sequence[Trajectory]) -> None:
+        if not parts:
+            raise InvalidInput("ChainTrajectory needs at least one trajectory")
+        self.parts = list(parts)
+        self.dof = self.parts[0].dof
+        self.kind = "+".join(p.kind for p in self.parts)
+        self._starts = np.cumsum([0.0] + [p.duration for p in self.parts])
+        self.duration = float(self._starts[-1])
+
+    def _eval(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        out = np.empty((3, ts.size, self.dof))
+        k = np.clip(np.searchsorted(self._starts, ts, side="right") - 1, 0, len(self.parts) - 1)
+        for i, part in enumerate(self.parts):
+            sel = np.flatnonzero(k == i)
+            if sel.size:
+                q, dq, ddq = part.sample_many(ts[sel] - self._starts[i])
+                out[0, sel], out[1, sel], out[2, sel] = q, dq, ddq
+        return out[0], out[1], out[2]
+
+
+APPROACH_SPEED_FRACTIONS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)
+"""Joint speeds over the approach point tried by `plan_approach`, as fractions of the
+fastest the descent's joint-space direction allows (0: at rest there)."""
+
+
+def plan_approach(
+    q0: np.ndarray | Sequence[float],
+    q_over: np.ndarray | Sequence[float],
+    q_to: np.ndarray | Sequence[float],
+    robot: Robot | str,
+    *,
+    velocity_scale: float = 1.0,
+    acceleration_scale: float = 1.0,
+    fractions: Sequence[float] = APPROACH_SPEED_FRACTIONS,
+) -> ChainTrajectory:
+    """The quickest jerk-limited move from rest at q0 through q_over to rest at q_to whose
+    last part, from q_over on, runs along the straight joint-space segment to q_to.
+
+    The arm passes q_over moving along that segment (at one of `fractions` of the fastest
+    speed its direction allows, whichever ends soonest), then a phase-synchronised ruckig
+    move, every joint on one profile, takes it along the segment to rest at q_to. An empty
+    arm's approach to a pick: anywhere to the point over the item, then straight down
+    onto it, without stopping in between.
+
+    Args:
+        q0: start configuration, at rest [rad], shape (dof,).
+        q_over: the configuration passed on the way [rad], shape (dof,).
+        q_to: the end configuration, at rest [rad], shape (dof,).
+        robot: the robot (or its name).
+        velocity_scale: fraction of the velocity limits to use, in (0, 1].
+        acceleration_scale: fraction of the acceleration limits, in (0, 1].
+        fractions: speeds over q_over to try, each in [0, 1].
+
+    Returns:
+        A ChainTrajectory of two ruckig moves (to q_over, then along the segment to q_to).
+
+    Raises:
+        InvalidInput: bad shapes or scales, a configuration outside the limits, or q_over
+            equal to q_to.
+        TrajectoryError: no speed gives a move within the limits whose last part stays
+            on the segment.
+    """
+    rb = as_robot(robot)
+    for name, s in (("velocity_scale", velocity_scale), ("acceleration_scale", acceleration_scale)):
+        if not (0.0 < s <= 1.0):
+            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    p0 = joint_vector(rb, q0, "q0")
+    pm = joint_vector(rb, q_over, "q_over")
+    p1 = joint_vector(rb, q_to, "q_to")
+    lim = rb.limits
+    for name, q in (("q0", p0), ("q_over", pm), ("q_to", p1)):
+        lim.check_position(q, name, tol=POSITION_TOL_RAD)
+    seg = p1 - pm
+    length = float(np.linalg.norm(seg))
+    if length < 1e-9:
+        raise InvalidInput("plan_approach: q_over is q_to, there is no segment to descend")
+    u = seg / length
+    vmax = lim.velocity * velocity_scale
+    amax = lim.acceleration * acceleration_scale
+    jmax = lim.jerk
+    with np.errstate(divide="ignore"):
+        s_max = float(np.min(np.where(np.abs(u) > 0, vmax / np.abs(u), np.inf)))
+    zero = np.zeros(rb.dof)
+    best: ChainTrajectory | None = None
+    err: Exception | None = None
+    for f in fractions:
+        if not (0.0 <= f <= 1.0):
+            raise InvalidInput(f"plan_approach: speed fraction {f} outside [0, 1]")
+        v = u * s_max * f
+        try:
+            first = _ruckig(rb, p0, zero, zero, pm, v, vmax, amax, jmax, velocity_interface=False)
+            down = _ruckig(
+                rb, pm, v, zero, p1, zero, vmax, amax, jmax, velocity_interface=False, phase=True
+            )
+        except TrajectoryError as exc:
+            err = exc
+            continue
+        # phase synchronisation may fall back to time synchronisation: then off the line
+        qs = down.sample_many(np.linspace(0.0, down.duration, 41))[0] - pm
+        off = qs - np.outer(qs @ u, u)
+        if float(np.max(np.linalg.norm(off, axis=1))) > POSITION_TOL_RAD:
+            err = TrajectoryError(f"the descent at speed fraction {f} leaves the segment")
+            continue
+        if best is None or first.duration + down.duration < best.duration:
+            best = ChainTrajectory([first, down])
+    if best is None:
+        raise TrajectoryError(f"no approach through q_over: {err}")
+    return best
 
 
 def plan_stop(

@@ -480,6 +480,11 @@ class CellScene:
             for c in self.client.getContactPoints(bodyA=self.ee_body, bodyB=body)
         )
 
+    def pick_station_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The pick station's axis-aligned bounding box: (lowest, highest) corner [m, W]."""
+        lo, hi = self.client.getAABB(self.pick_station)
+        return np.asarray(lo, float), np.asarray(hi, float)
+
     def on_station(self, item: Item) -> bool:
         """The item rests on the pick station (its centre over it, not far above it)."""
         p = self.item_position(item)
