@@ -13,7 +13,6 @@ import pytest
 
 from cell.endeffector.factory import make_end_effector
 from cell.errors import CellError, UnreachableTarget
-from cell.jobs import BinSpec
 from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.throw import ThrowBatch, launch_state, predict_landing

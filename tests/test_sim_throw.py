@@ -8,9 +8,10 @@ import pybullet
 import pytest
 
 from cell.catalogue import get_object
-from cell.endeffector.pybullet_backend import PyBulletEndEffector
+from cell.endeffector.pybullet_backend import PLACE_DROP_M, PyBulletEndEffector
 from cell.errors import InvalidParameter
 from cell.model import DEFAULT_EE, ThrowBatch, band_state, predict_landing
+from cell.model.params import G
 from cell.params import load_params
 from cell.sim import BinSpec, CellScene
 from cell.workflows.campaign import throw_once
@@ -112,6 +113,27 @@ def test_place_sets_the_item_down_in_the_target_bin_gently(scene, ee):
     assert out.bin_id == "target"
     assert out.touchdown_body == scene.bin_bodies["target"]
     assert out.touchdown_speed < 0.3
+    assert out.rest_xyz[2] == pytest.approx(0.01 + obj.size[2] / 2, abs=3e-3)
+
+
+@pytest.mark.parametrize("obj_id", ["cuboid_c", "cyl70", "sphere40"])
+def test_a_place_touches_down_no_harder_than_a_drop_of_a_few_millimetres(scene, ee, obj_id):
+    # the place unwinds at the speed of a free fall from PLACE_DROP_M: the item touches
+    # down at that speed (v² = 2 g h), and comes to rest where it was held, on the floor
+    obj = get_object(obj_id)
+    pos, orn = scene.ee_pose_for_place((0.0, 0.0), 0.01, obj, 0.045, clearance_m=0.02)
+    scene.hold_ee(pos, orn, teleport=True)
+    item = scene.spawn_item(obj)
+    ee.grasp(0.045, item)
+    held = np.asarray(scene.item_position(item))
+    ee.place()
+    scene.hold_ee([pos[0], pos[1], pos[2] + 0.3], orn)
+    out = scene.watch_until_rest(item, timeout_s=2.0)
+    drop_m = out.touchdown_speed**2 / (2 * G)
+    assert out.touchdown_body == scene.bin_bodies["target"]
+    assert drop_m <= PLACE_DROP_M * 1.05
+    assert PLACE_DROP_M <= 0.005  # "a few millimetres"
+    assert math.hypot(out.rest_xyz[0] - held[0], out.rest_xyz[1] - held[1]) < 1e-3
     assert out.rest_xyz[2] == pytest.approx(0.01 + obj.size[2] / 2, abs=3e-3)
 
 
