@@ -177,18 +177,11 @@ class PyBulletEndEffector(EndEffector):
         """
         if self.item is not None:
             raise InvalidInput("already holding an item: place or throw it first")
-        sc, cl = self.scene, self.scene.client
+        sc = self.scene
         sc.set_timestep(sc.dt_s)
         stroke_m = self.band.position()
         self.band.fingers_closing = True
-        # until the fingers stop (on the item, or on each other), then the grip builds up
-        t0 = sc.t
-        while sc.t - t0 < self.close_time_s:
-            sc.step()
-            moving = max(abs(cl.getJointState(sc.ee_body, j)[1]) for j in FINGERS)
-            if sc.t - t0 > 0.01 and moving < 0.01:
-                break
-        sc.run_for(0.02)
+        self._close_fingers()
         touching = self.pads_touching(item)
         if len(touching) < 2 or not self._in_grip(item, stroke_m):
             opening = self.band.width()
@@ -201,6 +194,18 @@ class PyBulletEndEffector(EndEffector):
             )
         self.item = item
         self._grasp_stroke_m = stroke_m
+
+    def _close_fingers(self) -> None:
+        """Step while the closing fingers move (close_time_s at most: they stop on the item,
+        or on each other), then GRIP_BUILD_S for the grip to build up."""
+        sc, cl = self.scene, self.scene.client
+        t0 = sc.t
+        while sc.t - t0 < self.close_time_s:
+            sc.step()
+            moving = max(abs(cl.getJointState(sc.ee_body, j)[1]) for j in FINGERS)
+            if sc.t - t0 > 0.01 and moving < 0.01:
+                break
+        sc.run_for(GRIP_BUILD_S)
 
     def let_go(self) -> None:
         """Open the fingers and forget the item (a pick that failed, before a retry)."""
@@ -243,15 +248,7 @@ class PyBulletEndEffector(EndEffector):
         cl.changeConstraint(seat, maxForce=50.0)
         self.band.fingers_closing = True
         try:
-            # until the fingers stop on the item (close_time_s at most), then the grip
-            # builds up for GRIP_BUILD_S, as in close_on
-            t0 = sc.t
-            while sc.t - t0 < self.close_time_s:
-                sc.step()
-                moving = max(abs(cl.getJointState(sc.ee_body, j)[1]) for j in FINGERS)
-                if sc.t - t0 > 0.01 and moving < 0.01:
-                    break
-            sc.run_for(GRIP_BUILD_S)
+            self._close_fingers()
         finally:
             cl.removeConstraint(seat)
         sc.run_for(0.01)
