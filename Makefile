@@ -28,8 +28,8 @@ test: lint
 bench: install
 	$(BIN)/cell bench
 
-# Every figure and quoted figure in README.md and docs/ (about 50 min on 2 cores: 15 of them the
-# random-layout benchmark, 9 its speed trade-off, 5 the flywheel). The JSON beside
+# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 13 of them the
+# random-layout benchmark, 6 its speed trade-off, 5 the flywheel). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
