@@ -53,6 +53,13 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
+def _check_scales(**scales: float) -> None:
+    """InvalidInput naming the first limit scale outside (0, 1]."""
+    for name, s in scales.items():
+        if not (0.0 < s <= 1.0):
+            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+
+
 def plan_path(
     waypoints_q: Sequence[np.ndarray] | np.ndarray,
     robot: Robot | str,
@@ -88,9 +95,7 @@ def plan_path(
     import toppra.constraint as constraint
 
     rb = as_robot(robot)
-    for name, s in (("velocity_scale", velocity_scale), ("acceleration_scale", acceleration_scale)):
-        if not (0.0 < s <= 1.0):
-            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
     wps = [joint_vector(rb, w, f"waypoint {i}") for i, w in enumerate(waypoints_q)]
     if len(wps) < 2:
         raise InvalidInput(f"plan_path needs at least 2 waypoints, got {len(wps)}")
@@ -182,13 +187,9 @@ def plan_move(
     """
     rb = as_robot(robot)
     n = rb.dof
-    for name, s in (
-        ("velocity_scale", velocity_scale),
-        ("acceleration_scale", acceleration_scale),
-        ("jerk_scale", jerk_scale),
-    ):
-        if not (0.0 < s <= 1.0):
-            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    _check_scales(
+        velocity_scale=velocity_scale, acceleration_scale=acceleration_scale, jerk_scale=jerk_scale
+    )
     zero = np.zeros(n)
     p0 = joint_vector(rb, q0, "q0")
     p1 = joint_vector(rb, q1, "q1")
@@ -338,9 +339,7 @@ def plan_approach(
             on the segment.
     """
     rb = as_robot(robot)
-    for name, s in (("velocity_scale", velocity_scale), ("acceleration_scale", acceleration_scale)):
-        if not (0.0 < s <= 1.0):
-            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
     p0 = joint_vector(rb, q0, "q0")
     pm = joint_vector(rb, q_over, "q_over")
     p1 = joint_vector(rb, q_to, "q_to")
@@ -416,9 +415,7 @@ def plan_stop(
         TrajectoryError: the stop would pass a joint's position limit.
     """
     rb = as_robot(robot)
-    for name, s in (("acceleration_scale", acceleration_scale), ("jerk_scale", jerk_scale)):
-        if not (0.0 < s <= 1.0):
-            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
+    _check_scales(acceleration_scale=acceleration_scale, jerk_scale=jerk_scale)
     zero = np.zeros(rb.dof)
     p0 = joint_vector(rb, q0, "q0")
     v0 = joint_vector(rb, dq0, "dq0")
