@@ -215,9 +215,15 @@ def clean_launch(speed_mps: float, elevation_rad: float) -> bool:
     return speed_mps >= LAUNCH_SPEED_MIN_MPS or elevation_rad <= SLOW_LAUNCH_MAX_ELEVATION_RAD
 
 
-def launch_stroke_limit(params: ModelParams, obj: ObjectParams, elevation_max_rad: float) -> float:
+def launch_stroke_limit(
+    params: ModelParams,
+    obj: ObjectParams,
+    elevation_max_rad: float,
+    model_obj: ObjectParams | None = None,
+) -> float:
     """The longest stroke [m] at which the model launches `obj` at LAUNCH_SPEED_MIN_MPS
-    or faster at every elevation up to `elevation_max_rad` (the steepest is the slowest).
+    or faster at every elevation up to `elevation_max_rad` (the steepest is the slowest),
+    `obj` as the plan models it (`model_obj`; default `params.model_object(obj)`).
 
     Raises:
         UnreachableTarget: even the shortest stroke launches it slower (too heavy to
@@ -226,9 +232,8 @@ def launch_stroke_limit(params: ModelParams, obj: ObjectParams, elevation_max_ra
     from cell.model.throw import longest_stroke_launching
 
     ee, name = params.ee, obj.name or obj.shape
-    s_max = longest_stroke_launching(
-        ee, params.model_object(obj), LAUNCH_SPEED_MIN_MPS, elevation_max_rad
-    )
+    modelled = params.model_object(obj) if model_obj is None else model_obj
+    s_max = longest_stroke_launching(ee, modelled, LAUNCH_SPEED_MIN_MPS, elevation_max_rad)
     if s_max is None or s_max < ee.stroke_min + MIN_THROW_STROKE_RANGE_M:
         raise UnreachableTarget(
             f"{name} ({obj.mass * 1000:.0f} g) is too heavy to throw steeply: the band "
@@ -266,7 +271,7 @@ def plan_clean(
         return plan_facing(model_obj, goal, params.ee, flat)
     except UnreachableTarget:
         pass
-    s_fast = launch_stroke_limit(params, obj, bounds.elevation_max)
+    s_fast = launch_stroke_limit(params, obj, bounds.elevation_max, model_obj)
     if bounds.stroke_max is not None:  # a cap the bounds already have (the grip's)
         s_fast = min(s_fast, bounds.stroke_max)
     return plan_facing(model_obj, goal, params.ee, grip_bounds(bounds, params, s_fast))
