@@ -19,18 +19,25 @@ is within the grip while its use of the force and of the torque together stays u
 1: m |f| / F + |τ_x| / T ≤ 1/margin (each used fraction takes from the same friction).
 
 `plan_carry` finds the fastest toppra path through the waypoints whose use of the
-grip stays under that bound: it time-scales the path (velocity limits × √s, acceleration
-limits × s, so that a uniform slow-down of the same path scales every acceleration by
-s, centripetal terms included) by bisection on s, evaluating a_c exactly from the
-joint state with Pinocchio (a_c = a_o + α × r + ω × (ω × r), o the grip centre).
+grip stays under that bound, evaluating a_c exactly from the joint state with Pinocchio
+(a_c = a_o + α × r + ω × (ω × r), o the grip centre). Two ways, the sooner is taken:
+- a uniform slow-down: it time-scales the path (velocity limits × √s, acceleration
+  limits × s, so that every acceleration scales by s, centripetal terms included) by
+  bisection on s;
+- the path shaped by the grip: toppra with the grip's bound as a second-order path
+  constraint (`grip_constraint`, a polytope inside the bound), which slows the path only
+  where the grip asks it. A tall box hung from the pads and carried sideways: 1.11 s
+  against 1.36 s uniformly slowed (tests/test_carry.py).
 """
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -192,6 +199,63 @@ def peak_specific_force(
     return float(np.max(np.linalg.norm(acc - _GRAVITY, axis=1)))
 
 
+@functools.lru_cache(maxsize=4)
+def _sphere_directions(n: int = 128) -> tuple[np.ndarray, float]:
+    """n unit vectors spread over the sphere (a Fibonacci lattice) and their cover c:
+    every unit vector u has max_k n_k·u ≥ c, so |f| ≤ max_k n_k·f / c (checked on a
+    dense sample of directions)."""
+    k = np.arange(n) + 0.5
+    z = 1.0 - 2.0 * k / n
+    phi = k * math.pi * (3.0 - math.sqrt(5.0))
+    r = np.sqrt(1.0 - z * z)
+    dirs = np.c_[r * np.cos(phi), r * np.sin(phi), z]
+    u = _sphere_sample(20000)
+    # less a margin for the directions between the samples (the cover's error is below
+    # the sample's spacing squared, about 1e-3)
+    return dirs, float(np.min(np.max(u @ dirs.T, axis=1))) - 0.005
+
+
+def _sphere_sample(n: int) -> np.ndarray:
+    rng = np.random.default_rng(0)
+    v = rng.normal(size=(n, 3))
+    return np.asarray(v / np.linalg.norm(v, axis=1, keepdims=True))
+
+
+def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
+    """The grip as a toppra path constraint: w = (f [m/s², ee_tcp], τ_x [N·m]) at the
+    item's centre of mass, affine in q̈ and quadratic in q̇ as toppra's second-order
+    constraints are, kept inside a polytope within m |f| / F + |τ_x| / T ≤ bound: for
+    every direction n_k of `_sphere_directions` and sign σ,
+    m (n_k·f) / (c F) + σ τ_x / T ≤ bound. Inner, so conservative: the couple the
+    item's base adds when pressed onto the carriage is left out, and the force's share
+    by the cover c (≈ 0.95). With no couple to count on (T = 0) the item must not be
+    asked to turn at all, which no path does: toppra then finds no parameterisation.
+    """
+    import toppra.constraint as constraint
+
+    dirs, cover = _sphere_directions()
+    rows = [np.r_[hold.mass_kg * d / (cover * hold.force_n), sg] for d in dirs for sg in (1, -1)]
+    coef = np.array(rows)
+    if hold.torque_nm > 0.0:
+        coef[:, 3] /= hold.torque_nm
+    else:
+        coef[:, 3] *= 1e6  # [1/(N·m)]: no couple, no turn (a stiff stand-in for τ_x = 0)
+    g = np.full(len(rows), bound)
+
+    def inv_dyn(q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> np.ndarray:
+        f, alpha, _ = item_motion(robot, q[None], dq[None], ddq[None], hold.offset_tcp_m)
+        tau = -hold.lever_m * hold.mass_kg * f[0, 1] + hold.inertia_xx * alpha[0, 0]
+        return np.r_[f[0], tau]
+
+    return constraint.SecondOrderConstraint(
+        inv_dyn,
+        lambda q: coef,
+        lambda q: g,
+        dof=robot.model.nq,
+        discretization_scheme=constraint.DiscretizationType.Interpolation,
+    )
+
+
 def plan_carry(
     waypoints_q: Sequence[np.ndarray],
     robot: Robot,
@@ -201,8 +265,12 @@ def plan_carry(
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
     iterations: int = 6,
+    shape: bool = True,
 ) -> tuple[Trajectory, float]:
-    """The fastest path through the waypoints that keeps the item in the grip.
+    """The fastest path through the waypoints that keeps the item in the grip: at the
+    joint limits if the grip holds it there; else the faster of the path slowed
+    uniformly (bisection on a time scale) and, with `shape`, the path slowed only where
+    the grip asks it (toppra with `grip_constraint`).
 
     Args:
         waypoints_q: joint waypoints [rad] (the first is where the arm is).
@@ -211,6 +279,7 @@ def plan_carry(
         margin: the grip's capacity over the most a carry may use of it (≥ 1).
         velocity_scale, acceleration_scale: the fastest scales to try, in (0, 1].
         iterations: bisection steps on the time scale s.
+        shape: also try the path shaped by the grip as a toppra constraint.
 
     Returns:
         (the trajectory, its peak use of the grip, `grip_use`): at most 1/margin, or,
@@ -242,6 +311,9 @@ def plan_carry(
     best = attempt(1.0)
     if best[1] <= bound:
         return best
+    shaped = None
+    if shape:
+        shaped = _shaped(waypoints_q, robot, hold, bound, velocity_scale, acceleration_scale)
     lo, hi = 0.0, 1.0
     slowest = 0.02
     for _ in range(iterations):
@@ -263,4 +335,39 @@ def plan_carry(
             100 * GENTLE_SCALE,
         )
         best = (tr, use)
+    if shaped is not None and (best[1] > bound or shaped[0].duration < best[0].duration):
+        return shaped
     return best
+
+
+def _shaped(
+    waypoints_q: Sequence[np.ndarray],
+    robot: Robot,
+    hold: GripHold,
+    bound: float,
+    velocity_scale: float,
+    acceleration_scale: float,
+) -> tuple[Trajectory, float] | None:
+    """The path at the joint limits with the grip as a toppra constraint
+    (`grip_constraint`): slow only where the grip asks it, where a uniform time scaling
+    slows all of it. Its use of the grip, sampled densely between toppra's grid points,
+    is checked against the bound; over it, the constraint is tightened (twice at most).
+    None when toppra finds no parameterisation (the path asks too much at rest)."""
+    from cell.robot.motion import plan_path
+
+    for tighten in (1.0, 0.9, 0.8):
+        try:
+            tr = plan_path(
+                waypoints_q,
+                robot,
+                velocity_scale=velocity_scale,
+                acceleration_scale=acceleration_scale,
+                constraints=[grip_constraint(robot, hold, bound * tighten)],
+            )
+        except TrajectoryError as exc:
+            log.debug("no carry shaped by the grip: %s", exc)
+            return None
+        use = grip_use(tr, robot, hold, n=501)
+        if use <= bound:
+            return tr, use
+    return None

@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -66,6 +67,7 @@ def plan_path(
     *,
     velocity_scale: float = 1.0,
     acceleration_scale: float = 1.0,
+    constraints: Sequence[Any] = (),
 ) -> Trajectory:
     """Time-optimal trajectory along a spline through joint waypoints, at rest at both ends.
 
@@ -80,6 +82,8 @@ def plan_path(
         robot: the robot (or its name).
         velocity_scale: fraction of the velocity limits to use, in (0, 1].
         acceleration_scale: fraction of the acceleration limits to use, in (0, 1].
+        constraints: more toppra path constraints, besides the joint limits (the grip's
+            on a carry, `cell.robot.carry.grip_constraint`).
 
     Returns:
         A Trajectory starting at the first waypoint and stopping at the last.
@@ -131,7 +135,10 @@ def plan_path(
             discretization_scheme=constraint.DiscretizationType.Interpolation,
         )
         inst = algo.TOPPRA(
-            [pc_vel, pc_acc], path, parametrizer="ParametrizeConstAccel", gridpt_min_nb_points=100
+            [pc_vel, pc_acc, *constraints],
+            path,
+            parametrizer="ParametrizeConstAccel",
+            gridpt_min_nb_points=100,
         )
         raw = inst.compute_trajectory(0.0, 0.0)
         if raw is None:
