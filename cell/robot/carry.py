@@ -355,19 +355,27 @@ def _shaped(
     None when toppra finds no parameterisation (the path asks too much at rest)."""
     from cell.robot.motion import plan_path
 
-    for tighten in (1.0, 0.9, 0.8):
-        try:
-            tr = plan_path(
-                waypoints_q,
-                robot,
-                velocity_scale=velocity_scale,
-                acceleration_scale=acceleration_scale,
-                constraints=[grip_constraint(robot, hold, bound * tighten)],
-            )
-        except TrajectoryError as exc:
-            log.debug("no carry shaped by the grip: %s", exc)
-            return None
-        use = grip_use(tr, robot, hold, n=501)
-        if use <= bound:
-            return tr, use
-    return None
+    # toppra logs a path it cannot parameterise as a warning; here that is an expected
+    # answer (the uniformly slowed path is kept), not something for the user to see
+    toppra_log = logging.getLogger("toppra")
+    level = toppra_log.level
+    toppra_log.setLevel(logging.ERROR)
+    try:
+        for tighten in (1.0, 0.9, 0.8):
+            try:
+                tr = plan_path(
+                    waypoints_q,
+                    robot,
+                    velocity_scale=velocity_scale,
+                    acceleration_scale=acceleration_scale,
+                    constraints=[grip_constraint(robot, hold, bound * tighten)],
+                )
+            except TrajectoryError as exc:
+                log.debug("no carry shaped by the grip: %s", exc)
+                return None
+            use = grip_use(tr, robot, hold, n=501)
+            if use <= bound:
+                return tr, use
+        return None
+    finally:
+        toppra_log.setLevel(level)
