@@ -228,7 +228,7 @@ def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
     every direction n_k of `_sphere_directions` and sign σ,
     m (n_k·f) / (c F) + σ τ_x / T ≤ bound. Inner, so conservative: the couple the
     item's base adds when pressed onto the carriage is left out, and the force's share
-    by the cover c (≈ 0.95). With no couple to count on (T = 0) the item must not be
+    by the cover c (≈ 0.97). With no couple to count on (T = 0) the item must not be
     asked to turn at all, which no path does: toppra then finds no parameterisation.
     """
     import toppra.constraint as constraint
