@@ -78,6 +78,7 @@ LIFT_MAX_DQ_RAD = 1.0
 # The empty arm's approach to a (kinematic) pick passes, without stopping, the point where
 # the open pads' tips are this far over the item's top, and goes straight down from there
 PICK_OVER_CLEARANCE_M = 0.02
+GRIP_DOWN = (-math.pi / 2, 0.0)  # (elevation, azimuth) [rad] of the throw axis pointing down
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
 # The physical pick (Orchestrator._pick)
@@ -895,9 +896,10 @@ class Orchestrator:
 
         over = self.scene.geometry.pad_length_m + PICK_OVER_CLEARANCE_M
         p_item = self.scene.item_position(item)
-        down = (-math.pi / 2, 0.0)
         try:
-            tcp = self._tcp_for_item_centre(p_item + np.array([0, 0, over]), *down, stroke, obj)
+            tcp = self._tcp_for_item_centre(
+                p_item + np.array([0, 0, over]), *GRIP_DOWN, stroke, obj
+            )
             q_over = self._ik_frame(tcp, q_pick)
             if joint_gap(q_pick, q_over) > LIFT_MAX_DQ_RAD:  # another IK branch
                 return False
@@ -940,8 +942,7 @@ class Orchestrator:
         """(pick, lift) configurations of the grip pointing down over the item where the
         plant has it, the pick putting the item's centre where the gripped item's will be."""
         p_item = self.scene.item_position(item)
-        down = (-math.pi / 2, 0.0)
-        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *down, stroke, obj))
+        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *GRIP_DOWN, stroke, obj))
         return q_pick, self._lift_q(p_item, stroke, obj, q_pick)
 
     def _lift_q(
@@ -952,13 +953,12 @@ class Orchestrator:
         joint): a tall item gripped at a long stroke puts the flange up to 0.3 m over the
         item, and 0.15 m more can be out of the arm's reach, or only reached on another
         branch, a swing of the whole arm away."""
-        down = (-math.pi / 2, 0.0)
         err: IKFailed | None = None
         far: list[tuple[float, np.ndarray]] = []  # (joint gap from the pick, lift)
         for up in (LIFT_M, LIFT_M / 2, LIFT_M / 4):
             lift = p_item + np.array([0, 0, up])
             try:
-                q = self._ik_frame(self._tcp_for_item_centre(lift, *down, stroke, obj), q_pick)
+                q = self._ik_frame(self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj), q_pick)
             except IKFailed as exc:
                 err = err or exc
                 continue
@@ -1284,14 +1284,13 @@ class Orchestrator:
         """Over the bin, then down into it on a short move of its own (a spline through
         both would cut the corner and sweep the item through the bin's wall)."""
         sc = self.scene
-        down = (-math.pi / 2, 0.0)
         target = d.state["target"]
         # a spot on the bin's floor clear of what it holds (its centre while it is empty)
         sx, sy, surface_z = sc.place_spot(target.id, obj)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
-        q_above = self._ik_frame(self._tcp_for_item_centre(above, *down, d.stroke_m, obj))
-        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *down, d.stroke_m, obj))
+        q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
+        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj))
         self._move([q_lift, q_above])
         self._move([q_down])
         d.state["q_above"] = q_above

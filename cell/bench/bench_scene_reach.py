@@ -33,13 +33,14 @@ def scene_reach_errors(
     n: int, seed: int = 0, params_path: str | None = None
 ) -> tuple[np.ndarray, list[dict]]:
     """Relative reach errors (model − scene) / scene of n throws, and their settings
-    (each row's `in_envelope`: its stroke is one the cell throws with, see the module).
+    (each row's `in_envelope`: its launch is one the cell makes, `clean_launch`; see the
+    module).
 
-        Args:
-            n: number of throws.
-            seed: the draw (items and settings come from the random stream [seed, 0x5C], which
-                the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
-            params_path: the parameter file to predict with (default: the shipped scene file).
+    Args:
+        n: number of throws.
+        seed: the draw (items and settings come from the random stream [seed, 0x5C], which
+            the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
+        params_path: the parameter file to predict with (default: the shipped scene file).
     """
     from cell.endeffector.factory import make_end_effector
     from cell.errors import CellError
@@ -120,12 +121,19 @@ def _stats(e: np.ndarray) -> dict[str, float]:
     }
 
 
+def _by_envelope(errs: np.ndarray, rows: list[dict]) -> tuple[np.ndarray, list[dict], np.ndarray]:
+    """(the errors and rows of the throws inside the throw envelope, the errors of those
+    beyond it)."""
+    inside = np.array([bool(r["in_envelope"]) for r in rows], dtype=bool)
+    kept = [r for r, k in zip(rows, inside, strict=True) if k]
+    return errs[inside], kept, errs[~inside]
+
+
 def breakdown(errs: np.ndarray, rows: list[dict]) -> dict[str, object]:
     """The relative reach errors by mass, grip width, stroke, elevation and shape bins,
     of the throws inside the throw envelope; those beyond it as `slow`."""
-    inside = np.array([bool(r["in_envelope"]) for r in rows], dtype=bool)
-    out: dict[str, object] = {"all": _stats(errs[inside]), "slow": _stats(errs[~inside])}
-    errs, rows = errs[inside], [r for r, k in zip(rows, inside, strict=True) if k]
+    errs, rows, slow = _by_envelope(errs, rows)
+    out: dict[str, object] = {"all": _stats(errs), "slow": _stats(slow)}
     for name, (key, scale, edges) in _BINS.items():
         x = np.array(
             [(r["size_m"][0] if key == "width" else r[key]) * scale for r in rows], dtype=float
@@ -169,9 +177,7 @@ def main(argv: list[str] | None = None) -> int:
 def run(quick: bool) -> dict[str, float]:
     """scene_reach_err_pct (RMS), its bias and 95th percentile over the throws of n
     inside the throw envelope; the RMS of those drawn beyond it (NaN when none were)."""
-    e_all, rows = scene_reach_errors(12 if quick else 60)
-    inside = np.array([bool(r["in_envelope"]) for r in rows], dtype=bool)
-    e, slow = e_all[inside], e_all[~inside]
+    e, _, slow = _by_envelope(*scene_reach_errors(12 if quick else 60))
     return {
         "scene_reach_throws": float(e.size),
         "scene_reach_err_pct": float(100 * np.sqrt(np.mean(e**2))),

@@ -251,7 +251,7 @@ def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
         inv_dyn,
         lambda q: coef,
         lambda q: g,
-        dof=robot.model.nq,
+        dof=robot.dof,
         discretization_scheme=constraint.DiscretizationType.Interpolation,
     )
 
