@@ -277,8 +277,7 @@ def test_approach_passes_over_the_point_then_runs_down_the_segment_within_all_li
         # continuous in position and velocity where the parts meet (dense samples)
         assert np.max(np.abs(np.diff(q, axis=0))) < np.max(lim.velocity) * (ts[1] - ts[0]) * 1.01
         assert traj.duration >= bang_bang_time(q_to - q0, robot) - 1e-9
-        stop = plan_move(q0, None, q_over, None, robot).duration
-        stop += plan_move(q_over, None, q_to, None, robot).duration
+        stop = move_time(q0, q_over, robot) + move_time(q_over, q_to, robot)
         assert traj.duration <= stop + 1e-9
 
 
