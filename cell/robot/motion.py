@@ -61,6 +61,19 @@ def _check_scales(**scales: float) -> None:
             raise InvalidInput(f"{name} must be in (0, 1], got {s}")
 
 
+def spline_path(waypoints_q: Sequence[np.ndarray]) -> Any:
+    """The geometric path `plan_path` times: toppra's cubic spline through distinct joint
+    waypoints [rad], its parameter s ∈ [0, 1] at each waypoint proportional to the
+    cumulative joint-space distance. Callable: path(s) gives configurations."""
+    import toppra as ta
+
+    way = np.array(waypoints_q, float)
+    seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
+    ss = np.concatenate([[0.0], np.cumsum(seg)])
+    ss /= ss[-1]
+    return ta.SplineInterpolator(ss, way)
+
+
 def plan_path(
     waypoints_q: Sequence[np.ndarray] | np.ndarray,
     robot: Robot | str,
@@ -94,7 +107,6 @@ def plan_path(
         TrajectoryError: toppra found no parameterisation, or the spline leaves the joint
             limits between waypoints.
     """
-    import toppra as ta
     import toppra.algorithm as algo
     import toppra.constraint as constraint
 
@@ -112,11 +124,7 @@ def plan_path(
     q_start = wps[0]
     if len(keep) < 2:
         raise InvalidInput("plan_path waypoints are all the same configuration: nothing to do")
-    way = np.array(keep)
-    seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
-    ss = np.concatenate([[0.0], np.cumsum(seg)])
-    ss /= ss[-1]
-    path = ta.SplineInterpolator(ss, way)
+    path = spline_path(keep)
     # Sample the geometric path itself: a spline may overshoot a joint limit.
     qs = path(np.linspace(0.0, 1.0, 400))
     lo = np.min(qs - rb.limits.lower)

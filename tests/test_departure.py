@@ -1,0 +1,131 @@
+"""The carry's departure from the pick (`Orchestrator._departure`): straight from the pick
+when the path lifts the item out of the station, without the stop-free detour through a
+lift LIFT_M over it; the item leaves the station upward and is still held at the release.
+
+Independent checks: the grip centre's path from the arm's forward kinematics over every
+commanded configuration (not the spline the planner checked), the plant's contacts between
+the item and the station, the plant's grip (`holds_item`), and the duration of the same
+carry through the lift, planned with the same grip bound (`plan_carry`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cell.jobs import parse_job
+from cell.orchestrator import (
+    DEPARTURE_CLEAR_M,
+    GRIP_DOWN,
+    Orchestrator,
+    carry_hold,
+    joint_gap,
+)
+from cell.robot.carry import plan_carry
+
+JOB = """\
+cell: {robot: %s}
+pick_station: {position_m: [0.45, -0.40, 0.20]}
+bins:
+  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+  - {id: back, position_m: [-1.20, 1.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube50, count: 1, bin: far}
+  - {object: cyl50, count: 1, bin: back}
+  - {object: cube30, count: 1, bin: far}
+seed: 0
+"""
+
+
+@pytest.fixture(params=["panda", "ur5"])
+def orch(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
+    job = parse_job(JOB % request.param, str(tmp_path / "job.yaml"))
+    o = Orchestrator(job, session="departure", release="static")
+    yield o
+    o.close()
+
+
+def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_held(
+    orch: Orchestrator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    sc = orch.scene
+    commanded: list[np.ndarray] = []
+    touching: list[bool] = []
+    set_arm = sc.set_arm
+
+    def record(q: Any) -> None:
+        set_arm(q)
+        commanded.append(np.array(q))
+        body = orch.ee.item.body if orch.ee.item is not None else -1
+        touching.append(bool(sc.client.getContactPoints(bodyA=body, bodyB=sc.pick_station)))
+
+    monkeypatch.setattr(sc, "set_arm", record)
+    ways: list[list[np.ndarray]] = []
+    departure = orch._departure
+    monkeypatch.setattr(orch, "_departure", lambda *a: (ways.append(departure(*a)), ways[-1])[1])
+    lo, hi = sc.pick_station_bounds()
+    geo = sc.geometry
+    reach = geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m
+    sooner = 0
+    for index, spec in enumerate(orch.job.expanded_items()):
+        obj, target = spec.obj, orch.job.bin(spec.bin)
+        item = orch.present(index, obj)
+        d = orch.decide(index, obj, target)
+        assert d.action == "throw" and not d.moving
+        orch.pick(d, obj, item)
+        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        commanded.clear()
+        touching.clear()
+        t0 = sc.t
+        orch.carry(d, obj, item)  # raises GraspLost if the item left the grip
+        took = sc.t - t0
+        assert orch.ee.holds_item()
+        way = ways[-1]
+        # the grip centre over the station (widened by the grip's reach) rises at least as
+        # far as it moves sideways, up to the clearance; the item never comes back onto it
+        p0 = orch.robot.tcp_pose(q_pick)[0]
+        for q in commanded:
+            p = orch.robot.tcp_pose(q)[0]
+            if np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach):
+                side = float(np.hypot(*(p[:2] - p0[:2])))
+                assert p[2] - p0[2] >= min(DEPARTURE_CLEAR_M, side) - 1e-3
+        assert last_touch_is_early(touching)
+        if not any(joint_gap(w, q_lift) < 1e-9 for w in way):
+            # the same carry through the lift, with the same grip bound, is not sooner
+            through = [q_pick, q_lift, *orch._swung(q_lift, way[-1], d.plan), way[-1]]
+            hold = carry_hold(orch.params, obj, d.stroke_m)
+            traj, _ = plan_carry(through, orch.robot, hold)
+            assert took <= traj.duration + 0.05 + 1e-6  # + the settle at the release pose
+            sooner += took < traj.duration + 0.05 - 0.05
+        orch.release(d)
+        orch.finish(d)
+    assert sooner >= 1  # the departure saved 50 ms or more on at least one carry
+
+
+def last_touch_is_early(touching: list[bool]) -> bool:
+    """The item's contacts with the station end within the carry's first 0.1 s (50
+    physics steps of 2 ms: it is lifted off, not slid along it)."""
+    return True not in touching[50:]
+
+
+def test_a_path_that_slides_the_item_across_the_station_is_refused(
+    orch: Orchestrator,
+) -> None:
+    spec = orch.job.expanded_items()[0]
+    obj = spec.obj
+    item = orch.present(0, obj)
+    stroke = 0.06
+    q_pick, _ = orch._over_item(item, stroke, obj)
+    p = orch.scene.item_position(item)
+
+    def at(dx: float, dz: float) -> np.ndarray:
+        tcp = orch._tcp_for_item_centre(p + np.array([dx, 0.0, dz]), *GRIP_DOWN, stroke, obj)
+        return orch._ik_frame(tcp, q_pick)
+
+    assert not orch._rises_from_station([q_pick, at(0.08, 0.0)])  # slid sideways
+    assert not orch._rises_from_station([q_pick, at(0.08, 0.01)])  # rises too little
+    assert orch._rises_from_station([q_pick, at(0.0, 0.10)])  # straight up
+    assert orch._rises_from_station([q_pick, at(0.03, 0.10)])  # up more than sideways
