@@ -862,8 +862,9 @@ class Orchestrator:
         return np.asarray(rel.released_at, float)
 
     def after_place(self, d: Decision) -> None:
-        """Back up out of the bin."""
-        self._move([d.state["q_above"]])
+        """Back up out of the bin; no settle: nothing is held, and the next move starts
+        from rest."""
+        self._move([d.state["q_above"]], settle_s=0.0)
 
     def finish(self, d: Decision | None) -> None:
         """Nothing of the item is held any more."""
@@ -1360,9 +1361,76 @@ class Orchestrator:
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
         q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
         q_down = self._ik_frame(self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj))
-        self._move(self._departure(q_lift, q_above))
-        self._move([q_down])
+        way = self._departure(q_lift, q_above)
+        bottom = centre[2] - obj.size[2] / 2  # the item's lowest point at the spot [m]
+        # over the spot without stopping there, straight, or through the point where the
+        # item's lowest point is DEPARTURE_CLEAR_M over the rim (the bins stand on the floor)
+        mid = centre + np.array([0.0, 0.0, target.rim_height + DEPARTURE_CLEAR_M - bottom])
+        for via in ([], [mid]):
+            try:
+                qs = [
+                    self._ik_frame(self._tcp_for_item_centre(v, *GRIP_DOWN, d.stroke_m, obj))
+                    for v in via
+                ]
+            except IKFailed:
+                continue
+            if self._descends_straight([self.q, *way, *qs, q_down], bottom, target, obj):
+                self._move([*way, *qs, q_down])
+                break
+        else:
+            self._move(way)
+            self._move([q_down])
         d.state["q_above"] = q_above
+
+    def _descends_straight(
+        self,
+        waypoints: list[np.ndarray],
+        bottom_z: float,
+        target: Any,
+        obj: ObjectParams,
+        n: int = 400,
+    ) -> bool:
+        """May a place's carry pass over its spot without stopping? The spline through
+        `waypoints` (ending at the spot, the item's lowest point then at bottom_z [m]) must
+        stay within the joint limits, never dip below its end, and, wherever the item's
+        lowest point is below DEPARTURE_CLEAR_M over the rim of the `target` bin, keep the
+        grip (the item's footprint, and the open pads' reach) as far from the bin's walls,
+        and the item as far from what the bin already holds, as the spot does (or 1 cm),
+        though it cuts the corner the stop over the spot makes."""
+        from cell.robot.motion import spline_path
+
+        sc, geo = self.scene, self.scene.geometry
+        spec = next(b for b in sc.bins if b.id == target.id)
+        r_item = max(obj.size[0], obj.size[1]) / 2
+        r_grip = max(r_item, geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m)
+        held = [
+            (np.asarray(sc.item_position(it), float)[:2], max(it.obj.size) / 2)
+            for it in sc.kept_items(target.id)
+        ]
+
+        def clearance(xy: np.ndarray) -> float:
+            x, y = np.abs(spec.to_local(xy.tolist()))
+            walls = min(spec.size_xy[0] / 2 - x, spec.size_xy[1] / 2 - y) - r_grip
+            items = min((float(np.linalg.norm(xy - c)) - r - r_item for c, r in held), default=1.0)
+            return float(min(walls, items))
+
+        keep = [waypoints[0]] + [
+            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
+        ]
+        qs = spline_path(keep)(np.linspace(0.0, 1.0, n))
+        lim = self.robot.limits
+        if np.any(qs < lim.lower - 1e-6) or np.any(qs > lim.upper + 1e-6):
+            return False
+        end = self.robot.tcp_pose(keep[-1])[0]
+        need = min(clearance(end[:2]), 0.01) - 1e-3
+        for q in qs:
+            p = self.robot.tcp_pose(q)[0]
+            dz = p[2] - end[2]
+            if dz < -1e-3:
+                return False
+            if bottom_z + dz < target.rim_height + DEPARTURE_CLEAR_M and clearance(p[:2]) < need:
+                return False
+        return True
 
     def _check_held(self, obj: ObjectParams) -> None:
         """GraspLost when the item is no longer between the pads at the release pose."""

@@ -129,3 +129,55 @@ def test_a_path_that_slides_the_item_across_the_station_is_refused(
     assert not orch._rises_from_station([q_pick, at(0.08, 0.01)])  # rises too little
     assert orch._rises_from_station([q_pick, at(0.0, 0.10)])  # straight up
     assert orch._rises_from_station([q_pick, at(0.03, 0.10)])  # up more than sideways
+
+
+PLACE_JOB = """\
+cell: {robot: %s}
+pick_station: {position_m: [0.45, -0.40, 0.20]}
+bins:
+  - {id: tote, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
+items:
+  - {object: cuboid_c, count: 3, bin: tote}
+  - {object: cyl70, count: 1, bin: tote}
+seed: 0
+"""
+
+
+@pytest.fixture(params=["panda", "ur5"])
+def placer(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
+    job = parse_job(PLACE_JOB % request.param, str(tmp_path / "job.yaml"))
+    o = Orchestrator(job, session="place-descent")
+    yield o
+    o.close()
+
+
+def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_there(
+    placer: Orchestrator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    orch, sc = placer, placer.scene
+    bin_body = sc.bin_bodies["tote"]
+    walls: list[bool] = []  # the grip or the item on the bin (not its floor) while carried
+    set_arm = sc.set_arm
+
+    def record(q: Any) -> None:
+        set_arm(q)
+        bodies = [sc.ee_body] + ([orch.ee.item.body] if orch.ee.item is not None else [])
+        walls.append(
+            any(
+                c[5][2] > 0.02  # a contact point higher than the floor plate: a wall
+                for b in bodies
+                for c in sc.client.getContactPoints(bodyA=b, bodyB=bin_body)
+            )
+        )
+
+    monkeypatch.setattr(sc, "set_arm", record)
+    joined: list[bool] = []
+    straight = orch._descends_straight
+    monkeypatch.setattr(
+        orch, "_descends_straight", lambda *a: (joined.append(straight(*a)), joined[-1])[1]
+    )
+    summary = orch.run()
+    assert [r.action for r in summary.results] == ["place"] * 4
+    assert summary.in_bin == 4  # every item rests in the tote
+    assert any(joined)  # at least one place passed over its spot without stopping
+    assert not any(walls)
