@@ -20,6 +20,7 @@ from cell.jobs import parse_job
 from cell.orchestrator import (
     DEPARTURE_CLEAR_M,
     GRIP_DOWN,
+    SETTLE_S,
     Orchestrator,
     carry_hold,
     joint_gap,
@@ -40,12 +41,15 @@ seed: 0
 """
 
 
-@pytest.fixture(params=["panda", "ur5"])
-def orch(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
-    job = parse_job(JOB % request.param, str(tmp_path / "job.yaml"))
-    o = Orchestrator(job, session="departure", release="static")
+def _cell(text: str, tmp_path: Path, session: str, **kw: Any) -> Iterator[Orchestrator]:
+    o = Orchestrator(parse_job(text, str(tmp_path / "job.yaml")), session=session, **kw)
     yield o
     o.close()
+
+
+@pytest.fixture(params=["panda", "ur5"])
+def orch(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
+    yield from _cell(JOB % request.param, tmp_path, "departure", release="static")
 
 
 def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_held(
@@ -98,8 +102,9 @@ def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_h
             through = [q_pick, q_lift, *orch._swung(q_lift, way[-1], d.plan), way[-1]]
             hold = carry_hold(orch.params, obj, d.stroke_m)
             traj, _ = plan_carry(through, orch.robot, hold)
-            assert took <= traj.duration + 0.05 + 1e-6  # + the settle at the release pose
-            sooner += took < traj.duration + 0.05 - 0.05
+            through_s = traj.duration + SETTLE_S  # and the settle at the release pose
+            assert took <= through_s + 1e-6
+            sooner += took <= through_s - 0.05
         orch.release(d)
         orch.finish(d)
     assert sooner >= 1  # the departure saved 50 ms or more on at least one carry
@@ -145,10 +150,7 @@ seed: 0
 
 @pytest.fixture(params=["panda", "ur5"])
 def placer(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
-    job = parse_job(PLACE_JOB % request.param, str(tmp_path / "job.yaml"))
-    o = Orchestrator(job, session="place-descent")
-    yield o
-    o.close()
+    yield from _cell(PLACE_JOB % request.param, tmp_path, "place-descent")
 
 
 def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_there(
