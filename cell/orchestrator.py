@@ -938,8 +938,9 @@ class Orchestrator:
         configuration, for its `plan`, or over a bin): through the lowest of
         DEPARTURE_LIFTS_M over the pick (the first: none) whose spline lifts the item out
         of the station (`_rises_from_station`) and stays within the joint limits, then
-        (a throw) along the twist-free swing (`_swing`); else through the full lift q_lift. A spline through a lift LIFT_M up turns back on itself: the
-        demo's throws carried 0.3-0.4 s longer than a per-joint time-optimal move."""
+        (a throw) along the twist-free swing (`_swing`); else through the full lift
+        q_lift. A spline through a lift LIFT_M up turns back on itself: the demo's throws
+        carried 0.3-0.4 s longer than a per-joint time-optimal move."""
         q_pick = self.q
         obj, stroke = self._carried
         p_pick = self.scene.item_position(self.ee.item) if self.ee.item is not None else None
@@ -972,21 +973,12 @@ class Orchestrator:
         start at least as far as it has moved sideways (up to DEPARTURE_CLEAR_M; 1 mm
         tolerance)? Then the item leaves the station upward, neither dragged across its top
         nor pushed into it."""
-        from cell.robot.motion import spline_path
-
-        keep = [waypoints[0]] + [
-            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
-        ]
-        if len(keep) < 2:
+        qs = self._spline_within_limits(waypoints, n)
+        if qs is None:
             return False
-        qs = spline_path(keep)(np.linspace(0.0, 1.0, n))
-        lim = self.robot.limits
-        if np.any(qs < lim.lower - 1e-6) or np.any(qs > lim.upper + 1e-6):
-            return False
-        sc, geo = self.scene, self.scene.geometry
-        lo, hi = sc.pick_station_bounds()
-        reach = geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m
-        p0 = self.robot.tcp_pose(keep[0])[0]
+        lo, hi = self.scene.pick_station_bounds()
+        reach = self._grip_reach_m()
+        p0 = self.robot.tcp_pose(qs[0])[0]
         for q in qs:
             p = self.robot.tcp_pose(q)[0]
             near = np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach)
@@ -995,13 +987,36 @@ class Orchestrator:
                 return False
         return True
 
+    def _spline_within_limits(self, waypoints: list[np.ndarray], n: int) -> np.ndarray | None:
+        """n configurations [rad] evenly along the spline through the distinct `waypoints`
+        (`cell.robot.motion.spline_path`: the path a move follows whatever its timing), or
+        None when they are fewer than two or the spline leaves the joint limits."""
+        from cell.robot.motion import spline_path
+
+        keep = [waypoints[0]] + [
+            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
+        ]
+        if len(keep) < 2:
+            return None
+        qs = np.asarray(spline_path(keep)(np.linspace(0.0, 1.0, n)))
+        lim = self.robot.limits
+        if np.any(qs < lim.lower - 1e-6) or np.any(qs > lim.upper + 1e-6):
+            return None
+        return qs
+
+    def _grip_reach_m(self) -> float:
+        """How far [m] the grip reaches out from its centre, horizontally: the carriage's
+        half side, the open pads and their thickness."""
+        geo = self.scene.geometry
+        return float(geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m)
+
     def _keeps_over_station(self, traj: Any, z_min: float) -> bool:
         """Does the grip centre stay at least z_min [m] high (1 mm tolerance) wherever it
         passes over the pick station's top, widened by the grip's reach (the carriage's
         half side and the open pads), along `traj` (sampled every physics step)?"""
-        sc, geo = self.scene, self.scene.geometry
+        sc = self.scene
         lo, hi = sc.pick_station_bounds()
-        reach = geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m
+        reach = self._grip_reach_m()
         ts = np.arange(0.0, traj.duration + sc.dt_s, sc.dt_s)
         for q in traj.sample_many(ts)[0]:
             p = self.robot.tcp_pose(q)[0]
@@ -1401,12 +1416,10 @@ class Orchestrator:
         grip (the item's footprint, and the open pads' reach) as far from the bin's walls,
         and the item as far from what the bin already holds, as the spot does (or 1 cm),
         though it cuts the corner the stop over the spot makes."""
-        from cell.robot.motion import spline_path
-
-        sc, geo = self.scene, self.scene.geometry
+        sc = self.scene
         spec = next(b for b in sc.bins if b.id == target.id)
         r_item = max(obj.size[0], obj.size[1]) / 2
-        r_grip = max(r_item, geo.carriage_half_xy_m + geo.finger_open_m + geo.pad_thickness_m)
+        r_grip = max(r_item, self._grip_reach_m())
         held = [
             (np.asarray(sc.item_position(it), float)[:2], max(it.obj.size) / 2)
             for it in sc.kept_items(target.id)
@@ -1418,14 +1431,10 @@ class Orchestrator:
             items = min((float(np.linalg.norm(xy - c)) - r - r_item for c, r in held), default=1.0)
             return float(min(walls, items))
 
-        keep = [waypoints[0]] + [
-            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
-        ]
-        qs = spline_path(keep)(np.linspace(0.0, 1.0, n))
-        lim = self.robot.limits
-        if np.any(qs < lim.lower - 1e-6) or np.any(qs > lim.upper + 1e-6):
+        qs = self._spline_within_limits(waypoints, n)
+        if qs is None:
             return False
-        end = self.robot.tcp_pose(keep[-1])[0]
+        end = self.robot.tcp_pose(qs[-1])[0]
         need = min(clearance(end[:2]), 0.01) - 1e-3
         for q in qs:
             p = self.robot.tcp_pose(q)[0]
