@@ -102,7 +102,8 @@ def test_cli_calibrate_record_nominal_and_fitted_against_the_scene(tmp_path) -> 
     from cell.params import ModelParams, load_params
 
     rrd, log, out = tmp_path / "cal.rrd", tmp_path / "cal.csv", tmp_path / "ee.yaml"
-    argv = ["calibrate", "--n", "20", "-o", str(out), "--log", str(log), "--record", str(rrd)]
+    argv = ["calibrate", "--n", "20", "--adhoc", "16", "-o", str(out), "--log", str(log)]
+    argv += ["--record", str(rrd)]
     assert main([*argv, "--json"]) == 0
     table = read_throws_csv(log)
     rows = read_rows(rrd)

@@ -83,7 +83,8 @@ def test_scene_commands_keep_stdout_for_their_output(tmp_path, capfd) -> None:
 
     from cell.cli import main
 
-    assert main(["calibrate", "--n", "28", "--json", "-o", str(tmp_path / "e.yaml")]) == 0
+    argv = ["calibrate", "--n", "28", "--adhoc", "16", "--json", "-o", str(tmp_path / "e.yaml")]
+    assert main(argv) == 0
     out, err = capfd.readouterr()
     assert json.loads(out)["throws"] == 28
     assert "argv[0]" in err  # the banner still shows, on the right stream
