@@ -122,11 +122,20 @@ def as_gripped(obj: ObjectParams) -> ObjectParams:
     return obj
 
 
-def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
+def carry_hold(
+    params: ModelParams, obj: ObjectParams, stroke_m: float, *, placing: bool = False
+) -> Any:
     """What the pads hold `obj` with at stroke L_s [m] (a `cell.robot.carry.GripHold`):
     the friction force of the grip model, the couple of the pads' contact patches (as
     long as the pads and the item overlap along the throw axis, as wide as both along
-    y), and where the item's centre of mass sits above that patch."""
+    y), and where the item's centre of mass sits above that patch.
+
+    A mesh meets the flat pads wherever its surface does: no patch gives its couple.
+    Carried to be thrown, it is given none (the carry goes at GENTLE_SCALE): measured in
+    the scene, a duck carried at 0.45 of its grip's force turned 7-8° in the pads and
+    landed 0.12 m off, against 1° and 0.06 m at GENTLE_SCALE (the turn shifts the
+    launch). Carried to be `placing`, where a turn in the pads matters little, it is
+    held as the scene measures it (`mesh_grip`)."""
     from cell.model.grip import grip_friction, holding_mass_kg
     from cell.model.params import G
     from cell.robot.carry import GripHold, patch_torsion_radius_m
@@ -141,10 +150,14 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
     # a cylinder standing on the carriage meets each flat pad along a line (its side,
     # along the throw axis): the patch has no width
     half_y = 0.0 if obj.shape == "cylinder" else min(GEO.pad_half_width_m, obj.size[1] / 2)
-    # a mesh or a sphere meets the flat pads at points, not over a face: no couple to
-    # count on (a duck pinched at its neck turned 110-130° in the pads while carried)
-    point = obj.shape in ("mesh", "sphere")
-    radius = 0.0 if point else patch_torsion_radius_m(half_y, length / 2)
+    # a sphere meets the flat pads at two points: no couple to count on
+    if obj.shape == "sphere" or (obj.shape == "mesh" and not (placing and force > 0)):
+        couple = 0.0
+    elif obj.shape == "mesh":
+        ratio, arm = mesh_grip(params, obj)
+        force, couple = ratio * force, arm * force
+    else:
+        couple = PAD_COUPLE_FACTOR * force * patch_torsion_radius_m(half_y, length / 2)
     lever, base_half, inertia = (height - length) / 2, obj.size[1] / 2, float(obj.inertia[0])
     if obj.shape == "sphere":
         # held at two points: at its equator (R ≤ L_p), on the line through its centre, so
@@ -154,13 +167,37 @@ def carry_hold(params: ModelParams, obj: ObjectParams, stroke_m: float) -> Any:
         lever, base_half, inertia = max(0.0, height / 2 - GEO.pad_length_m), 0.0, 0.0
     return GripHold(
         force_n=force,
-        torque_nm=PAD_COUPLE_FACTOR * force * radius,
+        torque_nm=couple,
         mass_kg=obj.mass,
         inertia_xx=inertia,
         offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),
         lever_m=lever,
         base_half_m=base_half,
     )
+
+
+def mesh_grip(params: ModelParams, obj: ObjectParams) -> tuple[float, float]:
+    """How the pads hold mesh `obj`, measured in the scene (`cell.sim.grip_probe`) at each
+    of PROBE_STROKES_M: (the smallest ratio of the measured force to the grip model's, at
+    most 1; the smallest arm [m] of the model's force that the measured couple is).
+
+    The grip model's force, made for faces, may overstate what holds a mesh: the duck
+    slides along the pads at 0.69 of it. The same probe gives a box's force and patch
+    couple within 10 % (tests/test_grip_probe.py)."""
+    from cell.model.grip import grip_friction, holding_mass_kg
+    from cell.model.params import G
+    from cell.sim.grip_probe import PROBE_STROKES_M, probe_grip
+    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
+
+    width, mu = as_gripped(obj).width, grip_friction(obj, GEO.pad_length_m)
+    ratios, arms = [1.0], []
+    for stroke in PROBE_STROKES_M:
+        force = holding_mass_kg(params.ee, stroke, width, mu) * G
+        if force > 0:
+            probe = probe_grip(obj, stroke)
+            ratios.append(probe.force_n / force)
+            arms.append(probe.couple_nm / force)
+    return min(ratios), min(arms, default=0.0)
 
 
 def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
@@ -479,6 +516,7 @@ class Orchestrator:
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
         self._frame: tuple[float, float] | None = None  # the grip's (azimuth, roll) now
+        self._placing = False  # the item carried is to be placed (carry_hold)
         self.loop = ItemLoop(
             job,
             self,
@@ -689,7 +727,7 @@ class Orchestrator:
         traj, _ = plan_carry(
             [self.q, *waypoints],
             self.robot,
-            carry_hold(self.params, obj, stroke),
+            carry_hold(self.params, obj, stroke, placing=self._placing),
             velocity_scale=self.speed_scale,
             acceleration_scale=self.speed_scale,
         )
@@ -717,8 +755,14 @@ class Orchestrator:
         if self.pick_mode == "physical":
             self._presented = self._spawn_at_station(index, obj)
             return self._presented
-        item = self.scene.spawn_item(obj if obj.shape != "mesh" else obj.name)
-        self.scene.run_for(0.05)  # let it settle on the station
+        # The station presents it as the arm leaves the previous item: at rest, as the arm
+        # comes. A box, a cylinder or a sphere is set down resting on the station; a mesh
+        # (whose box's bottom need not be its lowest point) 1 mm over it and drops there
+        # while the arm is on its way (it rests within 15 ms).
+        if obj.shape == "mesh":
+            item = self.scene.spawn_item(obj.name)
+        else:
+            item = self.scene.spawn_item(obj, gap_m=0.0)
         self._presented = item
         return item
 
@@ -1372,10 +1416,22 @@ class Orchestrator:
     def _carry_to_place(self, d: Decision, obj: ObjectParams, q_lift: np.ndarray) -> None:
         """Over the bin, then down into it on a short move of its own (a spline through
         both would cut the corner and sweep the item through the bin's wall)."""
+        self._placing = True
+        try:
+            self._carry_to_spot(d, obj, q_lift)
+        finally:
+            self._placing = False
+
+    def _carry_to_spot(self, d: Decision, obj: ObjectParams, q_lift: np.ndarray) -> None:
+        from cell.endeffector.pybullet_backend import PLACE_OPENING_M
+
         sc = self.scene
         target = d.state["target"]
-        # a spot on the bin's floor clear of what it holds (its centre while it is empty)
-        sx, sy, surface_z = sc.place_spot(target.id, obj)
+        # a spot on the bin's floor clear of what it holds (its centre while it is empty),
+        # and of the walls by the pads that open beside the item (PLACE_OPENING_M) and 1 cm
+        # (5 mm: an open pad still met a tote's wall as the grip rose out of it)
+        pads = PLACE_OPENING_M + sc.geometry.pad_thickness_m + 0.01
+        sx, sy, surface_z = sc.place_spot(target.id, obj, wall_margin_m=pads)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
         q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))

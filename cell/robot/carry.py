@@ -127,10 +127,12 @@ def grip_use(traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> fl
     tau = -hold.lever_m * hold.mass_kg * f[:, 1] + hold.inertia_xx * alpha[:, 0]
     # pressed onto the carriage, the item's base face rights it too
     cap = hold.torque_nm + hold.mass_kg * np.maximum(f[:, 2], 0.0) * hold.base_half_m
-    # Pads without a couple (a mesh or a large sphere held at points) give an unbounded
-    # use wherever the path turns the item: such carries go at GENTLE_SCALE. Tried and
-    # left out: bounding them by the force alone (3-4 s faster per carry); on random
-    # layout 4 four teddy throws then missed their bins by 0.17-0.20 m (0.01-0.12 m before).
+    # Pads without a couple (a mesh carried to be thrown, a large sphere held at points)
+    # give an unbounded use wherever the path turns the item: such carries go at
+    # GENTLE_SCALE. Tried and left out: bounding them by the force alone (3-4 s faster per
+    # carry); on random layout 4 four teddy throws then missed their bins by 0.17-0.20 m
+    # (0.01-0.12 m before). A mesh carried to be placed is given the couple the scene
+    # measures (cell.orchestrator.carry_hold).
     turn = np.abs(tau) / np.maximum(cap, 1e-12)
     return float(np.max(force + turn))
 

@@ -429,6 +429,7 @@ class CellScene:
         orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
         offset_xy: Sequence[float] = (0.0, 0.0),
         yaw: float = 0.0,
+        gap_m: float = 1e-3,
     ) -> Item:
         """Add an item: on the pick station (dropped onto any item already there), or at a pose.
 
@@ -439,6 +440,8 @@ class CellScene:
             orientation: quaternion (x, y, z, w) [W] (ignored on the pick station).
             offset_xy: on the pick station: where from the station's centre [m, W].
             yaw: on the pick station: the item's turn about the vertical [rad].
+            gap_m: on the pick station: how high over its top the item's box is set [m]
+                (0: resting on it, for a box, a cylinder or a sphere).
         """
         from cell.sim.items import resolve_object
 
@@ -449,7 +452,7 @@ class CellScene:
             position = (
                 self.pick_station_xy[0] + float(offset_xy[0]),
                 self.pick_station_xy[1] + float(offset_xy[1]),
-                self._station_top() + obj.size[2] / 2 + 1e-3,
+                self._station_top() + obj.size[2] / 2 + gap_m,
             )
             orientation = (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2)))
         item = spawn_item(self.client, what, position, orientation)
@@ -550,7 +553,13 @@ class CellScene:
         return kept if bin_id is None else [it for it in kept if self.in_bin(it) == bin_id]
 
     def place_spot(
-        self, bin_id: str, obj: ObjectParams, *, margin_m: float = 0.01, grid: int = 7
+        self,
+        bin_id: str,
+        obj: ObjectParams,
+        *,
+        margin_m: float = 0.01,
+        wall_margin_m: float | None = None,
+        grid: int = 7,
     ) -> tuple[float, float, float]:
         """Where in a bin to set an item down, clear of what the bin already holds.
 
@@ -563,7 +572,8 @@ class CellScene:
         Args:
             bin_id: the bin.
             obj: the item to set down.
-            margin_m: clearance from walls and other items [m].
+            margin_m: clearance from other items [m], and from the walls unless…
+            wall_margin_m: … this is given [m] (room for the pads that open beside it).
             grid: candidates per side.
 
         Returns:
@@ -577,8 +587,9 @@ class CellScene:
         if spec is None:
             raise InvalidInput(f"no bin {bin_id!r} in the scene; bins: {[b.id for b in self.bins]}")
         r_new = max(obj.size[0], obj.size[1]) / 2
-        hx = max(spec.size_xy[0] / 2 - r_new - margin_m, 0.0)
-        hy = max(spec.size_xy[1] / 2 - r_new - margin_m, 0.0)
+        wall = margin_m if wall_margin_m is None else wall_margin_m
+        hx = max(spec.size_xy[0] / 2 - r_new - wall, 0.0)
+        hy = max(spec.size_xy[1] / 2 - r_new - wall, 0.0)
         c, s = np.cos(spec.yaw), np.sin(spec.yaw)
         cands = [
             (
