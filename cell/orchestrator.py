@@ -727,11 +727,18 @@ class Orchestrator:
         traj, _ = plan_carry(
             [self.q, *waypoints],
             self.robot,
-            carry_hold(self.params, obj, stroke, placing=self._placing),
+            carry_hold(self.params, obj, stroke, placing=self._placing_as_probed()),
             velocity_scale=self.speed_scale,
             acceleration_scale=self.speed_scale,
         )
         return traj
+
+    def _placing_as_probed(self) -> bool:
+        """Is the item carried to be placed, seated in the pads as the grip probe seats it
+        (`carry_hold`)? A kinematic pick seats it so; a physical pick grips it where the
+        pads meet it as it lay: the probe's figures do not hold there (a teddy gripped so
+        left the pads on a place's carry at them, once with each arm)."""
+        return self._placing and self.pick_mode != "physical"
 
     # -- the platform's steps (cell.loop.Platform) -----------------------------
     name = "arm"
