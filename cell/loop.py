@@ -544,7 +544,7 @@ class ItemLoop:
             )
         finally:
             pf.finish(decision)
-            if flying is None:  # a thrown item is tidied once it is scored (_settle)
+            if flying is None:  # an item released is tidied once it is scored (_settle)
                 self.plant.tidy(item)
 
     def _place(
