@@ -122,6 +122,17 @@ def as_gripped(obj: ObjectParams) -> ObjectParams:
     return obj
 
 
+def grip_force_n(params: ModelParams, obj: ObjectParams, stroke_m: float) -> float:
+    """The friction force [N] the grip model's pads hold `obj` with at stroke L_s [m],
+    F = 2 μ f_g: the band's closing force at the width the pads meet (`as_gripped`)."""
+    from cell.model.grip import grip_friction, holding_mass_kg
+    from cell.model.params import G
+    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
+
+    mu = grip_friction(obj, GEO.pad_length_m)
+    return float(holding_mass_kg(params.ee, stroke_m, as_gripped(obj).width, mu) * G)
+
+
 def carry_hold(
     params: ModelParams, obj: ObjectParams, stroke_m: float, *, placing: bool = False
 ) -> Any:
@@ -136,17 +147,13 @@ def carry_hold(
     landed 0.12 m off, against 1° and 0.06 m at GENTLE_SCALE (the turn shifts the
     launch). Carried to be `placing`, where a turn in the pads matters little, it is
     held as the scene measures it (`mesh_grip`)."""
-    from cell.model.grip import grip_friction, holding_mass_kg
-    from cell.model.params import G
     from cell.robot.carry import GripHold, patch_torsion_radius_m
     from cell.sim import EE_TO_TCP_M
     from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
 
-    gripped = as_gripped(obj)
     height = obj.size[2]
     length = min(GEO.pad_length_m, height)
-    mu = grip_friction(obj, GEO.pad_length_m)
-    force = holding_mass_kg(params.ee, stroke_m, gripped.width, mu) * G
+    force = grip_force_n(params, obj, stroke_m)
     # a cylinder standing on the carriage meets each flat pad along a line (its side,
     # along the throw axis): the patch has no width
     half_y = 0.0 if obj.shape == "cylinder" else min(GEO.pad_half_width_m, obj.size[1] / 2)
@@ -184,15 +191,11 @@ def mesh_grip(params: ModelParams, obj: ObjectParams) -> tuple[float, float]:
     The grip model's force, made for faces, may overstate what holds a mesh: the duck
     slides along the pads at 0.69 of it. The same probe gives a box's force and patch
     couple within 10 % (tests/test_grip_probe.py)."""
-    from cell.model.grip import grip_friction, holding_mass_kg
-    from cell.model.params import G
     from cell.sim.grip_probe import PROBE_STROKES_M, probe_grip
-    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
 
-    width, mu = as_gripped(obj).width, grip_friction(obj, GEO.pad_length_m)
     ratios, arms = [1.0], []
     for stroke in PROBE_STROKES_M:
-        force = holding_mass_kg(params.ee, stroke, width, mu) * G
+        force = grip_force_n(params, obj, stroke)
         if force > 0:
             probe = probe_grip(obj, stroke)
             ratios.append(probe.force_n / force)

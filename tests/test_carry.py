@@ -251,27 +251,12 @@ def test_carrying_at_the_static_limit_slides_the_item():
 def _turn_in_grip_deg(obj, stroke_m: float) -> float:
     """Grasp `obj` with the pads' y axis up (gravity pulls it along the pads' faces, its
     centre of mass above their patch) in a scene without an arm; its turn [deg] in 1 s."""
-    from cell.endeffector.pybullet_backend import PyBulletEndEffector
-    from cell.sim import CellScene
+    from cell.sim.grip_probe import grasped_in_scene, turn_rad
 
-    with CellScene(robot=None) as sc:
-        ee = PyBulletEndEffector(sc)
-        cl = sc.client
-        pos, orn = sc.ee_pose_for_release((0, 0, 0.7), 0.0, 0.0, stroke_m, obj, math.pi / 2)
-        sc.hold_ee(pos, orn, teleport=True)
-        item = sc.spawn_item(obj)
-        ee.grasp(stroke_m, item)
-
-        def rel() -> tuple:
-            e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
-            return cl.multiplyTransforms(
-                *cl.invertTransform(e_p, e_o), *cl.getBasePositionAndOrientation(item.body)
-            )[1]
-
-        q0 = rel()
+    with grasped_in_scene(obj, stroke_m, 0.0, math.pi / 2) as (sc, _, relative):
+        q0 = relative()[1]
         sc.run_for(1.0)
-        d = cl.getDifferenceQuaternion(q0, rel())
-        return math.degrees(2 * math.acos(min(1.0, abs(d[3]))))
+        return math.degrees(turn_rad(sc.client, q0, relative()[1]))
 
 
 def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():

@@ -18,13 +18,18 @@ of one grip. The duck slides along the pads at 0.69 of the model's force; the te
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
 
 from cell.model.objects import ObjectParams
 
-__all__ = ["PROBE_STROKES_M", "GripProbe", "probe_grip"]
+__all__ = ["PROBE_STROKES_M", "GripProbe", "grasped_in_scene", "probe_grip", "turn_rad"]
 
 FORCE_RAMP_N_S = 2.0  # [N/s] the pull's ramp
 SLIP_M = 2e-3  # [m] the slide that counts as slipping
@@ -70,34 +75,53 @@ def _probe(obj: ObjectParams, stroke_m: float) -> GripProbe:
     )
 
 
+@contextlib.contextmanager
+def grasped_in_scene(
+    obj: ObjectParams, stroke_m: float, elevation_rad: float, roll_rad: float = 0.0
+) -> Iterator[tuple[Any, Any, Callable[[], tuple[np.ndarray, tuple[float, ...]]]]]:
+    """A scene without an arm whose end-effector, held still with its throw axis at
+    `elevation_rad` (and `roll_rad` about it), grips `obj` at stroke L_s [m]: yields
+    (the scene, the item, a function giving the item's pose in the end-effector's frame
+    now: position [m] and quaternion x y z w)."""
+    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.sim.scene import CellScene
+
+    with CellScene(robot=None) as sc:
+        ee = PyBulletEndEffector(sc)
+        cl = sc.client
+        pos, orn = sc.ee_pose_for_release(
+            (0.0, 0.0, 0.7), elevation_rad, 0.0, stroke_m, obj, roll_rad
+        )
+        sc.hold_ee(pos, orn, teleport=True)
+        item = sc.spawn_item(obj)
+        ee.grasp(stroke_m, item)
+
+        def relative() -> tuple[np.ndarray, tuple[float, ...]]:
+            e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
+            inv = cl.invertTransform(e_p, e_o)
+            p, q = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(item.body))
+            return np.asarray(p), q
+
+        yield sc, item, relative
+
+
+def turn_rad(client: Any, q0: Sequence[float], q1: Sequence[float]) -> float:
+    """The angle [rad] between two orientations (quaternions x y z w)."""
+    return 2.0 * math.acos(min(1.0, abs(client.getDifferenceQuaternion(q0, q1)[3])))
+
+
 def _ramp(obj: ObjectParams, stroke_m: float, load: str, axis_col: int) -> float:
     """The load (force [N] or torque [N·m] along ee axis `axis_col`) at which the item,
     held at `stroke_m`, first slips, under a linear ramp; PROBE_MAX_S × the ramp if it
     never does."""
-    import numpy as np
-
-    from cell.endeffector.pybullet_backend import PyBulletEndEffector
-    from cell.sim.scene import CellScene
-
     rate = FORCE_RAMP_N_S if load == "force" else COUPLE_RAMP_NM_S
-    with CellScene(robot=None) as sc:
-        ee = PyBulletEndEffector(sc)
+    # the throw axis up, as when the item is carried upright
+    with grasped_in_scene(obj, stroke_m, math.pi / 2) as (sc, item, relative):
         cl = sc.client
-        # the throw axis up, as when the item is carried upright
-        pos, orn = sc.ee_pose_for_release((0.0, 0.0, 0.7), math.pi / 2, 0.0, stroke_m, obj)
-        sc.hold_ee(pos, orn, teleport=True)
-        item = sc.spawn_item(obj)
-        ee.grasp(stroke_m, item)
         cl.setGravity(0.0, 0.0, 0.0)
         sc.run_for(0.1)
-        e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
-        inv = cl.invertTransform(e_p, e_o)
+        e_o = cl.getBasePositionAndOrientation(sc.ee_body)[1]
         axis = np.array(cl.getMatrixFromQuaternion(e_o)).reshape(3, 3)[:, axis_col]
-
-        def relative() -> tuple[np.ndarray, tuple[float, ...]]:
-            p, q = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(item.body))
-            return np.asarray(p), q
-
         p0, q0 = relative()
         steps = int(PROBE_MAX_S / sc.dt_s)
         for k in range(1, steps + 1):
@@ -111,9 +135,8 @@ def _ramp(obj: ObjectParams, stroke_m: float, load: str, axis_col: int) -> float
                 cl.applyExternalTorque(item.body, -1, (value * axis).tolist(), cl.WORLD_FRAME)
             sc.step()
             p, q = relative()
-            turn = 2.0 * math.acos(min(1.0, abs(cl.getDifferenceQuaternion(q0, q)[3])))
             # a torque turns the item about the patch: its centre moves with the turn
             slid = load == "force" and float(np.linalg.norm(p - p0)) > SLIP_M
-            if slid or turn > SLIP_RAD:
+            if slid or turn_rad(cl, q0, q) > SLIP_RAD:
                 return value
         return rate * PROBE_MAX_S
