@@ -1,5 +1,8 @@
 # The whole set-up is `make run` or `make test`; both create .venv if missing.
 PYTHON ?= python3
+# pytest-xdist processes for `make test`, each test file in one of them (its module fixtures
+# built once); 2 = the cores of the machine CI runs on
+TEST_WORKERS ?= 2
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
@@ -23,7 +26,7 @@ lint: install
 	$(BIN)/mypy cell
 
 test: lint
-	$(BIN)/python -m pytest -q -p no:cacheprovider tests
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile tests
 
 bench: install
 	$(BIN)/cell bench
