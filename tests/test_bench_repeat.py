@@ -1,8 +1,9 @@
-"""The random-layout benchmark's measure of the flywheel: second throws against first."""
+"""The random-layout benchmark's figures from its layouts: the flywheel's measure (second
+throws against first) and each layout's own figures."""
 
 import math
 
-from cell.bench.bench_sort import repeat_figures
+from cell.bench.bench_sort import per_layout, repeat_figures, summarise_layouts
 
 
 def _it(oid: str, err: float, action: str = "throw") -> dict:
@@ -25,3 +26,47 @@ def test_repeat_figures_pair_each_objects_first_two_throws_within_a_layout():
 def test_repeat_figures_without_pairs_are_nan():
     f = repeat_figures([{"items": [_it("a", 0.1)]}])
     assert f["repeat_pairs"] == 0 and math.isnan(f["repeat_second_closer_rate"])
+
+
+def _lay(seed, robot, cycles_in, sim, refused=""):
+    items = [
+        {
+            "object_id": f"o{i}",
+            "cycle_time_s": c,
+            "in_bin": ok,
+            "landing_error_m": 0.01,
+            "action": "throw",
+            "failure": "" if ok else "missed_bin",
+            "unseen": False,
+        }
+        for i, (c, ok) in enumerate(cycles_in)
+    ]
+    return {
+        "seed": seed,
+        "robot": robot,
+        "items": items,
+        "sim_time_s": sim,
+        "wall_time_s": 1.0,
+        "refused": refused,
+    }
+
+
+def test_per_layout_figures_add_up_to_the_campaigns():
+    layouts = [
+        _lay(3, "panda", [(2.0, True), (5.0, True), (3.0, False)], 10.0),
+        _lay(4, "ur5", [(1.5, True), (2.5, True)], 4.0),
+        _lay(5, "panda", [], 0.0, refused="bin_2: out of reach"),
+    ]
+    rows = per_layout(layouts)
+    assert [r["seed"] for r in rows] == [3, 4, 5]
+    assert rows[0]["items_per_hour"] == 3600.0 * 2 / 10.0
+    assert rows[0]["median_cycle_s"] == 3.0
+    assert (rows[0]["slowest_item"], rows[0]["slowest_cycle_s"]) == ("o1", 5.0)
+    assert rows[1]["median_cycle_s"] == 2.5  # the upper median of two
+    assert rows[2]["refused"] and rows[2]["items_per_hour"] == 0.0
+    assert math.isnan(rows[2]["median_cycle_s"])
+    total = summarise_layouts(layouts)
+    assert total["per_layout"] == rows
+    assert sum(r["in_bin"] for r in rows) == total["in_bin"] == 4
+    assert sum(r["sim_time_s"] for r in rows) == total["sim_time_s"]
+    assert total["items_per_hour"] == 3600.0 * 4 / 14.0

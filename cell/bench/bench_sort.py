@@ -13,7 +13,8 @@ Figures (`summarise_layouts`):
     in_bin_rate_unseen     the same over items never used in calibration (catalogue
                            sets other than thesis14, and ad-hoc items);
     items_per_hour         items at rest in their bin per simulated hour of arm time;
-    items, layouts, failures (count per cell.orchestrator.FAILURES reason).
+    items, layouts, failures (count per cell.orchestrator.FAILURES reason);
+    per_layout             each layout's own figures (`per_layout`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,14 @@ from typing import Any
 
 import yaml
 
-__all__ = ["LayoutUnit", "run_layout", "summarise_layouts", "wilson_interval", "layout_units"]
+__all__ = [
+    "LayoutUnit",
+    "layout_units",
+    "per_layout",
+    "run_layout",
+    "summarise_layouts",
+    "wilson_interval",
+]
 
 
 @dataclass(frozen=True)
@@ -176,7 +184,36 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "thrown": sum(it["action"] == "throw" for it in items),
         "released_moving": sum(bool(it.get("moving")) for it in items),
         **repeat_figures(layouts),
+        "per_layout": per_layout(layouts),
     }
+
+
+def per_layout(layouts: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Each layout's own figures, in campaign order: which layouts the campaign's rate and
+    time come from. {seed, robot, items, in_bin, sim_time_s, items_per_hour, the
+    median cycle [s] of its items, its slowest item (object and cycle [s]), refused}."""
+    rows = []
+    for lay in layouts:
+        items = lay["items"]
+        k = sum(it["in_bin"] for it in items)
+        sim = float(lay["sim_time_s"])
+        cycles = sorted(float(it["cycle_time_s"]) for it in items)
+        slow = max(items, key=lambda it: float(it["cycle_time_s"]), default=None)
+        rows.append(
+            {
+                "seed": lay["seed"],
+                "robot": lay["robot"],
+                "items": len(items),
+                "in_bin": k,
+                "sim_time_s": sim,
+                "items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0,
+                "median_cycle_s": cycles[len(cycles) // 2] if cycles else math.nan,
+                "slowest_item": slow["object_id"] if slow else "",
+                "slowest_cycle_s": float(slow["cycle_time_s"]) if slow else math.nan,
+                "refused": bool(lay["refused"]),
+            }
+        )
+    return rows
 
 
 def repeat_figures(layouts: list[dict[str, Any]]) -> dict[str, Any]:

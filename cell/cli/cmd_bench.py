@@ -97,8 +97,20 @@ def run_sort(args: argparse.Namespace) -> int:
     if args.json:
         print_json(figures)
     else:
+        rows = figures.pop("per_layout")
         for k, v in figures.items():
             print(f"{k:28s} {v if not isinstance(v, float) else round(v, 4)}")
+        print(
+            f"\n{'seed':>6s} {'robot':6s} {'in bin':>8s} {'sim [s]':>8s} {'items/h':>8s} "
+            f"{'median cycle [s]':>16s}  slowest item [s]"
+        )
+        for r in rows:
+            print(
+                f"{r['seed']:>6d} {r['robot']:6s} {r['in_bin']:>3d}/{r['items']:<4d} "
+                f"{r['sim_time_s']:>8.1f} {r['items_per_hour']:>8.0f} {r['median_cycle_s']:>16.2f}  "
+                f"{r['slowest_item']} {r['slowest_cycle_s']:.2f}"
+                + ("  (refused)" if r["refused"] else "")
+            )
     return 0
 
 
