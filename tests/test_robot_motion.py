@@ -2,18 +2,21 @@
 
 import numpy as np
 import pytest
+from scipy.interpolate import CubicSpline
 
 from cell.errors import InvalidInput, TrajectoryError
 from cell.robot.model import load_robot
 from cell.robot.motion import (
     ChainTrajectory,
     check_limits,
+    monotone_samples,
     move_time,
     plan_approach,
     plan_move,
     plan_path,
     plan_stop,
     release_joint_velocity,
+    spline_path,
 )
 
 RTOL = 1e-6  # relative tolerance on a limit
@@ -124,11 +127,45 @@ def test_ruckig_move_that_would_overshoot_a_joint_limit_raises():
         plan_move(q0, dq0, q1, None, robot)
 
 
-def test_spline_leaving_the_joint_limits_raises():
+def test_where_the_cubic_spline_leaves_the_limits_the_path_keeps_within_them():
     robot = load_robot("panda")
     up = robot.limits.upper[0]
     a, b, c = (robot.home.copy() for _ in range(3))
     a[0], b[0], c[0] = up - 1.0, up - 0.001, up - 0.3
+    c[1] += 1.0
+    way = np.array([a, b, c])
+    # the cubic spline through them overshoots joint 1's upper limit (scipy's, on its own)
+    seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
+    ss = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
+    assert CubicSpline(ss, way, axis=0)(np.linspace(0.0, 1.0, 2001))[:, 0].max() > up + 0.01
+    path = spline_path(way, robot.limits.lower, robot.limits.upper)
+    qs = path(np.linspace(0.0, 1.0, 4001))
+    assert qs[:, 0].max() <= up
+    assert np.allclose(path(ss), way, atol=1e-12)  # through the waypoints
+    # the shape-preserving samples: no joint leaves the range of two neighbouring waypoints
+    s_dense, q_dense = monotone_samples(ss, way, 8)
+    for k in range(len(way) - 1):
+        inside = (s_dense >= ss[k]) & (s_dense <= ss[k + 1])
+        lo, hi = np.minimum(way[k], way[k + 1]), np.maximum(way[k], way[k + 1])
+        assert np.all(q_dense[inside] >= lo - 1e-12) and np.all(q_dense[inside] <= hi + 1e-12)
+    # timed at the limits, it stays inside all of them and ends at rest on the last waypoint
+    traj = plan_path([a, b, c], robot)
+    use = check_limits(traj, robot, n=4001)
+    assert use["position_margin_rad"] >= -1e-9 and use["velocity"] <= 1.0 + 1e-6
+    assert use["acceleration"] <= 1.0 + 1e-6
+    q_end, dq_end, _ = traj.sample(traj.duration)
+    assert np.allclose(q_end, c, atol=1e-6) and np.allclose(dq_end, 0.0, atol=1e-6)
+    # without limits, the path is the spline through the waypoints, overshoot and all
+    assert spline_path(way)(np.linspace(0.0, 1.0, 2001))[:, 0].max() > up + 0.01
+
+
+def test_a_spline_that_must_leave_the_limits_raises():
+    # the middle waypoint on joint 1's limit, the path turning back from it towards a
+    # third waypoint off the line: no spline through these stays inside
+    robot = load_robot("panda")
+    up = robot.limits.upper[0]
+    a, b, c = (robot.home.copy() for _ in range(3))
+    a[0], b[0], c[0] = up - 1.0, up, up - 0.3
     c[1] += 1.0
     with pytest.raises(TrajectoryError, match="leaves the joint limits"):
         plan_path([a, b, c], robot)

@@ -4,7 +4,8 @@ Two planners, one result type:
 
 - `plan_path` (toppra 0.6): the time-optimal parameterisation of a cubic spline through
   joint waypoints (pick → lift → pre-release), at rest at both ends, under the joint
-  velocity and acceleration limits.
+  velocity and acceleration limits; where the spline would overshoot a joint limit, one
+  that keeps to the shape-preserving cubic through the waypoints (`spline_path`).
 - `plan_move` (ruckig 0.19): a jerk-limited, time-optimal move from one joint state to
   another, which may end with a nonzero joint velocity (a release while moving: the
   thesis §4.2's secondary trajectory reaching the gripper's pose with nonzero velocity).
@@ -61,17 +62,67 @@ def _check_scales(**scales: float) -> None:
             raise InvalidInput(f"{name} must be in (0, 1], got {s}")
 
 
-def spline_path(waypoints_q: Sequence[np.ndarray]) -> Any:
-    """The geometric path `plan_path` times: toppra's cubic spline through distinct joint
-    waypoints [rad], its parameter s ∈ [0, 1] at each waypoint proportional to the
-    cumulative joint-space distance. Callable: path(s) gives configurations."""
+def spline_path(
+    waypoints_q: Sequence[np.ndarray],
+    lower: np.ndarray | None = None,
+    upper: np.ndarray | None = None,
+) -> Any:
+    """The geometric path through distinct joint waypoints [rad] that a move follows: a
+    cubic spline (toppra's `SplineInterpolator`, C²), its parameter s ∈ [0, 1] at each
+    waypoint proportional to the cumulative joint-space distance. Callable: path(s) gives
+    configurations, path(s, 1) and path(s, 2) their derivatives in s.
+
+    Through the waypoints themselves. Given joint limits `lower`/`upper` [rad] that this
+    spline leaves between waypoints (it overshoots where a joint turns back near a limit),
+    through 8 (else 16, 32: SHAPE_SAMPLES) points of each segment of the shape-preserving
+    cubic instead (`monotone_samples`), which never leaves the range of two neighbouring
+    waypoints: the spline keeps close to it, so within the limits unless a waypoint lies
+    on one. Without limits, or when none stays within them, the spline through the
+    waypoints."""
     import toppra as ta
 
     way = np.array(waypoints_q, float)
     seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
     ss = np.concatenate([[0.0], np.cumsum(seg)])
     ss /= ss[-1]
-    return ta.SplineInterpolator(ss, way)
+    cubic = ta.SplineInterpolator(ss, way)
+    if lower is None or upper is None or _within(cubic, lower, upper):
+        return cubic
+    for per_segment in SHAPE_SAMPLES:
+        shaped = ta.SplineInterpolator(*monotone_samples(ss, way, per_segment))
+        if _within(shaped, lower, upper):
+            return shaped
+    return cubic
+
+
+# points per segment of the shape-preserving cubic that `spline_path` fits a spline
+# through, fewest first: the spline's overshoot shrinks as the points close in
+SHAPE_SAMPLES = (8, 16, 32)
+
+
+def monotone_samples(
+    ss: np.ndarray, way: np.ndarray, per_segment: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(parameters, configurations [rad]) of `per_segment` evenly spaced points of each
+    segment of the shape-preserving piecewise cubic through the waypoints (Fritsch and
+    Carlson's, scipy's `PchipInterpolator`, per joint), the waypoints among them: between
+    two waypoints no joint leaves the range of their values."""
+    from scipy.interpolate import PchipInterpolator
+
+    s = np.concatenate(
+        [
+            np.linspace(a, b, per_segment, endpoint=False)
+            for a, b in zip(ss[:-1], ss[1:], strict=True)
+        ]
+        + [ss[-1:]]
+    )
+    return s, np.asarray(PchipInterpolator(ss, way, axis=0)(s))
+
+
+def _within(path: Any, lower: np.ndarray, upper: np.ndarray, n: int = 400) -> bool:
+    """Does the path stay within [lower, upper] (POSITION_TOL_RAD) on n samples?"""
+    qs = path(np.linspace(0.0, 1.0, n))
+    return bool(np.all(qs >= lower - POSITION_TOL_RAD) and np.all(qs <= upper + POSITION_TOL_RAD))
 
 
 def plan_path(
@@ -84,8 +135,10 @@ def plan_path(
 ) -> Trajectory:
     """Time-optimal trajectory along a spline through joint waypoints, at rest at both ends.
 
-    The path is toppra's cubic spline through the waypoints, with the path parameter at
-    each waypoint proportional to the cumulative joint-space distance. Limits are scaled by
+    The path is a cubic spline through the waypoints, with the path parameter at each
+    waypoint proportional to the cumulative joint-space distance; where that spline
+    overshoots a joint limit, the spline that keeps to the shape-preserving cubic through
+    them (`spline_path`). Limits are scaled by
     `*_scale`, then tightened by 2 % (toppra's constant-acceleration parameterisation
     overshoots slightly); the result is sampled and, if it still exceeds a limit, planned
     again with tighter margins.
@@ -124,8 +177,9 @@ def plan_path(
     q_start = wps[0]
     if len(keep) < 2:
         raise InvalidInput("plan_path waypoints are all the same configuration: nothing to do")
-    path = spline_path(keep)
-    # Sample the geometric path itself: a spline may overshoot a joint limit.
+    path = spline_path(keep, rb.limits.lower, rb.limits.upper)
+    # Sample the geometric path itself: where no spline keeps within the limits (a waypoint
+    # on a limit, the path turning back there), it leaves them.
     qs = path(np.linspace(0.0, 1.0, 400))
     lo = np.min(qs - rb.limits.lower)
     hi = np.min(rb.limits.upper - qs)
