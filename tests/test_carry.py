@@ -337,7 +337,7 @@ def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
 
 # A throw's carry on random layout 0 (Panda): the lift over the station, three waypoints of
 # the twist-free swing and the release [rad]; the cubic spline through them leaves joint 5's
-# limits. The 60 g, 70 mm tall o2_cylinder35 held at L_s = 0.06 m (`carry_hold`).
+# limits. The 60 g, 70 mm tall o2_cylinder35 held at L_s = 0.065 m (`carry_hold`).
 SWING_OVER_A_LIMIT = [
     [0.218887, 0.446759, -1.037305, -1.946, 0.455947, 2.135307, -0.243283],
     [0.323963, 0.294299, -1.182833, -1.719448, 0.281017, 1.823749, -0.129941],
