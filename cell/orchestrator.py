@@ -574,7 +574,13 @@ class Orchestrator:
 
         return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q).q
 
-    def _swing(self, q_lift: np.ndarray, q_rel: np.ndarray, plan: Any) -> list[np.ndarray]:
+    def _swing(
+        self,
+        q_lift: np.ndarray,
+        q_rel: np.ndarray,
+        plan: Any,
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[np.ndarray]:
         """Waypoints between the lift and the release that keep the grip on the twist-free
         swing (`_pick_frame`): the throw axis turns up about one horizontal axis, the
         pads' y axis stays level. A joint-space spline between the two ends alone rolls
@@ -586,8 +592,9 @@ class Orchestrator:
         branch (a seed that does not converge falls back to home: a UR5 swing came out
         4.4 rad round in a joint between waypoints and flung the item), from the point
         on the joint-space line between the ends instead. A swing whose joints travel
-        more than SWING_MAX_DETOUR × the ends' gap is not taken."""
-        if self._frame is None or SWING_WAYPOINTS < 1 or not self._turns_if_rolled():
+        more than SWING_MAX_DETOUR × the ends' gap is not taken. `carried`: the item and
+        its stroke [m] (default: the one in the grip)."""
+        if self._frame is None or SWING_WAYPOINTS < 1 or not self._turns_if_rolled(*carried or ()):
             return []
         az, roll = self._frame
         rb = self.robot
@@ -694,44 +701,68 @@ class Orchestrator:
         each.
         """
         settle_s = SETTLE_S if settle_s is None else settle_s
+        trajs = self._move_plan(self.q, waypoints, settle_s)
+        ends = waypoints if len(trajs) > 1 else waypoints[-1:]
+        return sum(self._follow(t, w, settle_s) for t, w in zip(trajs, ends, strict=True))
+
+    def _move_plan(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        settle_s: float,
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[Any]:
+        """The trajectories `_move` follows from q_from through the waypoints [rad]: the
+        one path, or one per waypoint when it stops at each (`_move`'s choice, a settle of
+        `settle_s` [s] at each stop). `carried`: the item and its stroke [m] carried
+        (default: what the grip holds)."""
         path: Any = None
         try:
-            path = self._path(self.q, waypoints)
+            path = self._path(q_from, waypoints, carried)
         except TrajectoryError:
             if len(waypoints) < 2:
                 raise
         if len(waypoints) >= 2 and (
-            path is None or self._spline_within_limits([self.q, *waypoints], 400) is None
+            path is None or self._spline_within_limits([q_from, *waypoints], 400) is None
         ):
-            stops = self._stops(waypoints)
+            stops = self._stops(q_from, waypoints, carried)
             t_stops = sum(t.duration for t in stops) + settle_s * (len(stops) - 1)
             if path is None or t_stops < path.duration:
-                return sum(
-                    self._follow(t, w, settle_s) for t, w in zip(stops, waypoints, strict=True)
-                )
-        return self._follow(path, waypoints[-1], settle_s)
+                return stops
+        return [path]
 
-    def _path(self, q_from: np.ndarray, waypoints: list[np.ndarray]) -> Any:
+    def _path(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> Any:
         """The trajectory of a move from q_from through the waypoints [rad]: empty, at
-        `speed_scale` of the joint limits; carrying, the fastest the grip holds the item
-        along (`_carry_path`). TrajectoryError when there is none."""
+        `speed_scale` of the joint limits; carrying (`carried`, else what the grip
+        holds), the fastest the grip holds the item along (`_carry_path`).
+        TrajectoryError when there is none."""
         from cell.robot.motion import plan_path
 
-        if self.ee.item is None:
+        if carried is None and self.ee.item is None:
             return plan_path(
                 [q_from, *waypoints],
                 self.robot,
                 velocity_scale=self.speed_scale,
                 acceleration_scale=self.speed_scale,
             )
-        return self._carry_path([q_from, *waypoints])
+        return self._carry_path([q_from, *waypoints], carried)
 
-    def _stops(self, waypoints: list[np.ndarray]) -> list[Any]:
+    def _stops(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[Any]:
         """The trajectories of a move that stops at each waypoint: a straight joint-space
         stretch each, which stays inside the joint limits' box."""
-        out, q = [], self.q
+        out, q = [], q_from
         for w in waypoints:
-            out.append(self._path(q, [w]))
+            out.append(self._path(q, [w], carried))
             q = w
         return out
 
@@ -751,12 +782,15 @@ class Orchestrator:
         self.loop.land()
         return float(traj.duration) + settle_s
 
-    def _carry_path(self, waypoints: list[np.ndarray]) -> Any:
+    def _carry_path(
+        self, waypoints: list[np.ndarray], carried: tuple[ObjectParams, float] | None = None
+    ) -> Any:
         """The fastest path through the waypoints (the first: where the arm starts) that
-        the grip holds the item along."""
+        the grip holds the item along (`carried`: the item and its stroke [m]; default:
+        the one in the grip)."""
         from cell.robot.carry import plan_carry
 
-        obj, stroke = self._carried
+        obj, stroke = carried or self._carried
         traj, _ = plan_carry(
             waypoints,
             self.robot,
@@ -980,12 +1014,25 @@ class Orchestrator:
         return q_lift
 
     def _approach(self, item: Any, stroke: float, obj: ObjectParams, q_pick: np.ndarray) -> bool:
-        """The empty arm to the pick without stopping over it: anywhere to the point
-        the pads' length and PICK_OVER_CLEARANCE_M over the pick, then down
-        the straight joint-space segment onto the item (`plan_approach`). Taken only if,
-        until that point, the grip stays at least that high wherever it is over the
-        station or within the grip's reach of it (`_keeps_over_station`); else (or when
-        no IK or move is found) False, and nothing has moved."""
+        """The empty arm to the pick without stopping over it (`_approach_plan`); False
+        when there is none, and nothing has moved."""
+        traj, why = self._approach_plan(item, stroke, obj, q_pick)
+        if traj is None:
+            log.info("%s: over the lift instead", why)
+            return False
+        # no settle: the grasp that follows holds the arm still while the pads close
+        self._follow(traj, q_pick, 0.0)
+        return True
+
+    def _approach_plan(
+        self, item: Any, stroke: float, obj: ObjectParams, q_pick: np.ndarray
+    ) -> tuple[Any, str]:
+        """(the trajectory, "") of the empty arm from where it is to the pick without
+        stopping over it: anywhere to the point the pads' length and PICK_OVER_CLEARANCE_M
+        over the pick, then down the straight joint-space segment onto the item
+        (`plan_approach`). Taken only if, until that point, the grip stays at least that
+        high wherever it is over the station or within the grip's reach of it
+        (`_keeps_over_station`); else (or when no IK or move is found) (None, why)."""
         from cell.robot.motion import plan_approach
 
         over = self.scene.geometry.pad_length_m + PICK_OVER_CLEARANCE_M
@@ -996,7 +1043,7 @@ class Orchestrator:
             )
             q_over = self._ik_frame(tcp, q_pick)
             if joint_gap(q_pick, q_over) > LIFT_MAX_DQ_RAD:  # another IK branch
-                return False
+                return None, "the point over the pick is on another IK branch"
             traj = plan_approach(
                 self.q,
                 q_over,
@@ -1006,14 +1053,10 @@ class Orchestrator:
                 acceleration_scale=self.speed_scale,
             )
         except (IKFailed, TrajectoryError) as exc:
-            log.info("no straight approach to the pick (%s): over the lift instead", exc)
-            return False
+            return None, f"no straight approach to the pick ({exc})"
         if not self._keeps_over_station(traj.parts[0], float(self.robot.tcp_pose(q_over)[0][2])):
-            log.info("the approach to the pick dips over the station: over the lift instead")
-            return False
-        # no settle: the grasp that follows holds the arm still while the pads close
-        self._follow(traj, q_pick, 0.0)
-        return True
+            return None, "the approach to the pick dips over the station"
+        return traj, ""
 
     def _departure(
         self, q_lift: np.ndarray, q_end: np.ndarray, plan: Any = None
@@ -1574,12 +1617,13 @@ class Orchestrator:
             stroke = plan.stroke_m + delta
             centre = np.array([plan.x_m, plan.y_m, plan.z_m])
             try:
-                self._q_release = self._ik(
+                self._q_release = self._release_q(
                     self._tcp_for_item_centre(
                         centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
                     ),
-                    plan.elevation_rad,
-                    plan.azimuth_rad,
+                    plan,
+                    stroke,
+                    obj,
                 )
             except IKFailed as exc:
                 err = err or exc
@@ -1587,6 +1631,76 @@ class Orchestrator:
             return plan, delta
         assert err is not None
         raise err
+
+    def _release_q(
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
+    ) -> np.ndarray:
+        """The release configuration for a throw's `plan` at `tcp` [m, W]: of the two rolls
+        that put the item's weight on a pad (0 and π, `solve_release_ik`), the one whose
+        cycle is the shorter: the empty arm to the pick of the presented item (as
+        `_approach_plan` times it, else through the lift: jerk-limited rest-to-rest moves
+        at the full limits, `move_time`), plus twice the
+        carry from its lift along the twist-free swing to the release, timed as a carry of
+        this item (`plan_carry`; the next approach comes back about as far). The pick is
+        gripped at the release's roll (`_pick_frame`), so the roll chooses the pick's,
+        the lift's and the swing's configurations too. Each roll's release is solved from
+        the lift and from where the arm is (IK keeps the solution nearest its seed: two
+        branches, the second the one `solve_release_ik` gives). Where no item is
+        presented, or no candidate's moves are found, the roll nearer where the arm is
+        (`solve_release_ik`). IKFailed when the pose has no configuration."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD
+
+        e, a = plan.elevation_rad, plan.azimuth_rad
+        best: tuple[float, np.ndarray] | None = None
+        if self._presented is not None and abs(math.cos(e)) > 1e-6:
+            kept = self._frame
+            try:
+                for roll in WEIGHT_ROLLS_RAD:
+                    self._frame = (float(a), roll)  # the pick is gripped at this roll
+                    for cost, q_rel in self._release_costs(tcp, plan, roll, stroke, obj):
+                        log.debug("release roll %.2f rad: cycle estimate %.2f s", roll, cost)
+                        if best is None or cost < best[0]:
+                            best = (cost, q_rel)
+            finally:
+                self._frame = kept
+        if best is not None:
+            return best[1]
+        return self._ik(tcp, e, a)
+
+    def _release_costs(
+        self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
+    ) -> list[tuple[float, np.ndarray]]:
+        """(cycle estimate [s], release configuration) of each release at `roll` [rad]
+        (`_release_q`), with the pick in the frame `self._frame`; none when the pick, the
+        approach, the release or the carry is not found."""
+        from cell.robot.ik import ReleasePose, solve_ik
+        from cell.robot.motion import move_time
+
+        try:
+            q_pick, q_lift = self._over_item(self._presented, stroke, obj)
+            approach, _ = self._approach_plan(self._presented, stroke, obj, q_pick)
+            if approach is not None:
+                t_approach = float(approach.duration)
+            else:  # through the lift (`_pick_kinematic`)
+                t_approach = move_time(self.q, q_lift, self.robot) + move_time(
+                    q_lift, q_pick, self.robot
+                )
+        except (IKFailed, TrajectoryError):
+            return []
+        pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
+        out: list[tuple[float, np.ndarray]] = []
+        for seed in (q_lift, self.q):  # IK keeps the solution nearest its seed
+            try:
+                q_rel = solve_ik(self.robot, pose, seed).q
+                if any(joint_gap(q_rel, q) < 1e-3 for _, q in out):
+                    continue
+                way = self._swing(q_lift, q_rel, plan, (obj, stroke))
+                carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
+            except (IKFailed, TrajectoryError):
+                continue
+            t_carry = sum(float(t.duration) for t in carry) + SETTLE_S * (len(carry) - 1)
+            out.append((t_approach + 2.0 * t_carry, q_rel))
+        return out
 
     def _release_bounds(self, target: Any) -> list[Any]:
         """The release bounds a plan is tried in, in order: the cell's, then lower and
