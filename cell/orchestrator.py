@@ -1639,9 +1639,9 @@ class Orchestrator:
         that put the item's weight on a pad (0 and π, `solve_release_ik`), the one whose
         cycle is the shorter: the empty arm to the pick of the presented item (as
         `_approach_plan` times it, else through the lift: jerk-limited rest-to-rest moves
-        at the full limits, `move_time`), plus twice the
-        carry from its lift along the twist-free swing to the release, timed as a carry of
-        this item (`plan_carry`; the next approach comes back about as far). The pick is
+        at the full limits, `move_time`), plus twice the carry from its lift along the
+        twist-free swing to the release, timed as `_move_plan` times a carry of this item
+        (the next approach comes back about as far). The pick is
         gripped at the release's roll (`_pick_frame`), so the roll chooses the pick's,
         the lift's and the swing's configurations too. Each roll's release is solved from
         the lift and from where the arm is (IK keeps the solution nearest its seed: two
