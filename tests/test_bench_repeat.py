@@ -3,7 +3,8 @@ throws against first) and each layout's own figures."""
 
 import math
 
-from cell.bench.bench_sort import per_layout, repeat_figures, summarise_layouts
+from cell.bench.bench_sort import failures_by_object, per_layout, repeat_figures, summarise_layouts
+from cell.orchestrator import FAILURES
 
 
 def _it(oid: str, err: float, action: str = "throw") -> dict:
@@ -70,3 +71,31 @@ def test_per_layout_figures_add_up_to_the_campaigns():
     assert sum(r["in_bin"] for r in rows) == total["in_bin"] == 4
     assert sum(r["sim_time_s"] for r in rows) == total["sim_time_s"]
     assert total["items_per_hour"] == 3600.0 * 4 / 14.0
+
+
+def test_failures_by_object_count_each_reason_per_object_and_add_up():
+    def item(oid: str, failure: str) -> dict:
+        return {"object_id": oid, "failure": failure}
+
+    items = [
+        item("bottle", "dropped_while_carried"),
+        item("cube", "missed_bin"),
+        item("bottle", "dropped_while_carried"),
+        item("cube", ""),
+        item("egg", "missed_bin"),
+        item("cube", "missed_bin"),
+        item("duck", "ik"),
+    ]
+    f = failures_by_object(items)
+    assert f == {
+        "ik": {"duck": 1},
+        "dropped_while_carried": {"bottle": 2},
+        "missed_bin": {"cube": 2, "egg": 1},
+    }
+    assert list(f) == [r for r in FAILURES if r in f]  # in the fixed list's order
+    assert list(f["missed_bin"]) == ["cube", "egg"]  # most frequent first
+    assert sum(sum(v.values()) for v in f.values()) == sum(bool(it["failure"]) for it in items)
+    layouts = [_lay(3, "panda", [(2.0, True), (3.0, False), (3.0, False)], 10.0)]
+    total = summarise_layouts(layouts)
+    assert total["failures_by_object"] == {"missed_bin": {"o1": 1, "o2": 1}}
+    assert sum(total["failures"].values()) == 2

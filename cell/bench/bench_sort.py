@@ -14,6 +14,8 @@ Figures (`summarise_layouts`):
                            sets other than thesis14, and ad-hoc items);
     items_per_hour         items at rest in their bin per simulated hour of arm time;
     items, layouts, failures (count per cell.orchestrator.FAILURES reason);
+    failures_by_object     per reason, which objects failed so and how often
+                           (`failures_by_object`: where to look first);
     per_layout             each layout's own figures (`per_layout`).
 """
 
@@ -28,6 +30,7 @@ import yaml
 
 __all__ = [
     "LayoutUnit",
+    "failures_by_object",
     "layout_units",
     "per_layout",
     "run_layout",
@@ -181,11 +184,27 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "sim_time_s": sim,
         "wall_time_s": sum(lay["wall_time_s"] for lay in layouts),
         "failures": {f: c for f in FAILURES if (c := sum(it["failure"] == f for it in items))},
+        "failures_by_object": failures_by_object(items),
         "thrown": sum(it["action"] == "throw" for it in items),
         "released_moving": sum(bool(it.get("moving")) for it in items),
         **repeat_figures(layouts),
         "per_layout": per_layout(layouts),
     }
+
+
+def failures_by_object(items: list[dict[str, Any]]) -> dict[str, dict[str, int]]:
+    """{reason: {object_id: count}} over the failed items, each reason's objects most
+    frequent first (ties by name), in the order of cell.orchestrator.FAILURES."""
+    from collections import Counter
+
+    from cell.orchestrator import FAILURES
+
+    out: dict[str, dict[str, int]] = {}
+    for reason in FAILURES:
+        counts = Counter(it["object_id"] for it in items if it["failure"] == reason)
+        if counts:
+            out[reason] = dict(sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
+    return out
 
 
 def per_layout(layouts: list[dict[str, Any]]) -> list[dict[str, Any]]:
