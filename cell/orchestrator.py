@@ -66,6 +66,9 @@ PICK_STROKE_M = (
 # engine's contact points add their own couple. 4 is taken.
 PAD_COUPLE_FACTOR = 4.0
 SWING_WAYPOINTS = 2  # waypoints that keep the carry's swing free of twist (see _swing)
+SWING_WAYPOINTS_MAX = 8  # doubled up to this while the spline between them rolls the grip
+SWING_CHECK_SAMPLES = 60  # configurations along the swing's spline its grip use is checked at
+GRIP_USE_TIE = 0.02  # grip uses this close are taken as equal (routes compared at rest)
 # A level swing whose joints travel farther than this × the ends' gap goes round (the
 # demo's swings travel 1.5-1.8 × the gap; a UR5's that flung its items, 3.4 ×)
 SWING_MAX_DETOUR = 2.5
@@ -147,6 +150,7 @@ def carry_hold(
     landed 0.12 m off, against 1° and 0.06 m at GENTLE_SCALE (the turn shifts the
     launch). Carried to be `placing`, where a turn in the pads matters little, it is
     held as the scene measures it (`mesh_grip`)."""
+    from cell.model.grip import grip_friction
     from cell.robot.carry import GripHold, patch_torsion_radius_m
     from cell.sim import EE_TO_TCP_M
     from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
@@ -166,6 +170,11 @@ def carry_hold(
     else:
         couple = PAD_COUPLE_FACTOR * force * patch_torsion_radius_m(half_y, length / 2)
     lever, base_half, inertia = (height - length) / 2, obj.size[1] / 2, float(obj.inertia[0])
+    # a box or a cylinder pressed between the flat pads resists a tilt about y with the
+    # pads' pressure along the patch and their friction w apart (cell.robot.carry)
+    tilt = 0.0
+    if obj.shape in ("cube", "cuboid", "cylinder") and force > 0:
+        tilt = force * (length / (2 * grip_friction(obj, GEO.pad_length_m)) + obj.width / 2)
     if obj.shape == "sphere":
         # held at two points: at its equator (R ≤ L_p), on the line through its centre, so
         # a turn about the pads' axis moves nothing and the sphere need not turn with the
@@ -180,6 +189,9 @@ def carry_hold(
         offset_tcp_m=(0.0, 0.0, stroke_m + height / 2 - EE_TO_TCP_M),
         lever_m=lever,
         base_half_m=base_half,
+        torque_y_nm=tilt,
+        inertia_yy=float(obj.inertia[1]) if tilt > 0 else 0.0,
+        base_half_x_m=obj.width / 2 if tilt > 0 else 0.0,
     )
 
 
@@ -328,6 +340,38 @@ def launch_speed_mps(params: ModelParams, model_obj: ObjectParams, plan: Any) ->
     from cell.model.throw import launch_state
 
     return float(np.linalg.norm(launch_state(plan.to_batch(model_obj), params.ee)[1][0]))
+
+
+def release_grip_use(
+    params: ModelParams, obj: ObjectParams, stroke_m: float, elevations_rad: Any
+) -> np.ndarray:
+    """What holding `obj` still with the throw axis at each of `elevations_rad` asks of
+    the grip (`cell.robot.carry.uses`, the tilt about y included; ≤ 1/CARRY_MARGIN to
+    carry it there), the grip rolled so the item's weight is on a pad (a throw's
+    release, `cell.robot.ik.WEIGHT_ROLLS_RAD`, and the twist-free swing up to it), the
+    pads at stroke L_s [m]. In ee_tcp axes gravity then asks f = (g cos e, 0, g sin e):
+    along the pads' normal, which tilts a tall item about y, and onto the carriage."""
+    from cell.model.params import G
+    from cell.robot.carry import uses
+
+    e = np.atleast_1d(np.asarray(elevations_rad, float))
+    f = G * np.c_[np.cos(e), np.zeros_like(e), np.sin(e)]
+    return uses(f, np.zeros_like(f), carry_hold(params, obj, stroke_m))
+
+
+def release_elevation_min(
+    params: ModelParams, obj: ObjectParams, stroke_m: float, lo_rad: float, hi_rad: float
+) -> float | None:
+    """The least elevation [rad] in [lo_rad, hi_rad] (on a 0.5° grid) at whose release
+    the grip holds `obj` still within the carry's bound (`release_grip_use`); None when
+    lo_rad already does, or when none in the range does (the elevation does not help)."""
+    from cell.robot.carry import CARRY_MARGIN
+
+    es = np.r_[lo_rad, np.arange(lo_rad, hi_rad + 1e-9, math.radians(0.5))[1:]]
+    ok = release_grip_use(params, obj, stroke_m, es) <= 1.0 / CARRY_MARGIN
+    if ok[0] or not ok.any():
+        return None
+    return float(es[int(np.argmax(ok))])
 
 
 def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float, what: str = "") -> Any:
@@ -592,15 +636,41 @@ class Orchestrator:
         branch (a seed that does not converge falls back to home: a UR5 swing came out
         4.4 rad round in a joint between waypoints and flung the item), from the point
         on the joint-space line between the ends instead. A swing whose joints travel
-        more than SWING_MAX_DETOUR × the ends' gap is not taken. `carried`: the item and
-        its stroke [m] (default: the one in the grip)."""
+        more than SWING_MAX_DETOUR × the ends' gap is not taken. Where the spline through
+        SWING_WAYPOINTS of them rolls the grip more than the level swing must
+        (`_swing_holds`), twice as many are tried, up to SWING_WAYPOINTS_MAX, and the
+        one asking least of the grip at rest is kept (the fewer on a tie). `carried`:
+        the item and its stroke [m] (default: the one in the grip)."""
         if self._frame is None or SWING_WAYPOINTS < 1 or not self._turns_if_rolled(*carried or ()):
             return []
-        az, roll = self._frame
+        held = carried or self._carried
+        n, best = SWING_WAYPOINTS, None
+        while n <= SWING_WAYPOINTS_MAX:
+            out = self._swing_waypoints(q_lift, q_rel, plan, n)
+            if not out:  # none found with more: the sparser one (or none)
+                break
+            most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
+            if best is None or most < best[0] - GRIP_USE_TIE:
+                best = (most, out)
+            if most <= allowed + 1e-9:
+                break
+            n *= 2
+        if best is None:
+            return []
+        if best[0] > self._swing_static([q_lift, *best[1], q_rel], held, plan.elevation_rad)[1]:
+            log.info("the level swing asks more of the grip than it must, even at rest")
+        return best[1]
+
+    def _swing_waypoints(
+        self, q_lift: np.ndarray, q_rel: np.ndarray, plan: Any, n: int
+    ) -> list[np.ndarray]:
+        """n waypoints of the twist-free swing from q_lift to q_rel (`_swing`), evenly in
+        position and elevation; none when it goes round or has no IK."""
+        az, roll = self._frame or (0.0, 0.0)
         rb = self.robot
         p0, p1 = rb.tcp_pose(q_lift)[0], rb.tcp_pose(q_rel)[0]
         e0, e1 = -math.pi / 2, plan.elevation_rad
-        fs = [k / (SWING_WAYPOINTS + 1) for k in range(1, SWING_WAYPOINTS + 1)]
+        fs = [k / (n + 1) for k in range(1, n + 1)]
         from cell.robot.ik import ReleasePose, solve_ik
 
         poses = [
@@ -624,6 +694,62 @@ class Orchestrator:
                 return out
             log.info("the level swing goes round (%.1f rad in a joint for %.1f)", travel, gap)
         return []
+
+    def _swing_holds(
+        self,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float],
+        elevation_rad: float,
+    ) -> bool:
+        """Does the spline through the swing's waypoints (the path the carry follows, as
+        `plan_path` shapes it) ask no more of the grip, held still anywhere
+        (`static_grip_use`, the tilt about y included), than the carry's bound, or than
+        the twist-free swing must (`release_grip_use` at every elevation it passes, up
+        to the release's `elevation_rad`), or than its ends do? Between sparse waypoints
+        the spline can roll the grip: on random layout 5 (UR5) a 200 mm bottle's swing
+        rolled it 22° and the bottle left the pads. `carried`: the item and its stroke
+        [m]."""
+        most, allowed = self._swing_static(waypoints, carried, elevation_rad)
+        return most <= allowed + 1e-9
+
+    def _swing_static(
+        self,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float],
+        elevation_rad: float,
+    ) -> tuple[float, float]:
+        """(the most the spline through `waypoints` asks of the grip held still, what a
+        swing may ask: the carry's bound, the twist-free swing's own most, its ends'),
+        as `_swing_holds` compares them; (0, 0) for an item held at points (a sphere, a
+        mesh to be thrown: any roll at all turns it, its carry goes at GENTLE_SCALE, and
+        the twist-free swing is all a route can do for it)."""
+        from cell.robot.carry import static_grip_use
+        from cell.robot.motion import spline_path
+
+        obj, stroke = carried
+        hold = carry_hold(self.params, obj, stroke)
+        keep = [waypoints[0]] + [
+            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
+        ]
+        if hold.torque_nm <= 0.0 or len(keep) < 2:
+            return 0.0, 0.0
+        lim = self.robot.limits
+        path = spline_path(keep, lim.lower, lim.upper)  # as `plan_path` shapes it
+        qs = np.asarray(path(np.linspace(0.0, 1.0, SWING_CHECK_SAMPLES)))
+        use = static_grip_use(self.robot, hold, qs)
+        allowed = max(self._level_swing_use(carried, elevation_rad), use[0], use[-1])
+        return float(np.max(use)), float(allowed)
+
+    def _level_swing_use(self, carried: tuple[ObjectParams, float], elevation_rad: float) -> float:
+        """The most a twist-free swing from hanging to `elevation_rad` asks of the grip
+        held still (`release_grip_use` at every elevation it passes), or the carry's bound
+        if more."""
+        from cell.robot.carry import CARRY_MARGIN
+
+        level = release_grip_use(
+            self.params, *carried, np.linspace(-math.pi / 2, elevation_rad, 46)
+        )
+        return max(1.0 / CARRY_MARGIN, float(np.max(level)))
 
     def _turns_if_rolled(self, obj: ObjectParams | None = None, stroke: float = 0.0) -> bool:
         """Would the carried item (or `obj` at `stroke` [m]) turn in the pads if the grip
@@ -677,6 +803,44 @@ class Orchestrator:
             except IKFailed:
                 log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
         return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
+
+    def _release_branch(
+        self, q_lift: np.ndarray, q_rel: np.ndarray, chosen: Any, tcp: np.ndarray, plan: Any
+    ) -> np.ndarray:
+        """The release configuration a throw's carry goes to: q_rel (solved from where the
+        pick left the arm), unless the item must be carried level (`_turns_if_rolled`),
+        even its level swing asks more of the grip at rest than the carry's bound (a
+        tall item tilted by its weight on a pad, `_level_swing_use`), IK landed on
+        another branch than the release `_release_q` chose and timed (`chosen`, [rad]),
+        and the chosen one's swing asks clearly less of the grip at rest
+        (`_swing_static`, by more than GRIP_USE_TIE): a UR5 carried a 200 mm bottle round
+        on the other branch (1.33 against 1.00), its grip rolled 50°, and the bottle left
+        the pads."""
+        if chosen is None or self.pick_mode == "physical" or not self._turns_if_rolled():
+            return q_rel
+        chosen = np.asarray(chosen, float)
+        if chosen.shape != q_rel.shape or joint_gap(chosen, q_rel) < 1e-3:
+            return q_rel
+        if np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)) > 1e-4:
+            return q_rel
+
+        from cell.robot.carry import CARRY_MARGIN
+
+        if self._level_swing_use(self._carried, plan.elevation_rad) <= 1.0 / CARRY_MARGIN:
+            return q_rel  # even the level swing's tilt is within the bound: either will do
+
+        def most(q: np.ndarray) -> float:
+            way = [q_lift, *self._swing(q_lift, q, plan), q]
+            return self._swing_static(way, self._carried, plan.elevation_rad)[0]
+
+        m_chosen, m_rel = most(chosen), most(q_rel)
+        log.debug(
+            "release branches: chosen %.3f, re-solved %.3f (grip use at rest)", m_chosen, m_rel
+        )
+        if m_chosen >= m_rel - GRIP_USE_TIE:
+            return q_rel
+        log.info("the release on the branch chosen for it: the other rolls the grip more")
+        return chosen
 
     def _roll_of(self, q: np.ndarray, elevation: float, azimuth: float) -> float:
         """The roll (0 or π) of the release configuration q: its pads' axis against roll 0's."""
@@ -957,10 +1121,11 @@ class Orchestrator:
             tcp = self._tcp_for_item_centre(
                 centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj
             )
-            try:  # IK from the lift pose the arm is at; _plan checked one exists from before
+            try:  # IK from the lift pose the arm is at; _plan checked one exists before
                 q_rel = self._ik_gripped(tcp, plan.elevation_rad, plan.azimuth_rad)
             except IKFailed:
                 q_rel = d.state["q_release"]
+            q_rel = self._release_branch(q_lift, q_rel, d.state.get("q_release"), tcp, plan)
             self._move(self._departure(q_lift, q_rel, plan))
         self._check_held(obj)
 
@@ -1065,12 +1230,15 @@ class Orchestrator:
         configuration, for its `plan`, or over a bin): through the lowest of
         DEPARTURE_LIFTS_M over the pick (the first: none) whose spline lifts the item out
         of the station (`_rises_from_station`) and stays within the joint limits, then
-        (a throw) along the twist-free swing (`_swing`); else through the full lift
-        q_lift. A spline through a lift LIFT_M up turns back on itself: the demo's throws
+        (a throw) along the twist-free swing (`_swing`), which must keep a tall item within
+        the grip held still anywhere (`_swing_holds`: the swing solved from a lower lift
+        can come out on another branch and roll the grip); else through the full lift
+        q_lift (the route `_release_q` timed). A spline through a lift LIFT_M up turns back on itself: the demo's throws
         carried 0.3-0.4 s longer than a per-joint time-optimal move."""
         q_pick = self.q
         obj, stroke = self._carried
         p_pick = self.scene.item_position(self.ee.item) if self.ee.item is not None else None
+        level = plan is not None and self._turns_if_rolled()
         for up in DEPARTURE_LIFTS_M:
             start: list[np.ndarray] = []
             if up > 0.0 and p_pick is not None:
@@ -1085,7 +1253,9 @@ class Orchestrator:
             elif up > 0.0:
                 continue
             way = [*start, *self._swung(start[-1] if start else q_pick, q_end, plan), q_end]
-            if self._rises_from_station([q_pick, *way]):
+            if self._rises_from_station([q_pick, *way]) and (
+                not level or self._swing_holds([q_pick, *way], (obj, stroke), plan.elevation_rad)
+            ):
                 return way
         return [q_lift, *self._swung(q_lift, q_end, plan), q_end]
 
@@ -1654,14 +1824,14 @@ class Orchestrator:
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
-        best: tuple[float, np.ndarray] | None = None
+        best: tuple[tuple[bool, float], np.ndarray] | None = None
         if self._presented is not None and self.pick_mode != "physical" and abs(math.cos(e)) > 1e-6:
             kept = self._frame
             try:
                 for roll in WEIGHT_ROLLS_RAD:
                     self._frame = (float(a), roll)  # the pick is gripped at this roll
                     for cost, q_rel in self._release_costs(tcp, plan, roll, stroke, obj):
-                        log.debug("release roll %.2f rad: cycle estimate %.2f s", roll, cost)
+                        log.debug("release roll %.2f rad: (slips, cycle estimate) %s", roll, cost)
                         if best is None or cost < best[0]:
                             best = (cost, q_rel)
             finally:
@@ -1672,10 +1842,13 @@ class Orchestrator:
 
     def _release_costs(
         self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
-    ) -> list[tuple[float, np.ndarray]]:
-        """(cycle estimate [s], release configuration) of each release at `roll` [rad]
-        (`_release_q`), with the pick in the frame `self._frame`; none when the pick, the
-        approach, the release or the carry is not found."""
+    ) -> list[tuple[tuple[bool, float], np.ndarray]]:
+        """((asks more of the grip than it holds, cycle estimate [s]), release
+        configuration) of each release at `roll` [rad] (`_release_q`), with the pick in
+        the frame `self._frame`; none when the pick, the approach, the release or the
+        carry is not found. A carry whose route, held still anywhere, would ask more of
+        the grip than the carry's bound (`_swing_holds`: a tall item on a swing that
+        rolls the grip) ranks after every one that does not."""
         from cell.robot.ik import ReleasePose, solve_ik
         from cell.robot.motion import move_time
 
@@ -1691,7 +1864,8 @@ class Orchestrator:
         except (IKFailed, TrajectoryError):
             return []
         pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
-        out: list[tuple[float, np.ndarray]] = []
+        out: list[tuple[tuple[bool, float], np.ndarray]] = []
+        level = self._turns_if_rolled(obj, stroke)
         for seed in (q_lift, self.q):  # IK keeps the solution nearest its seed
             try:
                 q_rel = solve_ik(self.robot, pose, seed).q
@@ -1702,7 +1876,10 @@ class Orchestrator:
             except (IKFailed, TrajectoryError):
                 continue
             t_carry = sum(float(t.duration) for t in carry) + SETTLE_S * (len(carry) - 1)
-            out.append((t_approach + 2.0 * t_carry, q_rel))
+            slips = level and not self._swing_holds(
+                [q_lift, *way, q_rel], (obj, stroke), plan.elevation_rad
+            )
+            out.append(((slips, t_approach + 2.0 * t_carry), q_rel))
         return out
 
     def _release_bounds(self, target: Any) -> list[Any]:
@@ -1747,6 +1924,7 @@ class Orchestrator:
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = grip_bounds(bounds, self.params, stroke_max_m, obj.name or obj.shape)
             plan = plan_clean(self.params, obj, model_obj, goal, bounds)
+        plan, bounds = self._steep_enough(obj, model_obj, goal, plan, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
@@ -1764,6 +1942,36 @@ class Orchestrator:
 
         corrected = residual_for_plan(self.residual, obj, plan)  # clipping is logged there
         return plan, corrected.stroke_m - plan.stroke_m
+
+    def _steep_enough(
+        self, obj: ObjectParams, model_obj: ObjectParams, goal: Any, plan: Any, bounds: Any
+    ) -> tuple[Any, Any]:
+        """The plan, re-planned with its elevation raised where holding the item still at
+        its release would ask more of the grip than a carry may (`release_elevation_min`:
+        a tall item whose weight on a pad tilts it out, a 200 mm bottle below 37° at a
+        45 mm stroke), and the bounds it was planned in. Up to three times, as the stroke
+        of the steeper plan changes the grip; the plan kept when no steeper one reaches
+        the goal."""
+        from dataclasses import replace as dc_replace
+
+        for _ in range(3):
+            e_min = release_elevation_min(
+                self.params, obj, plan.stroke_m, plan.elevation_rad, bounds.elevation_max
+            )
+            if e_min is None:
+                break
+            steep = dc_replace(bounds, elevation_min=max(bounds.elevation_min, e_min))
+            try:
+                plan, bounds = plan_clean(self.params, obj, model_obj, goal, steep), steep
+            except UnreachableTarget:
+                log.info("%s: no release steep enough for the grip reaches the goal", obj.name)
+                break
+            log.info(
+                "%s: released at %.0f° or steeper so the grip holds it still there",
+                obj.name or obj.shape,
+                math.degrees(e_min),
+            )
+        return plan, bounds
 
     # -- the flywheel ------------------------------------------------------------
     @staticmethod

@@ -18,6 +18,20 @@ up) its base face rights it as well, with up to m f_z times half its base. A car
 is within the grip while its use of the force and of the torque together stays under
 1: m |f| / F + |τ_x| / T ≤ 1/margin (each used fraction takes from the same friction).
 
+A tall item is also tilted about y (the pads' faces' other axis) by the specific force
+along the pads' normal: τ_y = m (r × f)_y + I_yy α_y = m l f_x + I_yy α_y (l the lever).
+The pads resist the tilt with their pressure (each pad's normal force f_g may move to
+its patch's edge, ±L_p/2: f_g L_p for both) and with their friction along the throw
+axis (μ f_g on each, w apart: F w / 2): T_y = F (L_p / (2 μ) + w / 2)
+(`cell.orchestrator.carry_hold`), plus m f_z w / 2 while the item is pressed onto the
+carriage. Measured in the scene (`cell.sim.grip_probe`, tests/test_grip_probe.py), a
+torque about y turns boxes and cylinders at 1.02-1.23 T_y. The tilt's use is not
+friction's alone (the pressure takes most of it), so it adds to the rest in quadrature:
+use = √((m |f| / F + |τ_x| / T)² + (|τ_y| / T_y)²). Measured: pushed along x at the
+centre of mass, nine boxes and cylinders slid where that use was 0.98-1.82 (the 200 mm
+bottle at 0.98, where m |f| / F alone had said 0.50); the linear sum of the three said
+1.34-2.41. A spherical or mesh item has no T_y (held at points) and keeps the first law.
+
 `plan_carry` finds the fastest toppra path through the waypoints whose use of the
 grip stays under that bound, evaluating a_c exactly from the joint state with Pinocchio
 (a_c = a_o + α × r + ω × (ω × r), o the grip centre). Two ways, the sooner is taken:
@@ -55,6 +69,8 @@ __all__ = [
     "patch_torsion_radius_m",
     "peak_specific_force",
     "plan_carry",
+    "static_grip_use",
+    "uses",
 ]
 
 # The grip's static friction force over what a carry may ask of it. Measured in the scene
@@ -79,6 +95,10 @@ class GripHold:
         lever_m: its centre of mass above the pads' patch centre, along z [m].
         base_half_m: half its extent along y where it stands on the carriage [m]: pressed
             onto the carriage (f_z > 0) it is kept from tipping by that face as well.
+        torque_y_nm: the couple the pads resist a tilt about y with, T_y [N·m]; 0: not
+            counted (a sphere or a mesh, held at points).
+        inertia_yy: its moment of inertia about y through its centre of mass [kg·m²].
+        base_half_x_m: half its extent along x (across the pads) on the carriage [m].
     """
 
     force_n: float
@@ -88,6 +108,9 @@ class GripHold:
     offset_tcp_m: tuple[float, float, float]
     lever_m: float
     base_half_m: float = 0.0
+    torque_y_nm: float = 0.0
+    inertia_yy: float = 0.0
+    base_half_x_m: float = 0.0
 
 
 def patch_torsion_radius_m(half_y_m: float, half_z_m: float, n: int = 41) -> float:
@@ -122,11 +145,28 @@ def grip_use(traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> fl
     ts = np.linspace(0.0, traj.duration, n)
     qs, dqs, ddqs = traj.sample_many(ts)
     f, alpha, _ = item_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
+    return float(np.max(uses(f, alpha, hold, tilt=False)))
+
+
+def static_grip_use(robot: Robot, hold: GripHold, qs: np.ndarray) -> np.ndarray:
+    """The use of the grip (as `grip_use`) at each configuration of qs [rad], shape (k,
+    dof), held still: what gravity alone asks of the pads there, shape (k,). A path
+    whose slowest carry would still ask more than the grip holds has it over 1/margin
+    somewhere."""
+    zeros = np.zeros_like(qs)
+    f, alpha, _ = item_motion(robot, qs, zeros, zeros, hold.offset_tcp_m)
+    return uses(f, alpha, hold)
+
+
+def uses(f: np.ndarray, alpha: np.ndarray, hold: GripHold, tilt: bool = True) -> np.ndarray:
+    """The grip's use at each instant (the module docstring), from the specific force f
+    [m/s²] and the angular acceleration α [rad/s²], both in ee_tcp axes, shape (k, 3)."""
     force = hold.mass_kg * np.linalg.norm(f, axis=1) / hold.force_n
     # (r × m f)_x with r = (0, 0, lever): −lever · m f_y; plus I_xx α_x
     tau = -hold.lever_m * hold.mass_kg * f[:, 1] + hold.inertia_xx * alpha[:, 0]
     # pressed onto the carriage, the item's base face rights it too
-    cap = hold.torque_nm + hold.mass_kg * np.maximum(f[:, 2], 0.0) * hold.base_half_m
+    press = hold.mass_kg * np.maximum(f[:, 2], 0.0)
+    cap = hold.torque_nm + press * hold.base_half_m
     # Pads without a couple (a mesh carried to be thrown, a large sphere held at points)
     # give an unbounded use wherever the path turns the item: such carries go at
     # GENTLE_SCALE. Tried and left out: bounding them by the force alone (3-4 s faster per
@@ -134,7 +174,12 @@ def grip_use(traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> fl
     # (0.01-0.12 m before). A mesh carried to be placed is given the couple the scene
     # measures (cell.orchestrator.carry_hold).
     turn = np.abs(tau) / np.maximum(cap, 1e-12)
-    return float(np.max(force + turn))
+    if not tilt or hold.torque_y_nm <= 0.0:
+        return np.asarray(force + turn)
+    # (r × m f)_y = lever · m f_x; plus I_yy α_y; the base face rights this tilt as well
+    tip = np.abs(hold.lever_m * hold.mass_kg * f[:, 0] + hold.inertia_yy * alpha[:, 1])
+    tip = tip / (hold.torque_y_nm + press * hold.base_half_x_m)
+    return np.asarray(np.hypot(force + turn, tip))
 
 
 def item_accelerations(

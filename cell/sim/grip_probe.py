@@ -29,7 +29,14 @@ import numpy as np
 
 from cell.model.objects import ObjectParams
 
-__all__ = ["PROBE_STROKES_M", "GripProbe", "grasped_in_scene", "probe_grip", "turn_rad"]
+__all__ = [
+    "PROBE_STROKES_M",
+    "GripProbe",
+    "grasped_in_scene",
+    "probe_grip",
+    "probe_load",
+    "turn_rad",
+]
 
 FORCE_RAMP_N_S = 2.0  # [N/s] the pull's ramp
 SLIP_M = 2e-3  # [m] the slide that counts as slipping
@@ -64,6 +71,16 @@ def probe_grip(obj: ObjectParams, stroke_m: float) -> GripProbe:
     until it slips: along the pads' faces, out of the grip, and about the pads' axis
     (cached per object and stroke)."""
     return _probe(obj, round(float(stroke_m), 4))
+
+
+def probe_load(obj: ObjectParams, stroke_m: float, load: str, axis: str) -> float:
+    """One load of the probe on its own: the force [N] (`load` "force", at the centre of
+    mass) or torque [N·m] ("torque") along ee axis `axis` ("x": the pads' normal, "y":
+    along their faces, "z": out of the grip along the throw axis) at which `obj`, held
+    at stroke L_s [m], first slips (not cached)."""
+    if load not in ("force", "torque") or axis not in ("x", "y", "z"):
+        raise ValueError(f"probe_load: load {load!r} (force, torque), axis {axis!r} (x, y, z)")
+    return _ramp(obj, round(float(stroke_m), 4), load, "xyz".index(axis))
 
 
 @functools.lru_cache(maxsize=256)
