@@ -703,7 +703,10 @@ class ItemLoop:
         self._flying, self._scored, self._flights = [], {}, {}
 
         def emit(t_end: float | None = None) -> None:
-            while (i := len(results)) in self._scored and (i + 1 < len(starts) or t_end):
+            # t_end may be 0.0: a lone item that failed before the plant ran is still reported
+            while (i := len(results)) in self._scored and (
+                i + 1 < len(starts) or t_end is not None
+            ):
                 t_next = starts[i + 1] if i + 1 < len(starts) else float(t_end or pl.t)
                 res = dc_replace(self._scored.pop(i), cycle_time_s=t_next - starts[i])
                 results.append(res)

@@ -551,6 +551,7 @@ class Orchestrator:
         self.bounds = ThrowBounds()
         self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
         self._q_release = np.zeros(0)
+        self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
         self.residual = None
         if job.residual:
             from cell.residual.model import ResidualModel
@@ -649,6 +650,8 @@ class Orchestrator:
             out = self._swing_waypoints(q_lift, q_rel, plan, n)
             if not out:  # none found with more: the sparser one (or none)
                 break
+            if best is not None and self._spline_within_limits([q_lift, *out, q_rel], 400) is None:
+                break  # a denser one whose spline leaves the joint limits stops at each
             most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
             if best is None or most < best[0] - GRIP_USE_TIE:
                 best = (most, out)
@@ -1778,27 +1781,33 @@ class Orchestrator:
         """
         err: CellError | None = None
         for bounds in self._release_bounds(target):
-            self.bounds_now = bounds
-            try:
-                plan, delta = self._plan_once(obj, target, index, stroke_max_m)
-            except UnreachableTarget as exc:
-                err = err or exc
-                continue
-            stroke = plan.stroke_m + delta
-            centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-            try:
-                self._q_release = self._release_q(
-                    self._tcp_for_item_centre(
-                        centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
-                    ),
-                    plan,
-                    stroke,
-                    obj,
-                )
-            except IKFailed as exc:
-                err = err or exc
-                continue
-            return plan, delta
+            # steep enough for the grip to hold the item at its release first; where the
+            # arm reaches no such release, as the bounds are (`_steep_enough`)
+            for steep in (True, False):
+                self.bounds_now = bounds
+                self._steepened = False
+                try:
+                    plan, delta = self._plan_once(obj, target, index, stroke_max_m, steep)
+                except UnreachableTarget as exc:
+                    err = err or exc
+                    break
+                stroke = plan.stroke_m + delta
+                centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+                try:
+                    self._q_release = self._release_q(
+                        self._tcp_for_item_centre(
+                            centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
+                        ),
+                        plan,
+                        stroke,
+                        obj,
+                    )
+                except IKFailed as exc:
+                    err = err or exc
+                    if not self._steepened:
+                        break
+                    continue
+                return plan, delta
         assert err is not None
         raise err
 
@@ -1909,7 +1918,12 @@ class Orchestrator:
         return [x for x in ordinary + inner if x.elevation_min <= x.elevation_max]
 
     def _plan_once(
-        self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float
+        self,
+        obj: ObjectParams,
+        target: Any,
+        index: int,
+        stroke_max_m: float,
+        steep: bool = True,
     ) -> tuple[Any, float]:
 
         goal = (*target.position, target.rim_height)
@@ -1924,7 +1938,8 @@ class Orchestrator:
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = grip_bounds(bounds, self.params, stroke_max_m, obj.name or obj.shape)
             plan = plan_clean(self.params, obj, model_obj, goal, bounds)
-        plan, bounds = self._steep_enough(obj, model_obj, goal, plan, bounds)
+        if steep:
+            plan, bounds = self._steep_enough(obj, model_obj, goal, plan, bounds)
         self._aim = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
@@ -1963,6 +1978,7 @@ class Orchestrator:
             steep = dc_replace(bounds, elevation_min=max(bounds.elevation_min, e_min))
             try:
                 plan, bounds = plan_clean(self.params, obj, model_obj, goal, steep), steep
+                self._steepened = True
             except UnreachableTarget:
                 log.info("%s: no release steep enough for the grip reaches the goal", obj.name)
                 break
