@@ -1236,8 +1236,9 @@ class Orchestrator:
         (a throw) along the twist-free swing (`_swing`), which must keep a tall item within
         the grip held still anywhere (`_swing_holds`: the swing solved from a lower lift
         can come out on another branch and roll the grip); else through the full lift
-        q_lift (the route `_release_q` timed). A spline through a lift LIFT_M up turns back on itself: the demo's throws
-        carried 0.3-0.4 s longer than a per-joint time-optimal move."""
+        q_lift (the route `_release_q` timed). A spline through a lift LIFT_M up turns back
+        on itself: the demo's throws carried 0.3-0.4 s longer than a per-joint time-optimal
+        move."""
         q_pick = self.q
         obj, stroke = self._carried
         p_pick = self.scene.item_position(self.ee.item) if self.ee.item is not None else None
