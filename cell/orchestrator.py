@@ -1830,7 +1830,9 @@ class Orchestrator:
         (`solve_release_ik`); so too with the physical pick, which grips the item as it
         lies, headed by the release's roll (`_carry_heading`), not in the frame timed
         here: on the UR5 copy of the demo the roll chosen so cost four grasps (19/24 in
-        bin against 23/24). IKFailed when the pose has no configuration."""
+        bin against 23/24). A release whose route would ask more of the grip than it must
+        (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
+        IKFailed when the pose has no configuration."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
