@@ -1967,7 +1967,7 @@ class Orchestrator:
         """The plan, re-planned with its elevation raised where holding the item still at
         its release would ask more of the grip than a carry may (`release_elevation_min`:
         a tall item whose weight on a pad tilts it out, a 200 mm bottle below 37° at a
-        45 mm stroke), and the bounds it was planned in. Up to three times, as the stroke
+        58 mm stroke), and the bounds it was planned in. Up to three times, as the stroke
         of the steeper plan changes the grip; the plan kept when no steeper one reaches
         the goal."""
         from dataclasses import replace as dc_replace
