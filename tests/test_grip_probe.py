@@ -68,8 +68,8 @@ def test_the_pads_resist_a_tilt_about_y_as_the_closed_form_says(params, name):
 def test_a_tall_item_pushed_along_the_pads_normal_slides_where_the_grip_is_used_up(params, name):
     """Pushed along x (the pads' normal) at its centre of mass, a tall item tips out
     about y. The grip's use with the tilt counted reaches about 1 where the scene's item
-    slides (measured 0.97-1.09 for these three); without it, the 200 mm bottle would
-    have had half its grip left (0.50), and was carried so until it dropped."""
+    slides (measured 0.96-1.10 for these three); without it, the 200 mm bottle would
+    have had half its grip left (0.49), and was carried so until it dropped."""
     from cell.robot.carry import uses
 
     obj = get_object(name)
