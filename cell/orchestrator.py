@@ -113,6 +113,14 @@ def joint_gap(qa: np.ndarray, qb: np.ndarray) -> float:
     return float(np.max(np.abs(np.asarray(qb) - np.asarray(qa))))
 
 
+def distinct_waypoints(waypoints: list[np.ndarray]) -> list[np.ndarray]:
+    """The waypoints [rad] without those equal to the one before (a spline needs distinct
+    knots): the first, then each that moves a joint more than 1e-9 rad from its predecessor."""
+    return [waypoints[0]] + [
+        w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
+    ]
+
+
 def as_gripped(obj: ObjectParams) -> ObjectParams:
     """The item as the pads see it: a mesh is as wide as it is where the pads meet it."""
     from dataclasses import replace as dc_replace
@@ -654,15 +662,15 @@ class Orchestrator:
                 break  # a denser one whose spline leaves the joint limits stops at each
             most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
             if best is None or most < best[0] - GRIP_USE_TIE:
-                best = (most, out)
+                best = (most, allowed, out)
             if most <= allowed + 1e-9:
                 break
             n *= 2
         if best is None:
             return []
-        if best[0] > self._swing_static([q_lift, *best[1], q_rel], held, plan.elevation_rad)[1]:
+        if best[0] > best[1]:
             log.info("the level swing asks more of the grip than it must, even at rest")
-        return best[1]
+        return best[2]
 
     def _swing_waypoints(
         self, q_lift: np.ndarray, q_rel: np.ndarray, plan: Any, n: int
@@ -731,9 +739,7 @@ class Orchestrator:
 
         obj, stroke = carried
         hold = carry_hold(self.params, obj, stroke)
-        keep = [waypoints[0]] + [
-            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
-        ]
+        keep = distinct_waypoints(waypoints)
         if hold.torque_nm <= 0.0 or len(keep) < 2:
             return 0.0, 0.0
         lim = self.robot.limits
@@ -1296,9 +1302,7 @@ class Orchestrator:
         resort of `_departure`, follows the shape-preserving path instead)."""
         from cell.robot.motion import spline_path
 
-        keep = [waypoints[0]] + [
-            w for a, w in zip(waypoints, waypoints[1:], strict=False) if joint_gap(a, w) > 1e-9
-        ]
+        keep = distinct_waypoints(waypoints)
         if len(keep) < 2:
             return None
         qs = np.asarray(spline_path(keep)(np.linspace(0.0, 1.0, n)))
