@@ -220,7 +220,9 @@ class ItemResult:
         bin_id: the bin it came to rest in ("" for none).
         in_bin: True when that is the target bin.
         landing_error_m: throws: distance of the crossing of the rim plane from the
-            bin centre; places: distance of the rest point from the bin centre [m].
+            point the throw was for (the bin's centre, or the point of it clear of
+            what the bin holds above its rim: CellScene.throw_spot); places: distance
+            of the rest point from the bin centre [m].
         stroke_m: commanded stroke at release [m] (NaN for failures before planning).
         delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
         cycle_time_s: simulated time for this item [s] (see the module docstring).
@@ -593,7 +595,8 @@ class ItemLoop:
                 base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at
             )
         t_release = self.plant.t
-        bx, by = target.position
+        # the point the throw was for: the bin's centre, or one clear of what it holds
+        bx, by = d.state.get("goal", target.position)[:2]
         pf = self.platform
 
         def score(out: Any) -> tuple[ItemResult, Any]:

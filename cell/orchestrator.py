@@ -560,6 +560,7 @@ class Orchestrator:
         self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
         self._q_release = np.zeros(0)
         self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
+        self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (throw_spot)
         self.residual = None
         if job.residual:
             from cell.residual.model import ResidualModel
@@ -1032,7 +1033,12 @@ class Orchestrator:
             delta,
             model_obj=self._model_obj,
             ee_params=self.params.ee,
-            state={"target": target, "aim": self._aim, "q_release": self._q_release},
+            state={
+                "target": target,
+                "goal": self._goal,
+                "aim": self._aim,
+                "q_release": self._q_release,
+            },
         )
         mt = None
         if self._may_release_moving(obj, d):
@@ -1933,7 +1939,9 @@ class Orchestrator:
         steep: bool = True,
     ) -> tuple[Any, float]:
 
-        goal = (*target.position, target.rim_height)
+        # the bin's centre, or a point of it clear of what stands above its rim there
+        goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
+        self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         # Identified η_o where the parameter file has them (seen objects), else the
         # catalogue's; with a residual, only those the residual was trained with, so
         # that L_s + ΔL_s means what it meant in training.

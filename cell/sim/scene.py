@@ -49,6 +49,9 @@ from cell.sim.items import Item, spawn_item
 from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
 from cell.sim.settle import Outcome, Tracker, crossing
 
+THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item standing above the rim (throw_spot)
+THROW_WALL_MARGIN_M = 0.03  # [m] a throw's aim from a wall when it is moved (throw_spot)
+
 # the frame constants and helpers are re-exported for callers that import them from here
 __all__ = [
     "CellScene",
@@ -583,26 +586,98 @@ class CellScene:
         Raises:
             InvalidInput: no such bin.
         """
-        spec = next((b for b in self.bins if b.id == bin_id), None)
-        if spec is None:
-            raise InvalidInput(f"no bin {bin_id!r} in the scene; bins: {[b.id for b in self.bins]}")
-        r_new = max(obj.size[0], obj.size[1]) / 2
-        wall = margin_m if wall_margin_m is None else wall_margin_m
-        hx = max(spec.size_xy[0] / 2 - r_new - wall, 0.0)
-        hy = max(spec.size_xy[1] / 2 - r_new - wall, 0.0)
-        c, s = np.cos(spec.yaw), np.sin(spec.yaw)
-        cands = [
-            (
-                spec.center_xy[0] + c * x - s * y,
-                spec.center_xy[1] + s * x + c * y,
-            )
-            for x in np.linspace(-hx, hx, grid)
-            for y in np.linspace(-hy, hy, grid)
-        ]
+        spec = self._bin(bin_id)
         held = []
         for it in self.kept_items(bin_id):
             p, _ = self.client.getBasePositionAndOrientation(it.body)
             held.append((np.asarray(p, float), max(it.obj.size) / 2))
+        wall = margin_m if wall_margin_m is None else wall_margin_m
+        (x, y), room = self._clear_spot(spec, obj, held, margin_m, wall, grid)
+        if room >= margin_m:
+            return x, y, float(spec.wall)
+        r_new = max(obj.size[0], obj.size[1]) / 2
+        under = [p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m]
+        return x, y, float(max([spec.wall, *under]))
+
+    def throw_spot(
+        self,
+        bin_id: str,
+        obj: ObjectParams,
+        *,
+        margin_m: float = THROW_CLEARANCE_M,
+        wall_margin_m: float = THROW_WALL_MARGIN_M,
+        grid: int = 7,
+    ) -> tuple[float, float]:
+        """Where in a bin to aim a throw: the centre, unless what the bin holds stands
+        above its rim there.
+
+        An item resting in the bin whose top rises above the thrown item's underside,
+        when the thrown item's centre crosses the rim plane (at least half its least
+        extent below it), is in the way of the throw: the thrown item strikes it and
+        glances off, out of a low bin (a 60 mm cylinder thrown at a 55 mm rim bin
+        bounced 0.22-0.25 m off a bottle lying across its centre). Such items are
+        obstacles, with footprints the circles about their bounding boxes plus
+        `margin_m`; items lower down are not (a throw lands on them as on the floor).
+        The aim is the grid point nearest the centre clear of every obstacle, kept half
+        the thrown item's footprint plus `wall_margin_m` from the walls; when none is
+        clear, the one with the most room.
+
+        Args:
+            bin_id: the bin.
+            obj: the item to throw.
+            margin_m: clearance from an obstacle [m].
+            wall_margin_m: clearance from the walls [m] (the spread of the landings).
+            grid: candidates per side.
+
+        Returns:
+            (x [m], y [m]) in W: the point of the rim plane to aim at.
+
+        Raises:
+            InvalidInput: no such bin.
+        """
+        spec = self._bin(bin_id)
+        under_z = spec.rim_height - min(obj.size) / 2  # the thrown item's underside
+        held = []
+        for it in self.kept_items(bin_id):
+            lo, hi = (np.asarray(v, float) for v in self.client.getAABB(it.body))
+            if hi[2] > under_z:
+                held.append(((lo + hi) / 2, float(np.hypot(*(hi - lo)[:2])) / 2))
+        if not held:
+            return float(spec.center_xy[0]), float(spec.center_xy[1])
+        xy, _ = self._clear_spot(spec, obj, held, margin_m, wall_margin_m, grid)
+        return xy
+
+    def _bin(self, bin_id: str) -> BinSpec:
+        spec = next((b for b in self.bins if b.id == bin_id), None)
+        if spec is None:
+            raise InvalidInput(f"no bin {bin_id!r} in the scene; bins: {[b.id for b in self.bins]}")
+        return spec
+
+    @staticmethod
+    def _clear_spot(
+        spec: BinSpec,
+        obj: ObjectParams,
+        held: list[tuple[np.ndarray, float]],
+        margin_m: float,
+        wall_m: float,
+        grid: int,
+    ) -> tuple[tuple[float, float], float]:
+        """The grid point of a bin's floor nearest its centre with `margin_m` of room
+        from every (centre, radius) in `held`, else the one with the most room; and
+        that room [m]. Points keep half the item's footprint plus `wall_m` from the
+        walls."""
+        r_new = max(obj.size[0], obj.size[1]) / 2
+        hx = max(spec.size_xy[0] / 2 - r_new - wall_m, 0.0)
+        hy = max(spec.size_xy[1] / 2 - r_new - wall_m, 0.0)
+        c, s = np.cos(spec.yaw), np.sin(spec.yaw)
+        cands = [
+            (
+                float(spec.center_xy[0] + c * x - s * y),
+                float(spec.center_xy[1] + s * x + c * y),
+            )
+            for x in np.linspace(-hx, hx, grid)
+            for y in np.linspace(-hy, hy, grid)
+        ]
 
         def room(xy: tuple[float, float]) -> float:
             return min(
@@ -612,13 +687,12 @@ class CellScene:
 
         clear = [xy for xy in cands if room(xy) >= margin_m]
         if clear:
-            x, y = min(
+            best = min(
                 clear, key=lambda xy: np.hypot(xy[0] - spec.center_xy[0], xy[1] - spec.center_xy[1])
             )
-            return float(x), float(y), float(spec.wall)
-        x, y = max(cands, key=room)
-        under = [p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m]
-        return float(x), float(y), float(max([spec.wall, *under]))
+        else:
+            best = max(cands, key=room)
+        return best, room(best)
 
     def which_bin(self, point: Sequence[float]) -> str | None:
         """The id of the bin a point lies in (see cell.sim.bins.which_bin), or None."""

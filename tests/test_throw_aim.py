@@ -1,0 +1,120 @@
+"""A throw aims at its bin's centre unless what the bin holds stands above the rim there:
+then at the nearest point clear of it (CellScene.throw_spot). Checked in the scene: a
+cylinder launched at the centre strikes a bottle lying across it, one launched at the
+throw spot lands on the bin's floor."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cell.catalogue import get_object
+from cell.jobs import parse_job
+from cell.model.objects import ObjectParams
+from cell.orchestrator import Orchestrator
+from cell.sim import BinSpec, CellScene
+from cell.sim.scene import THROW_CLEARANCE_M, THROW_WALL_MARGIN_M
+
+LOW = BinSpec("low", (1.2, 0.0), (0.35, 0.35), 0.055)  # rim 55 mm, under a lying bottle's top
+G = 9.81
+
+
+@pytest.fixture
+def scene():
+    sc = CellScene(robot=None, bins=[LOW], pick_station_xy=(-1.0, -1.0))
+    yield sc
+    sc.close()
+
+
+def keep_lying(sc, name, xy):
+    """Set an item down lying on its side (axis along W's x) at xy and keep it there."""
+    obj = get_object(name)
+    z = LOW.wall + obj.size[0] / 2 + 1e-3
+    q = (0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4))  # 90° about y
+    item = sc.spawn_item(name, position=(xy[0], xy[1], z), orientation=q)
+    out = sc.watch_until_rest(item)
+    assert out.bin_id == "low"
+    sc.keep(item)
+    return item
+
+
+def launch_at(sc, name, aim_xy, flight_s=0.45):
+    """Launch an item from 1.2 m short of the aim, 0.5 m up, on the ballistic arc that
+    crosses the rim plane at aim_xy after flight_s (drag moves it by millimetres)."""
+    p0 = np.array([aim_xy[0] - 1.2, aim_xy[1], 0.5])
+    goal = np.array([aim_xy[0], aim_xy[1], LOW.rim_height])
+    v0 = (goal - p0) / flight_s + np.array([0.0, 0.0, 0.5 * G * flight_s])
+    item = sc.spawn_item(name, position=tuple(p0))
+    sc.client.resetBaseVelocity(item.body, linearVelocity=tuple(v0))
+    sc.track(item)
+    return item, sc.watch_until_rest(item)
+
+
+def test_an_empty_bin_or_items_under_the_thrown_one_keep_the_aim_at_the_centre(scene):
+    obj = get_object("cyl60")
+    assert scene.throw_spot("low", obj) == LOW.center_xy
+    # a 12 mm tile: its top (22 mm) is under the cylinder's underside (25 mm) as the
+    # cylinder's centre crosses the rim plane (55 mm)
+    tile = ObjectParams("cuboid", 0.02, (0.05, 0.05, 0.012))
+    item = scene.spawn_item(tile, position=(*LOW.center_xy, LOW.wall + 0.007))
+    scene.watch_until_rest(item)
+    scene.keep(item)
+    assert scene.client.getAABB(item.body)[1][2] < LOW.rim_height - obj.size[0] / 2
+    assert scene.throw_spot("low", obj) == LOW.center_xy
+    # a lying 30 mm cube's top (40 mm) is over it: in the way
+    keep_lying(scene, "cube30", LOW.center_xy)
+    assert scene.throw_spot("low", obj) != LOW.center_xy
+
+
+def test_the_aim_clears_an_item_standing_above_the_rim_and_the_throw_misses_it(scene):
+    obj = get_object("cyl60")
+    bottle = keep_lying(scene, "o6_bottle", LOW.center_xy)
+    lo, hi = (np.asarray(v) for v in scene.client.getAABB(bottle.body))
+    assert hi[2] > LOW.rim_height  # it stands above the rim: in the way
+    x, y = scene.throw_spot("low", obj)
+    r_new = max(obj.size[:2]) / 2
+    # clear of the bottle's footprint circle, and inside the walls by the margin
+    room = math.hypot(x - (lo[0] + hi[0]) / 2, y - (lo[1] + hi[1]) / 2)
+    assert room >= math.hypot(*(hi - lo)[:2]) / 2 + r_new + THROW_CLEARANCE_M - 1e-9
+    for k in range(2):
+        assert abs((x, y)[k] - LOW.center_xy[k]) <= LOW.size_xy[k] / 2 - r_new - THROW_WALL_MARGIN_M
+    # the scene: at the centre the cylinder strikes the bottle; at the spot, the floor
+    _, at_centre = launch_at(scene, "cyl60", LOW.center_xy)
+    assert at_centre.touchdown_body == bottle.body
+    scene.remove_item(_)
+    _, at_spot = launch_at(scene, "cyl60", (x, y))
+    assert at_spot.touchdown_body != bottle.body
+    assert at_spot.bin_id == "low"
+
+
+JOB = """\
+cell: {robot: panda, ee: pybullet}
+bins:
+  - {id: bin_5, position_m: [0.023, 1.379], size_m: [0.356, 0.344], rim_height_m: 0.055}
+items:
+  - {object: cyl60, count: 2, bin: bin_5}
+policy: auto
+seed: 16
+"""
+
+
+def test_the_cell_throws_clear_of_a_bottle_lying_across_a_low_bin(tmp_path, monkeypatch):
+    """Random layout 16's bin_5 (Panda) with a bottle lying across its centre, as one
+    thrown there came to rest: the cylinders are thrown at a point clear of it, land
+    within a few centimetres of that point, and stay in the bin."""
+    monkeypatch.chdir(tmp_path)
+    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="aim")
+    try:
+        sc = o.scene
+        q = (0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4))
+        bottle = sc.spawn_item("o6_bottle", position=(0.02, 1.40, 0.045), orientation=q)
+        sc.watch_until_rest(bottle)
+        sc.keep(bottle)
+        spot = sc.throw_spot("bin_5", get_object("cyl60"))
+        assert math.dist(spot, (0.023, 1.379)) > 0.05  # moved off the centre
+        summary = o.run()
+    finally:
+        o.close()
+    rows = [(r.action, r.failure, r.in_bin) for r in summary.results]
+    assert rows == [("throw", "", True)] * 2, rows
+    assert all(r.landing_error_m < 0.05 for r in summary.results)
