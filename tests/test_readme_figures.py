@@ -96,8 +96,8 @@ def test_the_moving_releases_and_repeat_throws_are_the_last_generated_bench_sort
     moving, thrown = _quoted(r"(\d+) of the (\d+)\s+throws were released on the move")
     assert (int(moving), int(thrown)) == (bench["released_moving"], bench["thrown"])
     pairs, second, first, closer = _quoted(
-        r"\((\d+) pairs, without `--learn`\) lands at a median ([\d.]+) mm from its\s+bin's "
-        r"centre against ([\d.]+) mm for its first, closer in (\d+) % of the pairs"
+        r"\((\d+) pairs, without `--learn`\) lands at a median ([\d.]+) mm from the\s+point "
+        r"it was aimed at against ([\d.]+) mm for its first, closer in (\d+) % of the pairs"
     )
     assert int(pairs) == bench["repeat_pairs"]
     assert float(second) == pytest.approx(1000 * bench["repeat_second_median_error_m"], abs=0.05)
