@@ -1939,7 +1939,7 @@ class Orchestrator:
         steep: bool = True,
     ) -> tuple[Any, float]:
 
-        # the bin's centre, or a point of it clear of what stands above its rim there
+        # the bin's centre, or a point of it clear of what the bin holds in the throw's way
         goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
         self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         # Identified η_o where the parameter file has them (seen objects), else the

@@ -49,7 +49,7 @@ from cell.sim.items import Item, spawn_item
 from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
 from cell.sim.settle import Outcome, Tracker, crossing
 
-THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item standing above the rim (throw_spot)
+THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item in the throw's way (throw_spot)
 THROW_WALL_MARGIN_M = 0.03  # [m] a throw's aim from a wall when it is moved (throw_spot)
 
 # the frame constants and helpers are re-exported for callers that import them from here
@@ -609,7 +609,7 @@ class CellScene:
         grid: int = 7,
     ) -> tuple[float, float]:
         """Where in a bin to aim a throw: the centre, unless what the bin holds stands
-        above its rim there.
+        in the throw's way there.
 
         An item resting in the bin whose top rises above the thrown item's underside,
         when the thrown item's centre crosses the rim plane (at least half its least
