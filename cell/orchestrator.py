@@ -1742,7 +1742,7 @@ class Orchestrator:
         and the item as far from what the bin already holds, as the spot does (or 1 cm),
         though it cuts the corner the stop over the spot makes."""
         sc = self.scene
-        spec = next(b for b in sc.bins if b.id == target.id)
+        spec = sc.bin_spec(target.id)
         r_item = max(obj.size[0], obj.size[1]) / 2
         r_grip = max(r_item, self._grip_reach_m())
         held = [
@@ -1791,6 +1791,10 @@ class Orchestrator:
         smaller release box (RELEASE_BOX_SHRINK).
         """
         err: CellError | None = None
+        # the bin's centre, or a point of it clear of what the bin holds in the throw's
+        # way: the same for every bounds tried (the scene does not move meanwhile)
+        goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
+        self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         for bounds in self._release_bounds(target):
             # steep enough for the grip to hold the item at its release first; where the
             # arm reaches no such release, as the bounds are (`_steep_enough`)
@@ -1798,7 +1802,7 @@ class Orchestrator:
                 self.bounds_now = bounds
                 self._steepened = False
                 try:
-                    plan, delta = self._plan_once(obj, target, index, stroke_max_m, steep)
+                    plan, delta = self._plan_once(obj, goal, index, stroke_max_m, steep)
                 except UnreachableTarget as exc:
                     err = err or exc
                     break
@@ -1933,15 +1937,11 @@ class Orchestrator:
     def _plan_once(
         self,
         obj: ObjectParams,
-        target: Any,
+        goal: tuple[float, float, float],
         index: int,
         stroke_max_m: float,
         steep: bool = True,
     ) -> tuple[Any, float]:
-
-        # the bin's centre, or a point of it clear of what the bin holds in the throw's way
-        goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
-        self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         # Identified η_o where the parameter file has them (seen objects), else the
         # catalogue's; with a residual, only those the residual was trained with, so
         # that L_s + ΔL_s means what it meant in training.

@@ -586,7 +586,7 @@ class CellScene:
         Raises:
             InvalidInput: no such bin.
         """
-        spec = self._bin(bin_id)
+        spec = self.bin_spec(bin_id)
         held = []
         for it in self.kept_items(bin_id):
             p, _ = self.client.getBasePositionAndOrientation(it.body)
@@ -635,7 +635,7 @@ class CellScene:
         Raises:
             InvalidInput: no such bin.
         """
-        spec = self._bin(bin_id)
+        spec = self.bin_spec(bin_id)
         under_z = spec.rim_height - min(obj.size) / 2  # the thrown item's underside
         held = []
         for it in self.kept_items(bin_id):
@@ -647,7 +647,8 @@ class CellScene:
         xy, _ = self._clear_spot(spec, obj, held, margin_m, wall_margin_m, grid)
         return xy
 
-    def _bin(self, bin_id: str) -> BinSpec:
+    def bin_spec(self, bin_id: str) -> BinSpec:
+        """The bin of that id; InvalidInput naming the scene's bins when there is none."""
         spec = next((b for b in self.bins if b.id == bin_id), None)
         if spec is None:
             raise InvalidInput(f"no bin {bin_id!r} in the scene; bins: {[b.id for b in self.bins]}")
