@@ -1791,8 +1791,8 @@ class Orchestrator:
         smaller release box (RELEASE_BOX_SHRINK).
         """
         err: CellError | None = None
-        # the bin's centre, or a point of it clear of what the bin holds in the throw's
-        # way: the same for every bounds tried (the scene does not move meanwhile)
+        # the bin's centre, or a point of it clear of what the bin holds: the same for
+        # every bounds tried (the scene does not move meanwhile)
         goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
         self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         for bounds in self._release_bounds(target):

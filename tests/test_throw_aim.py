@@ -1,7 +1,7 @@
-"""A throw aims at its bin's centre unless what the bin holds stands above the rim there:
-then at the nearest point clear of it (CellScene.throw_spot). Checked in the scene: a
-cylinder launched at the centre strikes a bottle lying across it, one launched at the
-throw spot lands on the bin's floor."""
+"""A throw aims at its bin's centre unless the bin holds items there: then at the
+nearest point clear of them (CellScene.throw_spot). Checked in the scene: a cylinder
+launched at the centre strikes a bottle lying across it, or lands on a cube resting there
+and bounces out; one launched at the throw spot lands on the bin's floor."""
 
 import math
 
@@ -50,20 +50,57 @@ def launch_at(sc, name, aim_xy, flight_s=0.45):
     return item, sc.watch_until_rest(item)
 
 
-def test_an_empty_bin_or_items_under_the_thrown_one_keep_the_aim_at_the_centre(scene):
+def test_an_empty_bin_keeps_the_aim_at_the_centre_and_any_item_at_rest_moves_it(scene):
     obj = get_object("cyl60")
     assert scene.throw_spot("low", obj) == LOW.center_xy
-    # a 12 mm tile: its top (22 mm) is under the cylinder's underside (25 mm) as the
-    # cylinder's centre crosses the rim plane (55 mm)
+    # even a 12 mm tile, far under the rim: a throw lands on its edge, not on the floor
     tile = ObjectParams("cuboid", 0.02, (0.05, 0.05, 0.012))
     item = scene.spawn_item(tile, position=(*LOW.center_xy, LOW.wall + 0.007))
     scene.watch_until_rest(item)
     scene.keep(item)
-    assert scene.client.getAABB(item.body)[1][2] < LOW.rim_height - obj.size[0] / 2
-    assert scene.throw_spot("low", obj) == LOW.center_xy
-    # a lying 30 mm cube's top (40 mm) is over it: in the way
-    keep_lying(scene, "cube30", LOW.center_xy)
-    assert scene.throw_spot("low", obj) != LOW.center_xy
+    x, y = scene.throw_spot("low", obj)
+    lo, hi = (np.asarray(v) for v in scene.client.getAABB(item.body))
+    r_new = max(obj.size[:2]) / 2
+    room = math.hypot(x - (lo[0] + hi[0]) / 2, y - (lo[1] + hi[1]) / 2)
+    assert room >= math.hypot(*(hi - lo)[:2]) / 2 + r_new + THROW_CLEARANCE_M - 1e-9
+    # of the points as near the centre, the one beyond the tile, seen from the arm's base
+    # at W's origin (the bin is 1.2 m along x); from the other side, the other one
+    assert x > LOW.center_xy[0] and abs(y - LOW.center_xy[1]) < 1e-9
+    x2, y2 = scene.throw_spot("low", obj, source_xy=(2.4, 0.0))
+    assert x2 == pytest.approx(2 * LOW.center_xy[0] - x) and abs(y2 - LOW.center_xy[1]) < 1e-9
+
+
+@pytest.mark.parametrize("short_m", [1.5, 1.9])
+def test_a_flat_throw_onto_an_item_at_rest_bounces_out_and_the_aim_beside_it_lands(short_m):
+    """A 60 mm cube rests upright at the centre of a 121 mm rim bin (random layout 18's
+    bin_1). A 60 mm cylinder launched from short_m before the centre on a flat arc (0.4 s
+    of flight) lands on the cube and leaves the bin; launched the same way at the aim
+    `throw_spot` gives, it stays in the bin."""
+    spec = BinSpec("b", (2.0, 0.0), (0.338, 0.26), 0.121)
+
+    def launch(aim_xy):
+        sc = CellScene(robot=None, bins=[spec], pick_station_xy=(-1.0, -1.0))
+        try:
+            cube = sc.spawn_item("cube60", position=(*spec.center_xy, spec.wall + 0.031))
+            sc.watch_until_rest(cube)
+            sc.keep(cube)
+            aim = sc.throw_spot("b", get_object("cyl60")) if aim_xy is None else aim_xy
+            p0 = np.array([aim[0] - short_m, aim[1], 0.6])
+            goal = np.array([aim[0], aim[1], spec.rim_height])
+            flight_s = 0.4
+            v0 = (goal - p0) / flight_s + np.array([0.0, 0.0, 0.5 * G * flight_s])
+            item = sc.spawn_item("cyl60", position=tuple(p0))
+            sc.client.resetBaseVelocity(item.body, linearVelocity=tuple(v0))
+            sc.track(item)
+            return sc.watch_until_rest(item), cube.body
+        finally:
+            sc.close()
+
+    at_centre, cube = launch(spec.center_xy)
+    assert at_centre.touchdown_body == cube
+    assert at_centre.bin_id is None
+    at_spot, _ = launch(None)
+    assert at_spot.bin_id == "b"  # (from 1.5 m it grazes the cube's top edge, and stays)
 
 
 def test_the_aim_clears_an_item_standing_above_the_rim_and_the_throw_misses_it(scene):
