@@ -38,16 +38,24 @@ def keep_lying(sc, name, xy):
     return item
 
 
-def launch_at(sc, name, aim_xy, flight_s=0.45):
-    """Launch an item from 1.2 m short of the aim, 0.5 m up, on the ballistic arc that
-    crosses the rim plane at aim_xy after flight_s (drag moves it by millimetres)."""
-    p0 = np.array([aim_xy[0] - 1.2, aim_xy[1], 0.5])
-    goal = np.array([aim_xy[0], aim_xy[1], LOW.rim_height])
+def launch_at(sc, name, aim_xy, flight_s=0.45, short_m=1.2, height_m=0.5, rim_m=LOW.rim_height):
+    """Launch an item from short_m before the aim, height_m up, on the ballistic arc that
+    crosses the rim plane (rim_m) at aim_xy after flight_s (drag moves it by millimetres)."""
+    p0 = np.array([aim_xy[0] - short_m, aim_xy[1], height_m])
+    goal = np.array([aim_xy[0], aim_xy[1], rim_m])
     v0 = (goal - p0) / flight_s + np.array([0.0, 0.0, 0.5 * G * flight_s])
     item = sc.spawn_item(name, position=tuple(p0))
     sc.client.resetBaseVelocity(item.body, linearVelocity=tuple(v0))
     sc.track(item)
     return item, sc.watch_until_rest(item)
+
+
+def assert_clear_of(sc, body, xy, obj):
+    """xy keeps the thrown obj's footprint THROW_CLEARANCE_M from body's footprint circle."""
+    lo, hi = (np.asarray(v) for v in sc.client.getAABB(body))
+    room = math.hypot(xy[0] - (lo[0] + hi[0]) / 2, xy[1] - (lo[1] + hi[1]) / 2)
+    r_new = max(obj.size[:2]) / 2
+    assert room >= math.hypot(*(hi - lo)[:2]) / 2 + r_new + THROW_CLEARANCE_M - 1e-9
 
 
 def test_an_empty_bin_keeps_the_aim_at_the_centre_and_any_item_at_rest_moves_it(scene):
@@ -59,10 +67,7 @@ def test_an_empty_bin_keeps_the_aim_at_the_centre_and_any_item_at_rest_moves_it(
     scene.watch_until_rest(item)
     scene.keep(item)
     x, y = scene.throw_spot("low", obj)
-    lo, hi = (np.asarray(v) for v in scene.client.getAABB(item.body))
-    r_new = max(obj.size[:2]) / 2
-    room = math.hypot(x - (lo[0] + hi[0]) / 2, y - (lo[1] + hi[1]) / 2)
-    assert room >= math.hypot(*(hi - lo)[:2]) / 2 + r_new + THROW_CLEARANCE_M - 1e-9
+    assert_clear_of(scene, item.body, (x, y), obj)
     # of the points as near the centre, the one beyond the tile, seen from the arm's base
     # at W's origin (the bin is 1.2 m along x); from the other side, the other one
     assert x > LOW.center_xy[0] and abs(y - LOW.center_xy[1]) < 1e-9
@@ -85,14 +90,8 @@ def test_a_flat_throw_onto_an_item_at_rest_bounces_out_and_the_aim_beside_it_lan
             sc.watch_until_rest(cube)
             sc.keep(cube)
             aim = sc.throw_spot("b", get_object("cyl60")) if aim_xy is None else aim_xy
-            p0 = np.array([aim[0] - short_m, aim[1], 0.6])
-            goal = np.array([aim[0], aim[1], spec.rim_height])
-            flight_s = 0.4
-            v0 = (goal - p0) / flight_s + np.array([0.0, 0.0, 0.5 * G * flight_s])
-            item = sc.spawn_item("cyl60", position=tuple(p0))
-            sc.client.resetBaseVelocity(item.body, linearVelocity=tuple(v0))
-            sc.track(item)
-            return sc.watch_until_rest(item), cube.body
+            _, out = launch_at(sc, "cyl60", aim, 0.4, short_m, 0.6, spec.rim_height)
+            return out, cube.body
         finally:
             sc.close()
 
@@ -111,8 +110,7 @@ def test_the_aim_clears_an_item_standing_above_the_rim_and_the_throw_misses_it(s
     x, y = scene.throw_spot("low", obj)
     r_new = max(obj.size[:2]) / 2
     # clear of the bottle's footprint circle, and inside the walls by the margin
-    room = math.hypot(x - (lo[0] + hi[0]) / 2, y - (lo[1] + hi[1]) / 2)
-    assert room >= math.hypot(*(hi - lo)[:2]) / 2 + r_new + THROW_CLEARANCE_M - 1e-9
+    assert_clear_of(scene, bottle.body, (x, y), obj)
     for k in range(2):
         assert abs((x, y)[k] - LOW.center_xy[k]) <= LOW.size_xy[k] / 2 - r_new - THROW_WALL_MARGIN_M
     # the scene: at the centre the cylinder strikes the bottle; at the spot, the floor
