@@ -68,7 +68,10 @@ PAD_COUPLE_FACTOR = 4.0
 SWING_WAYPOINTS = 2  # waypoints that keep the carry's swing free of twist (see _swing)
 SWING_WAYPOINTS_MAX = 8  # doubled up to this while the spline between them rolls the grip
 SWING_CHECK_SAMPLES = 60  # configurations along the swing's spline its grip use is checked at
-GRIP_USE_TIE = 0.02  # grip uses this close are taken as equal (routes compared at rest)
+# Grip uses this close are taken as equal: routes compared at rest, and a route or a carry
+# that asks this little over the carry's bound (0.741, CARRY_MARGIN) is taken as within it
+# (the pads held 0.74-0.78 of their static limit accelerated, slid at 0.80)
+GRIP_USE_TIE = 0.02
 # A level swing whose joints travel farther than this × the ends' gap goes round (the
 # demo's swings travel 1.5-1.8 × the gap; a UR5's that flung its items, 3.4 ×)
 SWING_MAX_DETOUR = 2.5
@@ -664,12 +667,12 @@ class Orchestrator:
             most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
             if best is None or most < best[0] - GRIP_USE_TIE:
                 best = (most, allowed, out)
-            if most <= allowed + 1e-9:
+            if most <= allowed + GRIP_USE_TIE:
                 break
             n *= 2
         if best is None:
             return []
-        if best[0] > best[1]:
+        if best[0] > best[1] + GRIP_USE_TIE:
             log.info("the level swing asks more of the grip than it must, even at rest")
         return best[2]
 
@@ -722,7 +725,7 @@ class Orchestrator:
         rolled it 22° and the bottle left the pads. `carried`: the item and its stroke
         [m]."""
         most, allowed = self._swing_static(waypoints, carried, elevation_rad)
-        return most <= allowed + 1e-9
+        return most <= allowed + GRIP_USE_TIE
 
     def _swing_static(
         self,
@@ -971,6 +974,7 @@ class Orchestrator:
             carry_hold(self.params, obj, stroke, placing=self._placing_as_probed()),
             velocity_scale=self.speed_scale,
             acceleration_scale=self.speed_scale,
+            tie=GRIP_USE_TIE,
         )
         return traj
 
@@ -1166,7 +1170,7 @@ class Orchestrator:
     def after_place(self, d: Decision) -> None:
         """Back up out of the bin; no settle: nothing is held, and the next move starts
         from rest."""
-        self._move([d.state["q_above"]], settle_s=0.0)
+        self._move(d.state.get("rise") or [d.state["q_above"]], settle_s=0.0)
 
     def finish(self, d: Decision | None) -> None:
         """Nothing of the item is held any more."""
@@ -1699,12 +1703,31 @@ class Orchestrator:
         # a spot on the bin's floor clear of what it holds (its centre while it is empty),
         # and of the walls by the pads that open beside the item (PLACE_OPENING_M) and 1 cm
         # (5 mm: an open pad still met a tote's wall as the grip rose out of it)
-        pads = PLACE_OPENING_M + sc.geometry.pad_thickness_m + 0.01
+        g = sc.geometry
+        pads = PLACE_OPENING_M + g.pad_thickness_m + 0.01
+        # where the housing goes down below the rim (a deep bin), the walls kept as far
+        # from it as well, 1 cm beyond the circle about its sides: its sides are wider
+        # than the pads (random layout 17: seven items placed into a 0.25 m rim bin were
+        # knocked out of the grip as the housing met the bin's walls)
+        floor = sc.bin_spec(target.id).wall + obj.size[2] / 2 + PLACE_CLEARANCE_M
+        tcp_z = self._tcp_for_item_centre(np.array([0.0, 0.0, floor]), *GRIP_DOWN, d.stroke_m, obj)[
+            2
+        ]
+        housing_low = tcp_z + g.housing_to_tcp_m < target.rim_height + 0.01
+        if housing_low:
+            r_item = max(obj.size[0], obj.size[1]) / 2
+            housing = math.hypot(g.housing_half_x_m, g.housing_half_y_m) + 0.01
+            pads = max(pads, housing - r_item)
         sx, sy, surface_z = sc.place_spot(target.id, obj, wall_margin_m=pads)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
         q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
         q_down = self._ik_frame(self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj))
+        # where the housing goes below the rim, the vertical between them, through
+        # configurations on it: a joint-space line between the two strays sideways, and
+        # the housing met the bin's wall
+        inner = self._vertical(q_above, q_down) if housing_low else []
+        d.state["rise"] = [*inner[::-1], q_above]
         way = self._departure(q_lift, q_above)
         bottom = centre[2] - obj.size[2] / 2  # the item's lowest point at the spot [m]
         # over the spot without stopping there, straight, or through the point where the
@@ -1719,12 +1742,33 @@ class Orchestrator:
             except IKFailed:
                 continue
             if self._descends_straight([self.q, *way, *qs, q_down], bottom, target, obj):
+                log.debug("place: over the spot without stopping (%d via)", len(via))
                 self._move([*way, *qs, q_down])
                 break
         else:
+            log.debug("place: stopping over the spot")
             self._move(way)
-            self._move([q_down])
+            self._move([*inner, q_down])
         d.state["q_above"] = q_above
+
+    def _vertical(
+        self, q_top: np.ndarray, q_bottom: np.ndarray, step_m: float = 0.04
+    ) -> list[np.ndarray]:
+        """Configurations, grip pointing down, on the vertical line between the TCPs of
+        q_top and q_bottom [rad] (which share x and y), every `step_m` [m] or less, ends
+        excluded, each solved from the one above; none where IK fails on the way (the
+        line between the ends is then used)."""
+        p0, p1 = self.robot.tcp_pose(q_top)[0], self.robot.tcp_pose(q_bottom)[0]
+        k = math.ceil(float(np.linalg.norm(p1 - p0)) / step_m)
+        out: list[np.ndarray] = []
+        seed = q_top
+        try:
+            for i in range(1, k):
+                seed = self._ik_frame(p0 + (p1 - p0) * i / k, seed)
+                out.append(seed)
+        except IKFailed:
+            return []
+        return out
 
     def _descends_straight(
         self,
@@ -1750,23 +1794,31 @@ class Orchestrator:
             for it in sc.kept_items(target.id)
         ]
 
-        def clearance(xy: np.ndarray) -> float:
-            x, y = np.abs(spec.to_local(xy.tolist()))
-            walls = min(spec.size_xy[0] / 2 - x, spec.size_xy[1] / 2 - y) - r_grip
-            items = min((float(np.linalg.norm(xy - c)) - r - r_item for c, r in held), default=1.0)
+        g = sc.geometry
+        r_housing = math.hypot(g.housing_half_x_m, g.housing_half_y_m)
+
+        def clearance(p: np.ndarray) -> float:
+            x, y = np.abs(spec.to_local(p[:2].tolist()))
+            r = r_grip
+            if p[2] + g.housing_to_tcp_m < target.rim_height + 0.01:  # the housing too
+                r = max(r, r_housing)
+            walls = min(spec.size_xy[0] / 2 - x, spec.size_xy[1] / 2 - y) - r
+            items = min(
+                (float(np.linalg.norm(p[:2] - c)) - rc - r_item for c, rc in held), default=1.0
+            )
             return float(min(walls, items))
 
         qs = self._spline_within_limits(waypoints, n)
         if qs is None:
             return False
         end = self.robot.tcp_pose(qs[-1])[0]
-        need = min(clearance(end[:2]), 0.01) - 1e-3
+        need = min(clearance(end), 0.01) - 1e-3
         for q in qs:
             p = self.robot.tcp_pose(q)[0]
             dz = p[2] - end[2]
             if dz < -1e-3:
                 return False
-            if bottom_z + dz < target.rim_height + DEPARTURE_CLEAR_M and clearance(p[:2]) < need:
+            if bottom_z + dz < target.rim_height + DEPARTURE_CLEAR_M and clearance(p) < need:
                 return False
         return True
 

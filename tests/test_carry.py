@@ -87,6 +87,54 @@ def test_the_carry_path_keeps_under_its_bound_and_slows_for_a_tighter_one():
         plan_carry([q0, q1], rb, _hold(m * G, m))
 
 
+def _rolled_path_hold(over: float) -> tuple[list[np.ndarray], GripHold, float]:
+    """A path that rolls the pads' y axis up from level to vertical, with a tall item
+    whose grip use at rest peaks `over` above the carry's bound on it (the couple T
+    chosen so: at rest, use = m g/F + m L |f_y|/T, the closed form below); the path,
+    the hold and that peak."""
+    from cell.robot.carry import static_grip_use
+    from cell.robot.ik import ReleasePose, solve_ik
+
+    rb = load_robot("panda")
+    centre = np.array([0.45, 0.0, 0.5])
+    q0 = solve_ik(rb, ReleasePose.from_angles(centre, 0.0, 0.0, 0.0), rb.home).q
+    q1 = solve_ik(rb, ReleasePose.from_angles(centre, 0.0, 0.0, math.pi / 3), q0).q
+    m, lever = 0.07, 0.025
+    force_n = m * G / 0.3  # the weight asks 0.3 of the pads' force
+    qs = np.linspace(q0, q1, 101)
+    f_y = np.abs(static_grip_use(rb, GripHold(1e9, 1.0, m, 0.0, (0, 0, 0), lever), qs))
+    f_y_max = float(np.max(f_y)) / (m * lever)  # |f_y| [m/s²] at its most
+    peak = 1 / CARRY_MARGIN + over
+    torque = m * lever * f_y_max / (peak - 0.3)
+    hold = GripHold(force_n, torque, m, 0.0, (0.0, 0.0, 0.0), lever)
+    assert float(np.max(static_grip_use(rb, hold, qs))) == pytest.approx(peak, abs=1e-3)
+    return [q0, q1], hold, peak
+
+
+def test_a_carry_whose_path_asks_a_little_more_than_its_bound_at_rest_goes_within_the_tie():
+    """No time scaling keeps a path within 1/margin that asks more at rest. Up to `tie`
+    more, the carry is the fastest within 1/margin + tie, where a gentle carry
+    (GENTLE_SCALE) would ask more; beyond it, gentle, as without a tie."""
+    from cell.robot.carry import GENTLE_SCALE
+
+    rb = load_robot("panda")
+    bound, tie = 1 / CARRY_MARGIN, 0.02
+    path, hold, peak = _rolled_path_hold(0.01)
+    gentle = plan_path(
+        path, rb, velocity_scale=math.sqrt(GENTLE_SCALE), acceleration_scale=GENTLE_SCALE
+    )
+    tr0, use0 = plan_carry(path, rb, hold, shape=False)  # no tie: gentle
+    assert use0 > bound + tie  # gentle is not within the tie here
+    assert tr0.duration == pytest.approx(gentle.duration, rel=1e-6)
+    tr, use = plan_carry(path, rb, hold, shape=False, tie=tie)
+    assert peak - 1e-3 <= use <= bound + tie  # never under what the path asks at rest
+    assert grip_use(tr, rb, hold, n=801) <= bound + tie + 2e-3  # finer sampling
+    path, hold, _ = _rolled_path_hold(0.03)  # beyond the tie: gentle again
+    tr, use = plan_carry(path, rb, hold, shape=False, tie=tie)
+    assert use > bound + tie
+    assert tr.duration == pytest.approx(gentle.duration, rel=1e-6)
+
+
 def test_grip_use_of_a_tall_item_hanging_sideways_is_the_closed_form():
     """At rest with the pads' y axis up, gravity pulls the item along y: the pads carry
     m g and the couple m g × lever (a closed form), so use = m g/F + m g L/T."""

@@ -29,6 +29,9 @@ DOCUMENTED = EEGeometry(
     end_stop_m=0.138,
     stroke_lower_m=0.02,
     pad_friction=1.2,
+    housing_half_x_m=0.04,
+    housing_half_y_m=0.03,
+    housing_to_tcp_m=0.130,
 )
 
 

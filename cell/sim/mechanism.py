@@ -69,6 +69,10 @@ class EEGeometry:
         stroke_lower_m: lowest carriage position [m] (`ee_band_joint`'s lower limit).
         pad_friction: Coulomb friction of the pads (latex band on plastic): the pads'
             `<contact><lateral_friction>`.
+        housing_half_x_m, housing_half_y_m: half the housing's sides across the throw
+            axis [m] (`ee_base`'s box; x across the pads).
+        housing_to_tcp_m: from the housing's front face (toward the item) to the TCP,
+            along the throw axis [m] (`ee_tcp_joint`'s origin less the box's front).
     """
 
     band_mass_kg: float
@@ -83,6 +87,9 @@ class EEGeometry:
     end_stop_m: float
     stroke_lower_m: float
     pad_friction: float
+    housing_half_x_m: float
+    housing_half_y_m: float
+    housing_to_tcp_m: float
 
     @property
     def pad_spin_friction_m(self) -> float:
@@ -210,6 +217,24 @@ class _Description:
             raise InvalidParameter(f"{self.path}: joint {name!r} limits [{lo}, {hi}] are empty")
         return _origin_xyz(j, f"joint {name!r}", self.path), lo, hi
 
+    def fixed(self, name: str, parent: str, child: str) -> tuple[float, ...]:
+        """The origin xyz [m] of a fixed joint from `parent` to `child`, checked."""
+        if name not in self.joints:
+            raise InvalidParameter(f"{self.path}: no joint {name!r}")
+        j = self.joints[name]
+        par, chi = j.find("parent"), j.find("child")
+        got = (
+            j.get("type"),
+            par.get("link") if par is not None else None,
+            chi.get("link") if chi is not None else None,
+        )
+        if got != ("fixed", parent, child):
+            raise InvalidParameter(
+                f"{self.path}: joint {name!r} must be fixed from {parent!r} to {child!r}, "
+                f"got type, parent, child = {got}"
+            )
+        return _origin_xyz(j, f"joint {name!r}", self.path)
+
 
 def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
     """The simulated end-effector's numbers, read from its description.
@@ -269,6 +294,13 @@ def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
     if carriage[0] != carriage[1]:
         raise InvalidParameter(f"{path}: the carriage plate (ee_band's box) must be square")
     pad_mass, (pad_x, pad_y, pad_z), mu, opening = pads[0]
+    housing, h_centre = d.box("ee_base")
+    tcp = d.fixed("ee_tcp_joint", "ee_base", "ee_tcp")
+    if tcp[:2] != (0.0, 0.0) or h_centre[:2] != (0.0, 0.0):
+        raise InvalidParameter(
+            f"{path}: the TCP (ee_tcp_joint) and the housing's box must lie on the throw "
+            f"axis (x = y = 0), got {tcp} and {h_centre}"
+        )
     return EEGeometry(
         band_mass_kg=d.mass("ee_band"),
         finger_mass_kg=pad_mass,
@@ -282,6 +314,9 @@ def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
         end_stop_m=end_stop,
         stroke_lower_m=lower,
         pad_friction=mu,
+        housing_half_x_m=housing[0] / 2,
+        housing_half_y_m=housing[1] / 2,
+        housing_to_tcp_m=tcp[2] - (h_centre[2] + housing[2] / 2),
     )
 
 
