@@ -134,6 +134,13 @@ def _broken(tmp_path: Path, old: str, new: str, count: int = 1) -> Path:
         ('<origin xyz="0.002 0 0.015" rpy="0 0 0"/>', '<origin xyz="0 0 0.015"/>', 2, "inner face"),
         ('<mass value="0.008"/>', '<mass value="heavy"/>', 1, "'ee_band' mass must be 1 finite"),
         ("</robot>", "", 1, "cannot read"),
+        (
+            '<joint name="ee_tcp_joint" type="fixed">',
+            '<joint name="ee_tcp_joint" type="prismatic">',
+            1,
+            "'ee_tcp_joint' must be fixed",
+        ),
+        ('<origin xyz="0 0 0.145"', '<origin xyz="0.01 0 0.145"', 1, "on the throw axis"),
     ],
 )
 def test_a_broken_description_names_the_file_and_the_element(tmp_path, old, new, count, message):
