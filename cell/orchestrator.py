@@ -1710,14 +1710,11 @@ class Orchestrator:
         # than the pads (random layout 17: seven items placed into a 0.25 m rim bin were
         # knocked out of the grip as the housing met the bin's walls)
         floor = sc.bin_spec(target.id).wall + obj.size[2] / 2 + PLACE_CLEARANCE_M
-        tcp_z = self._tcp_for_item_centre(np.array([0.0, 0.0, floor]), *GRIP_DOWN, d.stroke_m, obj)[
-            2
-        ]
-        housing_low = tcp_z + g.housing_to_tcp_m < target.rim_height + 0.01
+        at_floor = self._tcp_for_item_centre(np.array([0, 0, floor]), *GRIP_DOWN, d.stroke_m, obj)
+        housing_low = self._housing_below_rim(at_floor[2], target)
         if housing_low:
             r_item = max(obj.size[0], obj.size[1]) / 2
-            housing = math.hypot(g.housing_half_x_m, g.housing_half_y_m) + 0.01
-            pads = max(pads, housing - r_item)
+            pads = max(pads, g.housing_radius_m + 0.01 - r_item)
         sx, sy, surface_z = sc.place_spot(target.id, obj, wall_margin_m=pads)
         centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
         above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
@@ -1750,6 +1747,11 @@ class Orchestrator:
             self._move(way)
             self._move([*inner, q_down])
         d.state["q_above"] = q_above
+
+    def _housing_below_rim(self, tcp_z: float, target: Any) -> bool:
+        """Is the housing below the `target` bin's rim + 1 cm with the grip pointing down
+        and the TCP at height tcp_z [m]?"""
+        return tcp_z + self.scene.geometry.housing_to_tcp_m < target.rim_height + 0.01
 
     def _vertical(
         self, q_top: np.ndarray, q_bottom: np.ndarray, step_m: float = 0.04
@@ -1794,13 +1796,12 @@ class Orchestrator:
             for it in sc.kept_items(target.id)
         ]
 
-        g = sc.geometry
-        r_housing = math.hypot(g.housing_half_x_m, g.housing_half_y_m)
+        r_housing = sc.geometry.housing_radius_m
 
         def clearance(p: np.ndarray) -> float:
             x, y = np.abs(spec.to_local(p[:2].tolist()))
             r = r_grip
-            if p[2] + g.housing_to_tcp_m < target.rim_height + 0.01:  # the housing too
+            if self._housing_below_rim(p[2], target):  # the housing too
                 r = max(r, r_housing)
             walls = min(spec.size_xy[0] / 2 - x, spec.size_xy[1] / 2 - y) - r
             items = min(

@@ -374,27 +374,26 @@ def plan_carry(
     shaped = None
     if shape:
         shaped = _shaped(waypoints_q, robot, hold, bound, velocity_scale, acceleration_scale)
-    lo, hi = 0.0, 1.0
     slowest = 0.02
-    for _ in range(iterations):
-        mid = max(slowest, 0.5 * (lo + hi))
-        tr, use = attempt(mid)
-        if use <= bound:
-            lo, best = mid, (tr, use)
-        else:
-            hi = mid
-    if best[1] > bound and tie > 0.0:
-        # Not even a slow move keeps within the bound. Where the path at rest asks no
-        # more than `tie` over it, the fastest within bound + tie (the pads held 0.74-0.78
-        # of their static limit accelerated, see CARRY_MARGIN), rather than gently
+
+    def fastest(limit: float, best: tuple[Trajectory, float]) -> tuple[Trajectory, float]:
+        """Bisection on the time scale for the fastest attempt within `limit` (else `best`)."""
         lo, hi = 0.0, 1.0
         for _ in range(iterations):
             mid = max(slowest, 0.5 * (lo + hi))
             tr, use = attempt(mid)
-            if use <= bound + tie:
+            if use <= limit:
                 lo, best = mid, (tr, use)
             else:
                 hi = mid
+        return best
+
+    best = fastest(bound, best)
+    if best[1] > bound and tie > 0.0:
+        # Not even a slow move keeps within the bound. Where the path at rest asks no
+        # more than `tie` over it, the fastest within bound + tie (the pads held 0.74-0.78
+        # of their static limit accelerated, see CARRY_MARGIN), rather than gently
+        best = fastest(bound + tie, best)
         if best[1] <= bound + tie:
             log.info("the carry's path asks %.3f of the grip at best (bound %.3f)", best[1], bound)
             if shaped is not None and shaped[0].duration < best[0].duration:

@@ -92,6 +92,12 @@ class EEGeometry:
     housing_to_tcp_m: float
 
     @property
+    def housing_radius_m(self) -> float:
+        """The circle about the housing's sides across the throw axis [m]: its reach from
+        the axis at any heading."""
+        return math.hypot(self.housing_half_x_m, self.housing_half_y_m)
+
+    @property
     def pad_spin_friction_m(self) -> float:
         """The pads' torsional ("spinning") friction coefficient [m] for PyBullet.
 
