@@ -91,6 +91,7 @@ DEPARTURE_CLEAR_M = 0.03
 PICK_OVER_CLEARANCE_M = 0.02
 GRIP_DOWN = (-math.pi / 2, 0.0)  # (elevation, azimuth) [rad] of the throw axis pointing down
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
+PLACE_SPOTS_TRIED = 8  # place spots tried, best first, for one the arm reaches (IK)
 ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
 # The physical pick (Orchestrator._pick)
 PICK_SCATTER_M = 0.03  # [m] items come to rest within ± this of the station's centre, in x and y
@@ -667,12 +668,12 @@ class Orchestrator:
             most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
             if best is None or most < best[0] - GRIP_USE_TIE:
                 best = (most, allowed, out)
-            if most <= allowed + GRIP_USE_TIE:
+            if most <= allowed + self._over_bound(held[0]):
                 break
             n *= 2
         if best is None:
             return []
-        if best[0] > best[1] + GRIP_USE_TIE:
+        if best[0] > best[1] + self._over_bound(held[0]):
             log.info("the level swing asks more of the grip than it must, even at rest")
         return best[2]
 
@@ -725,7 +726,15 @@ class Orchestrator:
         rolled it 22° and the bottle left the pads. `carried`: the item and its stroke
         [m]."""
         most, allowed = self._swing_static(waypoints, carried, elevation_rad)
-        return most <= allowed + GRIP_USE_TIE
+        return most <= allowed + self._over_bound(carried[0])
+
+    @staticmethod
+    def _over_bound(obj: ObjectParams) -> float:
+        """How far over the carry's bound a box's route or carry may ask at rest
+        (GRIP_USE_TIE: the pads held a box at 0.74-0.78 of their static limit
+        accelerated); 0 for other shapes: a 200 mm cylinder whose swing asked 0.756 at
+        rest, carried within 0.741 + 0.02, left the pads (its line contact)."""
+        return GRIP_USE_TIE if obj.shape in ("cube", "cuboid") else 0.0
 
     def _swing_static(
         self,
@@ -974,7 +983,7 @@ class Orchestrator:
             carry_hold(self.params, obj, stroke, placing=self._placing_as_probed()),
             velocity_scale=self.speed_scale,
             acceleration_scale=self.speed_scale,
-            tie=GRIP_USE_TIE,
+            tie=self._over_bound(obj),
         )
         return traj
 
@@ -1715,11 +1724,28 @@ class Orchestrator:
         if housing_low:
             r_item = max(obj.size[0], obj.size[1]) / 2
             pads = max(pads, g.housing_radius_m + 0.01 - r_item)
-        sx, sy, surface_z = sc.place_spot(target.id, obj, wall_margin_m=pads)
-        centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
-        above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
-        q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
-        q_down = self._ik_frame(self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj))
+
+        # the best spot the arm reaches over and down to, on one IK branch: the down pose
+        # solved from over the spot (solved from where the arm is, the two came out
+        # 3.5 rad apart on a UR5, random layout 11, and the line between them swept the
+        # grip through the bin); the next spot where the arm reaches none there
+        def poses(spot: tuple[float, float, float], on_branch: bool) -> tuple[Any, ...]:
+            sx, sy, surface_z = spot
+            centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
+            above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
+            q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
+            tcp_down = self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj)
+            return centre, q_above, self._ik_frame(tcp_down, q_above if on_branch else None)
+
+        spots = sc.place_spots(target.id, obj, wall_margin_m=pads)
+        for spot in spots[:PLACE_SPOTS_TRIED]:
+            try:
+                centre, q_above, q_down = poses(spot, on_branch=True)
+                break
+            except IKFailed:
+                log.info("place: no IK at the spot (%.3f, %.3f) m: the next spot", *spot[:2])
+        else:  # none on one branch: the first spot, each pose from where the arm is
+            centre, q_above, q_down = poses(spots[0], on_branch=False)
         # where the housing goes below the rim, the vertical between them, through
         # configurations on it: a joint-space line between the two strays sideways, and
         # the housing met the bin's wall
@@ -1733,7 +1759,9 @@ class Orchestrator:
         for via in ([], [mid]):
             try:
                 qs = [
-                    self._ik_frame(self._tcp_for_item_centre(v, *GRIP_DOWN, d.stroke_m, obj))
+                    self._ik_frame(
+                        self._tcp_for_item_centre(v, *GRIP_DOWN, d.stroke_m, obj), q_above
+                    )
                     for v in via
                 ]
             except IKFailed:

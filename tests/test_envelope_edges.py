@@ -116,14 +116,10 @@ def test_a_cube_thrown_into_a_low_rimmed_bin_stays_in():
 # out. It left the pads before the faster pick (the straight approach and the grasp that ends
 # once the pads stop) and stayed in them since; it flipped with milliseconds of the pick's
 # timing in between (the pads' couple on a cylinder's line contact is close to its weight's
-# lever when it hangs sideways). It flipped back with GRIP_USE_TIE in the carry: its swing
-# asks 0.756 of the grip at rest, within 0.741 + 0.02, and it was carried as fast as that
-# allows instead of on another route; it left the pads.
-@pytest.mark.xfail(
-    strict=True,
-    reason="open: the carry's tie over the grip's bound (GRIP_USE_TIE) admits this cylinder's "
-    "swing, which asks 0.756 of the grip at rest, and it leaves the pads",
-)
+# lever when it hangs sideways). It flipped back when the carry's tie over the grip's bound
+# (GRIP_USE_TIE) applied to every shape: its swing asks 0.756 of the grip at rest, within
+# 0.741 + 0.02, it was carried as fast as that allows, and it left the pads. The tie is
+# for boxes only since (Orchestrator._over_bound).
 def test_a_tall_cylinder_is_carried_to_its_release():
     item = "{shape: cylinder, mass_kg: 0.1, size_m: [0.05, 0.05, 0.2], bin: edge_bin}"
     orch = Orchestrator(parse_job(JOB % ("[1.8, 0.2]", 0.15, item), "tall.yaml"))

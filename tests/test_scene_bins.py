@@ -76,3 +76,22 @@ def test_a_full_bin_stacks_on_top_of_what_it_holds(scene):
         for it in kept
     ]
     assert z > FLOOR_TOP and z <= max(tops) + 1e-9
+
+
+def test_place_spots_are_ranked_clear_ones_nearest_the_centre_first(scene):
+    obj = get_object("cuboid_c")
+    kept, _ = drop_and_keep(scene, "cyl70", (1.0, 0.5))
+    spots = scene.place_spots("b1", obj, margin_m=0.01)
+    assert spots[0] == scene.place_spot("b1", obj, margin_m=0.01)
+    assert len(set(spots)) == len(spots) > 8  # distinct grid points, enough to try others
+    p = scene.client.getBasePositionAndOrientation(kept.body)[0]
+    r_new, r_kept = max(obj.size[:2]) / 2, max(kept.obj.size) / 2
+    clear = [
+        (x, y, z) for x, y, z in spots if math.hypot(x - p[0], y - p[1]) >= r_new + r_kept + 0.01
+    ]
+    # the clear spots come first, on the floor, nearest the bin's centre first
+    assert spots[: len(clear)] == clear and all(z == FLOOR_TOP for *_, z in clear)
+    off = [math.hypot(x - 1.0, y - 0.5) for x, y, _ in clear]
+    assert off == sorted(off)
+    # the others (over the kept cylinder) stand on it
+    assert all(z > FLOOR_TOP for *_, z in spots[len(clear) :])

@@ -587,18 +587,36 @@ class CellScene:
         Raises:
             InvalidInput: no such bin.
         """
+        return self.place_spots(
+            bin_id, obj, margin_m=margin_m, wall_margin_m=wall_margin_m, grid=grid
+        )[0]
+
+    def place_spots(
+        self,
+        bin_id: str,
+        obj: ObjectParams,
+        *,
+        margin_m: float = 0.01,
+        wall_margin_m: float | None = None,
+        grid: int = 7,
+    ) -> list[tuple[float, float, float]]:
+        """Every candidate of `place_spot`, best first (the first is `place_spot`'s): for
+        a spot the arm does not reach, the next. Same arguments and units."""
         spec = self.bin_spec(bin_id)
         held = []
         for it in self.kept_items(bin_id):
             p, _ = self.client.getBasePositionAndOrientation(it.body)
             held.append((np.asarray(p, float), max(it.obj.size) / 2))
         wall = margin_m if wall_margin_m is None else wall_margin_m
-        (x, y), room = self._clear_spot(spec, obj, held, margin_m, wall, grid)
-        if room >= margin_m:
-            return x, y, float(spec.wall)
         r_new = max(obj.size[0], obj.size[1]) / 2
-        under = [p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m]
-        return x, y, float(max([spec.wall, *under]))
+        out = []
+        for (x, y), room in self._clear_spot(spec, obj, held, margin_m, wall, grid):
+            under = [
+                p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m
+            ]
+            z = spec.wall if room >= margin_m else max([spec.wall, *under])
+            out.append((x, y, float(z)))
+        return out
 
     def throw_spot(
         self,
@@ -650,7 +668,7 @@ class CellScene:
         if not held:
             return float(spec.center_xy[0]), float(spec.center_xy[1])
         source = self.robot_base_xyz[:2] if source_xy is None else source_xy
-        xy, _ = self._clear_spot(spec, obj, held, margin_m, wall_margin_m, grid, source)
+        xy, _ = self._clear_spot(spec, obj, held, margin_m, wall_margin_m, grid, source)[0]
         return xy
 
     def bin_spec(self, bin_id: str) -> BinSpec:
@@ -669,11 +687,12 @@ class CellScene:
         wall_m: float,
         grid: int,
         source_xy: Sequence[float] | None = None,
-    ) -> tuple[tuple[float, float], float]:
-        """The grid point of a bin's floor nearest its centre with `margin_m` of room
-        from every (centre, radius) in `held` (of points as near, the farthest from
-        `source_xy`, if given), else the one with the most room; and that room [m].
-        Points keep half the item's footprint plus `wall_m` from the walls."""
+    ) -> list[tuple[tuple[float, float], float]]:
+        """The grid points of a bin's floor, each with its room [m] from every (centre,
+        radius) in `held`, best first: those with `margin_m` of room, nearest the centre
+        first (of points as near, the farthest from `source_xy`, if given), then the
+        others, most room first. Points keep half the item's footprint plus `wall_m` from
+        the walls."""
         r_new = max(obj.size[0], obj.size[1]) / 2
         hx = max(spec.size_xy[0] / 2 - r_new - wall_m, 0.0)
         hy = max(spec.size_xy[1] / 2 - r_new - wall_m, 0.0)
@@ -699,12 +718,9 @@ class CellScene:
                 return off, 0.0
             return off, -float(np.hypot(xy[0] - source_xy[0], xy[1] - source_xy[1]))
 
-        clear = [xy for xy in cands if room(xy) >= margin_m]
-        if clear:
-            best = min(clear, key=nearness)
-        else:
-            best = max(cands, key=room)
-        return best, room(best)
+        clear = sorted((xy for xy in cands if room(xy) >= margin_m), key=nearness)
+        crowded = sorted((xy for xy in cands if room(xy) < margin_m), key=lambda xy: -room(xy))
+        return [(xy, room(xy)) for xy in clear + crowded]
 
     def which_bin(self, point: Sequence[float]) -> str | None:
         """The id of the bin a point lies in (see cell.sim.bins.which_bin), or None."""
