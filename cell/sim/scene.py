@@ -611,10 +611,11 @@ class CellScene:
         r_new = max(obj.size[0], obj.size[1]) / 2
         out = []
         for (x, y), room in self._clear_spot(spec, obj, held, margin_m, wall, grid):
-            under = [
-                p[2] + r for p, r in held if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m
-            ]
-            z = spec.wall if room >= margin_m else max([spec.wall, *under])
+            z = spec.wall
+            if room < margin_m:  # crowded: on top of what lies under it
+                for p, r in held:
+                    if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m:
+                        z = max(z, p[2] + r)
             out.append((x, y, float(z)))
         return out
 
@@ -718,9 +719,10 @@ class CellScene:
                 return off, 0.0
             return off, -float(np.hypot(xy[0] - source_xy[0], xy[1] - source_xy[1]))
 
-        clear = sorted((xy for xy in cands if room(xy) >= margin_m), key=nearness)
-        crowded = sorted((xy for xy in cands if room(xy) < margin_m), key=lambda xy: -room(xy))
-        return [(xy, room(xy)) for xy in clear + crowded]
+        scored = [(xy, room(xy)) for xy in cands]
+        clear = sorted((c for c in scored if c[1] >= margin_m), key=lambda c: nearness(c[0]))
+        crowded = sorted((c for c in scored if c[1] < margin_m), key=lambda c: -c[1])
+        return clear + crowded
 
     def which_bin(self, point: Sequence[float]) -> str | None:
         """The id of the bin a point lies in (see cell.sim.bins.which_bin), or None."""
