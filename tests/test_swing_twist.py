@@ -4,7 +4,8 @@ The twist-free swing's waypoints are solved in the frame the release swings up f
 the grip pointing down over the pick is solved at azimuth 0 (a vertical axis has none).
 To a bin behind the arm the swing then turned the grip up to 80° off the one rotation
 between its ends, and the wrist 3.4-3.9 rad; the spline between the ends alone turns it
-less, and the carry takes that one where it does not ask more of the grip.
+less, and a sphere's carry takes that one where it is sooner (a sphere is the same
+turned about the throw axis).
 
 Independent checks: the twist of a joint path measured here with scipy's rotations from
 the arm's forward kinematics (a move of the last joint alone is a rotation about one axis:
