@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cell.jobs import parse_job
 from cell.loop import Decision
 from cell.orchestrator import Orchestrator
+from tests.job_rows import job_rows
 
 JOB = """\
 cell: {robot: panda, ee: pybullet}
@@ -48,11 +48,6 @@ def test_the_carry_goes_to_the_release_branch_the_decision_timed(
         return release(self, d)
 
     monkeypatch.setattr(Orchestrator, "release", watched)
-    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="branch")
-    try:
-        summary = o.run()
-    finally:
-        o.close()
-    rows = [(r.action, r.failure, r.in_bin) for r in summary.results]
+    rows = job_rows(JOB, tmp_path, "branch")
     assert rows == [("throw", "", True)], rows
     assert len(at_release) == 1 and at_release[0] < 1e-3, at_release  # [rad]

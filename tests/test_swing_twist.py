@@ -22,6 +22,7 @@ from scipy.spatial.transform import Rotation
 
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
+from tests.job_rows import job_rows
 
 # random layout 4 (Panda): a 35 g, 43 mm sphere into a bin behind the arm, 1.66 m out
 JOB = """\
@@ -79,11 +80,6 @@ def test_a_carry_behind_the_arm_turns_the_grip_about_one_axis(
         return follow(self, traj, q_end, settle_s)
 
     monkeypatch.setattr(Orchestrator, "_follow", watched)
-    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="twist")
-    try:
-        summary = o.run()
-    finally:
-        o.close()
-    rows = [(r.action, r.failure, r.in_bin) for r in summary.results]
+    rows = job_rows(JOB, tmp_path, "twist")
     assert rows == [("throw", "", True)] * 2, rows
     assert carries and max(carries) < 45.0, carries  # [°]; 74-80° along the swing

@@ -15,8 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from cell.jobs import parse_job
-from cell.orchestrator import Orchestrator
+from tests.job_rows import job_rows
 
 JOB = """\
 cell: {robot: ur5, ee: pybullet}
@@ -34,10 +33,5 @@ seed: 5
 
 def test_tall_bottles_stay_in_the_grip_and_land(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
     monkeypatch.chdir(tmp_path)
-    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="tall")
-    try:
-        summary = o.run()
-    finally:
-        o.close()
-    rows = [(r.action, r.failure, r.in_bin) for r in summary.results]
+    rows = job_rows(JOB, tmp_path, "tall")
     assert rows == [("throw", "", True)] * 3, rows

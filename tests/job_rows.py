@@ -1,0 +1,19 @@
+"""A sort job run from its YAML text, for the tests that check what became of each item."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cell.jobs import parse_job
+from cell.orchestrator import Orchestrator
+
+
+def job_rows(text: str, tmp_path: Path, session: str) -> list[tuple[str, str, bool]]:
+    """(action, failure, in its bin) of each item of the job `text` (read as
+    tmp_path/job.yaml), run in the scene; the orchestrator is closed after."""
+    o = Orchestrator(parse_job(text, str(tmp_path / "job.yaml")), session=session)
+    try:
+        summary = o.run()
+    finally:
+        o.close()
+    return [(r.action, r.failure, r.in_bin) for r in summary.results]
