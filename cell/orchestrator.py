@@ -241,10 +241,12 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     name = obj.name or obj.shape
     obj = as_gripped(obj)
     widest = 2 * DEFAULT_GEOMETRY.finger_open_m
+    # a sphere is as wide every way: no other side to turn toward the pads
+    turn = "" if obj.shape == "sphere" else "turn it so a narrower side faces the pads, or "
     if obj.width > widest:
         raise CannotGrip(
             f"{name} is {obj.width * 1000:.0f} mm wide across the pads; they open to "
-            f"{widest * 1000:.0f} mm: turn it so a narrower side faces the pads, or sort it by hand"
+            f"{widest * 1000:.0f} mm: {turn}sort it by hand"
         )
     mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
     s_max = max_grip_stroke(ee, obj, friction=mu)
@@ -260,9 +262,10 @@ def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
                 f"the pads hold up to {hold * 1000:.0f} g at {obj.width * 1000:.0f} mm "
                 f"(with a {GRIP_SAFETY}x margin for carrying)"
             )
+        wider = "" if obj.shape == "sphere" else "grip it across a wider side, or "
         raise CannotGrip(
             f"{name} ({obj.mass * 1000:.0f} g, {obj.width * 1000:.0f} mm across the pads) "
-            f"cannot be held: {why}; grip it across a wider side, or sort it by hand"
+            f"cannot be held: {why}; {wider}sort it by hand"
         )
     return s_max
 
@@ -539,6 +542,9 @@ class Orchestrator:
             raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
+        self.bounds = ThrowBounds()
+        self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
+        self._check_job()  # before the scene is built: a refused job leaves nothing open
         self.store = store
         self.session = session or f"run-{uuid.uuid4().hex[:8]}"
         self.robot = load_robot(job.robot)
@@ -560,8 +566,6 @@ class Orchestrator:
         self.scene.ee_collides_with_station(pick == "physical")
         self.effector = make_in_step(self.scene, end_effector)  # commands, in step
         self.ee = self.effector.sim  # the plant's end-effector: the physical pick's steps
-        self.bounds = ThrowBounds()
-        self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
         self._q_release = np.zeros(0)
         self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
         self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (throw_spot)
@@ -570,7 +574,6 @@ class Orchestrator:
             from cell.residual.model import ResidualModel
 
             self.residual = ResidualModel.load(job.residual)
-        self._check_job()
         self.q = np.asarray(self.scene.ready_q, float)
         self.rng = np.random.default_rng(job.seed)
         self.observer = observer

@@ -67,6 +67,16 @@ REFUSED = {
         "{shape: cuboid, mass_kg: 0.05, size_m: [0.025, 0.08, 0.06], bin: edge_bin}",
         "grip it across a wider side",
     ),
+    # held at the pads' edges below its equator, pulled out at the wedge's force
+    # (cell.model.grip.grip_friction): 1.4 times its weight at the shortest stroke, under
+    # the carry's 1.6. Accepted under the law before, it left the grip on all four carries
+    # of random layout 7 (the scene drops it hanging from the pads from a 0.06 m stroke).
+    "heavy wide sphere 88 mm": (
+        "[-0.23, 1.14]",
+        0.23,
+        "{shape: sphere, mass_kg: 0.182, size_m: [0.088, 0.088, 0.088], bin: edge_bin}",
+        "sort it by hand",
+    ),
     "too wide for the pads": (
         "[1.8, 0.2]",
         0.15,
@@ -139,3 +149,5 @@ def test_a_refused_edge_case_is_refused_before_anything_moves_with_its_reason(ca
     assert f"{case}.yaml, line" in msg  # the file and the item's line
     assert "edge_bin" in msg and "item" in msg  # the bin and the item
     assert instead in msg, msg  # what the cell can do instead
+    if "sphere" in item:  # as wide every way: no other side to offer the pads
+        assert "side" not in msg, msg

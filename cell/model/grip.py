@@ -39,18 +39,24 @@ def grip_friction(obj: ObjectParams, pad_length_m: float, friction: float = PAD_
     the pads (R > L_p, the pads reach from the carriage's face, where the sphere sits, to
     L_p) is touched at the pads' edges below its equator, where its surface faces back
     toward the carriage: the contact normal leans θ off the horizontal, sin θ = (R − L_p)/R,
-    and the squeeze pushes the sphere out along the axis. Along the axis the pads then
-    hold N (μ cos θ − sin θ) per pad instead of μ N: returned as that coefficient (0 when
-    the squeeze alone would push it out).
+    and the squeeze pushes the sphere out along the axis. Each pad is driven across the
+    throw axis by the band's f_g; at the point of slipping the contact's force (normal N
+    and friction μ N) leans the friction angle atan μ off its normal, so its axial part is
+    f_g tan(atan μ − θ): a wedge. Returned as that coefficient (0 when the squeeze alone
+    would push the sphere out).
+
+    Measured with the scene's probe (`cell.sim.grip_probe`, pulled out along the throw
+    axis at strokes 0.05 and 0.08 m): an 88 mm sphere held 0.74-0.75 of μ cos θ − sin θ
+    (the pads' normal force taken as f_g), 0.90 of this; a 70 mm one 0.83-0.84 and 0.93;
+    spheres within the pads 1.05-1.10 of μ, as boxes (tests/test_grip_probe.py).
     """
     if obj.shape != "sphere":
         return friction
     r = obj.size[0] / 2
     if r <= pad_length_m:
         return friction
-    sin_t = (r - pad_length_m) / r
-    cos_t = float(np.sqrt(1.0 - sin_t * sin_t))
-    return max(0.0, friction * cos_t - sin_t)
+    theta = float(np.arcsin((r - pad_length_m) / r))
+    return max(0.0, float(np.tan(np.arctan(friction) - theta)))
 
 
 def holding_mass_kg(
