@@ -161,19 +161,24 @@ def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any
     return ok
 
 
-def random_job(seed: int, robot: str = "panda", params: Any = None) -> dict[str, Any]:
+def random_job(
+    seed: int, robot: str = "panda", params: Any = None, refused: list[str] | None = None
+) -> dict[str, Any]:
     """A random sort job as a mapping (dump it to YAML for `cell run`).
 
     Each item goes to a bin drawn among those the cell can sort it into by the
     planner's model of the scene (`params`, default: the scene's calibrated file):
     the cell refuses a job with an impossible item up front (cell.orchestrator), so
     a benchmark of impossible jobs would measure nothing. Items no bin can take are
-    drawn again.
+    drawn again; the job's description says how many, and `refused` (a list, if
+    given) receives each one's object name (ad hoc: "adhoc <shape>"), so a benchmark
+    can say what its rate leaves out.
 
     Args:
         seed: names the job (0 ≤ seed < 2³²).
         robot: one of cell.kinds.ROBOTS.
         params: the model parameters the feasibility check uses.
+        refused: appended to with the kinds drawn again.
     """
     from cell.orchestrator import scene_params_path
     from cell.params import load_params
@@ -192,6 +197,7 @@ def random_job(seed: int, robot: str = "panda", params: Any = None) -> dict[str,
     items: list[dict[str, Any]] = []
     n_unseen = 0
     total = 0
+    dropped: list[str] = []
     while total < n_items:
         need_unseen = n_unseen < math.ceil(r.unseen_share * n_items)
         kind = rng.uniform()
@@ -205,17 +211,22 @@ def random_job(seed: int, robot: str = "panda", params: Any = None) -> dict[str,
             entry, is_unseen = {"object": str(rng.choice(seen))}, False
         choices = sortable_bins(entry, bins, params)
         if not choices:
+            dropped.append(entry.get("object") or f"adhoc {entry['shape']}")
             continue
         entry["count"] = count
         entry["bin"] = choices[int(rng.integers(len(choices)))]
         items.append(entry)
         n_unseen += count if is_unseen else 0
         total += count
+    if refused is not None:
+        refused.extend(dropped)
     return {
         "name": f"random layout {seed}",
         "description": (
             f"drawn by cell job random --seed {seed} --robot {robot}: {len(bins)} bins, "
-            f"{n_items} items, {n_unseen} of them outside the calibration set"
+            f"{n_items} items, {n_unseen} of them outside the calibration set; "
+            f"{len(dropped)} kinds drawn that no bin could take (the pads cannot hold them, "
+            "or no bin is within their reach) were drawn again"
         ),
         "cell": {"robot": robot, "ee": "pybullet"},
         "bins": bins,

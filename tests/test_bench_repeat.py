@@ -99,3 +99,19 @@ def test_failures_by_object_count_each_reason_per_object_and_add_up():
     total = summarise_layouts(layouts)
     assert total["failures_by_object"] == {"missed_bin": {"o1": 1, "o2": 1}}
     assert sum(total["failures"].values()) == 2
+
+
+def test_the_kinds_drawn_again_are_summed_over_the_layouts():
+    from cell.bench.bench_sort import refused_at_draw
+
+    a, b = _lay(0, "panda", [(2.0, True)], 2.0), _lay(1, "ur5", [(2.0, True)], 2.0)
+    a.update(refused_at_draw=["rock_000", "adhoc cube", "rock_000"], kinds_drawn=9)
+    b.update(refused_at_draw=["cuboid_a"], kinds_drawn=5)
+    f = refused_at_draw([a, b, _lay(2, "panda", [], 0.0)])  # an older result has neither key
+    assert f["kinds_drawn"] == 14 and f["kinds_refused_at_draw"] == 4
+    assert list(f["refused_at_draw_by_object"].items()) == [
+        ("rock_000", 2),
+        ("adhoc cube", 1),
+        ("cuboid_a", 1),
+    ]
+    assert summarise_layouts([a, b])["kinds_refused_at_draw"] == 4

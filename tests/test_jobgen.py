@@ -81,3 +81,31 @@ def test_cell_job_random_writes_a_job_that_loads(tmp_path, capsys):
     assert len(job.expanded_items()) == sum(it["count"] for it in random_job(4)["items"])
     assert main(["job", "random", "--seed", "4"]) == 0
     assert capsys.readouterr().out == out.read_text()
+
+
+def test_the_kinds_drawn_again_are_named_and_no_bin_of_the_job_takes_them(jobs):
+    """What a benchmark's rate leaves out: each kind `random_job` drew again, checked
+    against the cell's own refusal for every bin of the job (independently of the draw),
+    and counted in the job's description."""
+    from cell.errors import CannotGrip, UnreachableTarget
+    from cell.jobs import BinSpec
+
+    params = load_params(scene_params_path())
+    cat = catalogue()
+    seen_refused = 0
+    for s in SEEDS:
+        refused: list[str] = []
+        doc = random_job(s, refused=refused)
+        assert doc == jobs[s]  # asking for them changes nothing in the draw
+        assert f"; {len(refused)} kinds drawn that no bin could take" in doc["description"]
+        for name in refused:
+            if name.startswith("adhoc "):
+                continue  # its size and mass are not kept
+            for b in doc["bins"]:
+                spec = BinSpec(
+                    b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"]
+                )
+                with pytest.raises((CannotGrip, UnreachableTarget)):
+                    check_sortable(params, cat[name].params, spec)
+            seen_refused += 1
+    assert seen_refused > 0  # the six seeds draw some (cuboid_a, rock_000, ... at 30 mm)

@@ -33,6 +33,7 @@ __all__ = [
     "failures_by_object",
     "layout_units",
     "per_layout",
+    "refused_at_draw",
     "run_layout",
     "summarise_layouts",
     "wilson_interval",
@@ -98,7 +99,8 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
     from cell.orchestrator import Orchestrator
 
     t0 = time.perf_counter()
-    doc = random_job(unit.seed, unit.robot)
+    refused: list[str] = []  # kinds drawn that no bin could take, drawn again
+    doc = random_job(unit.seed, unit.robot, refused=refused)
     name = f"<random layout {unit.seed}>"
     job = parse_job(yaml.safe_dump(doc, sort_keys=False), name)
     if unit.max_items:
@@ -109,6 +111,8 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
         "robot": unit.robot,
         "speed_scale": unit.speed_scale,
         "refused": "",
+        "refused_at_draw": refused,
+        "kinds_drawn": len(doc["items"]) + len(refused),
         "items": [],
     }
     try:
@@ -186,9 +190,26 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "failures": {f: c for f in FAILURES if (c := sum(it["failure"] == f for it in items))},
         "failures_by_object": failures_by_object(items),
         "thrown": sum(it["action"] == "throw" for it in items),
+        **refused_at_draw(layouts),
         "released_moving": sum(bool(it.get("moving")) for it in items),
         **repeat_figures(layouts),
         "per_layout": per_layout(layouts),
+    }
+
+
+def refused_at_draw(layouts: list[dict[str, Any]]) -> dict[str, Any]:
+    """What the campaign's rate leaves out: the kinds of item (an object and its count)
+    drawn for the layouts that no bin could take by the planner's model (the pads cannot
+    hold them, or no bin is within their reach), which `random_job` drew again. {
+    kinds_drawn, kinds_refused_at_draw, refused_at_draw_by_object: {object: times}, most
+    frequent first}."""
+    from collections import Counter
+
+    counts = Counter(k for lay in layouts for k in lay.get("refused_at_draw", []))
+    return {
+        "kinds_drawn": sum(int(lay.get("kinds_drawn", 0)) for lay in layouts),
+        "kinds_refused_at_draw": sum(counts.values()),
+        "refused_at_draw_by_object": dict(sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))),
     }
 
 
