@@ -86,6 +86,8 @@ def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
     assert int(items) == bench["items"]
     (rate_h,) = _quoted(r"`items_per_hour` \*\*([\d,]+)\*\*")
     assert int(rate_h.replace(",", "")) == round(bench["items_per_hour"])
+    refused, drawn = _quoted(r"(\d+) of the (\d+) kinds\s+drawn were drawn again")
+    assert (int(refused), int(drawn)) == (bench["kinds_refused_at_draw"], bench["kinds_drawn"])
     (reach,) = _quoted(r"`scene_reach_err_pct` \*\*([\d.]+) %\*\*")
     assert float(reach) == pytest.approx(
         _json("docs/figures/bench.json")["scene_reach_err_pct"], abs=0.05
