@@ -1195,19 +1195,37 @@ class Orchestrator:
             self._carry_to_place(d, obj, q_lift)
         elif d.moving:
             # the move is the release's own (approach, latch on the move, coast, stop),
-            # planned from where the pick left the arm
+            # planned from where the pick left the arm: the grip round the item, the item
+            # on the station. Where that move would not lift it clear first (ruckig's move
+            # need not go straight up: it can sweep the item out of the pads across the
+            # station's top, `tests/test_moving_station.py`), or leaves the joint limits,
+            # the arm goes up to the lift, where `_moving_choice` timed the release from
             from cell.robot.moving_release import plan_moving_release
 
             mt = d.state["moving"]
-            d.state["motion"] = plan_moving_release(
-                self.robot,
-                self.q,
-                mt.motion.q_release,
-                mt.motion.v_release,
-                hold=carry_hold(self.params, obj, d.stroke_m),
-                velocity_scale=self.speed_scale,
-                acceleration_scale=self.speed_scale,
-            )
+
+            def motion_from(q: np.ndarray) -> Any:
+                return plan_moving_release(
+                    self.robot,
+                    q,
+                    mt.motion.q_release,
+                    mt.motion.v_release,
+                    hold=carry_hold(self.params, obj, d.stroke_m),
+                    velocity_scale=self.speed_scale,
+                    acceleration_scale=self.speed_scale,
+                )
+
+            try:
+                motion = motion_from(self.q)
+                ts = np.linspace(0.0, motion.t_release_s, 200)
+                direct = self._leaves_station_upward(np.array([motion.state(t)[0] for t in ts]))
+            except TrajectoryError:
+                direct = False
+            if not direct:
+                log.info("%s: up to the lift, then the release on the move", obj.name or obj.shape)
+                self._move([q_lift])
+                motion = motion_from(self.q)
+            d.state["motion"] = motion
         else:
             plan = d.plan
             centre = np.array([plan.x_m, plan.y_m, plan.z_m])
@@ -1359,14 +1377,18 @@ class Orchestrator:
 
     def _rises_from_station(self, waypoints: list[np.ndarray], n: int = 400) -> bool:
         """Does the spline through `waypoints` (`cell.robot.motion.spline_path`, the path a
-        carry follows whatever its timing) stay within the joint limits, and keep the grip,
-        wherever it is over the pick station widened by the grip's reach, risen from its
-        start at least as far as it has moved sideways (up to DEPARTURE_CLEAR_M; 1 mm
-        tolerance)? Then the item leaves the station upward, neither dragged across its top
-        nor pushed into it."""
+        carry follows whatever its timing) stay within the joint limits and leave the
+        station upward (`_leaves_station_upward`)? Then the item leaves the station
+        neither dragged across its top nor pushed into it."""
         qs = self._spline_within_limits(waypoints, n)
-        if qs is None:
-            return False
+        return qs is not None and self._leaves_station_upward(qs)
+
+    def _leaves_station_upward(self, qs: np.ndarray) -> bool:
+        """Do the configurations `qs` [rad], a path from the pick in order, keep the grip,
+        wherever it is over the pick station widened by the grip's reach, risen from the
+        first at least as far as it has moved sideways (up to DEPARTURE_CLEAR_M; 1 mm
+        tolerance)? The test of `_rises_from_station`, and of a release on the move's
+        motion (`carry`)."""
         lo, hi = self.scene.pick_station_bounds()
         reach = self._grip_reach_m()
         p0 = self.robot.tcp_pose(qs[0])[0]
