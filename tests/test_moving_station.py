@@ -2,8 +2,9 @@
 the item still on the pick station. Ruckig's time-optimal move from there does not go
 straight up: toward a release 0.4 m over the station it moves the grip 0.11 m sideways
 before it has risen 0.01 m, and dips 8 mm into the station first, so the item is swept
-out of the pads and the latch opens on nothing (over the random-layout benchmark, 5 of
-the 8 releases on the move that missed came down 0.5-2.0 m from their bins). The carry
+out of the pads and the latch opens on nothing (over the random-layout benchmark, 4 of
+the 9 releases on the move that failed came down 0.5-2.0 m from their bins so, and one was
+still in the pads when the arm braked). The carry
 checks the move as it checks a static departure (`Orchestrator._leaves_station_upward`)
 and, where it fails, goes up to the lift first, where the release on the move was timed
 from (`Orchestrator.carry`). Checked against the scene: the item at the latch, from the
