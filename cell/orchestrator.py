@@ -1217,8 +1217,7 @@ class Orchestrator:
 
             try:
                 motion = motion_from(self.q)
-                ts = np.linspace(0.0, motion.t_release_s, 200)
-                direct = self._leaves_station_upward(np.array([motion.state(t)[0] for t in ts]))
+                direct = self._moving_leaves_station(motion)
             except TrajectoryError:
                 direct = False
             if not direct:
@@ -1382,6 +1381,13 @@ class Orchestrator:
         neither dragged across its top nor pushed into it."""
         qs = self._spline_within_limits(waypoints, n)
         return qs is not None and self._leaves_station_upward(qs)
+
+    def _moving_leaves_station(self, motion: Any, n: int = 200) -> bool:
+        """Does a release on the move's `motion` (`plan_moving_release`, from the pick),
+        at n instants up to the latch, leave the station upward (`_leaves_station_upward`)?
+        The check `carry` makes before it takes that move."""
+        ts = np.linspace(0.0, motion.t_release_s, n)
+        return self._leaves_station_upward(np.array([motion.state(t)[0] for t in ts]))
 
     def _leaves_station_upward(self, qs: np.ndarray) -> bool:
         """Do the configurations `qs` [rad], a path from the pick in order, keep the grip,

@@ -5,7 +5,7 @@ before it has risen 0.01 m, and dips 8 mm into the station first, so the item is
 out of the pads and the latch opens on nothing (over the random-layout benchmark, 4 of
 the 9 releases on the move that failed came down 0.5-2.0 m from their bins so, and one was
 still in the pads when the arm braked). The carry
-checks the move as it checks a static departure (`Orchestrator._leaves_station_upward`)
+checks the move as it checks a static departure (`Orchestrator._moving_leaves_station`)
 and, where it fails, goes up to the lift first, where the release on the move was timed
 from (`Orchestrator.carry`). Checked against the scene: the item at the latch, from the
 pick and from the lift."""
@@ -55,8 +55,7 @@ def test_a_release_on_the_move_from_the_pick_leaves_the_item_on_the_station(
         q_rel = o._ik_gripped(tcp, ELEVATION_RAD, AZIMUTH_RAD, o.q)
         v = SPEED_MPS * throw_axis(ELEVATION_RAD, AZIMUTH_RAD)
         motion = plan_moving_release(o.robot, o.q, q_rel, v)
-        ts = np.linspace(0.0, motion.t_release_s, 200)
-        clear = o._leaves_station_upward(np.array([motion.state(t)[0] for t in ts]))
+        clear = o._moving_leaves_station(motion)
         at = release_in_scene(o.scene, o.ee, motion).released_at
     finally:
         o.close()
