@@ -94,6 +94,20 @@ def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
     )
 
 
+def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -> None:
+    turned = _json("docs/figures/bench_sort_turned.json")
+    n_in, items, rate, lo, hi, unseen, rate_h = _quoted(
+        r"--turn-release`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
+        r"([\d.]+) on the items never\s+calibrated, ([\d,]+) items per hour"
+    )
+    assert (int(n_in), int(items)) == (turned["in_bin"], turned["items"])
+    assert float(rate) == pytest.approx(turned["in_bin_rate"], abs=5e-4)
+    assert float(lo) == pytest.approx(turned["in_bin_rate_lo"], abs=5e-4)
+    assert float(hi) == pytest.approx(turned["in_bin_rate_hi"], abs=5e-4)
+    assert float(unseen) == pytest.approx(turned["in_bin_rate_unseen"], abs=5e-4)
+    assert int(rate_h.replace(",", "")) == round(turned["items_per_hour"])
+
+
 def test_the_moving_releases_and_repeat_throws_are_the_last_generated_bench_sort() -> None:
     bench = _json("docs/figures/bench_sort.json")
     moving, thrown = _quoted(r"(\d+) of the (\d+)\s+throws were released on the move")

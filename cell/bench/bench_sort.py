@@ -50,6 +50,7 @@ class LayoutUnit:
         learn: correct the planner from each observed landing during the run.
         max_items: run only the first items of the job (0: all of them).
         speed_scale: fraction of the arm's joint limits its moves use (Orchestrator).
+        turn: release throws turned toward the pick station (`cell run --turn-release`).
     """
 
     seed: int
@@ -57,6 +58,7 @@ class LayoutUnit:
     learn: bool = False
     max_items: int = 0
     speed_scale: float = 1.0
+    turn: bool = False
 
 
 def layout_units(
@@ -66,10 +68,11 @@ def layout_units(
     learn: bool = False,
     max_items: int = 0,
     speed_scale: float = 1.0,
+    turn: bool = False,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
     return [
-        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale)
+        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale, turn)
         for i in range(n)
     ]
 
@@ -116,7 +119,9 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
         "items": [],
     }
     try:
-        orch = Orchestrator(job, learn=unit.learn, speed_scale=unit.speed_scale)
+        orch = Orchestrator(
+            job, learn=unit.learn, speed_scale=unit.speed_scale, turn_release=unit.turn
+        )
     except JobError as exc:
         out["refused"] = str(exc)
         out["wall_time_s"] = time.perf_counter() - t0

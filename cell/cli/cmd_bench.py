@@ -48,6 +48,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sort: fraction of the arm's joint limits its moves use, in (0, 1] (1)",
     )
     p.add_argument(
+        "--turn-release",
+        action="store_true",
+        help="sort: release throws turned toward the pick station (cell run --turn-release)",
+    )
+    p.add_argument(
         "--scales",
         default="0.4,0.6,0.8,1.0",
         help="tradeoff: speed scales, comma-separated (0.4,0.6,0.8,1.0)",
@@ -78,7 +83,13 @@ def run_sort(args: argparse.Namespace) -> int:
     if not 0.0 < args.speed_scale <= 1.0:
         raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
     units = layout_units(
-        args.layouts, args.seed, robots, args.learn, max(0, args.max_items), args.speed_scale
+        args.layouts,
+        args.seed,
+        robots,
+        args.learn,
+        max(0, args.max_items),
+        args.speed_scale,
+        args.turn_release,
     )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]

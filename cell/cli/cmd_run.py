@@ -50,6 +50,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "and landing in the bin (auto, the default), or always stop to release (static)",
     )
     p.add_argument(
+        "--turn-release",
+        action="store_true",
+        help="arm platform: release a throw to a bin 70° or more round from the pick station "
+        "with the arm turned toward the station, the throw axis on the bin, where the "
+        "planner's cycle estimate is shorter (off by default: see the README's Limits)",
+    )
+    p.add_argument(
         "--learn",
         action="store_true",
         help="learn from the throws: before the run, refit each of the job's objects' "
@@ -147,6 +154,7 @@ def run(args: argparse.Namespace) -> int:
             speed_scale=args.speed_scale,
             pick=args.pick,
             release=args.release,
+            turn_release=args.turn_release,
         )
     bar = tqdm(
         total=len(job.expanded_items()),

@@ -73,6 +73,10 @@ class ThrowBounds:
         release_height: the fast path's release height [m, W].
         n_elevations: how many elevations, evenly spaced over the elevation
             range, the fast path considers.
+        facing_rad: the azimuth [rad, W] an arm that turns to face its target
+            (`plan_facing`) faces at the release: its release point lies
+            `release_radius` from the base along it, and the throw axis turns from
+            there to the target; None faces the target itself.
     """
 
     position_min: tuple[float, float, float] = (0.2, -0.4, 0.4)
@@ -89,6 +93,7 @@ class ThrowBounds:
     release_radius: float = 0.4
     release_height: float = 0.8
     n_elevations: int = 14
+    facing_rad: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("position_min", "position_max", "base_velocity_min", "base_velocity_max"):

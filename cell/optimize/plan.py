@@ -356,11 +356,22 @@ def plan_facing(
     turned toward it, and the plan is turned back: the arm releases on the side of
     the bin, as it would after turning its first joint, instead of throwing over
     its shoulder from the front box.
+
+    With `bounds.facing_rad` set, the frame is turned to that azimuth whatever the
+    target's, and the release point is `release_radius` from the base along it at
+    `release_height` (the box's point nearest it); the throw axis turns from there
+    to the target. An arm that turns back to a pick station after each throw faces
+    part-way toward it (`Orchestrator._facing_toward_station`).
     """
     g = np.asarray(target, float)
     phi = math.atan2(g[1], g[0])
-    if abs(phi) <= FACING_SECTOR_RAD:
+    current = None
+    if bounds.facing_rad is not None:
+        phi = bounds.facing_rad
+        current = (bounds.release_radius, 0.0, bounds.release_height)
+        bounds = replace(bounds, facing_rad=None)
+    elif abs(phi) <= FACING_SECTOR_RAD:
         return plan_throw(obj, g, ee, bounds)
     c, s = math.cos(-phi), math.sin(-phi)
     local = (c * g[0] - s * g[1], s * g[0] + c * g[1], g[2])
-    return rotate_plan(plan_throw(obj, local, ee, bounds), phi)
+    return rotate_plan(plan_throw(obj, local, ee, bounds, current=current), phi)
