@@ -577,7 +577,6 @@ class Orchestrator:
         self.effector = make_in_step(self.scene, end_effector)  # commands, in step
         self.ee = self.effector.sim  # the plant's end-effector: the physical pick's steps
         self._q_release = np.zeros(0)
-        self._release_cost: tuple[bool, float] | None = None
         self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
         self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (throw_spot)
         self._aim = np.zeros(3)  # where the last plan aims (the goal, or the learned aim)
@@ -2008,11 +2007,12 @@ class Orchestrator:
         turned = self._facing_toward_station(target)
         for facing in (None,) if turned is None else (None, turned):
             try:
-                plan, delta = self._plan_facing(obj, goal, target, index, stroke_max_m, facing)
+                plan, delta, cost = self._plan_facing(
+                    obj, goal, target, index, stroke_max_m, facing
+                )
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
                 continue
-            cost = self._release_cost
             log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
             if best is not None and (cost is None or best[0] is None or not cost < best[0]):
                 continue
@@ -2071,8 +2071,9 @@ class Orchestrator:
         index: int,
         stroke_max_m: float,
         facing: float | None,
-    ) -> tuple[Any, float]:
-        """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin).
+    ) -> tuple[Any, float, tuple[bool, float] | None]:
+        """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), and
+        the release's cycle estimate (`_release_q`; None where none was made).
 
         When IK finds no configuration for the plan's release pose, the plan is made
         again with the release lower and the throw axis flatter (RELEASE_FALLBACKS):
@@ -2082,7 +2083,6 @@ class Orchestrator:
         from dataclasses import replace as dc_replace
 
         err: CellError | None = None
-        self._release_cost = None
         for bounds in self._release_bounds(target):
             bounds = dc_replace(bounds, facing_rad=facing)
             # steep enough for the grip to hold the item at its release first; where the
@@ -2098,7 +2098,7 @@ class Orchestrator:
                 stroke = plan.stroke_m + delta
                 centre = np.array([plan.x_m, plan.y_m, plan.z_m])
                 try:
-                    self._q_release = self._release_q(
+                    self._q_release, cost = self._release_q(
                         self._tcp_for_item_centre(
                             centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
                         ),
@@ -2111,14 +2111,15 @@ class Orchestrator:
                     if not self._steepened:
                         break
                     continue
-                return plan, delta
+                return plan, delta, cost
         assert err is not None
         raise err
 
     def _release_q(
         self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
-    ) -> np.ndarray:
-        """The release configuration for a throw's `plan` at `tcp` [m, W]: of the two rolls
+    ) -> tuple[np.ndarray, tuple[bool, float] | None]:
+        """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
+        estimate (None where none was made; `_plan` compares facings by it): of the two rolls
         that put the item's weight on a pad (0 and π, `solve_release_ik`), the one whose
         cycle is the shorter: the empty arm to the pick of the presented item (as
         `_approach_plan` times it, else through the lift: jerk-limited rest-to-rest moves
@@ -2137,8 +2138,7 @@ class Orchestrator:
         here: on the UR5 copy of the demo the roll chosen so cost four grasps (19/24 in
         bin against 23/24). A release whose route would ask more of the grip than it must
         (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
-        The chosen one's cost is kept in `_release_cost` (None where none was estimated:
-        `_plan` compares facings by it). IKFailed when the pose has no configuration."""
+        IKFailed when the pose has no configuration."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
@@ -2154,10 +2154,9 @@ class Orchestrator:
                             best = (cost, q_rel)
             finally:
                 self._frame = kept
-        self._release_cost = None if best is None else best[0]
         if best is not None:
-            return best[1]
-        return self._ik(tcp, e, a)
+            return best[1], best[0]
+        return self._ik(tcp, e, a), None
 
     def _release_costs(
         self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
