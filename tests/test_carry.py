@@ -190,7 +190,7 @@ JOB = """
 bins:
   - {id: far, position_m: [1.6, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.1}
 items:
-  - {shape: cuboid, mass_kg: %.4f, size_m: [%s], bin: far}
+  - {%s, bin: far}
 """
 
 
@@ -212,7 +212,25 @@ def _carry(
     ee = load_params(scene_params_path()).ee
     m_hold = holding_mass_kg(ee, STROKE_M, WIDTH_M)
     size = f"{WIDTH_M}, {size_yz_m[0]}, {size_yz_m[1]}"
-    job = parse_job(JOB % (mass_fraction * m_hold, size), "carry.yaml")
+    item = f"shape: cuboid, mass_kg: {mass_fraction * m_hold:.4f}, size_m: [{size}]"
+    return _carry_item(item, STROKE_M, margin, release, shape)[:4]
+
+
+def _carry_item(
+    item_spec: str,
+    stroke_m: float,
+    margin: float,
+    release: tuple[tuple[float, float, float], float],
+    shape: bool = True,
+    probed: bool = False,
+) -> tuple[bool, float, float, float, float]:
+    """Grasp the job's item `item_spec` (its YAML fields but the bin) at
+    `stroke_m` kinematically, carry it to `release` at the grip limit computed with
+    `margin` (`carry_hold` with `probed`); (still held, drift in the grip [m], the
+    path's peak use of the grip, its duration [s], the item's turn in the grip [deg])."""
+    from scipy.spatial.transform import Rotation
+
+    job = parse_job(JOB % item_spec, "carry.yaml")
     orc = Orchestrator(job)
     try:
         obj = job.items[0].obj
@@ -221,23 +239,33 @@ def _carry(
         sc.run_for(0.05)
         p = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
         down = (-math.pi / 2, 0.0)
-        q_pick = orc._ik(orc._tcp_for_item_centre(p, *down, STROKE_M, obj), *down)
+        q_pick = orc._ik(orc._tcp_for_item_centre(p, *down, stroke_m, obj), *down)
         lift = p + np.array([0, 0, LIFT_M])
-        q_lift = orc._ik(orc._tcp_for_item_centre(lift, *down, STROKE_M, obj), *down)
+        q_lift = orc._ik(orc._tcp_for_item_centre(lift, *down, stroke_m, obj), *down)
         orc._move([q_lift, q_pick])
-        orc.ee.grasp(STROKE_M, item)
-        before = orc.ee.held_offset_m()
+        orc.ee.grasp(stroke_m, item)
+
+        def in_grip() -> tuple[np.ndarray, Rotation]:
+            centre, rot = sc.item_pose(item)
+            tcp, tcp_rot = orc.robot.tcp_pose(orc.q)
+            return orc.ee.held_offset_m(), Rotation.from_matrix(tcp_rot.T @ np.asarray(rot))
+
+        before, turned_from = in_grip()
         q_rel = orc._ik(np.array(release[0]), release[1], 0.0)
-        hold = carry_hold(orc.params, obj, STROKE_M)
+        hold = carry_hold(orc.params, obj, stroke_m, probed=probed)
         tr, peak = plan_carry([orc.q, q_lift, q_rel], orc.robot, hold, margin=margin, shape=shape)
         qs, _, _ = tr.sample_many(np.arange(sc.dt_s, tr.duration + sc.dt_s, sc.dt_s))
         for q in qs:
             sc.set_arm(q)
             sc.step()
+        orc.q = q_rel
         sc.run_for(0.1)
         held = orc.ee.holds_item()
-        drift = float(np.linalg.norm(orc.ee.held_offset_m() - before)) if held else math.inf
-        return held, drift, peak, tr.duration
+        if not held:
+            return False, math.inf, peak, tr.duration, math.inf
+        after, turned_to = in_grip()
+        turn = math.degrees((turned_to * turned_from.inv()).magnitude())
+        return True, float(np.linalg.norm(after - before)), peak, tr.duration, turn
     finally:
         orc.close()
 
@@ -249,6 +277,23 @@ def test_an_item_carried_at_the_computed_limit_does_not_slip():
         held, drift, use, _ = _carry(frac, CARRY_MARGIN)
         assert held and drift < 1e-3, (frac, drift)
         assert frac < use <= 1 / CARRY_MARGIN  # it did accelerate, within the bound
+
+
+@pytest.mark.parametrize("name", ["o7_egg", "rock_472"])
+def test_a_mesh_seated_as_probed_carried_at_its_limit_stays_put_in_the_pads(name):
+    """A mesh the kinematic pick seats, which the probe holds with the model's force, is
+    carried to a throw within the force and couple the grip probe measured
+    (`carry_hold(probed=True)`), not at GENTLE_SCALE: carried so to a throw's release
+    pose, it stays within 2 mm and 2° in the pads (measured: 0.6 and 1.1 mm, 0.3° and
+    0.7°), and the carry is at least a third sooner than the gentle one (1.4 s against
+    2.5 s)."""
+    release = ((0.3, 0.2, 0.6), math.radians(30.0))
+    item = f"object: {name}"
+    held, drift, use, t_probed, turn = _carry_item(item, 0.06, CARRY_MARGIN, release, probed=True)
+    assert held and drift < 2e-3 and turn < 2.0, (drift, turn)
+    assert use <= 1 / CARRY_MARGIN
+    *_, t_gentle, _ = _carry_item(item, 0.06, CARRY_MARGIN, release)
+    assert t_probed < t_gentle / 1.5, (t_probed, t_gentle)
 
 
 def test_a_carry_shaped_by_the_grip_is_sooner_and_holds_a_tall_box():

@@ -32,23 +32,32 @@ def test_the_scene_holds_a_box_as_the_grip_model_says(params, name):
         assert 0.8 < probe.couple_nm / model.torque_nm < 1.15, (stroke, probe, model)
 
 
-def test_a_mesh_is_held_as_the_scene_measures_it_only_when_it_is_placed(params):
-    """Carried to be thrown, a mesh is given no couple (its turn in the pads shifts the
-    launch); carried to be placed, the force and couple the probe measured, at most the
-    model's force: the duck slides along the pads well before the model's force."""
-    duck = get_object("duck")
+def test_a_seated_mesh_is_held_as_the_scene_measures_it_when_placed_or_held_as_a_face(params):
+    """Seated as the probe seats it, a mesh carried to be placed is held with the force and
+    couple the probe measured, at most the model's force: the duck slides along the pads
+    well before the model's force. Carried to be thrown, only a mesh the probe holds with
+    the model's force (MESH_PROBED_MIN_RATIO of it) is: the egg, not the duck. Not seated
+    so (a physical pick), none is given a couple."""
+    from cell.orchestrator import MESH_PROBED_MIN_RATIO
+
+    duck, egg = get_object("duck"), get_object("o7_egg")
     ratio, arm = mesh_grip(params, duck)
     assert 0.5 < ratio < 0.8 and arm > 0.01  # measured: 0.69, 0.029 m
+    assert mesh_grip(params, egg)[0] >= MESH_PROBED_MIN_RATIO  # measured: 1.0
     for stroke in (0.04, 0.07):
-        thrown = carry_hold(params, duck, stroke)
-        placed = carry_hold(params, duck, stroke, placing=True)
-        assert thrown.torque_nm == 0.0
-        assert placed.force_n == pytest.approx(ratio * thrown.force_n)
-        assert placed.torque_nm == pytest.approx(arm * thrown.force_n)
+        unseated = carry_hold(params, duck, stroke, placing=True)
+        placed = carry_hold(params, duck, stroke, probed=True, placing=True)
+        assert unseated.torque_nm == 0.0
+        assert carry_hold(params, duck, stroke, probed=True).torque_nm == 0.0
+        assert placed.force_n == pytest.approx(ratio * unseated.force_n)
+        assert placed.torque_nm == pytest.approx(arm * unseated.force_n)
         probe = probe_grip(duck, stroke)
         # the hold is what the pads gave at the probed strokes, none above it
         assert placed.force_n <= probe.force_n * 1.1
         assert placed.torque_nm <= probe.couple_nm * 1.1
+        thrown = carry_hold(params, egg, stroke, probed=True)
+        assert 0.0 < thrown.torque_nm <= probe_grip(egg, stroke).couple_nm * 1.1
+        assert carry_hold(params, egg, stroke).torque_nm == 0.0
 
 
 @pytest.mark.parametrize("name", ["cube50", "cuboid_c", "o4_cylinder50", "o6_bottle"])

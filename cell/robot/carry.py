@@ -176,12 +176,13 @@ def uses(f: np.ndarray, alpha: np.ndarray, hold: GripHold, tilt: bool = True) ->
     # pressed onto the carriage, the item's base face rights it too
     press = hold.mass_kg * np.maximum(f[:, 2], 0.0)
     cap = hold.torque_nm + press * hold.base_half_m
-    # Pads without a couple (a mesh carried to be thrown, a large sphere held at points)
-    # give an unbounded use wherever the path turns the item: such carries go at
-    # GENTLE_SCALE. Tried and left out: bounding them by the force alone (3-4 s faster per
-    # carry); on random layout 4 four teddy throws then missed their bins by 0.17-0.20 m
-    # (0.01-0.12 m before). A mesh carried to be placed is given the couple the scene
-    # measures (cell.orchestrator.carry_hold).
+    # Pads without a couple (a mesh the probe does not hold as a face, a large sphere held
+    # at points) give an unbounded use wherever the path turns the item: such carries go
+    # at GENTLE_SCALE. Tried and left out: bounding them by the force alone (3-4 s faster
+    # per carry); on random layout 4 four teddy throws then missed their bins by
+    # 0.17-0.20 m (0.01-0.12 m before), and on layout 3 two 72 mm, 102 g spheres left the
+    # pads (UR5). A mesh the kinematic pick seated is given the couple the scene measures
+    # (cell.orchestrator.carry_hold).
     turn = np.abs(tau) / np.maximum(cap, 1e-12)
     if not tilt or hold.torque_y_nm <= 0.0:
         return np.asarray(force + turn)
