@@ -196,8 +196,9 @@ def carry_hold(
     # along the throw axis): the patch has no width
     half_y = 0.0 if obj.shape == "cylinder" else min(GEO.pad_half_width_m, obj.size[1] / 2)
     # a sphere meets the flat pads at two points: no couple to count on
-    ratio, arm = mesh_grip(params, obj) if obj.shape == "mesh" and probed else (0.0, 0.0)
-    if probed and obj.shape == "mesh" and force > 0 and (placing or ratio >= MESH_PROBED_MIN_RATIO):
+    seated = probed and obj.shape == "mesh" and force > 0
+    ratio, arm = mesh_grip(params, obj) if seated else (0.0, 0.0)
+    if seated and (placing or ratio >= MESH_PROBED_MIN_RATIO):
         force, couple = ratio * force, arm * force
     elif obj.shape in ("sphere", "mesh"):
         couple = 0.0
@@ -1079,8 +1080,7 @@ class Orchestrator:
         all the bound allows, the fastest uniform carry within it crawls (three eggs on
         random layout 11, UR5: 29 s a cycle without this floor, 8.6 s with it, 6.1-6.9 s
         before the probe's couple)."""
-        from cell.robot.carry import GENTLE_SCALE, plan_carry
-        from cell.robot.motion import plan_path
+        from cell.robot.carry import plan_carry
 
         obj, stroke = carried or self._carried
         hold = carry_hold(
@@ -1093,16 +1093,8 @@ class Orchestrator:
             velocity_scale=self.speed_scale,
             acceleration_scale=self.speed_scale,
             tie=self._over_bound(obj),
+            gentle_floor=obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing,
         )
-        if obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing:
-            gentle = plan_path(
-                waypoints,
-                self.robot,
-                velocity_scale=self.speed_scale * math.sqrt(GENTLE_SCALE),
-                acceleration_scale=self.speed_scale * GENTLE_SCALE,
-            )
-            if gentle.duration < traj.duration:
-                return gentle
         return traj
 
     def _seated_as_probed(self) -> bool:

@@ -135,6 +135,29 @@ def test_a_carry_whose_path_asks_a_little_more_than_its_bound_at_rest_goes_withi
     assert tr.duration == pytest.approx(gentle.duration, rel=1e-6)
 
 
+def test_a_carry_with_the_gentle_floor_is_never_slower_than_the_gentle_one():
+    """A path whose rest asks just under the bound: the fastest uniform carry within it
+    crawls (the bisection's time scale near its floor), slower than the same path at
+    GENTLE_SCALE; with `gentle_floor` the gentle one is taken, and nothing changes where
+    the carry within the bound is the sooner."""
+    from cell.robot.carry import GENTLE_SCALE
+
+    rb = load_robot("panda")
+    path, hold, _ = _rolled_path_hold(-0.002)  # 2e-3 under the bound at rest
+    gentle = plan_path(
+        path, rb, velocity_scale=math.sqrt(GENTLE_SCALE), acceleration_scale=GENTLE_SCALE
+    )
+    crawl, _ = plan_carry(path, rb, hold, shape=False)
+    assert crawl.duration > gentle.duration
+    floored, _ = plan_carry(path, rb, hold, shape=False, gentle_floor=True)
+    assert floored.duration == pytest.approx(gentle.duration, rel=1e-6)
+    path, hold, _ = _rolled_path_hold(-0.3)  # room to spare: the carry within is sooner
+    within, _ = plan_carry(path, rb, hold, shape=False)
+    assert within.duration < gentle.duration
+    floored, _ = plan_carry(path, rb, hold, shape=False, gentle_floor=True)
+    assert floored.duration == pytest.approx(within.duration, rel=1e-6)
+
+
 def test_grip_use_of_a_tall_item_hanging_sideways_is_the_closed_form():
     """At rest with the pads' y axis up, gravity pulls the item along y: the pads carry
     m g and the couple m g × lever (a closed form), so use = m g/F + m g L/T."""
@@ -246,8 +269,8 @@ def _carry_item(
         orc.ee.grasp(stroke_m, item)
 
         def in_grip() -> tuple[np.ndarray, Rotation]:
-            centre, rot = sc.item_pose(item)
-            tcp, tcp_rot = orc.robot.tcp_pose(orc.q)
+            rot = sc.item_pose(item)[1]
+            tcp_rot = orc.robot.tcp_pose(orc.q)[1]
             return orc.ee.held_offset_m(), Rotation.from_matrix(tcp_rot.T @ np.asarray(rot))
 
         before, turned_from = in_grip()

@@ -325,6 +325,7 @@ def plan_carry(
     iterations: int = 6,
     shape: bool = True,
     tie: float = 0.0,
+    gentle_floor: bool = False,
 ) -> tuple[Trajectory, float]:
     """The fastest path through the waypoints that keeps the item in the grip: at the
     joint limits if the grip holds it there; else the faster of the path slowed
@@ -341,11 +342,15 @@ def plan_carry(
         shape: also try the path shaped by the grip as a toppra constraint.
         tie: where no time scaling keeps within 1/margin, the fastest within
             1/margin + tie is taken before a gentle carry (0: never).
+        gentle_floor: never slower than the path at GENTLE_SCALE of the limits (a hold
+            that only speeds up what was a gentle carry: where the path at rest asks
+            nearly all the bound allows, the fastest uniform carry within it crawls).
 
     Returns:
         (the trajectory, its peak use of the grip, `grip_use`): at most 1/margin (or
         1/margin + tie), or, when no time scaling gets it there (the path's geometry
-        asks too much), the path at GENTLE_SCALE of the limits and its use (logged).
+        asks too much), the path at GENTLE_SCALE of the limits and its use (logged);
+        with `gentle_floor`, that path wherever it is sooner.
 
     Raises:
         TrajectoryError: the grip cannot hold the item's weight alone within the
@@ -368,6 +373,21 @@ def plan_carry(
             acceleration_scale=acceleration_scale * s,
         )
         return tr, grip_use(tr, robot, hold)
+
+    if gentle_floor:
+        best = plan_carry(
+            waypoints_q,
+            robot,
+            hold,
+            margin=margin,
+            velocity_scale=velocity_scale,
+            acceleration_scale=acceleration_scale,
+            iterations=iterations,
+            shape=shape,
+            tie=tie,
+        )
+        gentle = attempt(GENTLE_SCALE)
+        return gentle if gentle[0].duration < best[0].duration else best
 
     best = attempt(1.0)
     if best[1] <= bound:
