@@ -544,6 +544,8 @@ class Orchestrator:
             class's (shape's) correction, bounded more tightly.
         speed_scale: fraction of the joint velocity and acceleration limits the arm's
             moves use, in (0, 1] (a carry may go slower, as its grip allows).
+        floor: also time each item's approach and throw's carry as one direct move
+            (`floors`, `_time_floor`): what the routes cost against the arm's limits.
     """
 
     def __init__(
@@ -561,6 +563,7 @@ class Orchestrator:
         pick: str = "kinematic",
         release: str = "auto",
         turn_release: bool = False,
+        floor: bool = False,
     ) -> None:
         from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
@@ -593,6 +596,11 @@ class Orchestrator:
             raise InvalidInput(f"release {release!r}: valid are {list(RELEASES)}")
         self.release_mode = release
         self.turn_release = bool(turn_release)  # `_facing_toward_station`
+        # with `floor`: per item index, (the seconds its approach and its throw's carry
+        # took, the seconds each would take as one direct move: `_time_floor`)
+        self.floor = bool(floor)
+        self.floors: dict[int, tuple[float, float]] = {}
+        self._index = -1  # the item being handled (`present`)
         self._presented: Any = None  # the item the plant presented last
         # the kinematic pick moves the item into the grip: the pads, longer than a flat
         # item, must not jam on the station's top while the fingers close
@@ -1104,6 +1112,28 @@ class Orchestrator:
         place's carry at them, once with each arm)."""
         return self.pick_mode != "physical"
 
+    def _time_floor(self, q_from: np.ndarray, t_from: float, settle_s: float = 0.0) -> None:
+        """With `floor`, add to `floors` the move just made, from q_from [rad] at scene time
+        t_from [s] to where the arm is: the time it took, and what one direct move would
+        take (a jerk-limited rest-to-rest move at the arm's full limits, `move_time`;
+        carrying, no faster than the grip holds the item along that joint-space line,
+        as `_carry_path` times a carry; plus `settle_s` [s] after it). The direct move
+        ignores what the routes are for (the clearance over the station, the level
+        swing, the stop over the pick): a floor for these poses, not a plan."""
+        if not self.floor:
+            return
+        from cell.robot.motion import move_time
+
+        took = self.scene.t - t_from
+        try:
+            direct = move_time(q_from, self.q, self.robot)
+            if self.ee.item is not None:
+                direct = max(direct, float(self._carry_path([q_from, self.q]).duration))
+        except TrajectoryError:
+            direct = took - settle_s  # no direct move found: the one made
+        spent, floor = self.floors.get(self._index, (0.0, 0.0))
+        self.floors[self._index] = (spent + took, floor + min(took, direct + settle_s))
+
     # -- the platform's steps (cell.loop.Platform) -----------------------------
     name = "arm"
     overlaps = True  # the next pick starts while a thrown item flies
@@ -1123,6 +1153,7 @@ class Orchestrator:
     def present(self, index: int, obj: ObjectParams) -> Any:
         """The item on the pick station: at its centre (kinematic pick), or at a seeded
         random spot and yaw (physical pick, `_spawn_at_station`)."""
+        self._index = index
         if self.pick_mode == "physical":
             self._presented = self._spawn_at_station(index, obj)
             return self._presented
@@ -1281,7 +1312,9 @@ class Orchestrator:
             except IKFailed:
                 q_rel = d.state["q_release"]
             q_rel = self._release_branch(q_lift, q_rel, d.state.get("q_release"), tcp, plan)
+            q0, t0 = self.q, self.scene.t
             self._move(self._departure(q_lift, q_rel, plan))
+            self._time_floor(q0, t0, settle_s=SETTLE_S)
         self._check_held(obj)
 
     def release(self, d: Decision) -> np.ndarray | None:
@@ -1327,8 +1360,10 @@ class Orchestrator:
         """The kinematic pick: the grip over the item, which is moved into it
         (PyBulletEndEffector.grasp); returns the lift configuration."""
         q_pick, q_lift = self._over_item(item, stroke, obj)
+        q0, t0 = self.q, self.scene.t
         if not self._approach(item, stroke, obj, q_pick):
             self._move([q_lift, q_pick])
+        self._time_floor(q0, t0)
         self.ee.grasp(stroke, item)
         self._carried = (obj, stroke)
         return q_lift

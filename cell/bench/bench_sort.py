@@ -13,6 +13,11 @@ Figures (`summarise_layouts`):
     in_bin_rate_unseen     the same over items never used in calibration (catalogue
                            sets other than thesis14, and ad-hoc items);
     items_per_hour         items at rest in their bin per simulated hour of arm time;
+    floor_items_per_hour   with `--floor`: the same in-bin count over the cycles with
+                           each approach and throw's carry one direct move at the arm's
+                           full limits, the carry as fast as the grip holds the item
+                           along it (`Orchestrator._time_floor`): the rate the routes
+                           leave on the table, not a rate the cell can reach;
     items, layouts, failures (count per cell.orchestrator.FAILURES reason);
     failures_by_object     per reason, which objects failed so and how often
                            (`failures_by_object`: where to look first);
@@ -31,6 +36,7 @@ import yaml
 __all__ = [
     "LayoutUnit",
     "failures_by_object",
+    "floor_figures",
     "layout_units",
     "per_layout",
     "refused_at_draw",
@@ -51,6 +57,8 @@ class LayoutUnit:
         max_items: run only the first items of the job (0: all of them).
         speed_scale: fraction of the arm's joint limits its moves use (Orchestrator).
         turn: release throws turned toward the pick station (`cell run --turn-release`).
+        floor: also time each approach and throw's carry as one direct move
+            (`Orchestrator.floors`): each item's `floor_cycle_s`.
     """
 
     seed: int
@@ -59,6 +67,7 @@ class LayoutUnit:
     max_items: int = 0
     speed_scale: float = 1.0
     turn: bool = False
+    floor: bool = False
 
 
 def layout_units(
@@ -69,10 +78,11 @@ def layout_units(
     max_items: int = 0,
     speed_scale: float = 1.0,
     turn: bool = False,
+    floor: bool = False,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
     return [
-        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale, turn)
+        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale, turn, floor)
         for i in range(n)
     ]
 
@@ -83,7 +93,9 @@ def run_layout(unit: LayoutUnit) -> dict[str, Any]:
     Returns:
         {"seed", "robot", "wall_time_s", "sim_time_s", "refused" (the job's
         up-front refusal message, "" when it ran), "items": [{object_id, unseen,
-        action, in_bin, failure, reason, landing_error_m, cycle_time_s}, ...]}.
+        action, in_bin, failure, reason, landing_error_m, cycle_time_s, moving, and
+        with `unit.floor` floor_cycle_s: the cycle with its approach and throw's carry
+        as one direct move each}, ...]}.
     """
 
     from threadpoolctl import threadpool_limits
@@ -120,7 +132,11 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
     }
     try:
         orch = Orchestrator(
-            job, learn=unit.learn, speed_scale=unit.speed_scale, turn_release=unit.turn
+            job,
+            learn=unit.learn,
+            speed_scale=unit.speed_scale,
+            turn_release=unit.turn,
+            floor=unit.floor,
         )
     except JobError as exc:
         out["refused"] = str(exc)
@@ -146,6 +162,9 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
                 "moving": bool(r.moving),
             }
         )
+        if unit.floor:
+            spent, floor = orch.floors.get(r.index, (0.0, 0.0))
+            out["items"][-1]["floor_cycle_s"] = float(r.cycle_time_s) - spent + floor
     out["sim_time_s"] = float(summary.sim_time_s)
     out["wall_time_s"] = time.perf_counter() - t0
     return out
@@ -189,6 +208,7 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "in_bin_rate_unseen_lo": ulo,
         "in_bin_rate_unseen_hi": uhi,
         "items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0,
+        **floor_figures(items),
         "median_landing_error_m": errs[len(errs) // 2] if errs else math.nan,
         "sim_time_s": sim,
         "wall_time_s": sum(lay["wall_time_s"] for lay in layouts),
@@ -200,6 +220,17 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         **repeat_figures(layouts),
         "per_layout": per_layout(layouts),
     }
+
+
+def floor_figures(items: list[dict[str, Any]]) -> dict[str, float]:
+    """{floor_items_per_hour, floor_sim_time_s} over items that have a `floor_cycle_s`
+    (`run_layout` with `floor`): the items in their bins per hour of those cycles; {}
+    when none has one."""
+    if not items or any("floor_cycle_s" not in it for it in items):
+        return {}
+    sim = sum(float(it["floor_cycle_s"]) for it in items)
+    k = sum(it["in_bin"] for it in items)
+    return {"floor_items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0, "floor_sim_time_s": sim}
 
 
 def refused_at_draw(layouts: list[dict[str, Any]]) -> dict[str, Any]:
@@ -252,6 +283,7 @@ def per_layout(layouts: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 "in_bin": k,
                 "sim_time_s": sim,
                 "items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0,
+                **floor_figures(items),
                 "median_cycle_s": cycles[len(cycles) // 2] if cycles else math.nan,
                 "slowest_item": slow["object_id"] if slow else "",
                 "slowest_cycle_s": float(slow["cycle_time_s"]) if slow else math.nan,

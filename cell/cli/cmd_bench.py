@@ -53,6 +53,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sort: release throws turned toward the pick station (cell run --turn-release)",
     )
     p.add_argument(
+        "--floor",
+        action="store_true",
+        help=(
+            "sort: also time each approach and throw's carry as one direct move at the arm's "
+            "full limits (the carry as the grip allows): floor_items_per_hour"
+        ),
+    )
+    p.add_argument(
         "--scales",
         default="0.4,0.6,0.8,1.0",
         help="tradeoff: speed scales, comma-separated (0.4,0.6,0.8,1.0)",
@@ -90,6 +98,7 @@ def run_sort(args: argparse.Namespace) -> int:
         max(0, args.max_items),
         args.speed_scale,
         args.turn_release,
+        args.floor,
     )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]
@@ -114,12 +123,14 @@ def run_sort(args: argparse.Namespace) -> int:
         print(
             f"\n{'seed':>6s} {'robot':6s} {'in bin':>8s} {'sim [s]':>8s} {'items/h':>8s} "
             f"{'median cycle [s]':>16s}  slowest item [s]"
+            + ("  floor [items/h]" if args.floor else "")
         )
         for r in rows:
             print(
                 f"{r['seed']:>6d} {r['robot']:6s} {r['in_bin']:>3d}/{r['items']:<4d} "
                 f"{r['sim_time_s']:>8.1f} {r['items_per_hour']:>8.0f} {r['median_cycle_s']:>16.2f}  "
                 f"{r['slowest_item']} {r['slowest_cycle_s']:.2f}"
+                + (f"  {r['floor_items_per_hour']:.0f}" if "floor_items_per_hour" in r else "")
                 + ("  (refused)" if r["refused"] else "")
             )
     return 0

@@ -1,0 +1,118 @@
+"""The cycle floor (`Orchestrator(floor=True)`, `cell bench sort --floor`): each item's
+approach and throw's carry timed again as one direct move, beside the moves made.
+
+Independent checks: the same job run without the floor (timing the floor must change
+nothing the arm does), the bang-bang lower bound of a rest-to-rest move under each
+joint's velocity and acceleration limits (a closed form no jerk-limited or path-following
+move beats), and the rate recomputed from the items' cycles."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cell.bench.bench_sort import floor_figures
+from cell.cli import main
+from cell.jobs import parse_job
+from cell.orchestrator import SETTLE_S, Orchestrator
+
+JOB = """\
+cell: {robot: panda}
+pick_station: {position_m: [0.45, -0.40, 0.20]}
+bins:
+  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+  - {id: back, position_m: [-1.20, 1.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube50, count: 1, bin: far}
+  - {object: cyl50, count: 1, bin: back}
+seed: 0
+"""
+
+
+def bang_bang_s(q0: np.ndarray, q1: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
+    """The least time [s] of a rest-to-rest move from q0 to q1 [rad] with each joint's
+    speed within v [rad/s] and acceleration within a [rad/s²]: the slowest joint's
+    triangle or trapezoid profile."""
+    d = np.abs(np.asarray(q1) - np.asarray(q0))
+    tri = d <= v * v / a
+    t = np.where(tri, 2.0 * np.sqrt(d / a), d / v + v / a)
+    return float(np.max(t))
+
+
+def _run(tmp_path: Path, floor: bool, spy: list[Any] | None = None) -> tuple[Any, Orchestrator]:
+    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), release="static", floor=floor)
+    if spy is not None:
+        time_floor = o._time_floor
+
+        def spied(q_from: np.ndarray, t_from: float, settle_s: float = 0.0) -> None:
+            before = o.floors.get(o._index, (0.0, 0.0))
+            time_floor(q_from, t_from, settle_s)
+            after = o.floors[o._index]
+            spy.append((np.array(q_from), np.array(o.q), settle_s, after[1] - before[1]))
+
+        o._time_floor = spied  # type: ignore[method-assign]
+    try:
+        return o.run(), o
+    finally:
+        o.close()
+
+
+def test_timing_the_floor_changes_nothing_and_no_direct_move_beats_the_bang_bang_bound(
+    tmp_path: Path,
+) -> None:
+    plain, _ = _run(tmp_path, floor=False)
+    spy: list[Any] = []
+    timed, orch = _run(tmp_path, floor=True, spy=spy)
+    assert [r.action for r in timed.results] == ["throw", "throw"]
+    for a, b in zip(plain.results, timed.results, strict=True):
+        assert a.cycle_time_s == b.cycle_time_s
+        assert a.landing_error_m == b.landing_error_m or (
+            math.isnan(a.landing_error_m) and math.isnan(b.landing_error_m)
+        )
+    # an approach and a carry per item, each floor within the bang-bang bound and the move
+    assert len(spy) == 4
+    lim = orch.robot.limits
+    for q0, q1, settle, floor in spy:
+        assert floor >= bang_bang_s(q0, q1, lim.velocity, lim.acceleration) + settle - 1e-9
+    for r in timed.results:
+        spent, floor = orch.floors[r.index]
+        assert 0.0 < floor <= spent < r.cycle_time_s
+    # the carries leave the pick upward and swing the throw axis level: not the direct move
+    carries = [f for _, _, settle, f in spy if settle == SETTLE_S]
+    assert len(carries) == 2
+    assert sum(orch.floors[r.index][0] - orch.floors[r.index][1] for r in timed.results) > 0.0
+
+
+def test_the_floor_rate_is_the_in_bin_count_over_the_floor_cycles() -> None:
+    items = [
+        {"in_bin": True, "floor_cycle_s": 1.5},
+        {"in_bin": False, "floor_cycle_s": 2.5},
+        {"in_bin": True, "floor_cycle_s": 2.0},
+    ]
+    figures = floor_figures(items)
+    assert figures["floor_items_per_hour"] == pytest.approx(3600.0 * 2 / 6.0)
+    assert figures["floor_sim_time_s"] == pytest.approx(6.0)
+    # a campaign run without the floor has none to report
+    assert floor_figures([{"in_bin": True, "cycle_time_s": 2.0}]) == {}
+    assert floor_figures([]) == {}
+
+
+def test_cli_bench_sort_with_the_floor_reports_a_rate_no_lower_than_its_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["bench", "sort", "--layouts", "1", "--seed", "12", "--max-items", "2"]
+    assert main([*argv, "--floor", "--json", "--out", str(tmp_path)]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    layout = json.loads((tmp_path / "layout_12.json").read_text())
+    cycles = [it["cycle_time_s"] for it in layout["items"]]
+    floors = [it["floor_cycle_s"] for it in layout["items"]]
+    assert len(floors) == 2 and all(0.0 < f <= c for f, c in zip(floors, cycles, strict=True))
+    k = sum(it["in_bin"] for it in layout["items"])
+    assert figures["floor_items_per_hour"] == pytest.approx(3600.0 * k / sum(floors))
+    assert figures["floor_items_per_hour"] >= figures["items_per_hour"]
+    assert figures["per_layout"][0]["floor_items_per_hour"] == figures["floor_items_per_hour"]
