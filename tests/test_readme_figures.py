@@ -94,6 +94,27 @@ def test_the_random_layout_figures_are_the_last_generated_bench_sort() -> None:
     )
 
 
+def test_the_floor_is_the_last_generated_bench_sort() -> None:
+    bench = _json("docs/figures/bench_sort.json")
+    rate, panda, ur5 = _quoted(
+        r"`floor_items_per_hour` \*\*([\d,]+)\*\*\s+\([\d,]+ s instead of [\d,]+ s; "
+        r"Panda ([\d,]+), UR5 ([\d,]+)"
+    )
+    assert int(rate.replace(",", "")) == round(bench["floor_items_per_hour"])
+    for robot, quoted in (("panda", panda), ("ur5", ur5)):
+        rows = [r for r in bench["per_layout"] if r["robot"] == robot]
+        k = sum(r["in_bin"] for r in rows)
+        sim = sum(r["floor_sim_time_s"] for r in rows)
+        assert int(quoted.replace(",", "")) == round(3600.0 * k / sim)
+    floor_s, sim_s = _quoted(r"\(([\d,]+) s instead of ([\d,]+) s; Panda")
+    assert int(floor_s.replace(",", "")) == round(bench["floor_sim_time_s"])
+    assert int(sim_s.replace(",", "")) == round(bench["sim_time_s"])
+    (at_95,) = _quoted(r"these\s+floor cycles give ([\d,]+) items per hour")
+    assert int(at_95.replace(",", "")) == round(
+        3600.0 * 0.95 * bench["items"] / bench["floor_sim_time_s"]
+    )
+
+
 def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -> None:
     turned = _json("docs/figures/bench_sort_turned.json")
     n_in, items, rate, lo, hi, unseen, rate_h = _quoted(
