@@ -4,7 +4,9 @@ approach and throw's carry timed again as one direct move, beside the moves made
 Independent checks: the same job run without the floor (timing the floor must change
 nothing the arm does), the bang-bang lower bound of a rest-to-rest move under each
 joint's velocity and acceleration limits (a closed form no jerk-limited or path-following
-move beats), and the rate recomputed from the items' cycles."""
+move beats), the grip law itself (`grip_use`) on the direct move at the arm's full limits
+(a carry's floor that would ask more of the grip must be slower), and the rate
+recomputed from the items' cycles."""
 
 from __future__ import annotations
 
@@ -17,20 +19,23 @@ import numpy as np
 import pytest
 
 from cell.bench.bench_sort import floor_figures
+from cell.catalogue import get_object
 from cell.cli import main
 from cell.jobs import parse_job
-from cell.orchestrator import SETTLE_S, Orchestrator
+from cell.orchestrator import SETTLE_S, Orchestrator, carry_hold
+from cell.robot.carry import CARRY_MARGIN, grip_use
+from cell.robot.motion import plan_move
 
+# the UR5 (the departure's tests run the Panda too), a bin ahead and one behind the arm
 JOB = """\
-cell: {robot: panda}
-pick_station: {position_m: [0.45, -0.40, 0.20]}
+cell: {robot: ur5}
 bins:
-  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
-  - {id: back, position_m: [-1.20, 1.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+  - {id: ahead, position_m: [1.10, 0.50], size_m: [0.35, 0.35], rim_height_m: 0.10}
+  - {id: behind, position_m: [-0.90, -0.90], size_m: [0.35, 0.35], rim_height_m: 0.12}
 items:
-  - {object: cube50, count: 1, bin: far}
-  - {object: cyl50, count: 1, bin: back}
-seed: 0
+  - {object: cube30, count: 1, bin: ahead}
+  - {object: cyl40, count: 1, bin: behind}
+seed: 3
 """
 
 
@@ -62,7 +67,7 @@ def _run(tmp_path: Path, floor: bool, spy: list[Any] | None = None) -> tuple[Any
         o.close()
 
 
-def test_timing_the_floor_changes_nothing_and_no_direct_move_beats_the_bang_bang_bound(
+def test_timing_the_floor_changes_nothing_and_each_floor_keeps_to_the_arm_and_the_grip(
     tmp_path: Path,
 ) -> None:
     plain, _ = _run(tmp_path, floor=False)
@@ -82,9 +87,20 @@ def test_timing_the_floor_changes_nothing_and_no_direct_move_beats_the_bang_bang
     for r in timed.results:
         spent, floor = orch.floors[r.index]
         assert 0.0 < floor <= spent < r.cycle_time_s
-    # the carries leave the pick upward and swing the throw axis level: not the direct move
-    carries = [f for _, _, settle, f in spy if settle == SETTLE_S]
+    # a carry's floor is no faster than the grip allows: where the direct move at the arm's
+    # full limits would ask more of the grip than a carry may (the grip law, `grip_use`),
+    # its floor is slower than that move
+    carries = [(q0, q1, f) for q0, q1, settle, f in spy if settle == SETTLE_S]
     assert len(carries) == 2
+    over = 0
+    for (q0, q1, floor), r in zip(carries, timed.results, strict=True):
+        hold = carry_hold(orch.params, get_object(r.object_id), r.stroke_m, probed=True)
+        direct = plan_move(q0, None, q1, None, orch.robot)
+        if grip_use(direct, orch.robot, hold) > 1.0 / CARRY_MARGIN:
+            over += 1
+            assert floor > direct.duration + SETTLE_S + 1e-3
+    assert over >= 1
+    # the routes (the departure upward, the level swing, the stop over the pick) cost time
     assert sum(orch.floors[r.index][0] - orch.floors[r.index][1] for r in timed.results) > 0.0
 
 
