@@ -16,8 +16,8 @@ Figures (`summarise_layouts`):
     floor_items_per_hour   with `--floor`: the same in-bin count over the cycles with
                            each approach and throw's carry one direct move at the arm's
                            full limits, the carry as fast as the grip holds the item
-                           along it (`Orchestrator._time_floor`): the rate the routes
-                           leave on the table, not a rate the cell can reach;
+                           along it (`Orchestrator._time_floor`): the rate were the
+                           routes free, a floor of the cycle, not a rate the cell reaches;
     items, layouts, failures (count per cell.orchestrator.FAILURES reason);
     failures_by_object     per reason, which objects failed so and how often
                            (`failures_by_object`: where to look first);
@@ -225,7 +225,7 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
 def floor_figures(items: list[dict[str, Any]]) -> dict[str, float]:
     """{floor_items_per_hour, floor_sim_time_s} over items that have a `floor_cycle_s`
     (`run_layout` with `floor`): the items in their bins per hour of those cycles; {}
-    when none has one."""
+    when any item lacks one (a campaign run without the floor)."""
     if not items or any("floor_cycle_s" not in it for it in items):
         return {}
     sim = sum(float(it["floor_cycle_s"]) for it in items)
