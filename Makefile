@@ -59,7 +59,7 @@ figures: install
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json
-	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --json > $(FIG)/bench_sort_turned.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --floor --json > $(FIG)/bench_sort_turned.json
 	$(BIN)/python -m cell.bench.bench_flywheel --json $(FIG)/flywheel.json
 	$(BIN)/cell bench tradeoff --layouts 4 --seed 0 --robots panda,ur5 --scales 0.5,0.75,1.0 --workers 2 --plot $(FIG)/tradeoff.png --json > $(FIG)/tradeoff.json
 

@@ -118,7 +118,7 @@ def test_the_floor_is_the_last_generated_bench_sort() -> None:
 def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -> None:
     turned = _json("docs/figures/bench_sort_turned.json")
     n_in, items, rate, lo, hi, unseen, rate_h = _quoted(
-        r"--turn-release`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
+        r"--turn-release --floor`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
         r"([\d.]+) on the items never\s+calibrated, ([\d,]+) items per hour"
     )
     assert (int(n_in), int(items)) == (turned["in_bin"], turned["items"])
@@ -127,6 +127,12 @@ def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -
     assert float(hi) == pytest.approx(turned["in_bin_rate_hi"], abs=5e-4)
     assert float(unseen) == pytest.approx(turned["in_bin_rate_unseen"], abs=5e-4)
     assert int(rate_h.replace(",", "")) == round(turned["items_per_hour"])
+    floor, at_95 = _quoted(
+        r"Its floor \(`--floor`, below\)\s+is ([\d,]+) items per hour, ([\d,]+) with 0.95"
+    )
+    assert int(floor.replace(",", "")) == round(turned["floor_items_per_hour"])
+    at_95_rate = 3600.0 * 0.95 * turned["items"] / turned["floor_sim_time_s"]
+    assert int(at_95.replace(",", "")) == round(at_95_rate)
 
 
 def test_the_moving_releases_and_repeat_throws_are_the_last_generated_bench_sort() -> None:
