@@ -62,6 +62,7 @@ __all__ = [
     "failure_of",
     "landing",
     "missed_bin",
+    "rate_per_hour",
     "sorted_throw_record",
     "summarise",
 ]
@@ -272,6 +273,12 @@ class RunSummary:
         return d
 
 
+def rate_per_hour(in_bin: int, sim_time_s: float) -> float:
+    """Items at rest in their bin per hour of `sim_time_s` [s] of arm time (0 with none):
+    the `items_per_hour` of a run, a campaign and its floor (`cell.bench.bench_sort`)."""
+    return 3600.0 * in_bin / sim_time_s if sim_time_s > 0 else 0.0
+
+
 def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
     """The closing figures of a list of item results."""
     n = len(results)
@@ -289,7 +296,7 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
         mean_landing_error_m=float(errs.mean()) if errs.size else math.nan,
         p95_landing_error_m=float(np.percentile(errs, 95)) if errs.size else math.nan,
         mean_cycle_time_s=float(cyc.mean()) if cyc.size else math.nan,
-        items_per_hour=3600.0 * in_bin / sim_time if sim_time > 0 else 0.0,
+        items_per_hour=rate_per_hour(in_bin, sim_time),
         sim_time_s=sim_time,
         wall_time_s=wall_time_s,
         results=list(results),

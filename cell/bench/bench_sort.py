@@ -33,6 +33,8 @@ from typing import Any
 
 import yaml
 
+from cell.loop import rate_per_hour
+
 __all__ = [
     "LayoutUnit",
     "failures_by_object",
@@ -207,7 +209,7 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "in_bin_rate_unseen": ku / len(unseen) if unseen else 0.0,
         "in_bin_rate_unseen_lo": ulo,
         "in_bin_rate_unseen_hi": uhi,
-        "items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0,
+        "items_per_hour": rate_per_hour(k, sim),
         **floor_figures(items),
         "median_landing_error_m": errs[len(errs) // 2] if errs else math.nan,
         "sim_time_s": sim,
@@ -230,7 +232,7 @@ def floor_figures(items: list[dict[str, Any]]) -> dict[str, float]:
         return {}
     sim = sum(float(it["floor_cycle_s"]) for it in items)
     k = sum(it["in_bin"] for it in items)
-    return {"floor_items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0, "floor_sim_time_s": sim}
+    return {"floor_items_per_hour": rate_per_hour(k, sim), "floor_sim_time_s": sim}
 
 
 def refused_at_draw(layouts: list[dict[str, Any]]) -> dict[str, Any]:
@@ -282,7 +284,7 @@ def per_layout(layouts: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 "items": len(items),
                 "in_bin": k,
                 "sim_time_s": sim,
-                "items_per_hour": 3600.0 * k / sim if sim > 0 else 0.0,
+                "items_per_hour": rate_per_hour(k, sim),
                 **floor_figures(items),
                 "median_cycle_s": cycles[len(cycles) // 2] if cycles else math.nan,
                 "slowest_item": slow["object_id"] if slow else "",
