@@ -129,7 +129,9 @@ def test_a_cube_thrown_into_a_low_rimmed_bin_stays_in():
 # lever when it hangs sideways). It flipped back when the carry's tie over the grip's bound
 # (GRIP_USE_TIE) applied to every shape: its swing asks 0.756 of the grip at rest, within
 # 0.741 + 0.02, it was carried as fast as that allows, and it left the pads. The tie is
-# for boxes only since (Orchestrator._over_bound).
+# for boxes only since (Orchestrator._over_bound). As its swing at its 55 mm throw stroke
+# asks more than the bound at rest, it is now carried at the shortest stroke
+# (Orchestrator._carry_stroke), where the pads hold it hardest.
 def test_a_tall_cylinder_is_carried_to_its_release():
     item = "{shape: cylinder, mass_kg: 0.1, size_m: [0.05, 0.05, 0.2], bin: edge_bin}"
     orch = Orchestrator(parse_job(JOB % ("[1.8, 0.2]", 0.15, item), "tall.yaml"))

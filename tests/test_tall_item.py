@@ -11,6 +11,7 @@ Independent check: the scene's physics, the bottles at rest in their bin."""
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import pytest
@@ -31,7 +32,93 @@ seed: 5
 """
 
 
-def test_tall_bottles_stay_in_the_grip_and_land(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+def test_tall_bottles_stay_in_the_grip_and_land(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+):
     monkeypatch.chdir(tmp_path)
-    rows = job_rows(JOB, tmp_path, "tall")
+    with caplog.at_level(logging.INFO, logger="cell.orchestrator"):
+        rows = job_rows(JOB, tmp_path, "tall")
     assert rows == [("throw", "", True)] * 3, rows
+    # each carried at the shortest stroke (`Orchestrator._carry_stroke`): the level swing at
+    # the throw's asks more of the grip at rest than a carry may
+    short = [r for r in caplog.records if "carried at the 0.030 m stroke" in r.getMessage()]
+    assert len(short) == 3, [r.getMessage() for r in caplog.records]
+
+
+THROW_STROKE_M = 0.075  # the strokes the bottle is thrown at on random layouts: 0.071-0.084 m
+
+
+def _bottle_held_horizontal(carry_stroke_m: float) -> tuple[bool, float, float, float, float]:
+    """Grip the bottle hanging at THROW_STROKE_M (as the kinematic pick grips it), wind the
+    spool to `carry_stroke_m` with it held, then turn the throw axis horizontal with the
+    bottle's weight on a pad (where the level swing passes horizontal) and hold it there
+    1 s, in a scene without an arm: (still held, its turn in the grip [deg], how far it
+    moved along the throw axis on the wind [m], how many times the pads' closing force
+    f_g the wind made it, and what the band law (`holding_mass_kg`) says of that)."""
+    import math
+
+    import numpy as np
+
+    from cell.catalogue import catalogue
+    from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.model.grip import holding_mass_kg
+    from cell.sim.grip_probe import turn_rad
+    from cell.sim.scene import CellScene
+
+    bottle = catalogue()["o6_bottle"].params
+    with CellScene(robot=None) as sc:
+        ee, cl = PyBulletEndEffector(sc), sc.client
+        down = sc.ee_pose_for_release((0.0, 0.0, 0.7), -math.pi / 2, 0.0, THROW_STROKE_M, bottle)
+        sc.hold_ee(*down, teleport=True)
+        item = sc.spawn_item(bottle)
+        ee.grasp(THROW_STROKE_M, item)
+
+        def in_grip() -> tuple[np.ndarray, tuple[float, ...]]:
+            e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
+            inv = cl.invertTransform(e_p, e_o)
+            p, q = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(item.body))
+            return np.asarray(p), q
+
+        p0, f0 = in_grip()[0], ee.reading().grip_n
+        if carry_stroke_m != THROW_STROKE_M:
+            ee.set_stroke(carry_stroke_m)
+        sc.run_for(0.05)
+        (p1, q1), f1 = in_grip(), ee.reading().grip_n
+        # the band law of the plant's own end-effector at the pads' width on the item
+        plant, width = ee.band.ee, ee.band.width()
+        law = holding_mass_kg(plant, carry_stroke_m, width) / holding_mass_kg(
+            plant, THROW_STROKE_M, width
+        )
+        level = sc.ee_pose_for_release((0.0, 0.0, 0.7), 0.0, 0.0, carry_stroke_m, bottle, 0.0)
+        sc.hold_ee(*level, teleport=True)
+        sc.run_for(1.0)
+        turn = math.degrees(turn_rad(cl, q1, in_grip()[1]))
+        return ee.holds_item(), turn, float(p1[2] - p0[2]), f1 / f0, law
+
+
+def test_a_tall_item_wound_to_the_shortest_stroke_stays_in_the_pads_where_it_fell_out():
+    """The level swing passes horizontal with the bottle's weight on a pad. Held still
+    there at its throw's 75 mm stroke, the scene's pads let it tip out; wound to the
+    shortest stroke first (`Orchestrator._carry_stroke`), where the band closes the pads
+    hardest, they hold it without a turn. The grip model agrees: its use at rest there is
+    over 1 at 75 mm and under 1 at 30 mm (measured in the scene: out at 60 mm as well,
+    use 0.96; held at 50 mm, 0.90). Winding carries the bottle with the carriage, the
+    stroke's change along the throw axis, and the pads close by the band law's f_g."""
+    from cell.catalogue import catalogue
+    from cell.orchestrator import release_grip_use, scene_params_path
+    from cell.params import load_params
+
+    params = load_params(scene_params_path())
+    bottle = catalogue()["o6_bottle"].params
+    short = params.ee.stroke_min
+    use = release_grip_use(params, bottle, THROW_STROKE_M, [0.0])[0]
+    use_short = release_grip_use(params, bottle, short, [0.0])[0]
+    assert use > 1.0 > use_short, (use, use_short)
+
+    held, turn, _, _, _ = _bottle_held_horizontal(THROW_STROKE_M)
+    assert not held or turn > 30.0, turn
+
+    held, turn, moved, gain, law = _bottle_held_horizontal(short)
+    assert held and turn < 1.0, turn
+    assert moved == pytest.approx(short - THROW_STROKE_M, abs=1e-3)
+    assert gain == pytest.approx(law, rel=0.02) and gain > 1.2, (gain, law)

@@ -305,6 +305,8 @@ class PyBulletEndEffector(EndEffector):
         if not self.band.latched:
             self.band.reset(self.band.position(), self.band.width() / 2)
         self._wind_to(stroke_m, self.spool_speed_mps)
+        if self.item is not None:  # the carriage took the item with it
+            self._grasp_stroke_m = stroke_m
 
     def throw(self, *, keep_launch_step: bool = False) -> None:
         """Disengage the latch; returns once the carriage has hit its end stop.
