@@ -369,7 +369,7 @@ def _turn_in_grip_deg(obj, stroke_m: float) -> float:
     centre of mass above their patch) in a scene without an arm; its turn [deg] in 1 s."""
     from cell.sim.grip_probe import grasped_in_scene, turn_rad
 
-    with grasped_in_scene(obj, stroke_m, 0.0, math.pi / 2) as (sc, _, relative):
+    with grasped_in_scene(obj, stroke_m, 0.0, math.pi / 2) as (sc, _, relative, _):
         q0 = relative()[1]
         sc.run_for(1.0)
         return math.degrees(turn_rad(sc.client, q0, relative()[1]))

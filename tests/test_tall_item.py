@@ -57,28 +57,12 @@ def _bottle_held_horizontal(carry_stroke_m: float) -> tuple[bool, float, float, 
     f_g the wind made it, and what the band law (`holding_mass_kg`) says of that)."""
     import math
 
-    import numpy as np
-
     from cell.catalogue import catalogue
-    from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.model.grip import holding_mass_kg
-    from cell.sim.grip_probe import turn_rad
-    from cell.sim.scene import CellScene
+    from cell.sim.grip_probe import grasped_in_scene, turn_rad
 
     bottle = catalogue()["o6_bottle"].params
-    with CellScene(robot=None) as sc:
-        ee, cl = PyBulletEndEffector(sc), sc.client
-        down = sc.ee_pose_for_release((0.0, 0.0, 0.7), -math.pi / 2, 0.0, THROW_STROKE_M, bottle)
-        sc.hold_ee(*down, teleport=True)
-        item = sc.spawn_item(bottle)
-        ee.grasp(THROW_STROKE_M, item)
-
-        def in_grip() -> tuple[np.ndarray, tuple[float, ...]]:
-            e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
-            inv = cl.invertTransform(e_p, e_o)
-            p, q = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(item.body))
-            return np.asarray(p), q
-
+    with grasped_in_scene(bottle, THROW_STROKE_M, -math.pi / 2) as (sc, _, in_grip, ee):
         p0, f0 = in_grip()[0], ee.reading().grip_n
         if carry_stroke_m != THROW_STROKE_M:
             ee.set_stroke(carry_stroke_m)
@@ -92,7 +76,7 @@ def _bottle_held_horizontal(carry_stroke_m: float) -> tuple[bool, float, float, 
         level = sc.ee_pose_for_release((0.0, 0.0, 0.7), 0.0, 0.0, carry_stroke_m, bottle, 0.0)
         sc.hold_ee(*level, teleport=True)
         sc.run_for(1.0)
-        turn = math.degrees(turn_rad(cl, q1, in_grip()[1]))
+        turn = math.degrees(turn_rad(sc.client, q1, in_grip()[1]))
         return ee.holds_item(), turn, float(p1[2] - p0[2]), f1 / f0, law
 
 

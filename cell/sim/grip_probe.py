@@ -95,11 +95,11 @@ def _probe(obj: ObjectParams, stroke_m: float) -> GripProbe:
 @contextlib.contextmanager
 def grasped_in_scene(
     obj: ObjectParams, stroke_m: float, elevation_rad: float, roll_rad: float = 0.0
-) -> Iterator[tuple[Any, Any, Callable[[], tuple[np.ndarray, tuple[float, ...]]]]]:
+) -> Iterator[tuple[Any, Any, Callable[[], tuple[np.ndarray, tuple[float, ...]]], Any]]:
     """A scene without an arm whose end-effector, held still with its throw axis at
     `elevation_rad` (and `roll_rad` about it), grips `obj` at stroke L_s [m]: yields
     (the scene, the item, a function giving the item's pose in the end-effector's frame
-    now: position [m] and quaternion x y z w)."""
+    now: position [m] and quaternion x y z w, the end-effector)."""
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.sim.scene import CellScene
 
@@ -119,7 +119,7 @@ def grasped_in_scene(
             p, q = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(item.body))
             return np.asarray(p), q
 
-        yield sc, item, relative
+        yield sc, item, relative, ee
 
 
 def turn_rad(client: Any, q0: Sequence[float], q1: Sequence[float]) -> float:
@@ -133,7 +133,7 @@ def _ramp(obj: ObjectParams, stroke_m: float, load: str, axis_col: int) -> float
     never does."""
     rate = FORCE_RAMP_N_S if load == "force" else COUPLE_RAMP_NM_S
     # the throw axis up, as when the item is carried upright
-    with grasped_in_scene(obj, stroke_m, math.pi / 2) as (sc, item, relative):
+    with grasped_in_scene(obj, stroke_m, math.pi / 2) as (sc, item, relative, _):
         cl = sc.client
         cl.setGravity(0.0, 0.0, 0.0)
         sc.run_for(0.1)
