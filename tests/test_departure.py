@@ -183,3 +183,62 @@ def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_ther
     assert summary.in_bin == 4  # every item rests in the tote
     assert any(joined)  # at least one place passed over its spot without stopping
     assert not any(walls)
+
+
+LEVEL_JOB = """\
+cell: {robot: ur5}
+bins:
+  - {id: bin_5, position_m: [0.404, 1.276], size_m: [0.345, 0.292], rim_height_m: 0.242}
+  - {id: bin_6, position_m: [0.687, -1.031], size_m: [0.302, 0.287], rim_height_m: 0.234}
+items:
+  - {object: cuboid_c, count: 3, bin: bin_6}
+seed: 1
+"""
+
+
+@pytest.fixture
+def leveller(tmp_path: Path) -> Iterator[Orchestrator]:
+    yield from _cell(LEVEL_JOB, tmp_path, "level", release="static")
+
+
+def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
+    leveller: Orchestrator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A 100 mm box that would turn in the pads if the grip rolled while it hangs (its
+    carry is kept level, `_turns_if_rolled`), on random layout 1's UR5 geometry: where the
+    route without the twist-free swing's waypoints asks no more of the grip held still
+    than the swing may (`_swing_holds`), the carry takes it, sooner than the swing's
+    route timed by `plan_carry`; the box stays in the pads, unturned, and lands in its
+    bin (the scene's physics)."""
+    from scipy.spatial.transform import Rotation
+
+    orch, sc = leveller, leveller.scene
+    ways: list[list[np.ndarray]] = []
+    departure = orch._departure
+    monkeypatch.setattr(orch, "_departure", lambda *a: (ways.append(departure(*a)), ways[-1])[1])
+    carry = orch.carry
+    unswung: list[tuple[float, float, float]] = []  # (turn in the grip [deg], took, swing's [s])
+
+    def carried(d: Any, obj: Any, item: Any) -> None:
+        def in_grip() -> Rotation:
+            tcp = orch.robot.tcp_pose(orch.q)[1]
+            return Rotation.from_matrix(tcp.T @ np.asarray(sc.item_pose(item)[1]))
+
+        assert orch._turns_if_rolled()
+        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        before, t0 = in_grip(), sc.t
+        carry(d, obj, item)
+        took, way = sc.t - t0, ways[-1]
+        swing = orch._swung(q_lift, way[-1], d.plan)
+        if len(way) <= 2 and swing:  # a lift at most, then the release: no swing
+            hold = carry_hold(orch.params, obj, d.stroke_m)
+            traj, _ = plan_carry([q_pick, q_lift, *swing, way[-1]], orch.robot, hold)
+            turn = float(np.degrees((in_grip() * before.inv()).magnitude()))
+            unswung.append((turn, took, traj.duration + SETTLE_S))
+
+    monkeypatch.setattr(orch, "carry", carried)
+    summary = orch.run()
+    assert summary.in_bin == 3, [r.reason for r in summary.results]
+    assert unswung, "no carry left the swing out"
+    for turn, took, swing_s in unswung:
+        assert turn < 2.0 and took < swing_s, (turn, took, swing_s)
