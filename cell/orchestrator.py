@@ -510,6 +510,12 @@ FACE_MIN_OFF_RAD = math.radians(70.0)  # [rad] for a bin at least this far round
 FACE_THROW_STRETCH = 1.10  # lengthening the throw at most this much
 
 
+def _plan_time(trajs: list[Any], settle_s: float) -> float:
+    """How long [s] `_move` takes along `_move_plan`'s trajectories: their durations and a
+    settle of `settle_s` [s] at each stop between them."""
+    return sum(float(t.duration) for t in trajs) + settle_s * (len(trajs) - 1)
+
+
 def _clip(v: float, lim: float) -> float:
     return max(-lim, min(lim, v))
 
@@ -1020,7 +1026,7 @@ class Orchestrator:
             path is None or self._spline_within_limits([q_from, *waypoints], 400) is None
         ):
             stops = self._stops(q_from, waypoints, carried)
-            t_stops = sum(t.duration for t in stops) + settle_s * (len(stops) - 1)
+            t_stops = _plan_time(stops, settle_s)
             if path is None or t_stops < path.duration:
                 return stops
         return [path]
@@ -1530,7 +1536,7 @@ class Orchestrator:
                 trajs = self._move_plan(self.q, way, SETTLE_S)
             except TrajectoryError:
                 continue
-            took = sum(float(t.duration) for t in trajs) + SETTLE_S * (len(trajs) - 1)
+            took = _plan_time(trajs, SETTLE_S)
             if best is None or took < best[0]:
                 best = (took, way)
         return ways[0] if best is None else best[1]
@@ -2343,7 +2349,7 @@ class Orchestrator:
                 carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
             except (IKFailed, TrajectoryError):
                 continue
-            t_carry = sum(float(t.duration) for t in carry) + SETTLE_S * (len(carry) - 1)
+            t_carry = _plan_time(carry, SETTLE_S)
             # a turned release (`turn_release`) is compared by the way back it leaves (the
             # next item is presented where this one is); otherwise the way back is taken
             # to be as long as the carry, as for the cycles the figures measured
