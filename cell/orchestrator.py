@@ -1226,7 +1226,8 @@ class Orchestrator:
         """The release on the move that the planner prefers to the static one by cycle
         time, landing in the bin by the model (`cell.robot.moving_release.choose_release`,
         from where the lift over the presented item will be, its stroke at most
-        `stroke_max_m`: what the grip holds), or None."""
+        `stroke_max_m`: what the grip holds), and that is sooner than the static one as
+        the cell makes them from the pick (`_moving_sooner`); or None."""
         from cell.robot.moving_release import choose_release
 
         stroke = plan.stroke_m + delta
@@ -1246,6 +1247,10 @@ class Orchestrator:
                 velocity_scale=self.speed_scale,
                 acceleration_scale=self.speed_scale,
             )
+            if choice.moving is not None and not self._moving_sooner(
+                obj, plan, stroke, choice.moving, delta
+            ):
+                return None
         except (IKFailed, TrajectoryError) as exc:
             log.info("no release on the move for %s: %s", obj.name or obj.shape, exc)
             return None
@@ -1254,6 +1259,55 @@ class Orchestrator:
         if choice.moving is not None:
             log.info("%s: release on the move saves %.2f s", obj.name or obj.shape, choice.saved_s)
         return choice.moving
+
+    def _moving_sooner(
+        self, obj: ObjectParams, plan: Any, stroke: float, mt: Any, delta: float
+    ) -> bool:
+        """Is the release on the move `mt` sooner than the static release of `plan` at
+        `stroke` [m], each from the pick of the presented item to the release and back
+        to that pick, as the cell makes them? The static: the carry along `_departure`'s
+        route (`_move_plan`, its settle), the push (COAST_S) and the empty arm's way back
+        from the release (`_approach_s`); the moving: its motion from the pick, or the
+        move up to the lift and its motion from there (`_moving_route`), and the way
+        back from where it stops. The moving plan's stroke is its own plus `delta`.
+
+        `choose_release` times both from rest at the lift and back to it; the cell's
+        static carry leaves the pick without stopping, and a moving release whose move
+        from the pick does not rise from the station stops at the lift first. On random
+        layouts 6 and 11, 13 of the 17 releases on the move it had chosen took 0.36-1.45 s
+        longer a cycle than the static release of the same item (layout 11's three 51 mm
+        cubes stopped at the lift); four 50 mm cubes' were 0.28-0.45 s sooner
+        (tests/test_moving_choice.py). Where the static route is not found, the moving
+        one is kept."""
+        from cell.robot.moving_release import COAST_S
+
+        item = self._presented
+        if item is None or self.pick_mode == "physical":
+            return True  # no pick to time from (`choose_release`'s choice stands)
+        s_moving = mt.plan.stroke_m + delta
+        q_pick, q_lift = self._over_item(item, s_moving, obj)
+        lifted, motion = self._moving_route(mt, obj, s_moving, q_pick, q_lift)
+        t_moving = motion.duration_s + self._approach_s(
+            motion.q_end, (q_pick, q_lift), s_moving, obj
+        )
+        if lifted:
+            held = (obj, s_moving)
+            t_moving += _plan_time(self._move_plan(q_pick, [q_lift], SETTLE_S, held), SETTLE_S)
+        try:
+            q_pick, q_lift = self._over_item(item, stroke, obj)
+            at = (q_pick, self.scene.item_position(item), obj, stroke)
+            way = self._departure(q_lift, self._q_release, plan, at)
+            t_static = _plan_time(self._move_plan(q_pick, way, SETTLE_S, (obj, stroke)), SETTLE_S)
+            t_static += COAST_S + self._approach_s(self._q_release, (q_pick, q_lift), stroke, obj)
+        except (IKFailed, TrajectoryError):
+            return True
+        log.info(
+            "%s: release on the move %.2f s, static %.2f s, pick to pick",
+            obj.name or obj.shape,
+            t_moving,
+            t_static,
+        )
+        return t_moving < t_static
 
     def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
         """Grip the item turned as the release will hold it: the carry then only swings
@@ -1322,30 +1376,10 @@ class Orchestrator:
             # need not go straight up: it can sweep the item out of the pads across the
             # station's top, `tests/test_moving_station.py`), or leaves the joint limits,
             # the arm goes up to the lift, where `_moving_choice` timed the release from
-            from cell.robot.moving_release import plan_moving_release
-
-            mt = d.state["moving"]
-
-            def motion_from(q: np.ndarray) -> Any:
-                return plan_moving_release(
-                    self.robot,
-                    q,
-                    mt.motion.q_release,
-                    mt.motion.v_release,
-                    hold=carry_hold(self.params, obj, d.stroke_m),
-                    velocity_scale=self.speed_scale,
-                    acceleration_scale=self.speed_scale,
-                )
-
-            try:
-                motion = motion_from(self.q)
-                direct = self._moving_leaves_station(motion)
-            except TrajectoryError:
-                direct = False
-            if not direct:
+            lifted, motion = self._moving_route(d.state["moving"], obj, d.stroke_m, self.q, q_lift)
+            if lifted:
                 log.info("%s: up to the lift, then the release on the move", obj.name or obj.shape)
                 self._move([q_lift])
-                motion = motion_from(self.q)
             d.state["motion"] = motion
         else:
             plan = d.plan
@@ -1367,6 +1401,34 @@ class Orchestrator:
                 self._grip_stroke = d.stroke_m
                 self.scene.run_for(SETTLE_S)
         self._check_held(obj)
+
+    def _moving_route(
+        self, mt: Any, obj: ObjectParams, stroke: float, q_pick: np.ndarray, q_lift: np.ndarray
+    ) -> tuple[bool, Any]:
+        """(up to the lift first?, the motion) of the release on the move `mt` carrying
+        `obj` at `stroke` [m] (`carry`): the release's own move from the pick q_pick
+        [rad] where it leaves the station upward (`_moving_leaves_station`), else from
+        rest at the lift q_lift. TrajectoryError when there is none from the lift."""
+        from cell.robot.moving_release import plan_moving_release
+
+        def motion_from(q: np.ndarray) -> Any:
+            return plan_moving_release(
+                self.robot,
+                q,
+                mt.motion.q_release,
+                mt.motion.v_release,
+                hold=carry_hold(self.params, obj, stroke),
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+
+        try:
+            motion = motion_from(q_pick)
+            if self._moving_leaves_station(motion):
+                return False, motion
+        except TrajectoryError:
+            pass
+        return True, motion_from(q_lift)
 
     def release(self, d: Decision) -> np.ndarray | None:
         """Open the latch: slowly to place, at once to throw (a hardware end-effector
@@ -1471,7 +1533,11 @@ class Orchestrator:
         return traj, ""
 
     def _departure(
-        self, q_lift: np.ndarray, q_end: np.ndarray, plan: Any = None
+        self,
+        q_lift: np.ndarray,
+        q_end: np.ndarray,
+        plan: Any = None,
+        at: tuple[np.ndarray, np.ndarray | None, ObjectParams, float] | None = None,
     ) -> list[np.ndarray]:
         """Waypoints from the pick (where the arm is) to q_end (a throw's release
         configuration, for its `plan`, or over a bin): through the lowest of
@@ -1490,11 +1556,21 @@ class Orchestrator:
         what any route may ask, and where both pass, the sooner is taken (`_soonest`). On
         random layout 1 (UR5), four 100 mm boxes (cuboid_c) whose swing routes had failed
         from the pick went straight from it: 0.73-0.77 s against 1.38-1.43 s through the
-        lift and the swing (tests/test_departure.py)."""
-        q_pick = self.q
-        obj, stroke = self._carried[0], self._grip_stroke
-        p_pick = self.scene.item_position(self.ee.item) if self.ee.item is not None else None
-        level = plan is not None and self._turns_if_rolled()
+        lift and the swing (tests/test_departure.py).
+
+        `at`: (the pick's configuration [rad], the item's centre there [m, W], the item,
+        its stroke [m]), to time a departure before the pick (`_moving_sooner`); default:
+        where the arm is, with what the grip holds."""
+        # the swing is the throw's item at its throw's stroke (`_swing`'s default); the
+        # routes' tests are at the stroke it is held at (`_carry_stroke`)
+        swing_of: tuple[ObjectParams, float] | None = None
+        if at is None:
+            p_held = self.scene.item_position(self.ee.item) if self.ee.item is not None else None
+            at = (self.q, p_held, self._carried[0], self._grip_stroke)
+        else:
+            swing_of = (at[2], at[3])
+        q_pick, p_pick, obj, stroke = at
+        level = plan is not None and self._turns_if_rolled(*swing_of or ())
         # a route that leaves the swing out, where it holds the item as well (below)
         unswung = level and carry_hold(self.params, obj, stroke).torque_nm > 0.0
 
@@ -1506,7 +1582,9 @@ class Orchestrator:
             if up > 0.0 and p_pick is not None:
                 lift = p_pick + np.array([0.0, 0.0, up])
                 try:
-                    q_up = self._ik_frame(self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj))
+                    q_up = self._ik_frame(
+                        self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj), q_pick
+                    )
                 except IKFailed:
                     continue
                 if joint_gap(q_pick, q_up) > LIFT_MAX_DQ_RAD:
@@ -1514,26 +1592,32 @@ class Orchestrator:
                 start = [q_up]
             elif up > 0.0:
                 continue
-            swung = self._swung(start[-1] if start else q_pick, q_end, plan)
+            swung = self._swung(start[-1] if start else q_pick, q_end, plan, swing_of)
             ways = [[*start, *swung, q_end]] + ([[*start, q_end]] if swung and unswung else [])
             ways = [w for w in ways if self._rises_from_station([q_pick, *w]) and holds(w)]
             if ways:
-                return self._soonest(ways)
-        swung = self._swung(q_lift, q_end, plan)
+                return self._soonest(ways, q_pick, (obj, stroke))
+        swung = self._swung(q_lift, q_end, plan, swing_of)
         way = [q_lift, *swung, q_end]
         if swung and unswung and holds([q_lift, q_end]):
-            return self._soonest([way, [q_lift, q_end]])
+            return self._soonest([way, [q_lift, q_end]], q_pick, (obj, stroke))
         return way
 
-    def _soonest(self, ways: list[list[np.ndarray]]) -> list[np.ndarray]:
-        """Of routes from where the arm is (a carry's, `_departure`), the one `_move` takes
-        soonest, its stops and settles counted; the first where none is timed."""
+    def _soonest(
+        self,
+        ways: list[list[np.ndarray]],
+        q_from: np.ndarray,
+        carried: tuple[ObjectParams, float],
+    ) -> list[np.ndarray]:
+        """Of routes from q_from [rad] carrying `carried` (the item and its stroke [m]: a
+        carry's, `_departure`), the one `_move` takes soonest, its stops and settles
+        counted; the first where none is timed."""
         if len(ways) == 1:
             return ways[0]
         best: tuple[float, list[np.ndarray]] | None = None
         for way in ways:
             try:
-                trajs = self._move_plan(self.q, way, SETTLE_S)
+                trajs = self._move_plan(q_from, way, SETTLE_S, carried)
             except TrajectoryError:
                 continue
             took = _plan_time(trajs, SETTLE_S)
@@ -1541,9 +1625,16 @@ class Orchestrator:
                 best = (took, way)
         return ways[0] if best is None else best[1]
 
-    def _swung(self, q_from: np.ndarray, q_end: np.ndarray, plan: Any) -> list[np.ndarray]:
-        """The twist-free swing's waypoints for a throw's `plan` (`_swing`); none for a place."""
-        return [] if plan is None else self._swing(q_from, q_end, plan)
+    def _swung(
+        self,
+        q_from: np.ndarray,
+        q_end: np.ndarray,
+        plan: Any,
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[np.ndarray]:
+        """The twist-free swing's waypoints for a throw's `plan` (`_swing`, `carried` as
+        there); none for a place."""
+        return [] if plan is None else self._swing(q_from, q_end, plan, carried)
 
     def _rises_from_station(self, waypoints: list[np.ndarray], n: int = 400) -> bool:
         """Does the spline through `waypoints` (`cell.robot.motion.spline_path`, the path a
@@ -2323,18 +2414,10 @@ class Orchestrator:
         the grip than the carry's bound (`_swing_holds`: a tall item on a swing that
         rolls the grip) ranks after every one that does not."""
         from cell.robot.ik import ReleasePose, solve_ik
-        from cell.robot.motion import move_time
-
-        def approach_s(q_from: np.ndarray) -> float:
-            approach, _ = self._approach_plan(self._presented, stroke, obj, q_pick, q_from)
-            if approach is not None:
-                return float(approach.duration)
-            # through the lift (`_pick_kinematic`)
-            return move_time(q_from, q_lift, self.robot) + move_time(q_lift, q_pick, self.robot)
 
         try:
             q_pick, q_lift = self._over_item(self._presented, stroke, obj)
-            t_approach = approach_s(self.q)
+            t_approach = self._approach_s(self.q, (q_pick, q_lift), stroke, obj)
         except (IKFailed, TrajectoryError):
             return []
         pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
@@ -2356,7 +2439,7 @@ class Orchestrator:
             t_back = t_carry
             if self.turn_release:
                 try:
-                    t_back = approach_s(q_rel)
+                    t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
                 except (IKFailed, TrajectoryError):
                     continue
             slips = level and not self._swing_holds(
@@ -2364,6 +2447,26 @@ class Orchestrator:
             )
             out.append(((slips, t_approach + t_carry + t_back), q_rel))
         return out
+
+    def _approach_s(
+        self,
+        q_from: np.ndarray,
+        over: tuple[np.ndarray, np.ndarray],
+        stroke: float,
+        obj: ObjectParams,
+    ) -> float:
+        """How long [s] the empty arm takes from rest at q_from [rad] to the pick of the
+        presented item, `over` its (pick, lift) configurations: without stopping over it
+        (`_approach_plan`), else through the lift (`_pick_kinematic`; jerk-limited
+        rest-to-rest moves at the full limits, `move_time`). TrajectoryError or IKFailed
+        where neither is found."""
+        from cell.robot.motion import move_time
+
+        q_pick, q_lift = over
+        approach, _ = self._approach_plan(self._presented, stroke, obj, q_pick, q_from)
+        if approach is not None:
+            return float(approach.duration)
+        return move_time(q_from, q_lift, self.robot) + move_time(q_lift, q_pick, self.robot)
 
     def _release_bounds(self, target: Any) -> list[Any]:
         """The release bounds a plan is tried in, in order: the cell's, then lower and
