@@ -71,3 +71,33 @@ def test_the_release_chosen_is_no_later_than_the_static_one_in_the_scene(
     took_static = sum(r.cycle_time_s for r in static.results[:-1])
     assert took_auto <= took_static + 0.02, (took_auto, took_static)
     assert auto.in_bin == len(auto.results)  # and no item lost for it
+
+
+def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Path) -> None:
+    """`_moving_sooner` times the static carry along `_departure` planned before the pick
+    (`_static_carry`): the same waypoints as the carry plans once the item is in the
+    grip, and the time the scene's clock says the carry took, its settle included."""
+    import numpy as np
+
+    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="at", release="static")
+    try:
+        for index, spec in enumerate(o.job.expanded_items()[:4]):
+            obj, target = spec.obj, o.job.bin(spec.bin)
+            item = o.present(index, obj)
+            d = o.decide(index, obj, target)
+            o._frame = o._pick_frame(d.plan)  # as the pick grips it
+            q_pick, q_lift = o._over_item(item, d.stroke_m, obj)
+            at = (q_pick, o.scene.item_position(item), obj, d.stroke_m)
+            before, timed = o._static_carry(at, q_lift, d.state["q_release"], d.plan)
+            o.pick(d, obj, item)
+            after = o._departure(d.state["q_lift"], d.state["q_release"], d.plan)
+            assert len(before) == len(after)
+            for a, b in zip(before, after, strict=True):
+                assert np.allclose(a, b, atol=1e-3), (index, a, b)
+            t0 = o.scene.t
+            o._move(after)
+            assert abs((o.scene.t - t0) - timed) < 0.02, (index, o.scene.t - t0, timed)
+            o.effector.throw()
+            o.finish(d)
+    finally:
+        o.close()
