@@ -1266,10 +1266,10 @@ class Orchestrator:
         """Is the release on the move `mt` sooner than the static release of `plan` at
         `stroke` [m], each from the pick of the presented item to the release and back
         to that pick, as the cell makes them? The static: the carry along `_departure`'s
-        route (`_move_plan`, its settles, the last at the release), the push (COAST_S) and the empty arm's way back
-        from the release (`_approach_s`); the moving: its motion from the pick, or the
-        move up to the lift and its motion from there (`_moving_route`), and the way
-        back from where it stops. The moving plan's stroke is its own plus `delta`.
+        route (`_static_carry`: `_move_plan`, its settles, the last at the release), the
+        push (COAST_S) and the empty arm's way back from the release (`_approach_s`); the
+        moving: its motion from the pick, or the move up to the lift, its settle and its
+        motion from there (`_moving_route`), and the way back from where it stops. The moving plan's stroke is its own plus `delta`.
 
         `choose_release` times both from rest at the lift and back to it; the cell's
         static carry leaves the pick without stopping, and a moving release whose move
