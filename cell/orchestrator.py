@@ -510,6 +510,12 @@ FACE_MIN_OFF_RAD = math.radians(70.0)  # [rad] for a bin at least this far round
 FACE_THROW_STRETCH = 1.10  # lengthening the throw at most this much
 
 
+# Where a carry starts, for planning it before the pick (`Orchestrator._departure`): the
+# pick's configuration [rad], the item's centre there [m, W] (None: not known), the item and
+# the stroke it is held at [m].
+PickState = tuple[np.ndarray, np.ndarray | None, ObjectParams, float]
+
+
 def _plan_time(trajs: list[Any], settle_s: float) -> float:
     """How long [s] `_move` takes along `_move_plan`'s trajectories: their durations and a
     settle of `settle_s` [s] at each stop between them."""
@@ -1269,7 +1275,8 @@ class Orchestrator:
         route (`_static_carry`: `_move_plan`, its settles, the last at the release), the
         push (COAST_S) and the empty arm's way back from the release (`_approach_s`); the
         moving: its motion from the pick, or the move up to the lift, its settle and its
-        motion from there (`_moving_route`), and the way back from where it stops. The moving plan's stroke is its own plus `delta`.
+        motion from there (`_moving_route`), and the way back from where it stops. The
+        moving plan's stroke is its own plus `delta`.
 
         `choose_release` times both from rest at the lift and back to it; the cell's
         static carry leaves the pick without stopping, and a moving release whose move
@@ -1278,7 +1285,8 @@ class Orchestrator:
         longer a cycle than the static release of the same item (layout 11's three 51 mm
         cubes stopped at the lift); four 50 mm cubes' were 0.28-0.45 s sooner
         (tests/test_moving_choice.py). Where the static route is not found, the moving
-        one is kept."""
+        one is kept; where the moving one is not, IKFailed or TrajectoryError (then
+        `_moving_choice` takes none)."""
         from cell.robot.moving_release import COAST_S
 
         item = self._presented
@@ -1404,7 +1412,7 @@ class Orchestrator:
 
     def _static_carry(
         self,
-        at: tuple[np.ndarray, np.ndarray | None, ObjectParams, float],
+        at: PickState,
         q_lift: np.ndarray,
         q_rel: np.ndarray,
         plan: Any,
@@ -1553,7 +1561,7 @@ class Orchestrator:
         q_lift: np.ndarray,
         q_end: np.ndarray,
         plan: Any = None,
-        at: tuple[np.ndarray, np.ndarray | None, ObjectParams, float] | None = None,
+        at: PickState | None = None,
     ) -> list[np.ndarray]:
         """Waypoints from the pick (where the arm is) to q_end (a throw's release
         configuration, for its `plan`, or over a bin): through the lowest of
@@ -1574,9 +1582,8 @@ class Orchestrator:
         from the pick went straight from it: 0.73-0.77 s against 1.38-1.43 s through the
         lift and the swing (tests/test_departure.py).
 
-        `at`: (the pick's configuration [rad], the item's centre there [m, W], the item,
-        its stroke [m]), to time a departure before the pick (`_moving_sooner`); default:
-        where the arm is, with what the grip holds."""
+        `at`: where the carry starts (`PickState`), to time a departure before the pick
+        (`_moving_sooner`); default: where the arm is, with what the grip holds."""
         # the swing is the throw's item at its throw's stroke (`_swing`'s default); the
         # routes' tests are at the stroke it is held at (`_carry_stroke`)
         swing_of: tuple[ObjectParams, float] | None = None

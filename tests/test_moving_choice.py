@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from cell.jobs import parse_job
@@ -77,8 +78,6 @@ def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Pat
     """`_moving_sooner` times the static carry along `_departure` planned before the pick
     (`_static_carry`): the same waypoints as the carry plans once the item is in the
     grip, and the time the scene's clock says the carry took, its settle included."""
-    import numpy as np
-
     o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="at", release="static")
     try:
         for index, spec in enumerate(o.job.expanded_items()[:4]):
