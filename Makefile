@@ -32,7 +32,8 @@ bench: install
 	$(BIN)/cell bench
 
 # Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 13 of them the
-# random-layout benchmark, 6 its speed trade-off, 5 the flywheel). The JSON beside
+# random-layout benchmark, 6 its speed trade-off, 5 the flywheel; and about 75 min more for
+# the benchmark and the demo with --cycle-search, whose planning is slow). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
@@ -60,6 +61,8 @@ figures: install
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --floor --json > $(FIG)/bench_sort_turned.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --floor --json > $(FIG)/bench_sort_cycle.json
+	$(BIN)/cell run tasks/bins.yaml --no-log --cycle-search --json $(FIG)/run_cycle.json
 	$(BIN)/python -m cell.bench.bench_flywheel --json $(FIG)/flywheel.json
 	$(BIN)/cell bench tradeoff --layouts 4 --seed 0 --robots panda,ur5 --scales 0.5,0.75,1.0 --workers 2 --plot $(FIG)/tradeoff.png --json > $(FIG)/tradeoff.json
 

@@ -28,7 +28,7 @@ import math
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -504,6 +504,13 @@ RELEASE_FALLBACKS = ((math.radians(45.0), 0.7), (math.radians(30.0), 0.6))
 # optimiser puts a long throw of a heavy item in the box's far upper corner, which the arm
 # does not reach with the throw axis tilted (a 174 g disc to a bin 2.5 m out: 15 mm short)
 RELEASE_BOX_SHRINK = 0.75
+# With `cycle_search`, a release's cycle estimate (`Orchestrator._release_costs`) counts
+# this much of the empty arm's approach from where it is: the approach is paid once, the
+# cycle by this item and the like ones after it. Counted in full, random layout 0's first
+# item, chosen from the arm's start, kept the next ones on a branch 0.8 s slower a cycle;
+# left out, the UR5's two wrist rolls (equal cycles) alternated on layout 3, each approach
+# turning the wrist half a turn (0.4-0.6 s a pick).
+APPROACH_WEIGHT = 0.25
 # a throw's release turns from its bin toward the pick station (_facing_toward_station):
 FACE_TURN_MAX_RAD = math.radians(90.0)  # [rad] at most this far,
 FACE_MIN_OFF_RAD = math.radians(70.0)  # [rad] for a bin at least this far round from the station,
@@ -514,6 +521,18 @@ FACE_THROW_STRETCH = 1.10  # lengthening the throw at most this much
 # pick's configuration [rad], the item's centre there [m, W] (None: not known), the item and
 # the stroke it is held at [m].
 PickState = tuple[np.ndarray, np.ndarray | None, ObjectParams, float]
+
+
+class _Release(NamedTuple):
+    """A throw's plan in one release bounds, as `Orchestrator._plan_facing` compares them."""
+
+    cost: tuple[bool, float] | None  # (asks more of the grip than it holds, cycle [s]) or None
+    plan: Any
+    delta: float  # [m] the learned ΔL_s
+    q_release: np.ndarray  # [rad] the release configuration chosen
+    bounds: Any  # the release bounds it was planned in
+    aim: np.ndarray  # [m, W] where the plan aims to cross the rim plane
+    model_obj: ObjectParams  # the object the plan's model assumed
 
 
 def _plan_time(trajs: list[Any], settle_s: float) -> float:
@@ -558,6 +577,11 @@ class Orchestrator:
             moves use, in (0, 1] (a carry may go slower, as its grip allows).
         floor: also time each item's approach and throw's carry as one direct move
             (`floors`, `_time_floor`): what the routes cost against the arm's limits.
+        cycle_search: choose each throw's release by its pick-to-pick cycle as the cell
+            makes it, among the cell's release bounds and the lower ones
+            (RELEASE_FALLBACKS), and carry it there (`_release_costs`, `_plan_facing`,
+            `_release_branch`): sooner cycles for about ten times the planning (off by
+            default: the planning of a throw then takes longer than its cycle here).
     """
 
     def __init__(
@@ -576,6 +600,7 @@ class Orchestrator:
         release: str = "auto",
         turn_release: bool = False,
         floor: bool = False,
+        cycle_search: bool = False,
     ) -> None:
         from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
@@ -608,6 +633,7 @@ class Orchestrator:
             raise InvalidInput(f"release {release!r}: valid are {list(RELEASES)}")
         self.release_mode = release
         self.turn_release = bool(turn_release)  # `_facing_toward_station`
+        self.cycle_search = bool(cycle_search)  # `_release_costs`, `_plan_facing`
         # with `floor`: per item index, (the seconds its approach and its throw's carry
         # took, the seconds each would take as one direct move: `_time_floor`)
         self.floor = bool(floor)
@@ -962,11 +988,30 @@ class Orchestrator:
         bottle left the pads; a 70 mm, 60 g cylinder's re-solved branch asked 0.97
         against the chosen one's 0.746, so its carry went at the gentle scale (5.8 s
         against the 3.2 s the decision timed). This holds even where the level swing
-        alone is within the carry's bound: the spline between its waypoints is not."""
-        if chosen is None or self.pick_mode == "physical" or not self._turns_if_rolled():
+        alone is within the carry's bound: the spline between its waypoints is not.
+
+        With `cycle_search` the decision times each candidate along the route the carry
+        takes, from the pick: the carry goes to the chosen configuration wherever it is
+        one of the release pose (its TCP within IK's own tolerance, POSITION_TOL_M, of
+        `tcp` [m, W]). IK from the pick can land on another branch than the one timed:
+        on random layout 2, a 67 mm cube's re-solved release was 3.13 rad away in a
+        wrist joint, and its carry took 2.11 s in the scene against the 1.06 s timed
+        (tests/test_release_choice.py). Without it, the decision times the carry from
+        the lift, not from the pick, and the branch found from the pick is often the
+        sooner: carried to the chosen one, that job's 67 mm cube took 1.91 s a cycle
+        instead of 2.96 s, but its three 57 mm, 165 g cubes 15.65 s instead of 10.80 s."""
+        from cell.robot.ik import POSITION_TOL_M
+
+        if chosen is None or self.pick_mode == "physical":
             return q_rel
         chosen = np.asarray(chosen, float)
-        if chosen.shape != q_rel.shape or joint_gap(chosen, q_rel) < 1e-3:
+        if chosen.shape != q_rel.shape:
+            return q_rel
+        if self.cycle_search:
+            if np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)) > POSITION_TOL_M:
+                return q_rel
+            return chosen
+        if not self._turns_if_rolled() or joint_gap(chosen, q_rel) < 1e-3:
             return q_rel
         if np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)) > 1e-4:
             return q_rel
@@ -1271,9 +1316,7 @@ class Orchestrator:
     ) -> bool:
         """Is the release on the move `mt` sooner than the static release of `plan` at
         `stroke` [m], each from the pick of the presented item to the release and back
-        to that pick, as the cell makes them? The static: the carry along `_departure`'s
-        route (`_static_carry`: `_move_plan`, its settles, the last at the release), the
-        push (COAST_S) and the empty arm's way back from the release (`_approach_s`); the
+        to that pick, as the cell makes them? The static: `_static_cycle_s`; the
         moving: its motion from the pick, or the move up to the lift, its settle and its
         motion from there (`_moving_route`), and the way back from where it stops. The
         moving plan's stroke is its own plus `delta`.
@@ -1287,8 +1330,6 @@ class Orchestrator:
         (tests/test_moving_choice.py). Where the static route is not found, the moving
         one is kept; where the moving one is not, IKFailed or TrajectoryError (then
         `_moving_choice` takes none)."""
-        from cell.robot.moving_release import COAST_S
-
         item = self._presented
         if item is None or self.pick_mode == "physical":
             return True  # no pick to time from (`choose_release`'s choice stands)
@@ -1303,10 +1344,7 @@ class Orchestrator:
             lift = self._move_plan(q_pick, [q_lift], SETTLE_S, held)
             t_moving += _plan_time(lift, SETTLE_S) + SETTLE_S
         try:
-            q_pick, q_lift = self._over_item(item, stroke, obj)
-            at = (q_pick, self.scene.item_position(item), obj, stroke)
-            _, t_static = self._static_carry(at, q_lift, self._q_release, plan)
-            t_static += COAST_S + self._approach_s(self._q_release, (q_pick, q_lift), stroke, obj)
+            t_static = self._static_cycle_s(obj, plan, stroke, self._q_release)
         except (IKFailed, TrajectoryError):
             return True
         log.info(
@@ -1425,6 +1463,30 @@ class Orchestrator:
         way = self._departure(q_lift, q_rel, plan, at)
         trajs = self._move_plan(at[0], way, SETTLE_S, (at[2], at[3]))
         return way, _plan_time(trajs, SETTLE_S) + SETTLE_S
+
+    def _static_cycle_s(
+        self,
+        obj: ObjectParams,
+        plan: Any,
+        stroke: float,
+        q_rel: np.ndarray,
+        over: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> float:
+        """How long [s] the cell takes from the pick of the presented item, gripped at
+        `stroke` [m] in the frame `self._frame`, to its static release at q_rel [rad] for
+        `plan` and back to that pick: the carry along `_departure`'s route
+        (`_static_carry`), the push (COAST_S) and the empty arm's way back
+        (`_approach_s`). The next item of the same kind is picked where this one was, so
+        this is its pick-to-pick cycle; on random layout 3, 11 of 15 such cycles were
+        within 0.03 s of the scene's. `over`: the pick's and the lift's configurations
+        (`_over_item`), where known. IKFailed or TrajectoryError where a move is not
+        found."""
+        from cell.robot.moving_release import COAST_S
+
+        q_pick, q_lift = over or self._over_item(self._presented, stroke, obj)
+        at = (q_pick, self.scene.item_position(self._presented), obj, stroke)
+        _, t_carry = self._static_carry(at, q_lift, q_rel, plan)
+        return t_carry + COAST_S + self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
 
     def _moving_route(
         self, mt: Any, obj: ObjectParams, stroke: float, q_pick: np.ndarray, q_lift: np.ndarray
@@ -2344,63 +2406,118 @@ class Orchestrator:
         """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), and
         the release's cycle estimate (`_release_q`; None where none was made).
 
-        When IK finds no configuration for the plan's release pose, the plan is made
-        again with the release lower and the throw axis flatter (RELEASE_FALLBACKS):
-        the arm cannot point steeply up at shoulder height close to its base; then in a
-        smaller release box (RELEASE_BOX_SHRINK).
+        The plan is made in the cell's release bounds; where IK finds no configuration for
+        its release pose, again with the release lower and the throw axis flatter
+        (RELEASE_FALLBACKS): the arm cannot point steeply up at shoulder height close to
+        its base. With `cycle_search`, in all of these, the sooner kept
+        (`_soonest_release`): a lower release can be nearer the pick. Random layout 11's
+        three eggs took up to 8.6 s a cycle released in the cell's bounds, 2.48 s each
+        released lower, where the carry's grip bound is far less tight. Where none of these
+        is reached, the plan is made in a smaller release box (RELEASE_BOX_SHRINK), the
+        first reached kept.
         """
         from dataclasses import replace as dc_replace
 
         err: CellError | None = None
-        for bounds in self._release_bounds(target):
-            bounds = dc_replace(bounds, facing_rad=facing)
-            # steep enough for the grip to hold the item at its release first; where the
-            # arm reaches no such release, as the bounds are (`_steep_enough`)
-            for steep in (True, False):
-                self.bounds_now = bounds
-                self._steepened = False
+        ordinary, shrunk = self._release_bounds(target)
+        for tier in (ordinary, shrunk):
+            found: list[_Release] = []
+            for bounds in tier:
+                if found and (tier is shrunk or not self.cycle_search):
+                    break  # the first reached is kept
                 try:
-                    plan, delta = self._plan_once(obj, goal, index, stroke_max_m, steep)
-                except UnreachableTarget as exc:
-                    err = err or exc
-                    break
-                stroke = plan.stroke_m + delta
-                centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-                try:
-                    self._q_release, cost = self._release_q(
-                        self._tcp_for_item_centre(
-                            centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
-                        ),
-                        plan,
-                        stroke,
-                        obj,
+                    found.append(
+                        self._plan_in(
+                            obj,
+                            goal,
+                            index,
+                            stroke_max_m,
+                            dc_replace(bounds, facing_rad=facing),
+                        )
                     )
-                except IKFailed as exc:
+                except (UnreachableTarget, IKFailed) as exc:
                     err = err or exc
-                    if not self._steepened:
-                        break
-                    continue
-                return plan, delta, cost
+            if found:
+                r = self._soonest_release(obj, found)
+                self._q_release, self.bounds_now = r.q_release, r.bounds
+                self._aim, self._model_obj = r.aim, r.model_obj
+                return r.plan, r.delta, r.cost
         assert err is not None
         raise err
 
+    def _plan_in(
+        self,
+        obj: ObjectParams,
+        goal: tuple[float, float, float],
+        index: int,
+        stroke_max_m: float,
+        bounds: Any,
+    ) -> _Release:
+        """The throw's plan in release `bounds` and its release (`_release_q`): steep
+        enough for the grip to hold the item at its release first; where the arm reaches
+        no such release, as the bounds are (`_steep_enough`). UnreachableTarget or
+        IKFailed."""
+        err: IKFailed | None = None
+        for steep in (True, False):
+            self.bounds_now = bounds
+            self._steepened = False
+            plan, delta = self._plan_once(obj, goal, index, stroke_max_m, steep)
+            stroke = plan.stroke_m + delta
+            centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+            try:
+                q_release, cost = self._release_q(
+                    self._tcp_for_item_centre(
+                        centre, plan.elevation_rad, plan.azimuth_rad, stroke, obj
+                    ),
+                    plan,
+                    stroke,
+                    obj,
+                )
+            except IKFailed as exc:
+                err = err or exc
+                if not self._steepened:
+                    break
+                continue
+            return _Release(cost, plan, delta, q_release, bounds, self._aim, self._model_obj)
+        assert err is not None
+        raise err
+
+    @staticmethod
+    def _soonest_release(obj: ObjectParams, found: list[_Release]) -> _Release:
+        """Of the plans `found` in the release bounds in `_release_bounds`' order, the
+        first, unless a later one's cycle estimate is sooner and its route asks no more of
+        the grip than the first's; the first where an estimate is missing."""
+        first = best = found[0]
+        for r in found[1:]:
+            if first.cost is None or r.cost is None or best.cost is None:
+                continue
+            if r.cost[0] <= first.cost[0] and r.cost < best.cost:
+                best = r
+        if best is not first:
+            log.info(
+                "%s: released %.2f m high, %.2f s sooner a cycle than in the cell's bounds",
+                obj.name or obj.shape,
+                best.plan.z_m,
+                first.cost[1] - best.cost[1],  # type: ignore[index]
+            )
+        return best
+
     def _release_q(
-        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        stroke: float,
+        obj: ObjectParams,
     ) -> tuple[np.ndarray, tuple[bool, float] | None]:
         """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
         estimate (None where none was made; `_plan` compares facings by it): of the two rolls
         that put the item's weight on a pad (0 and π, `solve_release_ik`), the one whose
-        cycle is the shorter: the empty arm to the pick of the presented item (as
-        `_approach_plan` times it, else through the lift: jerk-limited rest-to-rest moves
-        at the full limits, `move_time`), plus twice the carry from its lift along the
-        twist-free swing to the release, timed as `_move_plan` times a carry of this item
-        (the next approach comes back about as far; with `turn_release`, the empty arm's
-        way back from the release to the same pick instead, timed as the first: a release
-        turned toward the station winds the wrist round, and the way back unwinds it). The pick is
+        cycle estimate is the shorter (`_release_costs`). The pick is
         gripped at the release's roll (`_pick_frame`), so the roll chooses the pick's,
         the lift's and the swing's configurations too. Each roll's release is solved from
         the lift and from where the arm is (IK keeps the solution nearest its seed: two
-        branches, the second the one `solve_release_ik` gives). Where no item is
+        branches, the second the one `solve_release_ik` gives; with `cycle_search` from
+        the pick too). Where no item is
         presented, or no candidate's moves are found, the roll nearer where the arm is
         (`solve_release_ik`); so too with the physical pick, which grips the item as it
         lies, headed by the release's roll (`_carry_heading`), not in the frame timed
@@ -2428,14 +2545,30 @@ class Orchestrator:
         return self._ik(tcp, e, a), None
 
     def _release_costs(
-        self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        roll: float,
+        stroke: float,
+        obj: ObjectParams,
     ) -> list[tuple[tuple[bool, float], np.ndarray]]:
         """((asks more of the grip than it holds, cycle estimate [s]), release
         configuration) of each release at `roll` [rad] (`_release_q`), with the pick in
         the frame `self._frame`; none when the pick, the approach, the release or the
         carry is not found. A carry whose route, held still anywhere, would ask more of
-        the grip than the carry's bound (`_swing_holds`: a tall item on a swing that
-        rolls the grip) ranks after every one that does not."""
+        the grip than the carry's bound (`_swing_holds`: a tall item on a swing that rolls
+        the grip) ranks after every one that does not. IK is seeded from the lift and
+        from where the arm is, and keeps the solution nearest its seed.
+
+        The estimate: the empty arm to the pick of the presented item (as `_approach_s`
+        times it), plus twice the carry from its lift along the twist-free swing to the
+        release, timed as `_move_plan` times a carry of this item (the next approach
+        comes back about as far; with `turn_release`, the empty arm's way back from the
+        release to the same pick instead: a release turned toward the station winds the
+        wrist round, and the way back unwinds it). With `cycle_search`: the item's
+        pick-to-pick cycle as the cell makes it (`_static_cycle_s`) plus APPROACH_WEIGHT
+        of the approach, IK seeded from the pick too (the configuration a carry solved
+        again from the pick would go to)."""
         from cell.robot.ik import ReleasePose, solve_ik
 
         try:
@@ -2446,29 +2579,33 @@ class Orchestrator:
         pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
         out: list[tuple[tuple[bool, float], np.ndarray]] = []
         level = self._turns_if_rolled(obj, stroke)
-        for seed in (q_lift, self.q):  # IK keeps the solution nearest its seed
+        seeds = (q_lift, self.q, q_pick) if self.cycle_search else (q_lift, self.q)
+        for seed in seeds:
             try:
                 q_rel = solve_ik(self.robot, pose, seed).q
                 if any(joint_gap(q_rel, q) < 1e-3 for _, q in out):
                     continue
-                way = self._swing(q_lift, q_rel, plan, (obj, stroke))
-                carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
+                way = (
+                    self._swing(q_lift, q_rel, plan, (obj, stroke))
+                    if level or not self.cycle_search
+                    else []
+                )
+                if self.cycle_search:
+                    t_cycle = self._static_cycle_s(obj, plan, stroke, q_rel, (q_pick, q_lift))
+                    t = t_cycle + APPROACH_WEIGHT * t_approach
+                else:
+                    carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
+                    t_carry = _plan_time(carry, SETTLE_S)
+                    t_back = t_carry
+                    if self.turn_release:
+                        t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
+                    t = t_approach + t_carry + t_back
             except (IKFailed, TrajectoryError):
                 continue
-            t_carry = _plan_time(carry, SETTLE_S)
-            # a turned release (`turn_release`) is compared by the way back it leaves (the
-            # next item is presented where this one is); otherwise the way back is taken
-            # to be as long as the carry, as for the cycles the figures measured
-            t_back = t_carry
-            if self.turn_release:
-                try:
-                    t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
-                except (IKFailed, TrajectoryError):
-                    continue
             slips = level and not self._swing_holds(
                 [q_lift, *way, q_rel], (obj, stroke), plan.elevation_rad
             )
-            out.append(((slips, t_approach + t_carry + t_back), q_rel))
+            out.append(((slips, t), q_rel))
         return out
 
     def _approach_s(
@@ -2491,10 +2628,11 @@ class Orchestrator:
             return float(approach.duration)
         return move_time(q_from, q_lift, self.robot) + move_time(q_lift, q_pick, self.robot)
 
-    def _release_bounds(self, target: Any) -> list[Any]:
-        """The release bounds a plan is tried in, in order: the cell's, then lower and
-        flatter (RELEASE_FALLBACKS), then each of those in a release box shrunk about its
-        centre (RELEASE_BOX_SHRINK); one that would leave no elevation range is skipped.
+    def _release_bounds(self, target: Any) -> tuple[list[Any], list[Any]]:
+        """The release bounds a plan is made in (`_plan_facing`): the cell's, then lower
+        and flatter (RELEASE_FALLBACKS); and each of those in a release box shrunk about
+        its centre (RELEASE_BOX_SHRINK), tried where none of the first is reached. One that
+        would leave no elevation range is skipped.
 
         Tried and left out: into a bin with a low rim (0.05 m), steep throws first
         (elevation ≥ 50°): of 10 throws of 5 objects, 4 landed against 8 with the least
@@ -2515,7 +2653,10 @@ class Orchestrator:
             dc_replace(x, position_min=tuple(mid - half), position_max=tuple(mid + half))
             for x in ordinary
         ]
-        return [x for x in ordinary + inner if x.elevation_min <= x.elevation_max]
+        return (
+            [x for x in ordinary if x.elevation_min <= x.elevation_max],
+            [x for x in inner if x.elevation_min <= x.elevation_max],
+        )
 
     def _plan_once(
         self,

@@ -194,3 +194,32 @@ def test_the_flywheel_figures_are_the_last_generated_ones() -> None:
             ("d2", "median_landing_error_second_m"),
         ):
             assert float(g[group]) == pytest.approx(1000 * f[key], abs=0.05)
+
+
+def test_the_cycle_search_figures_are_the_last_generated_ones() -> None:
+    cs = _json("docs/figures/bench_sort_cycle.json")
+    pattern = (
+        r"--cycle-search --floor`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
+        r"([\d.]+) on the items never calibrated, ([\d,]+) items per hour, floor ([\d,]+)"
+    )
+    m = re.search(pattern.replace(" ", r"\s+"), README)
+    assert m, "the README no longer quotes the --cycle-search benchmark"
+    n_in, items, rate, lo, hi, unseen, rate_h, floor = m.groups()
+    assert (int(n_in), int(items)) == (cs["in_bin"], cs["items"])
+    assert float(rate) == pytest.approx(cs["in_bin_rate"], abs=5e-4)
+    assert float(lo) == pytest.approx(cs["in_bin_rate_lo"], abs=5e-4)
+    assert float(hi) == pytest.approx(cs["in_bin_rate_hi"], abs=5e-4)
+    assert float(unseen) == pytest.approx(cs["in_bin_rate_unseen"], abs=5e-4)
+    assert int(rate_h.replace(",", "")) == round(cs["items_per_hour"])
+    assert int(floor.replace(",", "")) == round(cs["floor_items_per_hour"])
+    run, demo = _json("docs/figures/run_cycle.json"), _json("docs/figures/run.json")
+    pattern = (
+        r"`cell run tasks/bins.yaml --cycle-search`: (\d+)/(\d+) in their bins, ([\d,]+) items "
+        r"per hour, (\d+) s of wall time against (\d+) s without it"
+    )
+    m = re.search(pattern.replace(" ", r"\s+"), README)
+    assert m, "the README no longer quotes the demo with --cycle-search"
+    n_in, items, rate_h, wall, wall_default = m.groups()
+    assert (int(n_in), int(items)) == (run["in_bin"], run["items"])
+    assert int(rate_h.replace(",", "")) == round(run["items_per_hour"])
+    assert (int(wall), int(wall_default)) == (round(run["wall_time_s"]), round(demo["wall_time_s"]))

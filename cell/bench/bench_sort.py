@@ -61,6 +61,7 @@ class LayoutUnit:
         turn: release throws turned toward the pick station (`cell run --turn-release`).
         floor: also time each approach and throw's carry as one direct move
             (`Orchestrator.floors`): each item's `floor_cycle_s`.
+        cycle_search: each throw's release chosen by its cycle (`cell run --cycle-search`).
     """
 
     seed: int
@@ -70,6 +71,7 @@ class LayoutUnit:
     speed_scale: float = 1.0
     turn: bool = False
     floor: bool = False
+    cycle_search: bool = False
 
 
 def layout_units(
@@ -81,10 +83,20 @@ def layout_units(
     speed_scale: float = 1.0,
     turn: bool = False,
     floor: bool = False,
+    cycle_search: bool = False,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
     return [
-        LayoutUnit(seed + i, robots[i % len(robots)], learn, max_items, speed_scale, turn, floor)
+        LayoutUnit(
+            seed + i,
+            robots[i % len(robots)],
+            learn,
+            max_items,
+            speed_scale,
+            turn,
+            floor,
+            cycle_search,
+        )
         for i in range(n)
     ]
 
@@ -138,6 +150,7 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
             learn=unit.learn,
             speed_scale=unit.speed_scale,
             turn_release=unit.turn,
+            cycle_search=unit.cycle_search,
             floor=unit.floor,
         )
     except JobError as exc:

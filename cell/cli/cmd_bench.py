@@ -53,6 +53,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sort: release throws turned toward the pick station (cell run --turn-release)",
     )
     p.add_argument(
+        "--cycle-search",
+        action="store_true",
+        help="sort: each throw's release chosen by its cycle (cell run --cycle-search)",
+    )
+    p.add_argument(
         "--floor",
         action="store_true",
         help=(
@@ -99,6 +104,7 @@ def run_sort(args: argparse.Namespace) -> int:
         args.speed_scale,
         args.turn_release,
         args.floor,
+        args.cycle_search,
     )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]

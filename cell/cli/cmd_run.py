@@ -57,6 +57,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "planner's cycle estimate is shorter (off by default: see the README's Limits)",
     )
     p.add_argument(
+        "--cycle-search",
+        action="store_true",
+        help="arm platform: choose each throw's release by its pick-to-pick cycle as the cell "
+        "makes it, among the cell's release bounds and lower ones; sooner cycles for about "
+        "ten times the planning (off by default: see What make run does in the README)",
+    )
+    p.add_argument(
         "--learn",
         action="store_true",
         help="learn from the throws: before the run, refit each of the job's objects' "
@@ -155,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
             pick=args.pick,
             release=args.release,
             turn_release=args.turn_release,
+            cycle_search=args.cycle_search,
         )
     bar = tqdm(
         total=len(job.expanded_items()),
