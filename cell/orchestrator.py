@@ -580,7 +580,7 @@ class Orchestrator:
         cycle_search: choose each throw's release by its pick-to-pick cycle as the cell
             makes it, among the cell's release bounds and the lower ones
             (RELEASE_FALLBACKS), and carry it there (`_release_costs`, `_plan_facing`,
-            `_release_branch`): sooner cycles for about ten times the planning (off by
+            `_release_branch`): sooner cycles for several times the planning (off by
             default: the planning of a throw then takes longer than its cycle here).
     """
 

@@ -60,8 +60,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--cycle-search",
         action="store_true",
         help="arm platform: choose each throw's release by its pick-to-pick cycle as the cell "
-        "makes it, among the cell's release bounds and lower ones; sooner cycles for about "
-        "ten times the planning (off by default: see What make run does in the README)",
+        "makes it, among the cell's release bounds and lower ones; sooner cycles for "
+        "several times the planning (off by default: see What make run does in the README)",
     )
     p.add_argument(
         "--learn",
