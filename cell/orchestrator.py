@@ -1007,13 +1007,10 @@ class Orchestrator:
         chosen = np.asarray(chosen, float)
         if chosen.shape != q_rel.shape:
             return q_rel
+        off_m = float(np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)))
         if self.cycle_search:
-            if np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)) > POSITION_TOL_M:
-                return q_rel
-            return chosen
-        if not self._turns_if_rolled() or joint_gap(chosen, q_rel) < 1e-3:
-            return q_rel
-        if np.linalg.norm(self.robot.tcp_pose(chosen)[0] - np.asarray(tcp)) > 1e-4:
+            return chosen if off_m <= POSITION_TOL_M else q_rel
+        if not self._turns_if_rolled() or joint_gap(chosen, q_rel) < 1e-3 or off_m > 1e-4:
             return q_rel
 
         def most(q: np.ndarray) -> float:
@@ -2503,11 +2500,7 @@ class Orchestrator:
         return best
 
     def _release_q(
-        self,
-        tcp: np.ndarray,
-        plan: Any,
-        stroke: float,
-        obj: ObjectParams,
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
     ) -> tuple[np.ndarray, tuple[bool, float] | None]:
         """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
         estimate (None where none was made; `_plan` compares facings by it): of the two rolls
@@ -2545,12 +2538,7 @@ class Orchestrator:
         return self._ik(tcp, e, a), None
 
     def _release_costs(
-        self,
-        tcp: np.ndarray,
-        plan: Any,
-        roll: float,
-        stroke: float,
-        obj: ObjectParams,
+        self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
     ) -> list[tuple[tuple[bool, float], np.ndarray]]:
         """((asks more of the grip than it holds, cycle estimate [s]), release
         configuration) of each release at `roll` [rad] (`_release_q`), with the pick in
