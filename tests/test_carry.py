@@ -492,3 +492,50 @@ def test_a_carry_whose_spline_would_leave_the_limits_is_one_move_within_them_and
         for a, b in zip(way[:-1], way[1:], strict=True)
     )
     assert traj.duration < 0.85 * stops, (traj.duration, stops)
+
+
+def test_the_dilated_use_is_the_replanned_paths():
+    """`plan_carry`'s bisection reads the grip's use at a time scale s off the full-speed
+    path (`_Dilated`): the same as planning the path at velocity × √s and acceleration × s
+    with toppra and measuring it (`grip_use`), to toppra's own tolerance, for a tall item
+    whose couple and tilt terms count."""
+    from cell.robot.carry import _Dilated
+
+    rng = np.random.default_rng(3)
+    hold = GripHold(3.0, 0.02, 0.12, 1e-4, (0.0, 0.01, 0.05), 0.03, 0.02, 0.05, 1e-4, 0.02)
+    for name in ("panda", "ur5"):
+        rb = load_robot(name)
+        q0 = rb.home.copy()
+        q1 = np.clip(
+            q0 + rng.uniform(-1, 1, rb.dof), rb.limits.lower + 0.05, rb.limits.upper - 0.05
+        )
+        way = [q0, (q0 + q1) / 2 + rng.uniform(-0.3, 0.3, rb.dof), q1]
+        dilated = _Dilated(plan_path(way, rb), rb, hold)
+        for s in (0.8, 0.4, 0.1):
+            scaled = plan_path(way, rb, velocity_scale=math.sqrt(s), acceleration_scale=s)
+            assert dilated.use(s) == pytest.approx(grip_use(scaled, rb, hold), rel=1e-5)
+
+
+def test_the_grip_constraints_coefficients_are_toppras_own():
+    """The grip constraint computes toppra's a, b, c over all grid points at once: the
+    same arrays, bit for bit, as toppra's SecondOrderConstraint computing them a grid
+    point at a time, on both arms' paths."""
+    import toppra.constraint as constraint
+
+    from cell.robot.carry import grip_constraint
+    from cell.robot.motion import spline_path
+
+    rng = np.random.default_rng(0)
+    for name in ("panda", "ur5"):
+        rb = load_robot(name)
+        hold = GripHold(3.0, 0.02, 0.12, 1e-4, (0.0, 0.01, 0.05), 0.03, 0.02, 0.05, 1e-4, 0.02)
+        c = grip_constraint(rb, hold, 0.7)
+        q0 = rb.home
+        q1 = np.clip(q0 + rng.uniform(-1, 1, rb.dof), rb.limits.lower, rb.limits.upper)
+        path = spline_path([q0, (q0 + q1) / 2 + 0.1, q1], rb.limits.lower, rb.limits.upper)
+        grid = np.linspace(0.0, 1.0, 137)
+        ours = c.compute_constraint_params(path, grid)
+        toppras = constraint.SecondOrderConstraint.compute_constraint_params(c, path, grid)
+        assert len(ours) == len(toppras)
+        for a, b in zip(ours, toppras, strict=True):
+            assert (a is None and b is None) or np.array_equal(a, b)

@@ -263,6 +263,23 @@ def test_position_bounds_match_dense_sampling_where_ruckigs_own_extrema_do_not()
     np.testing.assert_allclose(hi, q.max(axis=0), atol=1e-7)
     assert hi[1] > 0.70
 
+    # With bounds to keep `within`, a joint is refined only where its true extremum could
+    # pass them: one bound just under the sampled maximum plus its margin (refined, and
+    # found past it as the dense samples are), the rest far out (left as sampled, inside).
+    dt = raw.duration / 399
+    slack = 5.0 * dt**2 / 8
+    t400 = np.linspace(0.0, raw.duration, 400)
+    sampled = np.array([raw.at_time(float(t))[0] for t in t400]).max(axis=0)
+    upper = np.full(3, 10.0)
+    upper[1] = sampled[1] + 0.5 * slack
+    lo_w, hi_w = RuckigTrajectory(raw, 3).position_bounds(
+        np.full(3, 5.0), within=(np.full(3, -10.0), upper)
+    )
+    np.testing.assert_allclose(hi_w[1], q.max(axis=0)[1], atol=1e-7)
+    assert (hi_w[1] > upper[1]) == (q.max(axis=0)[1] > upper[1])
+    np.testing.assert_allclose(hi_w[[0, 2]], sampled[[0, 2]])
+    assert np.all(lo_w >= q.min(axis=0) - 1e-7) and np.all(hi_w <= q.max(axis=0) + 1e-7)
+
 
 def test_a_move_ending_exactly_on_a_joint_limit_is_allowed():
     robot = load_robot("panda")

@@ -300,18 +300,56 @@ def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
         coef[:, 3] *= 1e6  # [1/(N·m)]: no couple, no turn (a stiff stand-in for τ_x = 0)
     g = np.full(len(rows), bound)
 
-    def inv_dyn(q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> np.ndarray:
-        f, alpha, _ = item_motion(robot, q[None], dq[None], ddq[None], hold.offset_tcp_m)
-        tau = -hold.lever_m * hold.mass_kg * f[0, 1] + hold.inertia_xx * alpha[0, 0]
-        return np.r_[f[0], tau]
+    def inv_dyn_many(qs: np.ndarray, dqs: np.ndarray, ddqs: np.ndarray) -> np.ndarray:
+        f, alpha, _ = item_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
+        tau = -hold.lever_m * hold.mass_kg * f[:, 1] + hold.inertia_xx * alpha[:, 0]
+        return np.c_[f, tau]
 
-    return constraint.SecondOrderConstraint(
+    def inv_dyn(q: np.ndarray, dq: np.ndarray, ddq: np.ndarray) -> np.ndarray:
+        return inv_dyn_many(q[None], dq[None], ddq[None])[0]
+
+    return _grip_constraint_class()(
         inv_dyn,
         lambda q: coef,
         lambda q: g,
         dof=robot.dof,
         discretization_scheme=constraint.DiscretizationType.Interpolation,
+        inv_dyn_many=inv_dyn_many,
     )
+
+
+@functools.cache
+def _grip_constraint_class() -> type:
+    """toppra's SecondOrderConstraint with its coefficients computed over all grid points
+    at once (`inv_dyn_many`), where toppra calls the inverse dynamics once a grid point
+    (three times over): the same a, b, c (tests/test_carry.py), a third of the time of a
+    carry's planning shaped by the grip before (toppra 0.6's
+    `compute_constraint_params`, whose discretisation this keeps)."""
+    import toppra.constraint as constraint
+    from toppra.constraint.linear_constraint import canlinear_colloc_to_interpolate
+
+    class GripConstraint(constraint.SecondOrderConstraint):  # type: ignore[misc]
+        def __init__(self, *args: Any, inv_dyn_many: Any, **kw: Any) -> None:
+            super().__init__(*args, **kw)
+            self.inv_dyn_many = inv_dyn_many
+
+        def compute_constraint_params(self, path: Any, gridpoints: np.ndarray) -> Any:
+            if path.dof != self.dof:
+                raise ValueError(f"constraint dof {self.dof} is not the path's {path.dof}")
+            p_vec = path(gridpoints)
+            ps_vec = path(gridpoints, 1)
+            pss_vec = path(gridpoints, 2)
+            zeros = np.zeros_like(p_vec)
+            f_vec = np.array(list(map(self.constraint_F, p_vec)))
+            g_vec = np.array(list(map(self.constraint_g, p_vec)))
+            c_vec = self.inv_dyn_many(p_vec, zeros, zeros)
+            a_vec = self.inv_dyn_many(p_vec, zeros, ps_vec) - c_vec
+            b_vec = self.inv_dyn_many(p_vec, ps_vec, pss_vec) - c_vec
+            return canlinear_colloc_to_interpolate(
+                a_vec, b_vec, c_vec, f_vec, g_vec, None, None, gridpoints
+            )
+
+    return GripConstraint
 
 
 def plan_carry(
@@ -397,8 +435,28 @@ def plan_carry(
         shaped = _shaped(waypoints_q, robot, hold, bound, velocity_scale, acceleration_scale)
     slowest = 0.02
 
+    dilated = _Dilated(best[0], robot, hold)
+
     def fastest(limit: float, best: tuple[Trajectory, float]) -> tuple[Trajectory, float]:
-        """Bisection on the time scale for the fastest attempt within `limit` (else `best`)."""
+        """Bisection on the time scale for the fastest attempt within `limit` (else
+        `best`). Each step's use is the full-speed path's, dilated (`_Dilated`: what
+        `attempt` would plan and measure at that scale, without planning it); the scale
+        found is then planned and measured as before, and where that plan's use is over
+        the limit after all, the bisection is made again planning every step."""
+        lo, hi, found = 0.0, 1.0, None
+        for _ in range(iterations):
+            mid = max(slowest, 0.5 * (lo + hi))
+            if dilated.use(mid) <= limit:
+                lo, found = mid, mid
+            else:
+                hi = mid
+        if found is not None:
+            tr, use = attempt(found)
+            if use <= limit:
+                return tr, use
+            log.debug(
+                "the dilated use at scale %.4f was under %.4f, planned %.4f", found, limit, use
+            )
         lo, hi = 0.0, 1.0
         for _ in range(iterations):
             mid = max(slowest, 0.5 * (lo + hi))
@@ -435,6 +493,33 @@ def plan_carry(
     if shaped is not None and (best[1] > bound or shaped[0].duration < best[0].duration):
         return shaped
     return best
+
+
+class _Dilated:
+    """The grip's use along a path time-scaled by s (`plan_carry`'s `attempt`), from one
+    set of samples of it at full speed.
+
+    `plan_path` at velocity limits × √s and acceleration limits × s is the full-speed
+    path dilated in time: q_s(t) = q(√s t), so q̇ scales by √s and q̈ by s, and the
+    item's acceleration a_c = a_o + α × r + ω × (ω × r) and the grip's angular
+    acceleration α by s (centripetal terms included), gravity not at all. At the same
+    n instants along it as `grip_use` samples the dilated path: f_s = s R⊤a_c − R⊤g,
+    α_s = s α."""
+
+    def __init__(self, traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> None:
+        ts = np.linspace(0.0, traj.duration, n)
+        qs, dqs, ddqs = traj.sample_many(ts)
+        a, alpha, rots = _point_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
+        rt = np.transpose(rots, (0, 2, 1))
+        self._motion = np.einsum("kij,kj->ki", rt, a)  # R⊤a_c, scales by s
+        self._weight = np.einsum("kij,j->ki", rt, _GRAVITY)  # R⊤g, does not
+        self._alpha = np.einsum("kij,kj->ki", rt, alpha)
+        self._hold = hold
+
+    def use(self, s: float) -> float:
+        """`grip_use` of the path at time scale s (velocity × √s, acceleration × s)."""
+        f = s * self._motion - self._weight
+        return float(np.max(uses(f, s * self._alpha, self._hold, tilt=False)))
 
 
 def _shaped(

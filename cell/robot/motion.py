@@ -323,8 +323,9 @@ def _ruckig(
     if result != Result.Working and result != Result.Finished:
         raise TrajectoryError(f"ruckig found no trajectory (result {result})")
     traj = RuckigTrajectory(raw, n)
-    lo, hi = traj.position_bounds(amax)
-    bad = np.flatnonzero((lo < lim.lower - POSITION_TOL_RAD) | (hi > lim.upper + POSITION_TOL_RAD))
+    lower, upper = lim.lower - POSITION_TOL_RAD, lim.upper + POSITION_TOL_RAD
+    lo, hi = traj.position_bounds(amax, within=(lower, upper))
+    bad = np.flatnonzero((lo < lower) | (hi > upper))
     if bad.size:
         i = int(bad[0])
         raise TrajectoryError(

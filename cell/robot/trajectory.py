@@ -106,7 +106,10 @@ class RuckigTrajectory(Trajectory):
         return out[0], out[1], out[2]
 
     def position_bounds(
-        self, max_acceleration: np.ndarray, n: int = 400
+        self,
+        max_acceleration: np.ndarray,
+        n: int = 400,
+        within: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """(min, max) position of each joint over the move [rad], each shape (dof,).
 
@@ -120,6 +123,10 @@ class RuckigTrajectory(Trajectory):
         Args:
             max_acceleration: per-joint acceleration bound [rad/s²], shape (dof,).
             n: samples.
+            within: (lower, upper) [rad], each shape (dof,): a joint's extremum is refined
+                only where refining could take it past these (its sampled extremum within
+                the margin of them); elsewhere the sampled one is returned, which lies
+                inside them as the refined one does. None: every joint refined.
 
         Returns:
             (minimum, maximum), each shape (dof,).
@@ -133,6 +140,12 @@ class RuckigTrajectory(Trajectory):
         lo, hi = q.min(axis=0), q.max(axis=0)
         for j in range(self.dof):
             for sign, ext in ((1.0, hi), (-1.0, lo)):
+                if within is not None and (
+                    hi[j] + slack[j] <= within[1][j]
+                    if sign > 0
+                    else lo[j] - slack[j] >= within[0][j]
+                ):
+                    continue  # the refined extremum cannot pass the bound either
                 f = sign * q[:, j]
                 pad = np.r_[-np.inf, f, -np.inf]
                 peaks = np.flatnonzero((f >= pad[:-2]) & (f >= pad[2:]) & (f >= f.max() - slack[j]))
