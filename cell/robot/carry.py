@@ -57,7 +57,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -437,35 +437,40 @@ def plan_carry(
 
     dilated = _Dilated(best[0], robot, hold)
 
+    def bisect(fits: Callable[[float], bool]) -> float | None:
+        """The largest time scale of `iterations` bisection steps that `fits`; None if none."""
+        lo, hi, found = 0.0, 1.0, None
+        for _ in range(iterations):
+            mid = max(slowest, 0.5 * (lo + hi))
+            if fits(mid):
+                lo, found = mid, mid
+            else:
+                hi = mid
+        return found
+
     def fastest(limit: float, best: tuple[Trajectory, float]) -> tuple[Trajectory, float]:
         """Bisection on the time scale for the fastest attempt within `limit` (else
         `best`). Each step's use is the full-speed path's, dilated (`_Dilated`: what
         `attempt` would plan and measure at that scale, without planning it); the scale
         found is then planned and measured as before, and where that plan's use is over
-        the limit after all, the bisection is made again planning every step."""
-        lo, hi, found = 0.0, 1.0, None
-        for _ in range(iterations):
-            mid = max(slowest, 0.5 * (lo + hi))
-            if dilated.use(mid) <= limit:
-                lo, found = mid, mid
-            else:
-                hi = mid
-        if found is not None:
-            tr, use = attempt(found)
-            if use <= limit:
-                return tr, use
-            log.debug(
-                "the dilated use at scale %.4f was under %.4f, planned %.4f", found, limit, use
-            )
-        lo, hi = 0.0, 1.0
-        for _ in range(iterations):
-            mid = max(slowest, 0.5 * (lo + hi))
-            tr, use = attempt(mid)
-            if use <= limit:
-                lo, best = mid, (tr, use)
-            else:
-                hi = mid
-        return best
+        the limit after all, the bisection is made again planning every step. Where no
+        scale tried is within the limit (the path's geometry asks too much even slowly),
+        `best`."""
+        found = bisect(lambda s: dilated.use(s) <= limit)
+        if found is None:
+            return best
+        tr, use = attempt(found)
+        if use <= limit:
+            return tr, use
+        log.debug("the dilated use at scale %.4f was under %.4f, planned %.4f", found, limit, use)
+        planned: dict[float, tuple[Trajectory, float]] = {}
+
+        def fits(s: float) -> bool:
+            planned[s] = attempt(s)
+            return planned[s][1] <= limit
+
+        found = bisect(fits)
+        return best if found is None else planned[found]
 
     best = fastest(bound, best)
     if best[1] > bound and tie > 0.0:
