@@ -64,6 +64,8 @@ def test_the_benchmark_table_is_the_last_generated_bench() -> None:
     assert float(gap) == pytest.approx(bench["gap_s"], abs=0.05 + 1e-9)
     (ident,) = _quoted(r"\| `identify_s`:[^|]*\| ([\d.]+) s ")
     assert float(ident) == pytest.approx(bench["identify_s"], abs=0.05 + 1e-9)
+    (carry,) = _quoted(r"\| `carry_median_ms`:[^|]*\| ([\d.]+) ms \|")
+    assert float(carry) == pytest.approx(bench["carry_median_ms"], abs=0.5 + 1e-9)
 
 
 def test_table_5_1_unseen_column_is_the_last_generated_example_08() -> None:
