@@ -117,18 +117,25 @@ def test_the_floor_is_the_last_generated_bench_sort() -> None:
     )
 
 
+def _check_campaign(quoted: tuple[str, ...], bench: dict) -> None:
+    """A campaign's quoted (in bin, items, in-bin rate, its interval's ends, the rate on
+    unseen items, items per hour) against its JSON."""
+    n_in, items, rate, lo, hi, unseen, rate_h = quoted
+    assert (int(n_in), int(items)) == (bench["in_bin"], bench["items"])
+    assert float(rate) == pytest.approx(bench["in_bin_rate"], abs=5e-4)
+    assert float(lo) == pytest.approx(bench["in_bin_rate_lo"], abs=5e-4)
+    assert float(hi) == pytest.approx(bench["in_bin_rate_hi"], abs=5e-4)
+    assert float(unseen) == pytest.approx(bench["in_bin_rate_unseen"], abs=5e-4)
+    assert int(rate_h.replace(",", "")) == round(bench["items_per_hour"])
+
+
 def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -> None:
     turned = _json("docs/figures/bench_sort_turned.json")
     n_in, items, rate, lo, hi, unseen, rate_h = _quoted(
         r"--turn-release --floor`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
         r"([\d.]+) on the items never\s+calibrated, ([\d,]+) items per hour"
     )
-    assert (int(n_in), int(items)) == (turned["in_bin"], turned["items"])
-    assert float(rate) == pytest.approx(turned["in_bin_rate"], abs=5e-4)
-    assert float(lo) == pytest.approx(turned["in_bin_rate_lo"], abs=5e-4)
-    assert float(hi) == pytest.approx(turned["in_bin_rate_hi"], abs=5e-4)
-    assert float(unseen) == pytest.approx(turned["in_bin_rate_unseen"], abs=5e-4)
-    assert int(rate_h.replace(",", "")) == round(turned["items_per_hour"])
+    _check_campaign((n_in, items, rate, lo, hi, unseen, rate_h), turned)
     floor, at_95 = _quoted(
         r"Its floor \(`--floor`, below\)\s+is ([\d,]+) items per hour, ([\d,]+) with 0.95"
     )
@@ -207,12 +214,7 @@ def test_the_cycle_search_figures_are_the_last_generated_ones() -> None:
     m = re.search(pattern.replace(" ", r"\s+"), README)
     assert m, "the README no longer quotes the --cycle-search benchmark"
     n_in, items, rate, lo, hi, unseen, rate_h, floor = m.groups()
-    assert (int(n_in), int(items)) == (cs["in_bin"], cs["items"])
-    assert float(rate) == pytest.approx(cs["in_bin_rate"], abs=5e-4)
-    assert float(lo) == pytest.approx(cs["in_bin_rate_lo"], abs=5e-4)
-    assert float(hi) == pytest.approx(cs["in_bin_rate_hi"], abs=5e-4)
-    assert float(unseen) == pytest.approx(cs["in_bin_rate_unseen"], abs=5e-4)
-    assert int(rate_h.replace(",", "")) == round(cs["items_per_hour"])
+    _check_campaign((n_in, items, rate, lo, hi, unseen, rate_h), cs)
     assert int(floor.replace(",", "")) == round(cs["floor_items_per_hour"])
     run, demo = _json("docs/figures/run_cycle.json"), _json("docs/figures/run.json")
     pattern = (
