@@ -500,10 +500,14 @@ LEARN_CLASS_MAX_TURN_RAD = math.radians(3.0)
 # Release fallbacks when the arm cannot reach a plan's release pose: (largest
 # elevation [rad], the fast path's release height [m]), tried in turn.
 RELEASE_FALLBACKS = ((math.radians(45.0), 0.7), (math.radians(30.0), 0.6))
-# … then each of those with the release box shrunk to this fraction about its centre: the
-# optimiser puts a long throw of a heavy item in the box's far upper corner, which the arm
-# does not reach with the throw axis tilted (a 174 g disc to a bin 2.5 m out: 15 mm short)
-RELEASE_BOX_SHRINK = 0.75
+# … then each of those with the release box shrunk to these fractions about its centre, in
+# turn: the optimiser puts a long throw of a heavy item in the box's far upper corner, which
+# the arm does not reach with the throw axis tilted (a 174 g disc to a bin 2.5 m out: 15 mm
+# short). The 0.75 box can leave the target out of reach: the same disc aimed 0.1 m
+# farther (a point of the bin clear of what it holds, `CellScene.throw_spot`) lay 2.17 m
+# beyond its nearest release, and the item failed (random layout 0); the 0.9 box reaches
+# both (tests/test_release_box.py)
+RELEASE_BOX_SHRINKS = (0.75, 0.9)
 # With `cycle_search`, a release's cycle estimate (`Orchestrator._release_costs`) counts
 # this much of the empty arm's approach from where it is: the approach is paid once, the
 # cycle by this item and the like ones after it. Counted in full, random layout 0's first
@@ -2410,7 +2414,7 @@ class Orchestrator:
         (`_soonest_release`): a lower release can be nearer the pick. Random layout 11's
         three eggs took up to 8.6 s a cycle released in the cell's bounds, 2.48 s each
         released lower, where the carry's grip bound is far less tight. Where none of these
-        is reached, the plan is made in a smaller release box (RELEASE_BOX_SHRINK), the
+        is reached, the plan is made in a smaller release box (RELEASE_BOX_SHRINKS), the
         first reached kept.
         """
         from dataclasses import replace as dc_replace
@@ -2619,8 +2623,8 @@ class Orchestrator:
     def _release_bounds(self, target: Any) -> tuple[list[Any], list[Any]]:
         """The release bounds a plan is made in (`_plan_facing`): the cell's, then lower
         and flatter (RELEASE_FALLBACKS); and each of those in a release box shrunk about
-        its centre (RELEASE_BOX_SHRINK), tried where none of the first is reached. One that
-        would leave no elevation range is skipped.
+        its centre (each of RELEASE_BOX_SHRINKS in turn), tried where none of the first is
+        reached. One that would leave no elevation range is skipped.
 
         Tried and left out: into a bin with a low rim (0.05 m), steep throws first
         (elevation ≥ 50°): of 10 throws of 5 objects, 4 landed against 8 with the least
@@ -2636,9 +2640,10 @@ class Orchestrator:
             for e_max, h in RELEASE_FALLBACKS
         ]
         lo, hi = np.asarray(b.position_min, float), np.asarray(b.position_max, float)
-        mid, half = (lo + hi) / 2, (hi - lo) / 2 * RELEASE_BOX_SHRINK
+        mid, half = (lo + hi) / 2, (hi - lo) / 2
         inner = [
-            dc_replace(x, position_min=tuple(mid - half), position_max=tuple(mid + half))
+            dc_replace(x, position_min=tuple(mid - k * half), position_max=tuple(mid + k * half))
+            for k in RELEASE_BOX_SHRINKS
             for x in ordinary
         ]
         return (

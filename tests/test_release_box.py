@@ -1,16 +1,19 @@
 """A long throw of a heavy item whose optimised release lies where the arm does not reach
 (the release box's far upper corner, the throw axis tilted): the cell plans it again in a
-smaller release box (`cell.orchestrator.RELEASE_BOX_SHRINK`) instead of failing the item.
+smaller release box (`cell.orchestrator.RELEASE_BOX_SHRINKS`) instead of failing the item.
 
 Independent checks: the release configuration's forward kinematics (Pinocchio) against
 the plan's release pose, and the throw's crossing of the rim plane in the scene."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from cell.errors import UnreachableTarget
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 
@@ -57,3 +60,60 @@ def test_a_heavy_disc_thrown_far_is_planned_in_a_smaller_release_box_and_lands(
         orch.close()
     assert r.action == "throw" and r.failure != "ik"
     assert r.landing_error_m < 0.13  # within the bin's smaller half-width (measured: 0.039 m)
+
+
+def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
+    tmp_path: Path,
+) -> None:
+    """The same disc aimed 0.1 m farther (random layout 0 aimed it there, at a point of
+    its bin clear of what the bin held): the cell's release is out of the arm's reach by
+    18 mm, the 0.75 box's nearest release 2.17 m short of the target; the item is planned
+    in the 0.9 box and lands, where it had failed with `ik`."""
+    from dataclasses import replace
+
+    from cell.errors import IKFailed
+    from cell.orchestrator import RELEASE_BOX_SHRINKS
+
+    job = parse_job(JOB.replace("[2.119, -1.268]", "[2.208, -1.306]"), str(tmp_path / "j.yaml"))
+    orch = Orchestrator(job, session="release-box-far")
+    try:
+        spec = job.expanded_items()[0]
+        obj, target = spec.obj, job.bin(spec.bin)
+        b = orch.bounds
+        orch.present(0, obj)
+        d = orch.decide(0, obj, target)
+        assert d.action == "throw"
+        lo, hi = np.asarray(b.position_min), np.asarray(b.position_max)
+        half = np.asarray(orch.bounds_now.position_max) - np.asarray(orch.bounds_now.position_min)
+        assert np.allclose(half, (hi - lo) * 0.9)  # planned in the larger of the two boxes
+        # the boxes tried before it: from the cell's own the release is out of the arm's
+        # reach, from the smaller one the target
+        k = RELEASE_BOX_SHRINKS[0]
+        mid = (lo + hi) / 2
+        small = replace(
+            b,
+            position_min=tuple(mid - k * (hi - lo) / 2),
+            position_max=tuple(mid + k * (hi - lo) / 2),
+        )
+        gx, gy, gz = (float(v) for v in orch._goal)
+        with pytest.raises(IKFailed):
+            orch._plan_in(obj, (gx, gy, gz), 0, math.inf, b)
+        with pytest.raises(UnreachableTarget):
+            orch._plan_in(obj, (gx, gy, gz), 0, math.inf, small)
+        # the release configuration puts the item's centre where the plan has it
+        plan = d.plan
+        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+        tcp = orch._tcp_for_item_centre(
+            centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj
+        )
+        p, _ = orch.robot.tcp_pose(d.state["q_release"])
+        assert np.linalg.norm(p - tcp) < 1e-3
+    finally:
+        orch.close()
+    orch = Orchestrator(job, session="release-box-far-run")
+    try:
+        (r,) = orch.run().results
+    finally:
+        orch.close()
+    assert r.action == "throw" and r.failure != "ik"
+    assert r.landing_error_m < 0.13  # within the bin's smaller half-width
