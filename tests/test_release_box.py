@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,38 +29,51 @@ seed: 0
 """
 
 
-def test_a_heavy_disc_thrown_far_is_planned_in_a_smaller_release_box_and_lands(
-    tmp_path: Path,
-) -> None:
-    job = parse_job(JOB, str(tmp_path / "job.yaml"))
-    orch = Orchestrator(job, session="release-box")
-    try:
-        spec = job.expanded_items()[0]
-        obj, target = spec.obj, job.bin(spec.bin)
-        # the cell's own release box: the optimiser's release is out of the arm's reach
-        b = orch.bounds
-        orch.present(0, obj)
-        d = orch.decide(0, obj, target)
-        assert d.action == "throw"
-        plan = d.plan
-        assert orch.bounds_now.position_max[0] < b.position_max[0]  # a smaller box
-        # the release configuration puts the item's centre where the plan has it
-        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-        tcp = orch._tcp_for_item_centre(
-            centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj
-        )
-        p, _ = orch.robot.tcp_pose(d.state["q_release"])
-        assert np.linalg.norm(p - tcp) < 1e-3
-    finally:
-        orch.close()
-    # and the whole item, in the scene: thrown, not failed, and it comes down near the bin
-    orch = Orchestrator(job, session="release-box-run")
+def _decided(job: Any, session: str) -> tuple[Orchestrator, Any, Any]:
+    """(the orchestrator, its decision for the job's one item, the item): the decision
+    made as `cell run` makes it, the item presented on the station; the caller closes."""
+    orch = Orchestrator(job, session=session)
+    spec = job.expanded_items()[0]
+    obj = spec.obj
+    orch.present(0, obj)
+    d = orch.decide(0, obj, job.bin(spec.bin))
+    assert d.action == "throw"
+    return orch, d, obj
+
+
+def _released_where_planned(orch: Orchestrator, d: Any, obj: Any) -> None:
+    """The release configuration's forward kinematics puts the item's centre where the
+    plan has it (within 1 mm)."""
+    plan = d.plan
+    centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+    tcp = orch._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
+    p, _ = orch.robot.tcp_pose(d.state["q_release"])
+    assert np.linalg.norm(p - tcp) < 1e-3
+
+
+def _thrown_into_reach_of_the_bin(job: Any, session: str) -> None:
+    """The whole item, in the scene: thrown, not failed, and it comes down near the bin."""
+    orch = Orchestrator(job, session=session)
     try:
         (r,) = orch.run().results
     finally:
         orch.close()
     assert r.action == "throw" and r.failure != "ik"
     assert r.landing_error_m < 0.13  # within the bin's smaller half-width (measured: 0.039 m)
+
+
+def test_a_heavy_disc_thrown_far_is_planned_in_a_smaller_release_box_and_lands(
+    tmp_path: Path,
+) -> None:
+    job = parse_job(JOB, str(tmp_path / "job.yaml"))
+    orch, d, obj = _decided(job, "release-box")
+    try:
+        # the cell's own release box: the optimiser's release is out of the arm's reach
+        assert orch.bounds_now.position_max[0] < orch.bounds.position_max[0]  # a smaller box
+        _released_where_planned(orch, d, obj)
+    finally:
+        orch.close()
+    _thrown_into_reach_of_the_bin(job, "release-box-run")
 
 
 def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
@@ -75,14 +89,9 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
     from cell.orchestrator import RELEASE_BOX_SHRINKS
 
     job = parse_job(JOB.replace("[2.119, -1.268]", "[2.208, -1.306]"), str(tmp_path / "j.yaml"))
-    orch = Orchestrator(job, session="release-box-far")
+    orch, d, obj = _decided(job, "release-box-far")
     try:
-        spec = job.expanded_items()[0]
-        obj, target = spec.obj, job.bin(spec.bin)
         b = orch.bounds
-        orch.present(0, obj)
-        d = orch.decide(0, obj, target)
-        assert d.action == "throw"
         lo, hi = np.asarray(b.position_min), np.asarray(b.position_max)
         half = np.asarray(orch.bounds_now.position_max) - np.asarray(orch.bounds_now.position_min)
         assert np.allclose(half, (hi - lo) * 0.9)  # planned in the larger of the two boxes
@@ -100,20 +109,7 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
             orch._plan_in(obj, (gx, gy, gz), 0, math.inf, b)
         with pytest.raises(UnreachableTarget):
             orch._plan_in(obj, (gx, gy, gz), 0, math.inf, small)
-        # the release configuration puts the item's centre where the plan has it
-        plan = d.plan
-        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-        tcp = orch._tcp_for_item_centre(
-            centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj
-        )
-        p, _ = orch.robot.tcp_pose(d.state["q_release"])
-        assert np.linalg.norm(p - tcp) < 1e-3
+        _released_where_planned(orch, d, obj)
     finally:
         orch.close()
-    orch = Orchestrator(job, session="release-box-far-run")
-    try:
-        (r,) = orch.run().results
-    finally:
-        orch.close()
-    assert r.action == "throw" and r.failure != "ik"
-    assert r.landing_error_m < 0.13  # within the bin's smaller half-width
+    _thrown_into_reach_of_the_bin(job, "release-box-far-run")
