@@ -545,16 +545,11 @@ def test_the_benchmarks_carry_is_slowed_by_the_grip_and_kept_within_it():
     """`cell bench`'s carry_median_ms times `plan_carry` where the grip binds: the cube's
     full-speed path asks more of the grip than a carry may (so the bisection and the
     grip-shaped path run), and the carry planned keeps within the bound."""
-    from cell.bench.bench_robot import _carry_hold
+    from cell.bench.bench_robot import _carry_hold, _carry_path
 
     hold = _carry_hold()
     rb = load_robot("panda")
-    rng = np.random.default_rng(200)  # the benchmark's first Panda path
-    lo, hi = rb.limits.lower + 0.1, rb.limits.upper - 0.1
-    pick = np.clip(rb.home + rng.uniform(-0.5, 0.5, rb.dof), lo, hi)
-    lift = np.clip(pick + rng.uniform(-0.2, 0.2, rb.dof), lo, hi)
-    pre = np.clip(lift + rng.uniform(-0.5, 0.5, rb.dof), lo, hi)
-    way = [rb.home, pick, lift, pre]
+    way = _carry_path(rb, np.random.default_rng(200))  # the benchmark's first Panda path
     assert grip_use(plan_path(way, rb), rb, hold) > 1.0 / CARRY_MARGIN
     tr, use = plan_carry(way, rb, hold)
     assert use <= 1.0 / CARRY_MARGIN + 1e-9

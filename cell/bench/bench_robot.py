@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -44,6 +45,17 @@ def _carry_hold() -> GripHold:
     return carry_hold(load_params(scene_params_path()), cube, 0.07)  # type: ignore[no-any-return]
 
 
+def _carry_path(robot: Any, rng: np.random.Generator) -> list[np.ndarray]:
+    """The benchmark's path [rad]: home -> pick -> lift -> pre-release, three nearby
+    configurations drawn from `rng` after home, each 0.1 rad inside the joint limits."""
+    lo = robot.limits.lower + 0.1
+    hi = robot.limits.upper - 0.1
+    pick = np.clip(robot.home + rng.uniform(-0.5, 0.5, robot.dof), lo, hi)
+    lift = np.clip(pick + rng.uniform(-0.2, 0.2, robot.dof), lo, hi)
+    pre = np.clip(lift + rng.uniform(-0.5, 0.5, robot.dof), lo, hi)
+    return [robot.home, pick, lift, pre]
+
+
 def _trajectory_figures(
     name: str, n: int, seed: int
 ) -> tuple[list[float], list[float], list[float]]:
@@ -60,19 +72,17 @@ def _trajectory_figures(
     t_move: list[float] = []
     t_carry: list[float] = []
     for _ in range(n):
-        # pick -> lift -> pre-release: three nearby configurations after home.
-        pick = np.clip(robot.home + rng.uniform(-0.5, 0.5, robot.dof), lo, hi)
-        lift = np.clip(pick + rng.uniform(-0.2, 0.2, robot.dof), lo, hi)
-        pre = np.clip(lift + rng.uniform(-0.5, 0.5, robot.dof), lo, hi)
+        way = _carry_path(robot, rng)
+        pre = way[-1]
         t0 = time.perf_counter()
         try:
-            plan_path([robot.home, pick, lift, pre], robot)
+            plan_path(way, robot)
         except TrajectoryError:
             continue
         t_path.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
         try:
-            plan_carry([robot.home, pick, lift, pre], robot, hold)
+            plan_carry(way, robot, hold)
             t_carry.append(time.perf_counter() - t0)
         except TrajectoryError:
             pass
