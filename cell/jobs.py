@@ -46,6 +46,9 @@ __all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
+# The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
+# listed, or bin by bin (the items all at hand, as in a tote).
+ORDERS = ("job", "bins")
 
 
 @dataclass(frozen=True)
@@ -113,13 +116,21 @@ class Job:
                 return b
         raise JobError(f"{self.path}: no bin {bin_id!r}; bins: {[b.id for b in self.bins]}")
 
-    def expanded_items(self) -> list[ItemSpec]:
-        """One entry per item, in job order, capped at max_items."""
+    def expanded_items(self, order: str = "job") -> list[ItemSpec]:
+        """One entry per item, capped at max_items (the job's first ones), in the `order`
+        they are taken (ORDERS): "job", as listed; "bins", each bin's items one after
+        another, the bins in the order the job first names them, each bin's items in job
+        order (the items are all at hand, as in a tote). InvalidInput for another order."""
+        if order not in ORDERS:
+            raise InvalidInput(f"item order {order!r}: valid are {list(ORDERS)}")
         out: list[ItemSpec] = []
         for it in self.items:
             out.extend([it] * min(it.count, self.max_items - len(out)))
             if len(out) >= self.max_items:
                 break
+        if order == "bins":
+            first = {it.bin: i for i, it in reversed(list(enumerate(out)))}
+            out.sort(key=lambda it: first[it.bin])  # stable: job order within a bin
         return out
 
 

@@ -441,6 +441,8 @@ class ItemLoop:
             (`cell.record.observer.RunObserver`), or None.
         wait_for: (obj, flying objs) → wait for these in-flight items to land before
             the next item starts (the arm's flywheel learns from its earlier throw).
+        order: the order the job's items are taken in (`cell.jobs.ORDERS`: "job", as
+            listed; "bins", bin by bin; `Job.expanded_items`).
     """
 
     def __init__(
@@ -453,8 +455,12 @@ class ItemLoop:
         session: str = "",
         observer: Any = None,
         wait_for: Callable[[ObjectParams, ObjectParams], bool] | None = None,
+        order: str = "job",
     ) -> None:
+        if job is not None:
+            job.expanded_items(order)  # InvalidInput for an order that is not one
         self._job = job
+        self.order = order
         self.platform = platform
         self.plant = plant
         self.store = store
@@ -699,7 +705,8 @@ class ItemLoop:
 
     # -- the run ---------------------------------------------------------------------
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
-        """Every item of the job; `on_item` is called after each, in job order.
+        """Every item of the job, in the loop's `order`; `on_item` is called after each,
+        in that order.
 
         With a platform that overlaps, the next pick starts as soon as an item is
         thrown, and the item is scored when it comes to rest. An item's `cycle_time_s`
@@ -728,7 +735,7 @@ class ItemLoop:
                     on_item(res)
 
         try:
-            for i, spec in enumerate(self.job.expanded_items()):
+            for i, spec in enumerate(self.job.expanded_items(self.order)):
                 if self.wait_for is not None:
                     self._land_kin(spec.obj)
                 starts.append(pl.t)

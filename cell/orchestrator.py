@@ -586,6 +586,11 @@ class Orchestrator:
             (RELEASE_FALLBACKS), and carry it there (`_release_costs`, `_plan_facing`,
             `_release_branch`): sooner cycles for several times the planning (off by
             default: the planning of a throw then takes longer than its cycle here).
+        order: the order the job's items are taken in (`cell.jobs.ORDERS`): "job", as
+            listed; "bins", each bin's items one after another (the items at hand, as in
+            a tote). A pick's IK is solved from where the arm is, the last release: after
+            one at another bin it can come out elsewhere on the arm's redundancy, bin by
+            bin the picks stay alike (tests/test_item_order.py).
     """
 
     def __init__(
@@ -605,6 +610,7 @@ class Orchestrator:
         turn_release: bool = False,
         floor: bool = False,
         cycle_search: bool = False,
+        order: str = "job",
     ) -> None:
         from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
@@ -616,6 +622,7 @@ class Orchestrator:
         self.speed_scale = float(speed_scale)
         if pick not in PICKS:
             raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
+        job.expanded_items(order)  # InvalidInput for an order that is not one, before the scene
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.bounds = ThrowBounds()
@@ -674,6 +681,7 @@ class Orchestrator:
             session=self.session,
             observer=observer,
             wait_for=self._same_kind if learn else None,
+            order=order,
         )
         if observer is not None:
             observer.on_scene(self.scene, job)

@@ -62,6 +62,7 @@ class LayoutUnit:
         floor: also time each approach and throw's carry as one direct move
             (`Orchestrator.floors`): each item's `floor_cycle_s`.
         cycle_search: each throw's release chosen by its cycle (`cell run --cycle-search`).
+        order: the order the items are taken in (`cell run --order`: "job" or "bins").
     """
 
     seed: int
@@ -72,6 +73,7 @@ class LayoutUnit:
     turn: bool = False
     floor: bool = False
     cycle_search: bool = False
+    order: str = "job"
 
 
 def layout_units(
@@ -84,6 +86,7 @@ def layout_units(
     turn: bool = False,
     floor: bool = False,
     cycle_search: bool = False,
+    order: str = "job",
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
     return [
@@ -96,6 +99,7 @@ def layout_units(
             turn,
             floor,
             cycle_search,
+            order,
         )
         for i in range(n)
     ]
@@ -152,6 +156,7 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
             turn_release=unit.turn,
             cycle_search=unit.cycle_search,
             floor=unit.floor,
+            order=unit.order,
         )
     except JobError as exc:
         out["refused"] = str(exc)

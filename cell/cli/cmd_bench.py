@@ -8,6 +8,7 @@ import time
 
 from cell.bench import available
 from cell.cli.common import print_json
+from cell.jobs import ORDERS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -58,6 +59,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="sort: each throw's release chosen by its cycle (cell run --cycle-search)",
     )
     p.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="job",
+        help="sort: the order the items are taken in (cell run --order; job, the default)",
+    )
+    p.add_argument(
         "--floor",
         action="store_true",
         help=(
@@ -105,6 +112,7 @@ def run_sort(args: argparse.Namespace) -> int:
         args.turn_release,
         args.floor,
         args.cycle_search,
+        args.order,
     )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]

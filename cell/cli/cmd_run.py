@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from cell.cli.common import to_jsonable
-from cell.jobs import load_job
+from cell.jobs import ORDERS, load_job
 from cell.kinds import EE_BACKENDS, PICKS, RELEASES
 
 
@@ -62,6 +62,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="arm platform: choose each throw's release by its pick-to-pick cycle as the cell "
         "makes it, among the cell's release bounds and lower ones; sooner cycles for "
         "several times the planning (off by default: see What make run does in the README)",
+    )
+    p.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="job",
+        help="arm platform: the order the items are taken in: as the job lists them (job, the "
+        "default), or each bin's items one after another (bins: the items all at hand, as in "
+        "a tote; see the README's Limits)",
     )
     p.add_argument(
         "--learn",
@@ -147,6 +155,11 @@ def run(args: argparse.Namespace) -> int:
             raise InvalidInput(
                 f"--learn: the flywheel runs on the arm platform, not {job.platform!r}"
             )
+        if args.order != "job":
+            raise InvalidInput(
+                f"--order {args.order}: the arm platform chooses the items' order, not "
+                f"{job.platform!r} (give --order job)"
+            )
 
         orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
     else:
@@ -163,9 +176,10 @@ def run(args: argparse.Namespace) -> int:
             release=args.release,
             turn_release=args.turn_release,
             cycle_search=args.cycle_search,
+            order=args.order,
         )
     bar = tqdm(
-        total=len(job.expanded_items()),
+        total=len(job.expanded_items(args.order)),
         desc=f"sorting {Path(args.job).name}",
         unit="item",
         file=sys.stderr,
