@@ -63,6 +63,8 @@ figures: install
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --floor --json > $(FIG)/bench_sort_turned.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --floor --json > $(FIG)/bench_sort_cycle.json
 	$(BIN)/cell run tasks/bins.yaml --no-log --cycle-search --json $(FIG)/run_cycle.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --order bins --floor --json > $(FIG)/bench_sort_bins.json
+	$(BIN)/cell run tasks/bins.yaml --no-log --order bins --json $(FIG)/run_bins.json
 	$(BIN)/python -m cell.bench.bench_flywheel --json $(FIG)/flywheel.json
 	$(BIN)/cell bench tradeoff --layouts 4 --seed 0 --robots panda,ur5 --scales 0.5,0.75,1.0 --workers 2 --plot $(FIG)/tradeoff.png --json > $(FIG)/tradeoff.json
 

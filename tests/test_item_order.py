@@ -115,7 +115,7 @@ def test_picks_for_one_bin_are_alike_in_the_scene():
     """Four cubes, to two bins 82° apart round the base, in the scene: every one lands in
     its bin in either order. Taken alternately, the picks wander along the Panda's
     redundancy (each solved from the last release, at the other bin: joints 1 and 3 turn
-    against each other, 2.5-3.3 rad from one pick to the next when measured); taken bin by
+    against each other: 0.75-3.3 rad from one pick to the next when measured); taken bin by
     bin, each pick is within 0.5 rad of the last in every joint."""
     job = parse_job(JOB, "two_bins.yaml")
     gaps: dict[str, list[float]] = {}

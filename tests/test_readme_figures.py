@@ -205,17 +205,37 @@ def test_the_flywheel_figures_are_the_last_generated_ones() -> None:
             assert float(g[group]) == pytest.approx(1000 * f[key], abs=0.05)
 
 
+def _check_option_campaign(option: str, bench: dict) -> None:
+    """An option's random-layout benchmark as the README quotes it (`… OPTION --floor`: in
+    bin, items, rate and interval, unseen rate, items per hour, floor) against its JSON."""
+    pattern = (
+        r"--floor`: (\d+) of (\d+) in their bins, ([\d.]+) "
+        r"\(([\d.]+)–([\d.]+)\), ([\d.]+) on the items never calibrated, ([\d,]+) items per "
+        r"hour, floor ([\d,]+)"
+    ).replace(" ", r"\s+")
+    words = r"\s+".join(re.escape(w) for w in option.split())
+    m = re.search(words + r"\s+" + pattern, README)
+    assert m, f"the README no longer quotes the {option} benchmark"
+    n_in, items, rate, lo, hi, unseen, rate_h, floor = m.groups()
+    _check_campaign((n_in, items, rate, lo, hi, unseen, rate_h), bench)
+    assert int(floor.replace(",", "")) == round(bench["floor_items_per_hour"])
+
+
+def test_the_bin_order_figures_are_the_last_generated_ones() -> None:
+    _check_option_campaign("--order bins", _json("docs/figures/bench_sort_bins.json"))
+    run, demo = _json("docs/figures/run_bins.json"), _json("docs/figures/run.json")
+    n_in, items, rate_h, rate_default = _quoted(
+        r"`cell run tasks/bins.yaml --order bins`: (\d+)/(\d+)\s+in their bins, ([\d,]+) "
+        r"items per hour against ([\d,]+)"
+    )
+    assert (int(n_in), int(items)) == (run["in_bin"], run["items"])
+    assert int(rate_h.replace(",", "")) == round(run["items_per_hour"])
+    assert int(rate_default.replace(",", "")) == round(demo["items_per_hour"])
+
+
 def test_the_cycle_search_figures_are_the_last_generated_ones() -> None:
     cs = _json("docs/figures/bench_sort_cycle.json")
-    pattern = (
-        r"--cycle-search --floor`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
-        r"([\d.]+) on the items never calibrated, ([\d,]+) items per hour, floor ([\d,]+)"
-    )
-    m = re.search(pattern.replace(" ", r"\s+"), README)
-    assert m, "the README no longer quotes the --cycle-search benchmark"
-    n_in, items, rate, lo, hi, unseen, rate_h, floor = m.groups()
-    _check_campaign((n_in, items, rate, lo, hi, unseen, rate_h), cs)
-    assert int(floor.replace(",", "")) == round(cs["floor_items_per_hour"])
+    _check_option_campaign("--cycle-search", cs)
     run, demo = _json("docs/figures/run_cycle.json"), _json("docs/figures/run.json")
     pattern = (
         r"`cell run tasks/bins.yaml --cycle-search`: (\d+)/(\d+) in their bins, ([\d,]+) items "
