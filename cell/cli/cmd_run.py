@@ -157,8 +157,8 @@ def run(args: argparse.Namespace) -> int:
             )
         if args.order != "job":
             raise InvalidInput(
-                f"--order {args.order}: the arm platform chooses the items' order, not "
-                f"{job.platform!r} (give --order job)"
+                f"--order {args.order}: only the arm platform takes the items in another "
+                f"order than the job's; the {job.platform!r} takes them as listed (--order job)"
             )
 
         orch = PlatformRunner(job, gui=args.gui, store=store, end_effector=hardware)
