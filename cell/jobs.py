@@ -51,6 +51,12 @@ MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is 
 ORDERS = ("job", "bins")
 
 
+def check_order(order: str) -> None:
+    """InvalidInput unless `order` is one of ORDERS (naming them)."""
+    if order not in ORDERS:
+        raise InvalidInput(f"item order {order!r}: valid are {list(ORDERS)}")
+
+
 @dataclass(frozen=True)
 class BinSpec:
     """An open bin on the floor.
@@ -121,16 +127,15 @@ class Job:
         they are taken (ORDERS): "job", as listed; "bins", each bin's items one after
         another, the bins in the order the job first names them, each bin's items in job
         order (the items are all at hand, as in a tote). InvalidInput for another order."""
-        if order not in ORDERS:
-            raise InvalidInput(f"item order {order!r}: valid are {list(ORDERS)}")
+        check_order(order)
         out: list[ItemSpec] = []
         for it in self.items:
             out.extend([it] * min(it.count, self.max_items - len(out)))
             if len(out) >= self.max_items:
                 break
         if order == "bins":
-            first = {it.bin: i for i, it in reversed(list(enumerate(out)))}
-            out.sort(key=lambda it: first[it.bin])  # stable: job order within a bin
+            rank = {b: i for i, b in enumerate(dict.fromkeys(it.bin for it in out))}
+            out.sort(key=lambda it: rank[it.bin])  # stable: job order within a bin
         return out
 
 

@@ -46,7 +46,7 @@ from cell.errors import (
     TrajectoryError,
     UnreachableTarget,
 )
-from cell.jobs import ItemSpec, Job
+from cell.jobs import ItemSpec, Job, check_order
 from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
 
@@ -457,8 +457,7 @@ class ItemLoop:
         wait_for: Callable[[ObjectParams, ObjectParams], bool] | None = None,
         order: str = "job",
     ) -> None:
-        if job is not None:
-            job.expanded_items(order)  # InvalidInput for an order that is not one
+        check_order(order)
         self._job = job
         self.order = order
         self.platform = platform

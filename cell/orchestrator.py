@@ -41,7 +41,7 @@ from cell.errors import (
     TrajectoryError,
     UnreachableTarget,
 )
-from cell.jobs import ItemSpec, Job
+from cell.jobs import ItemSpec, Job, check_order
 from cell.kinds import PICKS, RELEASES
 from cell.loop import FAILURES, Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
@@ -622,7 +622,7 @@ class Orchestrator:
         self.speed_scale = float(speed_scale)
         if pick not in PICKS:
             raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
-        job.expanded_items(order)  # InvalidInput for an order that is not one, before the scene
+        check_order(order)  # before the scene is built
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.bounds = ThrowBounds()
