@@ -10,7 +10,7 @@ configuration wins; if none converges the call raises IKFailed with the best res
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -625,6 +625,7 @@ def solve_release_ik(
     elevation: float,
     azimuth: float,
     q_current: np.ndarray | None = None,
+    solve: Callable[..., IKResult] | None = None,
 ) -> IKResult:
     """IK for a release with the item's weight on a pad: the roll fixed at 0 or π.
 
@@ -641,6 +642,8 @@ def solve_release_ik(
         elevation: e [rad].
         azimuth: a [rad].
         q_current: the current configuration [rad]; home if None.
+        solve: `solve_ik` or a stand-in with its (robot, pose, q_current) arguments (the
+            orchestrator's, which remembers what it solved: `Orchestrator._release_ik`).
 
     Returns:
         The IKResult.
@@ -648,15 +651,16 @@ def solve_release_ik(
     Raises:
         IKNoSolution: not even the free roll is reachable.
     """
+    solve = solve or solve_ik
     q_ref = robot.home if q_current is None else np.asarray(q_current, dtype=float)
     if abs(math.cos(elevation)) > 1e-6:
         found: list[IKResult] = []
         for roll in WEIGHT_ROLLS_RAD:
             try:
                 pose = ReleasePose.from_angles(position, elevation, azimuth, roll)
-                found.append(solve_ik(robot, pose, q_current))
+                found.append(solve(robot, pose, q_current))
             except IKFailed:
                 continue
         if found:
             return min(found, key=lambda r: float(np.linalg.norm(r.q - q_ref)))
-    return solve_ik(robot, ReleasePose.from_angles(position, elevation, azimuth), q_current)
+    return solve(robot, ReleasePose.from_angles(position, elevation, azimuth), q_current)

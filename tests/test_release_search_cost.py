@@ -1,0 +1,133 @@
+"""With `cycle_search`, what makes the search cheaper must not change what it chooses: the
+release IK remembered through a decision (`Orchestrator._release_ik`) and the candidates
+left out by a lower bound on their cycle (`Orchestrator._cycle_bound_s`).
+
+Independent checks: the same decision made by the exhaustive search (every candidate
+solved afresh and timed), the bound against every cycle the planner times and against
+ruckig's jerk-limited move at the full limits (a second solver, which no rest-to-rest move
+can beat by more than the bound allows), and the bound's closed form for one joint.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cell.jobs import parse_job
+from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator
+from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
+from cell.robot.motion import move_time
+from cell.robot.moving_release import COAST_S
+
+# random layout 2's geometry (Panda), as tests/test_release_choice.py
+JOB = """\
+cell: {robot: panda, ee: pybullet}
+bins:
+  - {id: bin_0, position_m: [-0.432, -1.044], size_m: [0.263, 0.392], rim_height_m: 0.05}
+  - {id: bin_2, position_m: [1.706, 1.434], size_m: [0.314, 0.377], rim_height_m: 0.123}
+  - {id: bin_3, position_m: [0.066, 2.162], size_m: [0.313, 0.305], rim_height_m: 0.11}
+items:
+  - {object: unseen_cube45, count: 1, bin: bin_2}
+  - {shape: cube, mass_kg: 0.0519, size_m: [0.0668, 0.0668, 0.0668], count: 1, bin: bin_3}
+  - {shape: cube, mass_kg: 0.1655, size_m: [0.0568, 0.0568, 0.0568], count: 3, bin: bin_0}
+seed: 2
+"""
+
+
+@pytest.fixture(scope="module")
+def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    tmp = tmp_path_factory.mktemp("search_cost")
+    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="cost", cycle_search=True)
+    yield o
+    o.close()
+
+
+def _decide(o: Orchestrator, k: int, exhaustive: bool) -> tuple[Any, list[tuple[float, float]]]:
+    """Item k's decision, the arm at rest where it is; and (bound, cycle timed) [s] of
+    every candidate the planner timed. `exhaustive`: every IK solved afresh, no
+    candidate left out."""
+    spec = o.job.expanded_items()[k]
+    o.present(k, spec.obj)
+    timed: list[tuple[float, float]] = []
+    cycle, bound = o._static_cycle_s, o._cycle_bound_s
+
+    def watched(obj: Any, plan: Any, stroke: float, q_rel: Any, over: Any = None) -> float:
+        t = cycle(obj, plan, stroke, q_rel, over)
+        q_pick = (over or o._over_item(o._presented, stroke, obj))[0]
+        timed.append((bound(q_pick, q_rel), t))
+        return t
+
+    o._static_cycle_s = watched  # type: ignore[method-assign]
+    if exhaustive:
+        o._release_ik = lambda robot, pose, seed=None: solve_ik(robot, pose, seed)  # type: ignore[method-assign]
+        o._cycle_bound_s = lambda q_pick, q_rel: -math.inf  # type: ignore[method-assign]
+    try:
+        d = o.decide(k, spec.obj, o.job.bin(spec.bin))
+    finally:
+        for name in ("_static_cycle_s", "_release_ik", "_cycle_bound_s"):
+            o.__dict__.pop(name, None)
+        o.scene.remove_item(o._presented)
+    return d, timed
+
+
+@pytest.mark.parametrize("k", [0, 1, 2])
+def test_the_cheaper_search_chooses_as_the_exhaustive_one(orchestrator: Any, k: int) -> None:
+    o = orchestrator
+    full, timed_full = _decide(o, k, exhaustive=True)
+    fast, timed_fast = _decide(o, k, exhaustive=False)
+    assert fast.action == full.action == "throw"
+    assert fast.plan == full.plan
+    assert fast.stroke_m == full.stroke_m
+    np.testing.assert_allclose(fast.state["q_release"], full.state["q_release"], atol=1e-12)
+    # fewer cycles timed, never more
+    assert len(timed_fast) <= len(timed_full), (timed_fast, timed_full)
+    for b, t in timed_full:
+        assert b <= t, timed_full  # a lower bound on every cycle the planner times
+
+
+def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: Any) -> None:
+    o = orchestrator
+    lim = o.robot.limits
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q0, q1 = o.robot.random_configuration(rng, 2)
+        each_way = (o._cycle_bound_s(q0, q1) - SETTLE_S - COAST_S) / 2
+        # ruckig's rest-to-rest move at the full limits, jerk-limited: no quicker
+        assert each_way <= move_time(q0, q1, o.robot) + 1e-9
+        assert each_way <= move_time(q1, q0, o.robot) + 1e-9
+    # one joint turned: 1 rad on the first, under the distance where it reaches full speed
+    # (a triangle, 2√(d/a)) or over it (d/v + v/a)
+    for d_rad in (0.05, 3.0):
+        q0 = np.asarray(o.robot.home, float)
+        q1 = q0.copy()
+        q1[0] += d_rad if q0[0] + d_rad <= lim.upper[0] else -d_rad
+        v, a = lim.velocity[0] * (1 + 1e-3), lim.acceleration[0] * (1 + 1e-3)
+        if d_rad <= v * v / a:
+            expected = 2 * math.sqrt(d_rad / a)
+        else:
+            expected = d_rad / v + v / a
+        assert o._cycle_bound_s(q0, q1) == pytest.approx(2 * expected + SETTLE_S + COAST_S)
+
+
+def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any) -> None:
+    o = orchestrator
+    # 1.5 m up over the base: out of the Panda's reach (about 1.2 m from its shoulder)
+    pose = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)
+    o._ik_memo.clear()
+    with pytest.raises(IKNoSolution) as first:
+        o._release_ik(o.robot, pose, np.asarray(o.robot.home, float))
+    assert first.value.position_error_m >= IK_OUT_OF_REACH_M
+    # from another seed: the same verdict, not searched again
+    with pytest.raises(IKNoSolution) as again:
+        o._release_ik(o.robot, pose, np.asarray(o.q, float) + 0.1)
+    assert again.value is first.value
+    # a pose in reach is solved as solve_ik solves it, and remembered as such
+    q_home = np.asarray(o.robot.home, float)
+    p, r = o.robot.tcp_pose(q_home)
+    near = ReleasePose(p, r[:, 2], None)
+    got = o._release_ik(o.robot, near, q_home)
+    np.testing.assert_allclose(got.q, solve_ik(o.robot, near, q_home).q, atol=1e-12)
+    assert o._release_ik(o.robot, near, q_home) is got
