@@ -21,20 +21,7 @@ from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from cell.robot.motion import move_time
 from cell.robot.moving_release import COAST_S
-
-# random layout 2's geometry (Panda), as tests/test_release_choice.py
-JOB = """\
-cell: {robot: panda, ee: pybullet}
-bins:
-  - {id: bin_0, position_m: [-0.432, -1.044], size_m: [0.263, 0.392], rim_height_m: 0.05}
-  - {id: bin_2, position_m: [1.706, 1.434], size_m: [0.314, 0.377], rim_height_m: 0.123}
-  - {id: bin_3, position_m: [0.066, 2.162], size_m: [0.313, 0.305], rim_height_m: 0.11}
-items:
-  - {object: unseen_cube45, count: 1, bin: bin_2}
-  - {shape: cube, mass_kg: 0.0519, size_m: [0.0668, 0.0668, 0.0668], count: 1, bin: bin_3}
-  - {shape: cube, mass_kg: 0.1655, size_m: [0.0568, 0.0568, 0.0568], count: 3, bin: bin_0}
-seed: 2
-"""
+from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
 
 @pytest.fixture(scope="module")
