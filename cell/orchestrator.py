@@ -675,8 +675,10 @@ class Orchestrator:
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
         self._frame: tuple[float, float] | None = None  # the grip's (azimuth, roll) now
-        # release IK solved for the decision being made (`_release_ik`; `decide` clears it)
+        # IK solved and approaches timed since the decision began (`_solve_ik`,
+        # `_approach_s`; `decide` clears them)
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
+        self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._placing = False  # the item carried is to be placed (carry_hold)
         self.loop = ItemLoop(
             job,
@@ -744,19 +746,30 @@ class Orchestrator:
         again from another seed. On the demo, a release 0.42 m out and 0.61 m up (the
         lowest release bounds) was missed by 12.4 mm from every seed, again and again:
         207 searches failed in its 18 throws, 81 now, and nothing chosen changed."""
-        from cell.robot.ik import IKNoSolution, solve_ik
+        from cell.robot.ik import solve_ik
 
         if robot is not self.robot:
             return solve_ik(robot, pose, seed)
+        return self._solve_ik(pose, seed, reach=self.cycle_search)
+
+    def _solve_ik(self, pose: Any, seed: np.ndarray | None = None, reach: bool = False) -> Any:
+        """`solve_ik(self.robot, pose, seed)`, remembered until the next decision
+        (`decide` clears it): the same pose from the same seed is the same solution, or
+        the same IKNoSolution. `reach`: a pose missed by IK_OUT_OF_REACH_M or more is not
+        searched again from another seed either (`_release_ik`)."""
+        from cell.robot.ik import IKNoSolution, solve_ik
+
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
-        found = self._ik_memo.get(key, self._ik_memo.get(where))
+        found = self._ik_memo.get(key)
+        if found is None and reach:
+            found = self._ik_memo.get(where)
         if found is None:
             try:
-                found = solve_ik(robot, pose, seed)
+                found = solve_ik(self.robot, pose, seed)
             except IKNoSolution as exc:
                 found = exc
-                if self.cycle_search and exc.position_error_m >= IK_OUT_OF_REACH_M:
+                if reach and exc.position_error_m >= IK_OUT_OF_REACH_M:
                     self._ik_memo[where] = exc
             self._ik_memo[key] = found
         if isinstance(found, Exception):
@@ -1012,13 +1025,13 @@ class Orchestrator:
         """IK at the roll the item was gripped for (`self._frame`); without one, or when that
         roll has no solution, the roll `solve_release_ik` chooses. From `seed` (default:
         where the arm is)."""
-        from cell.robot.ik import ReleasePose, solve_ik, solve_release_ik
+        from cell.robot.ik import ReleasePose, solve_release_ik
 
         q0 = self.q if seed is None else seed
         if self._frame is not None:
             pose = ReleasePose.from_angles(tcp, elevation, azimuth, self._frame[1])
             try:
-                return solve_ik(self.robot, pose, q0).q
+                return self._solve_ik(pose, q0).q.copy()  # the memo keeps its own
             except IKFailed:
                 log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
         return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
@@ -1274,6 +1287,7 @@ class Orchestrator:
         the throw's plan, made before the pick: the end-effector grasps at the stroke it
         will throw with, so the item sits on the band carriage as the plan assumes."""
         self._ik_memo.clear()
+        self._approach_memo.clear()
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m
@@ -2478,6 +2492,7 @@ class Orchestrator:
                             index,
                             stroke_max_m,
                             dc_replace(bounds, facing_rad=facing),
+                            self._beat(found),
                         )
                     )
                 except (UnreachableTarget, IKFailed) as exc:
@@ -2497,11 +2512,12 @@ class Orchestrator:
         index: int,
         stroke_max_m: float,
         bounds: Any,
+        beat: float | None = None,
     ) -> _Release:
-        """The throw's plan in release `bounds` and its release (`_release_q`): steep
-        enough for the grip to hold the item at its release first; where the arm reaches
-        no such release, as the bounds are (`_steep_enough`). UnreachableTarget or
-        IKFailed."""
+        """The throw's plan in release `bounds` and its release (`_release_q`, which need
+        not time a release whose cycle cannot beat `beat` [s]): steep enough for the grip
+        to hold the item at its release first; where the arm reaches no such release, as
+        the bounds are (`_steep_enough`). UnreachableTarget or IKFailed."""
         err: IKFailed | None = None
         for steep in (True, False):
             self.bounds_now = bounds
@@ -2517,6 +2533,7 @@ class Orchestrator:
                     plan,
                     stroke,
                     obj,
+                    beat,
                 )
             except IKFailed as exc:
                 err = err or exc
@@ -2528,7 +2545,7 @@ class Orchestrator:
         raise err
 
     @staticmethod
-    def _soonest_release(obj: ObjectParams, found: list[_Release]) -> _Release:
+    def _soonest_of(found: list[_Release]) -> _Release:
         """Of the plans `found` in the release bounds in `_release_bounds`' order, the
         first, unless a later one's cycle estimate is sooner and its route asks no more of
         the grip than the first's; the first where an estimate is missing."""
@@ -2538,6 +2555,22 @@ class Orchestrator:
                 continue
             if r.cost[0] <= first.cost[0] and r.cost < best.cost:
                 best = r
+        return best
+
+    def _beat(self, found: list[_Release]) -> float | None:
+        """The cycle estimate [s] a plan in the next release bounds must beat to be kept
+        (`_soonest_of` of the plans `found` so far), where one that asks no more of the
+        grip than it holds has it; None (nothing to beat: every release is timed) without
+        `cycle_search`, or where there is none."""
+        if not self.cycle_search or not found or found[0].cost is None:
+            return None
+        cost = self._soonest_of(found).cost
+        return None if cost is None or cost[0] else cost[1]
+
+    @classmethod
+    def _soonest_release(cls, obj: ObjectParams, found: list[_Release]) -> _Release:
+        """`_soonest_of` the plans `found`, logged where it is not the first."""
+        first, best = found[0], cls._soonest_of(found)
         if best is not first:
             log.info(
                 "%s: released %.2f m high, %.2f s sooner a cycle than in the cell's bounds",
@@ -2548,7 +2581,12 @@ class Orchestrator:
         return best
 
     def _release_q(
-        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        stroke: float,
+        obj: ObjectParams,
+        beat: float | None = None,
     ) -> tuple[np.ndarray, tuple[bool, float] | None]:
         """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
         estimate (None where none was made; `_plan` compares facings by it): of the two rolls
@@ -2565,7 +2603,9 @@ class Orchestrator:
         here: on the UR5 copy of the demo the roll chosen so cost four grasps (19/24 in
         bin against 23/24). A release whose route would ask more of the grip than it must
         (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
-        IKFailed when the pose has no configuration."""
+        With `cycle_search`, the candidates are timed as the cell makes the cycle, soonest
+        bound first, and `beat` [s] is a cycle estimate another release bounds' plan has
+        (`_release_search`). IKFailed when the pose has no configuration."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
@@ -2573,48 +2613,108 @@ class Orchestrator:
         if self._presented is not None and self.pick_mode != "physical" and abs(math.cos(e)) > 1e-6:
             kept = self._frame
             try:
-                for roll in WEIGHT_ROLLS_RAD:
-                    self._frame = (float(a), roll)  # the pick is gripped at this roll
-                    beat = None if best is None or best[0][0] else best[0][1]
-                    for cost, q_rel in self._release_costs(tcp, plan, roll, stroke, obj, beat):
-                        log.debug("release roll %.2f rad: (slips, cycle estimate) %s", roll, cost)
-                        if best is None or cost < best[0]:
-                            best = (cost, q_rel)
+                if self.cycle_search:
+                    best = self._release_search(tcp, plan, stroke, obj, beat)
+                else:
+                    for roll in WEIGHT_ROLLS_RAD:
+                        self._frame = (float(a), roll)  # the pick is gripped at this roll
+                        for cost, q_rel in self._release_costs(tcp, plan, roll, stroke, obj):
+                            log.debug("release roll %.2f rad: (slips, estimate) %s", roll, cost)
+                            if best is None or cost < best[0]:
+                                best = (cost, q_rel)
             finally:
                 self._frame = kept
         if best is not None:
             return best[1], best[0]
         return self._ik(tcp, e, a), None
 
+    def _release_search(
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams, beat: float | None
+    ) -> tuple[tuple[bool, float], np.ndarray] | None:
+        """`_release_q` with `cycle_search`: ((asks more of the grip than it holds, cycle
+        estimate [s]), release configuration) of the soonest release at either roll, as
+        `_release_costs` times each, or None where none is found.
+
+        Every candidate (both rolls, each seed's IK) is bounded first (`_cycle_bound_s`
+        plus APPROACH_WEIGHT of the approach) and timed in ascending order of that bound:
+        the soonest found early, a candidate whose bound cannot beat it (nor `beat` [s], a
+        cycle another release bounds' plan already has, `_plan_facing`) is not timed, nor
+        is any after it. Where candidates were left out so and none timed is found, the
+        first one's configuration with the estimate (False, ∞): it cannot be chosen
+        (`_soonest_release`). Ties go to the candidate `_release_costs` would time first
+        (rolls in WEIGHT_ROLLS_RAD's order, seeds in its order), so the choice is the one
+        the search timing every candidate makes (tests/test_release_search_cost.py)."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
+
+        level = self._turns_if_rolled(obj, stroke)
+        a = float(plan.azimuth_rad)
+        # (lower bound on the estimate [s], order, roll, release, (pick, lift), approach [s])
+        found: list[tuple[float, int, float, np.ndarray, Any, float]] = []
+        for roll in WEIGHT_ROLLS_RAD:
+            self._frame = (a, roll)  # the pick is gripped at this roll
+            try:
+                over = self._over_item(self._presented, stroke, obj)
+                t_approach = self._approach_s(self.q, over, stroke, obj)
+            except (IKFailed, TrajectoryError):
+                continue
+            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
+            mine: list[np.ndarray] = []
+            for seed in (over[1], self.q, over[0]):
+                try:
+                    q_rel = self._release_ik(self.robot, pose, seed).q
+                except IKFailed:
+                    continue
+                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
+                    continue
+                mine.append(q_rel)
+                low = self._cycle_bound_s(over[0], q_rel) + APPROACH_WEIGHT * t_approach
+                found.append((low, len(found), roll, q_rel, over, t_approach))
+        best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
+        soonest = math.inf if beat is None else beat
+        pruned = False
+        for low, order, roll, q_rel, over, t_approach in sorted(found, key=lambda c: c[:2]):
+            if low >= soonest:
+                pruned = True
+                break  # nor can any after it
+            self._frame = (a, roll)
+            try:
+                way = self._swing(over[1], q_rel, plan, (obj, stroke)) if level else []
+                t_cycle = self._static_cycle_s(obj, plan, stroke, q_rel, over)
+            except (IKFailed, TrajectoryError):
+                continue
+            t = t_cycle + APPROACH_WEIGHT * t_approach
+            slips = level and not self._swing_holds(
+                [over[1], *way, q_rel], (obj, stroke), plan.elevation_rad
+            )
+            log.debug("release roll %.2f rad: (slips, cycle estimate) (%s, %.3f)", roll, slips, t)
+            if best is None or ((slips, t), order) < best[0]:
+                best = (((slips, t), order), q_rel)
+            if not slips:
+                soonest = min(soonest, t)
+        if best is not None:
+            return best[0][0], best[1]
+        if pruned:
+            return (False, math.inf), min(found, key=lambda c: c[1])[3]
+        return None
+
     def _release_costs(
-        self,
-        tcp: np.ndarray,
-        plan: Any,
-        roll: float,
-        stroke: float,
-        obj: ObjectParams,
-        beat: float | None = None,
+        self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
     ) -> list[tuple[tuple[bool, float], np.ndarray]]:
         """((asks more of the grip than it holds, cycle estimate [s]), release
-        configuration) of each release at `roll` [rad] (`_release_q`), with the pick in
-        the frame `self._frame`; none when the pick, the approach, the release or the
-        carry is not found. A carry whose route, held still anywhere, would ask more of
-        the grip than the carry's bound (`_swing_holds`: a tall item on a swing that rolls
-        the grip) ranks after every one that does not. IK is seeded from the lift and
-        from where the arm is, and keeps the solution nearest its seed.
+        configuration) of each release at `roll` [rad] (`_release_q` without
+        `cycle_search`; with it, `_release_search`), with the pick in the frame
+        `self._frame`; none when the pick, the approach, the release or the carry is not
+        found. A carry whose route, held still anywhere, would ask more of the grip than
+        the carry's bound (`_swing_holds`: a tall item on a swing that rolls the grip)
+        ranks after every one that does not. IK is seeded from the lift and from where the
+        arm is, and keeps the solution nearest its seed.
 
         The estimate: the empty arm to the pick of the presented item (as `_approach_s`
         times it), plus twice the carry from its lift along the twist-free swing to the
         release, timed as `_move_plan` times a carry of this item (the next approach
         comes back about as far; with `turn_release`, the empty arm's way back from the
         release to the same pick instead: a release turned toward the station winds the
-        wrist round, and the way back unwinds it). With `cycle_search`: the item's
-        pick-to-pick cycle as the cell makes it (`_static_cycle_s`) plus APPROACH_WEIGHT
-        of the approach, IK seeded from the pick too (the configuration a carry solved
-        again from the pick would go to). With `cycle_search`, a release whose cycle
-        cannot be sooner than `beat` [s] (a cycle estimate already found that asks no
-        more of the grip than it holds) or than one found here, by `_cycle_bound_s`, is
-        left out unplanned: it could not be chosen."""
+        wrist round, and the way back unwinds it)."""
         from cell.robot.ik import ReleasePose
 
         try:
@@ -2625,38 +2725,24 @@ class Orchestrator:
         pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
         out: list[tuple[tuple[bool, float], np.ndarray]] = []
         level = self._turns_if_rolled(obj, stroke)
-        seeds = (q_lift, self.q, q_pick) if self.cycle_search else (q_lift, self.q)
-        for seed in seeds:
+        for seed in (q_lift, self.q):
             try:
                 q_rel = self._release_ik(self.robot, pose, seed).q
                 if any(joint_gap(q_rel, q) < 1e-3 for _, q in out):
                     continue
-                if self.cycle_search and beat is not None:
-                    if self._cycle_bound_s(q_pick, q_rel) + APPROACH_WEIGHT * t_approach >= beat:
-                        continue
-                way = (
-                    self._swing(q_lift, q_rel, plan, (obj, stroke))
-                    if level or not self.cycle_search
-                    else []
-                )
-                if self.cycle_search:
-                    t_cycle = self._static_cycle_s(obj, plan, stroke, q_rel, (q_pick, q_lift))
-                    t = t_cycle + APPROACH_WEIGHT * t_approach
-                else:
-                    carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
-                    t_carry = _plan_time(carry, SETTLE_S)
-                    t_back = t_carry
-                    if self.turn_release:
-                        t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
-                    t = t_approach + t_carry + t_back
+                way = self._swing(q_lift, q_rel, plan, (obj, stroke))
+                carry = self._move_plan(q_lift, [*way, q_rel], SETTLE_S, (obj, stroke))
+                t_carry = _plan_time(carry, SETTLE_S)
+                t_back = t_carry
+                if self.turn_release:
+                    t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
+                t = t_approach + t_carry + t_back
             except (IKFailed, TrajectoryError):
                 continue
             slips = level and not self._swing_holds(
                 [q_lift, *way, q_rel], (obj, stroke), plan.elevation_rad
             )
             out.append(((slips, t), q_rel))
-            if not slips and (beat is None or t < beat):
-                beat = t
         return out
 
     def _cycle_bound_s(self, q_pick: np.ndarray, q_rel: np.ndarray) -> float:
@@ -2688,10 +2774,22 @@ class Orchestrator:
         from cell.robot.motion import move_time
 
         q_pick, q_lift = over
+        key = (
+            *(np.asarray(q, float).tobytes() for q in (q_from, q_pick, q_lift)),
+            self.scene.item_position(self._presented).tobytes(),
+            stroke,
+            obj,
+            self._frame,
+        )
+        if key in self._approach_memo:  # until the next decision, as `_solve_ik`
+            return self._approach_memo[key]
         approach, _ = self._approach_plan(self._presented, stroke, obj, q_pick, q_from)
         if approach is not None:
-            return float(approach.duration)
-        return move_time(q_from, q_lift, self.robot) + move_time(q_lift, q_pick, self.robot)
+            t = float(approach.duration)
+        else:
+            t = move_time(q_from, q_lift, self.robot) + move_time(q_lift, q_pick, self.robot)
+        self._approach_memo[key] = t
+        return t
 
     def _release_bounds(self, target: Any) -> tuple[list[Any], list[Any]]:
         """The release bounds a plan is made in (`_plan_facing`): the cell's, then lower

@@ -1,6 +1,8 @@
 """With `cycle_search`, what makes the search cheaper must not change what it chooses: the
-release IK remembered through a decision (`Orchestrator._release_ik`) and the candidates
-left out by a lower bound on their cycle (`Orchestrator._cycle_bound_s`).
+IK and the approaches remembered through a decision (`Orchestrator._solve_ik`,
+`_release_ik`, `_approach_s`), and the candidates left out by a lower bound on their cycle
+(`Orchestrator._cycle_bound_s`), timed soonest bound first across both rolls and against
+what another release bounds' plan already has (`_release_search`, `_beat`).
 
 Independent checks: the same decision made by the exhaustive search (every candidate
 solved afresh and timed), the bound against every cycle the planner times and against
@@ -17,7 +19,7 @@ import numpy as np
 import pytest
 
 from cell.jobs import parse_job
-from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator
+from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator, _Release
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from cell.robot.motion import move_time
 from cell.robot.moving_release import COAST_S
@@ -118,3 +120,48 @@ def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any)
     got = o._release_ik(o.robot, near, q_home)
     np.testing.assert_allclose(got.q, solve_ik(o.robot, near, q_home).q, atol=1e-12)
     assert o._release_ik(o.robot, near, q_home) is got
+
+
+def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrator: Any) -> None:
+    """`_release_search` with `beat`: every candidate whose bound is not under it is left
+    untimed; where that is all of them, the estimate (False, ∞), which `_soonest_of` never
+    prefers to a plan that has one; with `beat` just over the soonest cycle, that cycle."""
+    o = orchestrator
+    spec = o.job.expanded_items()[2]
+    o.present(2, spec.obj)
+    try:
+        d = o.decide(2, spec.obj, o.job.bin(spec.bin))
+        plan, stroke = d.plan, d.stroke_m
+        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+        tcp = o._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, spec.obj)
+        timed: list[float] = []
+        cycle = o._static_cycle_s
+
+        def watched(*a: Any) -> float:
+            timed.append(cycle(*a))
+            return timed[-1]
+
+        o._static_cycle_s = watched  # type: ignore[method-assign]
+        kept = o._frame
+        try:
+            full = o._release_search(tcp, plan, stroke, spec.obj, None)
+            n_full = len(timed)
+            timed.clear()
+            none = o._release_search(tcp, plan, stroke, spec.obj, 0.0)
+            assert timed == []  # nothing timed: no cycle is under 0 s
+            assert full is not None and none is not None
+            assert none[0] == (False, math.inf)
+            assert not full[0][0]  # the soonest asks no more of the grip than it holds
+            just = o._release_search(tcp, plan, stroke, spec.obj, full[0][1] + 1e-9)
+            assert just is not None and just[0] == full[0]
+            np.testing.assert_allclose(just[1], full[1], atol=1e-12)
+            assert len(timed) <= n_full
+        finally:
+            o.__dict__.pop("_static_cycle_s", None)
+            o._frame = kept
+    finally:
+        o.scene.remove_item(o._presented)
+    first = _Release(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
+    pruned = first._replace(cost=none[0])
+    assert Orchestrator._soonest_of([first, pruned]) is first
+    assert o._beat([first, pruned]) == full[0][1]
