@@ -32,7 +32,7 @@ bench: install
 	$(BIN)/cell bench
 
 # Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 13 of them the
-# random-layout benchmark, 6 its speed trade-off, 5 the flywheel; and about 75 min more for
+# random-layout benchmark, 6 its speed trade-off, 5 the flywheel; and about 30 min more for
 # the benchmark and the demo with --cycle-search, whose planning is slow). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
