@@ -755,8 +755,9 @@ class Orchestrator:
     def _solve_ik(self, pose: Any, seed: np.ndarray | None = None, reach: bool = False) -> Any:
         """`solve_ik(self.robot, pose, seed)`, remembered until the next decision
         (`decide` clears it): the same pose from the same seed is the same solution, or
-        the same IKNoSolution. `reach`: a pose missed by IK_OUT_OF_REACH_M or more is not
-        searched again from another seed either (`_release_ik`)."""
+        the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
+        writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
+        more is not searched again from another seed either (`_release_ik`)."""
         from cell.robot.ik import IKNoSolution, solve_ik
 
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
@@ -1031,7 +1032,7 @@ class Orchestrator:
         if self._frame is not None:
             pose = ReleasePose.from_angles(tcp, elevation, azimuth, self._frame[1])
             try:
-                return self._solve_ik(pose, q0).q.copy()  # the memo keeps its own
+                return self._solve_ik(pose, q0).q
             except IKFailed:
                 log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
         return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
@@ -2632,8 +2633,13 @@ class Orchestrator:
         self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams, beat: float | None
     ) -> tuple[tuple[bool, float], np.ndarray] | None:
         """`_release_q` with `cycle_search`: ((asks more of the grip than it holds, cycle
-        estimate [s]), release configuration) of the soonest release at either roll, as
-        `_release_costs` times each, or None where none is found.
+        estimate [s]), release configuration) of the soonest release at either roll, or
+        None where none is found. IK is seeded from the lift, from where the arm is and
+        from the pick (the configuration a carry solved again from the pick would go to);
+        the estimate is the item's pick-to-pick cycle as the cell makes it
+        (`_static_cycle_s`) plus APPROACH_WEIGHT of the approach from where the arm is;
+        a release whose route would ask more of the grip than it holds (`_swing_holds`)
+        ranks after every one that does not, as in `_release_costs`.
 
         Every candidate (both rolls, each seed's IK) is bounded first (`_cycle_bound_s`
         plus APPROACH_WEIGHT of the approach) and timed in ascending order of that bound:
@@ -2641,9 +2647,9 @@ class Orchestrator:
         cycle another release bounds' plan already has, `_plan_facing`) is not timed, nor
         is any after it. Where candidates were left out so and none timed is found, the
         first one's configuration with the estimate (False, ∞): it cannot be chosen
-        (`_soonest_release`). Ties go to the candidate `_release_costs` would time first
-        (rolls in WEIGHT_ROLLS_RAD's order, seeds in its order), so the choice is the one
-        the search timing every candidate makes (tests/test_release_search_cost.py)."""
+        (`_soonest_release`). Ties go to the candidate first in the rolls' order
+        (WEIGHT_ROLLS_RAD) and then the seeds', so the choice is the one the search timing
+        every candidate makes (tests/test_release_search_cost.py)."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
 
         level = self._turns_if_rolled(obj, stroke)
@@ -2694,7 +2700,7 @@ class Orchestrator:
         if best is not None:
             return best[0][0], best[1]
         if pruned:
-            return (False, math.inf), min(found, key=lambda c: c[1])[3]
+            return (False, math.inf), found[0][3]
         return None
 
     def _release_costs(
