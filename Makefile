@@ -33,7 +33,8 @@ bench: install
 
 # Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 13 of them the
 # random-layout benchmark, 6 its speed trade-off, 5 the flywheel; and about 30 min more for
-# the benchmark and the demo with --cycle-search, whose planning is slow). The JSON beside
+# the benchmark and the demo with --cycle-search, whose planning is slow, and 32 min for the
+# benchmark with --cycle-search --turn-release). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
@@ -63,6 +64,7 @@ figures: install
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --floor --json > $(FIG)/bench_sort_turned.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --floor --json > $(FIG)/bench_sort_cycle.json
 	$(BIN)/cell run tasks/bins.yaml --no-log --cycle-search --json $(FIG)/run_cycle.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --turn-release --floor --json > $(FIG)/bench_sort_cycle_turned.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --order bins --floor --json > $(FIG)/bench_sort_bins.json
 	$(BIN)/cell run tasks/bins.yaml --no-log --order bins --json $(FIG)/run_bins.json
 	$(BIN)/python -m cell.bench.bench_flywheel --json $(FIG)/flywheel.json

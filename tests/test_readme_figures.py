@@ -233,6 +233,13 @@ def test_the_bin_order_figures_are_the_last_generated_ones() -> None:
     assert int(rate_default.replace(",", "")) == round(demo["items_per_hour"])
 
 
+def test_the_two_options_together_are_the_last_generated_bench() -> None:
+    """`--cycle-search --turn-release` over the random layouts, as the README quotes it."""
+    _check_option_campaign(
+        "--cycle-search --turn-release", _json("docs/figures/bench_sort_cycle_turned.json")
+    )
+
+
 def test_the_cycle_search_figures_are_the_last_generated_ones() -> None:
     cs = _json("docs/figures/bench_sort_cycle.json")
     _check_option_campaign("--cycle-search", cs)
