@@ -31,10 +31,9 @@ test: lint
 bench: install
 	$(BIN)/cell bench
 
-# Every figure and quoted figure in README.md and docs/ (about 40 min on 2 cores: 13 of them the
-# random-layout benchmark, 6 its speed trade-off, 5 the flywheel; and about 30 min more for
-# the benchmark and the demo with --cycle-search, whose planning is slow, and 32 min for the
-# benchmark with --cycle-search --turn-release). The JSON beside
+# Every figure and quoted figure in README.md and docs/ (about 1 h 57 min on 2 cores, most of it
+# the random-layout benchmark: 32 min by default, 15 min without the release search and
+# the turn, 27 min with --order bins; the speed trade-off 19 min). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
 FIG := docs/figures
@@ -61,10 +60,8 @@ figures: install
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json
-	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --turn-release --floor --json > $(FIG)/bench_sort_turned.json
-	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --floor --json > $(FIG)/bench_sort_cycle.json
-	$(BIN)/cell run tasks/bins.yaml --no-log --cycle-search --json $(FIG)/run_cycle.json
-	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --cycle-search --turn-release --floor --json > $(FIG)/bench_sort_cycle_turned.json
+	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --no-cycle-search --no-turn-release --floor --json > $(FIG)/bench_sort_plain.json
+	$(BIN)/cell run tasks/bins.yaml --no-log --no-cycle-search --no-turn-release --json $(FIG)/run_plain.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --order bins --floor --json > $(FIG)/bench_sort_bins.json
 	$(BIN)/cell run tasks/bins.yaml --no-log --order bins --json $(FIG)/run_bins.json
 	$(BIN)/python -m cell.bench.bench_flywheel --json $(FIG)/flywheel.json

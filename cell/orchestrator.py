@@ -79,7 +79,10 @@ GRIP_USE_TIE = 0.02
 # A level swing whose joints travel farther than this × the ends' gap goes round (the
 # demo's swings travel 1.5-1.8 × the gap; a UR5's that flung its items, 3.4 ×)
 SWING_MAX_DETOUR = 2.5
-SETTLE_S = 0.05  # [s] wait after a move so the end-effector and item come to rest
+# [s] wait after a move so the end-effector and item come to rest: none (0.05 s before; on
+# random layouts 0-5 with the release search and the turn, 190 -> 189 of 198 in their bins
+# and 1,420 -> 1,430 items per hour; with the constants below, README "Throughput")
+SETTLE_S = 0.0
 LIFT_M = 0.15  # [m] lift above the pick pose before moving to the release
 # A lift's configuration farther than this from the pick's, in any joint, is on another
 # IK branch: the straight lift would swing the arm round (a UR5 grip folded back over the
@@ -88,11 +91,11 @@ LIFT_MAX_DQ_RAD = 1.0
 # The carry from the pick leaves through the lowest of these lifts [m] (0: straight from the
 # pick) whose path keeps the item rising out of the station, at least as far as it moves
 # sideways, up to DEPARTURE_CLEAR_M (Orchestrator._departure); else through LIFT_M
-DEPARTURE_LIFTS_M = (0.0, 0.04)
-DEPARTURE_CLEAR_M = 0.03
+DEPARTURE_LIFTS_M = (0.0, 0.01, 0.02, 0.04)
+DEPARTURE_CLEAR_M = 0.02
 # The empty arm's approach to a (kinematic) pick passes, without stopping, the point where
 # the open pads' tips are this far over the item's top, and goes straight down from there
-PICK_OVER_CLEARANCE_M = 0.02
+PICK_OVER_CLEARANCE_M = 0.01
 GRIP_DOWN = (-math.pi / 2, 0.0)  # (elevation, azimuth) [rad] of the throw axis pointing down
 PLACE_CLEARANCE_M = 0.02  # [m] item's lowest point above the bin floor when the place starts
 PLACE_SPOTS_TRIED = 8  # place spots tried, best first, for one the arm reaches (IK)
@@ -520,7 +523,7 @@ RELEASE_BOX_SHRINKS = (0.75, 0.9)
 APPROACH_WEIGHT = 0.25
 # a throw's release turns from its bin toward the pick station (_facing_toward_station):
 FACE_TURN_MAX_RAD = math.radians(90.0)  # [rad] at most this far,
-FACE_MIN_OFF_RAD = math.radians(70.0)  # [rad] for a bin at least this far round from the station,
+FACE_MIN_OFF_RAD = math.radians(30.0)  # [rad] for a bin at least this far round from the station,
 FACE_THROW_STRETCH = 1.10  # lengthening the throw at most this much
 
 
@@ -574,8 +577,8 @@ class Orchestrator:
             than stopping and lands in the bin by the model; "static": always stop.
         turn_release: a throw to a bin far round from the pick station may be released
             with the arm turned toward the station, the throw axis on the bin, where the
-            cycle estimate is shorter (`_facing_toward_station`; off by default: on the
-            random layouts it gained 4.5 % items per hour with the in-bin rate under 0.95).
+            cycle estimate is shorter (`_facing_toward_station`; on by default, with
+            `cycle_search`: README, "Throughput").
         learn: correct the planner from each observed landing (the flywheel): an
             object's next throw aims where its earlier landings say it must
             (LandingCorrection), and an object never thrown before takes its
@@ -587,7 +590,7 @@ class Orchestrator:
         cycle_search: choose each throw's release by its pick-to-pick cycle as the cell
             makes it, among the cell's release bounds and the lower ones
             (RELEASE_FALLBACKS), and carry it there (`_release_costs`, `_plan_facing`,
-            `_release_branch`): sooner cycles for several times the planning (off by
+            `_release_branch`): sooner cycles for several times the planning (on by
             default: the planning of a throw then takes longer than its cycle here).
         order: the order the job's items are taken in (`cell.jobs.ORDERS`): "job", as
             listed; "bins", each bin's items one after another (the items at hand, as in
@@ -610,9 +613,9 @@ class Orchestrator:
         speed_scale: float = ARM_SPEED_SCALE,
         pick: str = "kinematic",
         release: str = "auto",
-        turn_release: bool = False,
+        turn_release: bool = True,
         floor: bool = False,
-        cycle_search: bool = False,
+        cycle_search: bool = True,
         order: str = "job",
     ) -> None:
         from cell.endeffector.factory import make_in_step
@@ -2227,16 +2230,21 @@ class Orchestrator:
             pads = max(pads, g.housing_radius_m + 0.01 - r_item)
 
         # the best spot the arm reaches over and down to, on one IK branch: the down pose
-        # solved from over the spot (solved from where the arm is, the two came out
-        # 3.5 rad apart on a UR5, random layout 11, and the line between them swept the
-        # grip through the bin); the next spot where the arm reaches none there
+        # solved down the vertical from over the spot, each step from the one above
+        # (`_down_vertical`; solved from where the arm is, the two came out 3.5 rad apart
+        # on a UR5, random layout 11, and the line between them swept the grip through the
+        # bin; solved from over the spot in one step, the demo's last teddy went down onto
+        # a Panda branch 1.4-1.7 rad away in four joints: 1.2 s down, 2.0 s back up); the
+        # next spot where the arm reaches none there
         def poses(spot: tuple[float, float, float], on_branch: bool) -> tuple[Any, ...]:
             sx, sy, surface_z = spot
             centre = np.array([sx, sy, obj.size[2] / 2 + PLACE_CLEARANCE_M + surface_z])
             above = centre + np.array([0, 0, max(LIFT_M, target.rim_height + 0.05)])
             q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
             tcp_down = self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj)
-            return centre, q_above, self._ik_frame(tcp_down, q_above if on_branch else None)
+            if not on_branch:
+                return centre, q_above, self._ik_frame(tcp_down)
+            return centre, q_above, self._down_vertical(q_above, tcp_down)[-1]
 
         spots = sc.place_spots(target.id, obj, wall_margin_m=pads)
         for spot in self._spots_to_try(spots, sc.bin_spec(target.id).wall):
@@ -2299,24 +2307,33 @@ class Orchestrator:
         and the TCP at height tcp_z [m]?"""
         return tcp_z + self.scene.geometry.housing_to_tcp_m < target.rim_height + 0.01
 
+    def _down_vertical(
+        self, q_top: np.ndarray, p_bottom: np.ndarray, step_m: float = 0.04
+    ) -> list[np.ndarray]:
+        """Configurations, grip pointing down, on the vertical line from q_top's TCP
+        [rad] down to p_bottom [m, W] (which shares its x and y), every `step_m` [m] or
+        less, each solved from the one above: q_top's end excluded, p_bottom's the last.
+        IKFailed where IK fails on the way."""
+        p0 = self.robot.tcp_pose(q_top)[0]
+        k = max(1, math.ceil(float(np.linalg.norm(p_bottom - p0)) / step_m))
+        out: list[np.ndarray] = []
+        seed = q_top
+        for i in range(1, k + 1):
+            seed = self._ik_frame(p0 + (p_bottom - p0) * i / k, seed)
+            out.append(seed)
+        return out
+
     def _vertical(
         self, q_top: np.ndarray, q_bottom: np.ndarray, step_m: float = 0.04
     ) -> list[np.ndarray]:
         """Configurations, grip pointing down, on the vertical line between the TCPs of
         q_top and q_bottom [rad] (which share x and y), every `step_m` [m] or less, ends
-        excluded, each solved from the one above; none where IK fails on the way (the
-        line between the ends is then used)."""
-        p0, p1 = self.robot.tcp_pose(q_top)[0], self.robot.tcp_pose(q_bottom)[0]
-        k = math.ceil(float(np.linalg.norm(p1 - p0)) / step_m)
-        out: list[np.ndarray] = []
-        seed = q_top
+        excluded, each solved from the one above (`_down_vertical`); none where IK fails
+        on the way (the line between the ends is then used)."""
         try:
-            for i in range(1, k):
-                seed = self._ik_frame(p0 + (p1 - p0) * i / k, seed)
-                out.append(seed)
+            return self._down_vertical(q_top, self.robot.tcp_pose(q_bottom)[0], step_m)[:-1]
         except IKFailed:
             return []
-        return out
 
     def _descends_straight(
         self,
@@ -2421,9 +2438,12 @@ class Orchestrator:
         """The azimuth [rad, W] the arm faces at a throw's release if it turns from the
         bin toward the pick station (both the carry and the next approach then turn the
         arm that much less), or None: without `turn_release`, or for a bin less than
-        FACE_MIN_OFF_RAD round from the station (the demo's bins, 28–64° round: there the
-        cycle estimate erred by more than the turn saves, and the demo went from 1,529 to
-        1,490 items per hour with the turn).
+        FACE_MIN_OFF_RAD round from the station. From 70° while the turn was compared by
+        the cycle estimate without `cycle_search`: that erred by more than a small turn
+        saves (the demo's bins, 28–64° round, went from 1,529 to 1,490 items per hour with
+        it). With the search timing both as the cell makes them, from 30° (README, "The
+        defaults": over the 20 random layouts 1,474 -> 1,507 items per hour with the rise
+        out of the station to 2 cm as well).
 
         The release point is `release_radius` r from the base along the azimuth faced,
         so turning it by Δ from the bin at distance d lengthens the throw from d − r to

@@ -134,15 +134,25 @@ def test_the_turn_keeps_the_throw_within_its_stretch(
     assert capped == (turn_max_deg < 90.0), math.degrees(turn)
 
 
-@pytest.mark.parametrize("bin_xy", [(0.9, -0.8), (1.4, 0.0), (1.9, 0.8)])
+@pytest.mark.parametrize("bin_xy", [(0.9, -0.8), (1.4, -0.5), (1.0, -1.4)])
 def test_a_bin_near_the_station_azimuth_is_faced(bin_xy: tuple[float, float]) -> None:
-    """Within FACE_MIN_OFF_RAD (70°) of the station's azimuth the arm faces the bin: the
-    demo's bins, 0–64° round, where the turned release's cycle estimate was measured
-    up to 0.46 s short of the carry's own time."""
+    """Within FACE_MIN_OFF_RAD (30°) of the station's azimuth (−41.6°) the arm faces the
+    bin: these bins are 0°, 21.9° and 12.9° round from it, where a turn would save little."""
+    assert orchestrator.FACE_MIN_OFF_RAD == pytest.approx(math.radians(30.0))
     assert facing("panda", bin_xy) is None
 
 
+@pytest.mark.parametrize("bin_xy", [(1.4, 0.0), (1.9, 0.8)])
+def test_a_bin_30_to_70_degrees_round_may_be_turned_toward(bin_xy: tuple[float, float]) -> None:
+    """41.6° and 64.4° round from the station (the demo's bins are 28–64° round): faced
+    while the turn was compared by the default estimate (from 70°), turned now."""
+    f = facing("panda", bin_xy)
+    assert f is not None
+    bin_az, station_az = math.atan2(bin_xy[1], bin_xy[0]), math.atan2(STATION[1], STATION[0])
+    assert min(bin_az, station_az) < f < max(bin_az, station_az)
+
+
 def test_the_arm_faces_every_bin_unless_asked_to_turn() -> None:
-    """`turn_release` is off by default (`cell run --turn-release` turns it on)."""
+    """`turn_release` is on by default (`cell run --no-turn-release` turns it off)."""
     assert facing("panda", (0.066, 2.162), turn=False) is None
     assert facing("panda", (0.066, 2.162)) is not None

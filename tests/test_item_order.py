@@ -116,11 +116,16 @@ def test_picks_for_one_bin_are_alike_in_the_scene():
     its bin in either order. Taken alternately, the picks wander along the Panda's
     redundancy (each solved from the last release, at the other bin: joints 1 and 3 turn
     against each other: 0.75-3.3 rad from one pick to the next when measured); taken bin by
-    bin, each pick is within 0.5 rad of the last in every joint."""
+    bin, each pick is within 0.5 rad of the last in every joint. Without the release
+    search and the turn (`--no-cycle-search --no-turn-release`): the search, timing each
+    release with the approach from where the arm is, keeps even the alternate picks within
+    0.3 rad here (measured)."""
     job = parse_job(JOB, "two_bins.yaml")
     gaps: dict[str, list[float]] = {}
     for order in ORDERS:
-        orch = Orchestrator(job, order=order, session=f"order-{order}")
+        orch = Orchestrator(
+            job, order=order, session=f"order-{order}", cycle_search=False, turn_release=False
+        )
         picks: list[np.ndarray] = []
         pick = orch._pick_kinematic
 

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from cell.errors import TrajectoryError
+from cell.robot import moving_release
 from cell.robot.model import load_robot
 from cell.robot.moving_release import (
     choose_release,
@@ -114,9 +115,16 @@ def test_the_moving_landing_of_a_static_plan_is_the_models(robot):
 
 
 # -- in the scene --------------------------------------------------------------------
+# The static release's wait at the pose the moving throw below was chosen against: the
+# cell's SETTLE_S was 0.05 s then; with none (the cell's now), no release on the move of
+# this scenario is sooner (`test_with_no_settle_the_static_release_is_taken_unless_...`)
+SCENARIO_SETTLE_S = 0.05
+
+
 @pytest.fixture(scope="module")
 def flown(robot):
-    """One moving throw and the same plan made static, flown in the scene."""
+    """One moving throw and the same plan made static, flown in the scene: the moving
+    throw the planner chooses with the static release waiting SCENARIO_SETTLE_S."""
     from cell.bench.bench_moving_release import fly, scenario
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.orchestrator import scene_params_path
@@ -128,15 +136,17 @@ def flown(robot):
     ee = PyBulletEndEffector(scene)
     try:
         sc = scenario(scene, robot, params, "cube50", "mid", np.zeros(2))
-        choice = choose_release(
-            robot,
-            sc.model_obj,
-            sc.static_plan,
-            sc.q_start,
-            params.ee,
-            hold=sc.hold,
-            criterion="release",
-        )
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(moving_release, "SETTLE_S", SCENARIO_SETTLE_S)
+            choice = choose_release(
+                robot,
+                sc.model_obj,
+                sc.static_plan,
+                sc.q_start,
+                params.ee,
+                hold=sc.hold,
+                criterion="release",
+            )
         mt = choice.moving
         assert mt is not None
         out_m, rel_m = fly(scene, ee, sc, mt.plan.stroke_m, mt.motion)
@@ -166,6 +176,40 @@ def flown(robot):
         )
     finally:
         scene.close()
+
+
+def test_with_no_settle_the_static_release_is_taken_unless_a_moving_one_is_sooner(robot):
+    """The cell's static release waits SETTLE_S (none) at the pose: a release on the move
+    (run-in, latch, coast) is then taken only where one is sooner by the criterion, the
+    soonest of them; here (cube50 to the mid bin) none is, so the static release is
+    taken, and every moving candidate planned is no sooner than it."""
+    from cell.bench.bench_moving_release import scenario
+    from cell.orchestrator import scene_params_path
+    from cell.params import load_params
+    from cell.sim import CellScene
+
+    assert moving_release.SETTLE_S == 0.0
+    params = load_params(scene_params_path())
+    scene = CellScene(ROBOT)
+    try:
+        sc = scenario(scene, robot, params, "cube50", "mid", np.zeros(2))
+    finally:
+        scene.close()
+    args = (robot, sc.model_obj, sc.static_plan, sc.q_start, params.ee)
+    choice = choose_release(*args, hold=sc.hold, criterion="release")
+    planned = [mt for _, mt in choice.candidates if not isinstance(mt, str)]
+    assert planned, choice.candidates
+    assert choice.moving is None
+    assert min(mt.motion.t_release_s for mt in planned) >= choice.static_to_release_s
+    # the same candidates against a static release that waits SCENARIO_SETTLE_S: sooner
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(moving_release, "SETTLE_S", SCENARIO_SETTLE_S)
+        waiting = choose_release(*args, hold=sc.hold, criterion="release")
+    assert waiting.static_to_release_s == pytest.approx(
+        choice.static_to_release_s + SCENARIO_SETTLE_S
+    )
+    assert waiting.moving is not None
+    assert waiting.moving.motion.t_release_s < waiting.static_to_release_s
 
 
 def test_the_planner_releases_on_the_move_sooner_than_at_rest(flown):

@@ -129,21 +129,6 @@ def _check_campaign(quoted: tuple[str, ...], bench: dict) -> None:
     assert int(rate_h.replace(",", "")) == round(bench["items_per_hour"])
 
 
-def test_the_turned_release_figures_are_the_last_generated_bench_sort_turned() -> None:
-    turned = _json("docs/figures/bench_sort_turned.json")
-    n_in, items, rate, lo, hi, unseen, rate_h = _quoted(
-        r"--turn-release --floor`: (\d+) of (\d+) in their bins, ([\d.]+) \(([\d.]+)–([\d.]+)\), "
-        r"([\d.]+) on the items never\s+calibrated, ([\d,]+) items per hour"
-    )
-    _check_campaign((n_in, items, rate, lo, hi, unseen, rate_h), turned)
-    floor, at_95 = _quoted(
-        r"Its floor \(`--floor`, below\)\s+is ([\d,]+) items per hour, ([\d,]+) with 0.95"
-    )
-    assert int(floor.replace(",", "")) == round(turned["floor_items_per_hour"])
-    at_95_rate = 3600.0 * 0.95 * turned["items"] / turned["floor_sim_time_s"]
-    assert int(at_95.replace(",", "")) == round(at_95_rate)
-
-
 def test_the_moving_releases_and_repeat_throws_are_the_last_generated_bench_sort() -> None:
     bench = _json("docs/figures/bench_sort.json")
     moving, thrown = _quoted(r"(\d+) of the (\d+)\s+throws were released on the move")
@@ -233,23 +218,18 @@ def test_the_bin_order_figures_are_the_last_generated_ones() -> None:
     assert int(rate_default.replace(",", "")) == round(demo["items_per_hour"])
 
 
-def test_the_two_options_together_are_the_last_generated_bench() -> None:
-    """`--cycle-search --turn-release` over the random layouts, as the README quotes it."""
+def test_the_plain_planner_figures_are_the_last_generated_ones() -> None:
+    """`--no-cycle-search --no-turn-release` over the random layouts and on the demo."""
     _check_option_campaign(
-        "--cycle-search --turn-release", _json("docs/figures/bench_sort_cycle_turned.json")
+        "--no-cycle-search --no-turn-release", _json("docs/figures/bench_sort_plain.json")
     )
-
-
-def test_the_cycle_search_figures_are_the_last_generated_ones() -> None:
-    cs = _json("docs/figures/bench_sort_cycle.json")
-    _check_option_campaign("--cycle-search", cs)
-    run, demo = _json("docs/figures/run_cycle.json"), _json("docs/figures/run.json")
+    run, demo = _json("docs/figures/run_plain.json"), _json("docs/figures/run.json")
     pattern = (
-        r"`cell run tasks/bins.yaml --cycle-search`: (\d+)/(\d+) in their bins, ([\d,]+) items "
-        r"per hour, (\d+) s of wall time against (\d+) s without it"
+        r"`cell run tasks/bins.yaml --no-cycle-search --no-turn-release`: (\d+)/(\d+) in their "
+        r"bins, ([\d,]+) items per hour, (\d+) s of wall time against (\d+) s by default"
     )
     m = re.search(pattern.replace(" ", r"\s+"), README)
-    assert m, "the README no longer quotes the demo with --cycle-search"
+    assert m, "the README no longer quotes the demo without the release search"
     n_in, items, rate_h, wall, wall_default = m.groups()
     assert (int(n_in), int(items)) == (run["in_bin"], run["items"])
     assert int(rate_h.replace(",", "")) == round(run["items_per_hour"])

@@ -58,10 +58,12 @@ class LayoutUnit:
         learn: correct the planner from each observed landing during the run.
         max_items: run only the first items of the job (0: all of them).
         speed_scale: fraction of the arm's joint limits its moves use (Orchestrator).
-        turn: release throws turned toward the pick station (`cell run --turn-release`).
+        turn: release throws turned toward the pick station (`cell run --turn-release`, on
+            by default).
         floor: also time each approach and throw's carry as one direct move
             (`Orchestrator.floors`): each item's `floor_cycle_s`.
-        cycle_search: each throw's release chosen by its cycle (`cell run --cycle-search`).
+        cycle_search: each throw's release chosen by its cycle (`cell run --cycle-search`,
+            on by default).
         order: the order the items are taken in (`cell run --order`: "job" or "bins").
     """
 
@@ -70,9 +72,9 @@ class LayoutUnit:
     learn: bool = False
     max_items: int = 0
     speed_scale: float = 1.0
-    turn: bool = False
+    turn: bool = True
     floor: bool = False
-    cycle_search: bool = False
+    cycle_search: bool = True
     order: str = "job"
 
 
@@ -83,9 +85,9 @@ def layout_units(
     learn: bool = False,
     max_items: int = 0,
     speed_scale: float = 1.0,
-    turn: bool = False,
+    turn: bool = True,
     floor: bool = False,
-    cycle_search: bool = False,
+    cycle_search: bool = True,
     order: str = "job",
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""

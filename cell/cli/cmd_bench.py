@@ -50,13 +50,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--turn-release",
-        action="store_true",
-        help="sort: release throws turned toward the pick station (cell run --turn-release)",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="sort: release throws turned toward the pick station (cell run --turn-release; on "
+        "by default)",
     )
     p.add_argument(
         "--cycle-search",
-        action="store_true",
-        help="sort: each throw's release chosen by its cycle (cell run --cycle-search)",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="sort: each throw's release chosen by its cycle (cell run --cycle-search; on by "
+        "default)",
     )
     p.add_argument(
         "--order",

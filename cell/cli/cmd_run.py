@@ -51,17 +51,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--turn-release",
-        action="store_true",
-        help="arm platform: release a throw to a bin 70° or more round from the pick station "
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="arm platform: release a throw to a bin 30° or more round from the pick station "
         "with the arm turned toward the station, the throw axis on the bin, where the "
-        "planner's cycle estimate is shorter (off by default: see the README's Limits)",
+        "planner's cycle estimate is shorter (on by default; --no-turn-release: always face "
+        "the bin)",
     )
     p.add_argument(
         "--cycle-search",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=True,
         help="arm platform: choose each throw's release by its pick-to-pick cycle as the cell "
         "makes it, among the cell's release bounds and lower ones; sooner cycles for "
-        "several times the planning (off by default: see What make run does in the README)",
+        "several times the planning (on by default; --no-cycle-search: the first release "
+        "the planner finds, planned in a fraction of the time)",
     )
     p.add_argument(
         "--order",

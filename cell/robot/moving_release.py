@@ -77,7 +77,7 @@ log = logging.getLogger(__name__)
 COAST_S = 0.08  # [s] constant grip velocity after the latch opens (the item leaves ~60 ms)
 RUN_IN_S = 0.05  # [s] constant grip velocity before it (the plant's mount settles)
 _COAST_H = 1e-3  # [s] the coast's integration step (RK4) and sample period
-SETTLE_S = 0.05  # [s] the static release's wait at the release pose (as the orchestrator's)
+SETTLE_S = 0.0  # [s] the static release's wait at the release pose (as the orchestrator's)
 DEFAULT_SPEEDS_MPS = (0.25, 0.5, 0.75, 1.0)  # candidate grip speeds at release [m/s]
 
 
