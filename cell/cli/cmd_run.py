@@ -64,8 +64,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         default=True,
         help="arm platform: choose each throw's release by its pick-to-pick cycle as the cell "
         "makes it, among the cell's release bounds and lower ones; sooner cycles for "
-        "several times the planning (on by default; --no-cycle-search: the first release "
-        "the planner finds, planned in a fraction of the time)",
+        "several times the planning (on by default; --no-cycle-search: the release by the "
+        "planner's cycle estimate, in the cell's release bounds, for a fraction of the planning)",
     )
     p.add_argument(
         "--order",
