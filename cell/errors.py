@@ -42,7 +42,7 @@ class InvalidInput(CellError, ValueError):
 
 
 class LogFormatError(InvalidInput):
-    """A throw log (THROW_LOG.md format) has a bad row, column or value.
+    """A throw log (docs/throw_log.md format) has a bad row, column or value.
 
     Attributes:
         path: the file.

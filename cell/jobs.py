@@ -36,12 +36,23 @@ import yaml
 
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
+from cell.jobschema import (
+    BIN_KEYS,
+    CELL_KEYS,
+    DRONE_KEYS,
+    ITEM_KEYS,
+    LIMIT_KEYS,
+    MOBILE_KEYS,
+    PICK_KEYS,
+    TOP_KEYS,
+    job_keys,
+)
 from cell.kinds import EE_BACKENDS, PLATFORMS, ROBOTS
 from cell.model.objects import SHAPES, ObjectParams
 from cell.yamlsafe import check_yaml, read_yaml_text
 from cell.yamltree import Checker, Node, to_tree
 
-__all__ = ["BinSpec", "ItemSpec", "Job", "load_job", "parse_job"]
+__all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
@@ -144,24 +155,6 @@ def _footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> boo
     return all(abs(pos_a[k] - pos_b[k]) < (size_a[k] + size_b[k]) / 2 for k in (0, 1))
 
 
-_TOP_KEYS = (
-    "cell",
-    "pick_station",
-    "bins",
-    "items",
-    "routing",
-    "policy",
-    "seed",
-    "limits",
-    "name",
-    "description",
-)
-_CELL_KEYS = ("robot", "ee", "ee_config", "params", "residual", "platform", "drone", "mobile")
-_BIN_KEYS = ("id", "position_m", "size_m", "rim_height_m")
-_ITEM_KEYS = ("object", "shape", "mass_kg", "size_m", "count", "bin")
-_LIMIT_KEYS = ("place_reach_m", "max_items", "item_time_limit_s")
-
-
 @dataclass(frozen=True)
 class _CellSpec:
     """The `cell` section, validated: robot, end-effector, files and platform."""
@@ -198,7 +191,7 @@ def _job_tree(text: str, path: str) -> Node:
 
 def _top_sections(c: Checker, tree: Node, path: str) -> dict[str, Node]:
     """The top-level sections, known keys only, with bins and items required."""
-    top = c.mapping(tree, "", dict.fromkeys(_TOP_KEYS, ""))
+    top = c.mapping(tree, "", dict.fromkeys(TOP_KEYS, ""))
     for req in ("bins", "items"):
         if req not in top:
             raise JobError(f"{path}, line {tree.line}: the job needs a '{req}' list")
@@ -217,9 +210,7 @@ def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, flo
     if "drone" in cell:
         if platform != "drone":
             raise c.fail(cell["drone"], "cell.drone", "only for platform: drone")
-        dr = c.mapping(
-            cell["drone"], "cell.drone", dict.fromkeys(("hover_height_m", "rotor_rpm"), "")
-        )
+        dr = c.mapping(cell["drone"], "cell.drone", dict.fromkeys(DRONE_KEYS, ""))
         if "hover_height_m" in dr:
             hover = c.number(dr["hover_height_m"], "cell.drone.hover_height_m", lo=0.5, hi=10.0)
         if "rotor_rpm" in dr:
@@ -227,7 +218,7 @@ def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, flo
     if "mobile" in cell:
         if platform != "mobile":
             raise c.fail(cell["mobile"], "cell.mobile", "only for platform: mobile")
-        mb = c.mapping(cell["mobile"], "cell.mobile", {"speed_mps": ""})
+        mb = c.mapping(cell["mobile"], "cell.mobile", dict.fromkeys(MOBILE_KEYS, ""))
         if "speed_mps" in mb:
             speed = c.number(mb["speed_mps"], "cell.mobile.speed_mps", lo=0.0, hi=2.0)
     return platform, hover, rpm, speed
@@ -255,7 +246,7 @@ def _cell_file(c: Checker, cell: dict[str, Node], key: str, base: Path) -> str:
 
 def _cell_section(c: Checker, top: dict[str, Node], tree: Node, path: str) -> _CellSpec:
     """The `cell` section: platform, robot, end-effector back-end and the files they read."""
-    cell = c.mapping(top["cell"], "cell", dict.fromkeys(_CELL_KEYS, "")) if "cell" in top else {}
+    cell = c.mapping(top["cell"], "cell", dict.fromkeys(CELL_KEYS, "")) if "cell" in top else {}
     platform, hover, rpm, speed = _platform(c, cell)
     robot = c.text(cell["robot"], "cell.robot", ROBOTS) if "robot" in cell else "panda"
     ee = c.text(cell["ee"], "cell.ee", EE_BACKENDS) if "ee" in cell else "pybullet"
@@ -276,7 +267,7 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
     """The top centre of the pick table [m, W] (the default station when not given)."""
     pick = (0.45, -0.40, 0.20)
     if "pick_station" in top:
-        ps = c.mapping(top["pick_station"], "pick_station", {"position_m": ""})
+        ps = c.mapping(top["pick_station"], "pick_station", dict.fromkeys(PICK_KEYS, ""))
         if "position_m" in ps:
             pick = c.vector(ps["position_m"], "pick_station.position_m", 3)  # type: ignore[assignment]
     return pick
@@ -295,8 +286,8 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec]) -> BinSpec:
         JobError: a missing or invalid field, a repeated id, a bin too close to the robot
             base or overlapping another.
     """
-    b = c.mapping(bn, fp, dict.fromkeys(_BIN_KEYS, ""))
-    for req in _BIN_KEYS:
+    b = c.mapping(bn, fp, dict.fromkeys(BIN_KEYS, ""))
+    for req in BIN_KEYS:
         if req not in b:
             raise c.fail(
                 bn,
@@ -405,7 +396,7 @@ def _item(
     """One entry of `items`: its object, count and destination bin (its own, else the
     routing rule for its shape)."""
     fp = f"items[{i}]"
-    it = c.mapping(itn, fp, dict.fromkeys(_ITEM_KEYS, ""))
+    it = c.mapping(itn, fp, dict.fromkeys(ITEM_KEYS, ""))
     obj = _item_object(c, it, itn, fp, i, cat)
     count = c.integer(it["count"], f"{fp}.count", 1, MAX_ITEMS) if "count" in it else 1
     if "bin" in it:
@@ -440,9 +431,7 @@ def _limits(c: Checker, top: dict[str, Node]) -> tuple[float, int, float]:
         (place reach [m], max items, time limit per item [s]), defaults where not given.
     """
     lim = (
-        c.mapping(top["limits"], "limits", dict.fromkeys(_LIMIT_KEYS, ""))
-        if "limits" in top
-        else {}
+        c.mapping(top["limits"], "limits", dict.fromkeys(LIMIT_KEYS, "")) if "limits" in top else {}
     )
     reach = (
         c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2)

@@ -252,7 +252,7 @@ def draw_campaign(world: World, campaign: Campaign | None = None, *, seed: int =
         seed: random seed.
 
     Returns:
-        The log (THROW_LOG.md columns plus session, time_s, t_flight_s, and mesh
+        The log (docs/throw_log.md columns plus session, time_s, t_flight_s, and mesh
         when a mesh object is thrown).
 
     Raises:

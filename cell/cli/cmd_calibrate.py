@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="allow -o to overwrite the shipped scene parameters (robots/cell_scene/ee_params.yaml)",
     )
     p.add_argument(
-        "--log", metavar="THROWS.csv", help="also write the campaign as THROW_LOG.md CSV"
+        "--log", metavar="THROWS.csv", help="also write the campaign as docs/throw_log.md CSV"
     )
     p.add_argument(
         "--db",

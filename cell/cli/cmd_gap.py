@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "gap",
         help="sim-to-real diagnosis: where the gap lies, which effect, how far it shrinks",
         description=(
-            "Diagnose the gap between logged throws (THROW_LOG.md) and the model as "
+            "Diagnose the gap between logged throws (docs/throw_log.md) and the model as "
             "configured. " + CHECK_HELP + "."
         ),
     )

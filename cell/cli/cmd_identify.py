@@ -26,7 +26,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument(
-        "throws", nargs="?", help="throws.csv (THROW_LOG.md); default: every throw in the store"
+        "throws",
+        nargs="?",
+        help="throws.csv (docs/throw_log.md); default: every throw in the store",
     )
     p.add_argument("-o", "--output", required=True, help="parameter file to write (YAML)")
     p.add_argument("--db", metavar="PATH", help="throw store when no CSV is given")

@@ -23,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             "chosen learner trained on every object. The planner then commands L_s + ΔL_s."
         ),
     )
-    p.add_argument("throws", help="throws.csv (THROW_LOG.md)")
+    p.add_argument("throws", help="throws.csv (docs/throw_log.md)")
     p.add_argument(
         "-o", "--output", required=True, help="the residual model file (.skops; never a pickle)"
     )

@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--db", metavar="PATH", help="store file")
     lsub = p.add_subparsers(dest="log_command", metavar="ACTION", required=True)
     imp = lsub.add_parser("import", help="add a throws.csv (all rows or none)")
-    imp.add_argument("file", help="throws.csv (THROW_LOG.md)")
+    imp.add_argument("file", help="throws.csv (docs/throw_log.md)")
     imp.add_argument("--tracks", metavar="TRACKS.csv", help="observed flight samples")
     imp.set_defaults(func=run_import)
     exp = lsub.add_parser("export", help="write the stored throws as a throws.csv")

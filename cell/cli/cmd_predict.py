@@ -13,7 +13,7 @@ from cell.params import load_params
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("predict", help="add predicted landings to a throw log (THROW_LOG.md)")
+    p = sub.add_parser("predict", help="add predicted landings to a throw log (docs/throw_log.md)")
     p.add_argument("throws", help="throws.csv")
     p.add_argument(
         "-o",

@@ -339,7 +339,7 @@ def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
         ("landing error mean", _fmt(s.mean_landing_error_m, " m")),
         ("landing error p95", _fmt(s.p95_landing_error_m, " m")),
         ("mean cycle time", _fmt(s.mean_cycle_time_s, " s (simulated)", 2)),
-        ("items per hour", f"{s.items_per_hour:.0f} (simulated time)"),
+        ("items per hour", f"{s.items_per_hour:,.0f} (simulated time)"),
         ("wall time", _fmt(s.wall_time_s, " s", 1)),
     ]
     if store is not None:

@@ -8,7 +8,7 @@ import argparse
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "synth",
-        help="draw a synthetic throw campaign from a chosen world (THROW_LOG.md CSV)",
+        help="draw a synthetic throw campaign from a chosen world (docs/throw_log.md CSV)",
         description=(
             "Draws throws of catalogue objects at various strokes and release poses in a "
             "world of known parameters, adds landing noise like the thesis' repeatability "

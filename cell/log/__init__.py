@@ -1,4 +1,4 @@
-"""Throw logs: the THROW_LOG.md interchange format (CSV) and the durable store."""
+"""Throw logs: the docs/throw_log.md interchange format (CSV) and the durable store."""
 
 from cell.log.csvio import read_throws_csv, read_tracks_csv, write_throws_csv
 from cell.log.store import DEFAULT_DB, ThrowStore, default_db_path

@@ -1,4 +1,4 @@
-"""Read and write throw logs in the THROW_LOG.md format (CSV).
+"""Read and write throw logs in the docs/throw_log.md format (CSV).
 
 The table type and its column checks are in `cell.log.table` (re-exported here).
 """
@@ -82,7 +82,7 @@ def _fmt(v: Any) -> str:
 
 
 def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
-    """Write a table in the THROW_LOG.md format (floats at full precision, NaN as empty)."""
+    """Write a table in the docs/throw_log.md format (floats at full precision, NaN as empty)."""
     tmp = Path(str(path) + ".tmp")
     with open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)

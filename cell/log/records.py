@@ -1,4 +1,4 @@
-"""One THROW_LOG.md row from what a throw was: the one place rows are built."""
+"""One docs/throw_log.md row from what a throw was: the one place rows are built."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def throw_record(
     landed_xy_m: Sequence[float] | np.ndarray | None = None,
     **extra: Any,
 ) -> dict[str, Any]:
-    """A throw-log row (THROW_LOG.md columns, SI units, world frame W).
+    """A throw-log row (docs/throw_log.md columns, SI units, world frame W).
 
     Args:
         throw_id: unique id.

@@ -6,7 +6,7 @@ whole table first and then writes it in one transaction: an import is either
 all in the store or not at all. The file is in WAL mode with full
 synchronisation, so readers (`cell log show`) never block the writer.
 
-Every THROW_LOG.md column is kept: the required ones and the known optional
+Every docs/throw_log.md column is kept: the required ones and the known optional
 ones (`mesh`, `time_s`, `session`, `t_flight_s`) as typed SQL columns (an empty
 cell is NULL), any other column as text in a JSON object per row. The column
 order of the logs that went in is remembered, so an export has the columns in
@@ -231,7 +231,7 @@ class ThrowStore:
         """Validate one throw and commit it in its own transaction.
 
         Args:
-            record: column -> value (THROW_LOG.md columns; numbers or strings;
+            record: column -> value (docs/throw_log.md columns; numbers or strings;
                 None or NaN for an empty cell; unknown columns are kept as text).
             track: optional observed flight samples, shape (k, 4): t_s, x_m, y_m, z_m.
 

@@ -3,7 +3,7 @@
 `ThrowTable` is columnar: numeric columns are float arrays (an empty cell is
 NaN where the format allows it), text columns are lists of str, and columns
 the format does not know are kept as text in their original order. The
-columns and what a cell may hold are THROW_LOG.md's; `parse_cells` checks rows
+columns and what a cell may hold are docs/throw_log.md's; `parse_cells` checks rows
 of text cells against them (the CSV reader `cell.log.csvio` and the store
 build their tables with it).
 """

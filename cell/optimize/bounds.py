@@ -1,7 +1,7 @@
 """Bounds of the release state σ for throw planning (thesis eq. 4.5).
 
 σ = [x, y, z, ẋ, ẏ, ż, φ, θ, ψ, L_s] (thesis eq. 4.2) is stored in the order
-and under the names of the THROW_LOG.md columns: the release grip centre
+and under the names of the docs/throw_log.md columns: the release grip centre
 (x_m, y_m, z_m) [m, world W], the base velocity (vx_mps, vy_mps, vz_mps)
 [m/s, W], the end-effector's roll about the throw axis and the throw axis'
 elevation and azimuth (roll_rad, elevation_rad, azimuth_rad) [rad], and the
@@ -25,7 +25,7 @@ from cell.model.params import EndEffectorParams
 
 __all__ = ["SIGMA_COLUMNS", "ThrowBounds", "DEFAULT_BOUNDS"]
 
-# σ in THROW_LOG.md column names, in the order of the thesis' eq. 4.2.
+# σ in docs/throw_log.md column names, in the order of the thesis' eq. 4.2.
 SIGMA_COLUMNS = (
     "x_m",
     "y_m",

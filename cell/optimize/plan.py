@@ -48,7 +48,7 @@ Method = Literal["auto", "fast", "nlp"]
 
 @dataclass(frozen=True)
 class ThrowPlan:
-    """A planned throw: σ* in THROW_LOG.md column names, and its predicted landing.
+    """A planned throw: σ* in docs/throw_log.md column names, and its predicted landing.
 
     Attributes:
         x_m, y_m, z_m: release grip centre [m, W].
@@ -92,7 +92,7 @@ class ThrowPlan:
         return np.array([getattr(self, c) for c in SIGMA_COLUMNS])
 
     def as_dict(self) -> dict[str, float | str]:
-        """Every field, named as above (σ with the THROW_LOG.md column names)."""
+        """Every field, named as above (σ with the docs/throw_log.md column names)."""
         return asdict(self)
 
     def to_batch(self, obj: ObjectParams) -> ThrowBatch:

@@ -3,7 +3,7 @@
 `throw_once` makes one throw through the cell's item loop (`cell.loop`, with the
 `ReleasePose` platform) the way the cell would (grasp at the pick station, the
 gripped item's centre of mass at the release point p0 as MODEL.md defines it, +z of
-the end-effector along the throw axis, latch released) and returns its THROW_LOG.md
+the end-effector along the throw axis, latch released) and returns its docs/throw_log.md
 record; the landing is where the item's centre of mass crosses the plane z = land_z
 while descending (MODEL.md), taken from the simulated track. The campaign holds the end-effector kinematically at each release pose
 without the arm (the arm does not touch the launch: the release is from rest),
@@ -106,7 +106,7 @@ def throw_once(
     track: list[np.ndarray] | None = None,
 ) -> dict[str, Any]:
     """One throw in a scene without an arm, through the item loop (`ReleasePose`, then
-    `cell.loop.ItemLoop.throw_to_plane`); returns its THROW_LOG.md record.
+    `cell.loop.ItemLoop.throw_to_plane`); returns its docs/throw_log.md record.
 
     Args:
         scene: a CellScene with robot=None.
@@ -257,7 +257,7 @@ def run_campaign(
             appends them to its throw store, the driver being the only writer.
 
     Returns:
-        The throw log of the campaign (THROW_LOG.md columns plus t_flight_s, session).
+        The throw log of the campaign (docs/throw_log.md columns plus t_flight_s, session).
     """
     if scene is None:
         from cell.parallel import run_campaign as on_ray
@@ -297,7 +297,7 @@ def campaign_records(
     scene: CellScene | None = None,
     progress: Callable[[int], None] | None = None,
 ) -> list[dict[str, Any]]:
-    """The THROW_LOG.md records of the planned throws, thrown one after the other."""
+    """The docs/throw_log.md records of the planned throws, thrown one after the other."""
     own = scene is None
     # the pick station stands behind the thrower, out of every flight path
     sc = (
