@@ -35,7 +35,7 @@ bench: install
 # the random-layout benchmark: 32 min by default, 15 min without the release search and
 # the turn, 27 min with --order bins; the speed trade-off 19 min). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
-# Not here: docs/figures/rerun_run.png needs a screen (README, "See a run").
+# Not here: docs/figures/rerun_run.png needs a screen (docs/recordings.md).
 FIG := docs/figures
 TMP := build/figures
 figures: install
