@@ -105,6 +105,25 @@ def test_the_annotated_example_job_runs_as_the_page_describes_it(tmp_path: Path)
     assert actions == {"cube50": "throw", "item1_cylinder": "place"}  # far thrown, near placed
 
 
+def test_the_readme_describes_the_demo_job_as_it_is() -> None:
+    from cell.catalogue import catalogue
+    from cell.jobs import load_job
+
+    job = load_job(ROOT / "tasks" / "bins.yaml")
+    words = ("zero one two three four five six seven eight nine ten").split()
+    objects = {i.obj.name for i in job.items}
+    meshes = sorted(i.obj.name for i in job.items if i.obj.shape == "mesh")
+    near = [b for b in job.bins if math.hypot(*b.position) <= job.place_reach_m]
+    text = " ".join(_read("README.md").split())
+    assert (
+        f"items of {words[len(objects)]} catalogue objects (two of them meshes the cell was "
+        f"never calibrated on, a {meshes[0]} and a {meshes[1]}) into {words[len(job.bins)]} "
+        f"open bins, {words[len(near)]} within the arm's reach (placed) and "
+        f"{words[len(job.bins) - len(near)]} beyond it (thrown)"
+    ) in text
+    assert len(meshes) == 2 and {catalogue()[m].set for m in meshes} == {"unseen"}
+
+
 def test_the_readme_first_job_runs(tmp_path: Path) -> None:
     (text,) = _yaml_blocks("README.md")
     assert len(text.splitlines()) <= 10, "the README's first job is ten lines at most"
