@@ -329,6 +329,15 @@ def test_the_diagnosis_page_names_the_codes_effects_and_rules() -> None:
         assert hasattr(diagnose, name) and f"`{name}`" in page, name
 
 
+def test_the_report_keys_are_the_reports() -> None:
+    documented = [
+        r[0].strip("`") for r in _table_rows("docs/diagnosis.md", "## Reading the report")
+    ]
+    for name in ("nominal", "identified"):
+        report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())
+        assert sorted(documented) == sorted(report), name
+
+
 def test_the_hardware_page_gives_the_codes_exit_code() -> None:
     from cell.cli.cmd_run import EXIT_HARDWARE_FAULT
 

@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="job",
         help="arm platform: the order the items are taken in: as the job lists them (job, the "
         "default), or each bin's items one after another (bins: the items all at hand, as in "
-        "a tote; see the README's Limits)",
+        "a tote; its figures: docs/figures.md)",
     )
     p.add_argument(
         "--learn",
