@@ -277,6 +277,13 @@ def check_the_tradeoff() -> None:
         _close(rate, p["in_bin_rate"], 3)
         _close(lo, p["in_bin_rate_lo"], 2)
         _close(hi, p["in_bin_rate_hi"], 2)
+    dropped = _quoted(
+        page,
+        r"dropped while carried: (\d+) at ×([\d.]+), (\d+) at ×([\d.]+), (\d+) at ×([\d.]+)\)",
+    )
+    for n, s in zip(dropped[::2], dropped[1::2], strict=True):
+        (p,) = [p for p in tradeoff["points"] if p["speed_scale"] == float(s)]
+        assert int(n) == p["failures"].get("dropped_while_carried", 0), s
     (items,) = _quoted(page, r"joint limits, (\d+) items a point")
     assert {int(items)} == {p["items"] for p in tradeoff["points"]}
 
