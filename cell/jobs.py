@@ -1,28 +1,10 @@
 """Sort jobs: the YAML schema, loaded safely and validated with line numbers.
 
-    cell:                      # the cell
-      robot: panda             # panda | ur5
-      ee: pybullet             # pybullet | dynamixel (end-effector back-end)
-      ee_config: robots/throwing_ee/dynamixel.yaml   # for dynamixel
-      params: robots/cell_scene/ee_params.yaml       # model parameter file (optional)
-      residual: residual.skops                        # learned ΔL_s model (optional)
-      platform: arm            # arm | drone | mobile
-      drone: {hover_height_m: 2.0, rotor_rpm: 8900}   # platform drone only
-      mobile: {speed_mps: 0.5}                        # platform mobile: base speed at release
-    pick_station: {position_m: [0.45, -0.40, 0.20]}  # top centre of the pick table (optional)
-    bins:
-      - {id: near, position_m: [0.55, 0.35], size_m: [0.3, 0.3], rim_height_m: 0.12}
-    items:
-      - {object: cube50, count: 3, bin: near}         # catalogue id ...
-      - {shape: cube, mass_kg: 0.05, size_m: [0.05, 0.05, 0.05], count: 1}  # ... or ad hoc
-    routing: {cube: near, sphere: far}  # shape class -> bin, for items with no `bin`
-    policy: auto               # auto (place within reach, else throw) | place | throw
-    seed: 0
-    limits: {place_reach_m: 0.75, max_items: 100, item_time_limit_s: 20}
-
-Loading uses yaml's safe composer (no tags are ever executed) and keeps the
-line of every node, so an error names the file, the line and the field path
-and says what would be valid.
+The format, every key with its units, default and bounds, an annotated example and what is
+refused, is docs/jobs.md (a test checks that page against this parser and runs its
+example); the keys themselves are `cell.jobschema`'s. Loading uses yaml's safe composer (no
+tags are ever executed) and keeps the line of every node, so an error names the file, the
+line and the field path and says what would be valid.
 """
 
 from __future__ import annotations
