@@ -5,7 +5,9 @@ objects move each object's effective mass and extents toward what its landings
 showed, from where the parameter file puts them (`ModelParams.model_object`:
 the identified η_o when the file names the object, else the mass rule's), with
 the priors and bounds identification uses (`IdentifyOptions`: factors within
-1 ± object_bound of the start, a Tikhonov pull toward it). The end-effector's
+1 ± object_bound of the start, a Gaussian prior toward it, residuals weighed by the
+documented landing noise). No cross-validated selection here: a job's few throws
+of an object are too few to split. The end-effector's
 η_ee is the file's: a few throws of a few objects cannot say more about the band
 than the campaign the file was identified from, and holding it keeps an object's
 refit from moving every other object's plan.
@@ -187,6 +189,8 @@ def _refit(
         _, k = data.factor_columns()
         factors = np.ones(k)
         for _ in range(opt.max_iter):
+            # residuals weighed by the documented noise at the current fit (as identify)
+            data.weigh(data.batch_with(data.objects_from_factors(factors)), params.ee, opt.noise)
             new = _stage2(data, params.ee, factors, opt)
             change = float(np.max(np.abs(new - factors)))
             factors = new
