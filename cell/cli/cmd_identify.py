@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,9 +12,6 @@ from cell.cli.common import print_json
 from cell.errors import InvalidInput
 from cell.log.table import ThrowTable
 from cell.params import ModelParams
-
-if TYPE_CHECKING:
-    from cell.identify.algorithm import IdentifyResult
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -59,6 +55,8 @@ def run(args: argparse.Namespace) -> int:
     from cell.identify import IdentifyOptions, identify
     from cell.identify.report import (
         errors_by_object,
+        evidence_json,
+        evidence_lines,
         format_table,
         heldout_split,
         predicted_landing,
@@ -137,13 +135,7 @@ def run(args: argparse.Namespace) -> int:
                     }
                     for b, a in zip(before, after, strict=True)
                 },
-                "chi2_fit": result.chi2_fit,
-                "determined_combinations": result.n_params,
-                "object_choice": {c.object_id: c.as_dict() for c in result.objects},
-                "directions": [d.as_dict() for d in result.directions],
-                "intervals_95": {
-                    k: {"value": v, "half_width": h} for k, (v, h) in result.intervals.items()
-                },
+                **evidence_json(result),
                 "end_effector": params.ee.as_dict(),
                 "object_params": {
                     k: {"mass_kg": o.mass, "size_m": list(o.size)}
@@ -169,37 +161,11 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g} ± {half:.3g}"
         )
-    _print_evidence(result)
+    print("\n".join(evidence_lines(result)))
     print(f"wrote {args.output}")
     for p in plots:
         print(f"wrote {p}")
     return 0
-
-
-def _print_evidence(result: IdentifyResult) -> None:
-    """Per object which factors were kept and why; the combinations the data determine."""
-    from cell.identify.problem import EE_NAMES
-
-    if result.objects:
-        print("objects (cross-validated prior width of the factors; 0 = catalogue kept):")
-        for c in result.objects:
-            facs = ", ".join(
-                f"{k.split('.', 1)[1]} {v:.3f}±{h:.3f}"
-                for k, (v, h) in result.intervals.items()
-                if k.startswith(c.object_id + ".")
-            )
-            print(f"  {c.object_id:12s} {c.reason()}; factors {facs}")
-    held = [d for d in result.directions if not d.determined]
-    print(
-        f"parameter combinations: {result.n_params} of {len(result.directions)} determined "
-        f"by the landings; {len(held)} held at the prior"
-    )
-    ee = set(EE_NAMES)
-    shown = [d for d in result.directions if any(n in ee for n, _ in d.components)]
-    for d in shown[:12]:
-        print(f"  {d.text()}")
-    if len(shown) > 12:
-        print(f"  ... {len(shown) - 12} more involving the end effector (--json lists all)")
 
 
 def _plot(

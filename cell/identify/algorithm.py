@@ -34,7 +34,7 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -47,10 +47,9 @@ from cell.identify.problem import (
     ee_bounds,
     ee_from_vector,
     ee_to_vector,
-    push_jacobian,
 )
+from cell.identify.stages import joint_jacobian, stage1_problem, stage2_problem
 from cell.log.table import ThrowTable
-from cell.model.band import push_force
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.model.throw import ThrowBatch
@@ -60,7 +59,14 @@ from cell.synth import NoiseModel
 if TYPE_CHECKING:
     from cell.identify.select import ObjectChoice
 
-__all__ = ["IdentifyOptions", "IdentifyResult", "identify"]
+__all__ = [
+    "IdentifyOptions",
+    "IdentifyResult",
+    "identify",
+    "joint_jacobian",
+    "stage1_problem",
+    "stage2_problem",
+]
 
 log = logging.getLogger(__name__)
 
@@ -164,46 +170,6 @@ def _rmse(res: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum(res**2, axis=1))))
 
 
-Problem = tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]
-
-
-def stage1_problem(
-    data: ThrowData, batch: ThrowBatch, ee: EndEffectorParams, anchor: np.ndarray, w: float
-) -> Problem:
-    """Stage-1 residual and Jacobian functions of the stage-1 vector z.
-
-    Residuals: predicted minus observed landings (x, y per throw) in units of their
-    noise σ (`ThrowData.wres`; metres when no weights are set), then the prior rows
-    w · (z − anchor). The Jacobian chains the analytic ∂f_o/∂θ with
-    one finite difference in the push of every throw at once, plus one in Δt.
-    """
-    n = len(data)
-    cache: dict[str, Any] = {}
-
-    def fun(z: np.ndarray) -> np.ndarray:
-        e = ee_from_vector(z, ee)
-        f_o = np.asarray(push_force(batch.stroke, batch.size[:, 0], e))
-        res = data.wres(batch, e, push=f_o)
-        cache.update(z=z.copy(), e=e, f_o=f_o, res=res)
-        return np.concatenate([res.ravel(), w * (z - anchor)])
-
-    def jac(z: np.ndarray) -> np.ndarray:
-        if cache.get("z") is None or not np.array_equal(cache["z"], z):
-            fun(z)
-        e: EndEffectorParams = cache["e"]
-        f_o: np.ndarray = cache["f_o"]
-        res: np.ndarray = cache["res"]
-        h_f = 1e-4 * np.maximum(np.abs(f_o), 1.0)  # [N]
-        d_push = (data.wres(batch, e, push=f_o + h_f) - res) / h_f[:, None]
-        j = d_push[:, :, None] * push_jacobian(batch, e)[:, None, :]
-        h_dt = 1e-4 * z[7]
-        e_dt = ee_from_vector(z + np.eye(8)[7] * h_dt, ee)
-        j[:, :, 7] = (data.wres(batch, e_dt, push=f_o) - res) / h_dt
-        return np.vstack([j.reshape(2 * n, 8), w * np.eye(8)])
-
-    return fun, jac
-
-
 def _stage1(
     data: ThrowData,
     batch: ThrowBatch,
@@ -228,51 +194,6 @@ def _stage1(
     )
     log.debug("stage 1: %d evaluations, %d Jacobians, %s", sol.nfev, sol.njev, sol.message)
     return ee_from_vector(sol.x, ee)
-
-
-def stage2_problem(
-    data: ThrowData, ee: EndEffectorParams, w: float | np.ndarray, upper: float
-) -> Problem:
-    """Stage-2 residual and Jacobian functions of the vector of all objects' factors.
-
-    Residuals: predicted minus observed landings (`ThrowData.wres`), then
-    w · (factors − 1) (w a number or one per factor). The
-    Jacobian is block diagonal; slot s of every object is perturbed at once (a
-    throw sees only its own object's factors), backwards where a factor is within
-    a step of `upper`.
-    """
-    col, k = data.factor_columns()
-    n = len(data)
-    nslot = int((col >= 0).sum(axis=1).max())
-    cache: dict[str, Any] = {}
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        res = data.wres(data.batch_with(data.objects_from_factors(x)), ee)
-        cache.update(x=x.copy(), res=res)
-        return np.concatenate([res.ravel(), w * (x - 1.0)])
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        if cache.get("x") is None or not np.array_equal(cache["x"], x):
-            fun(x)
-        res: np.ndarray = cache["res"]
-        j = np.zeros((n, 2, k))
-        h = 1e-5
-        rows = np.arange(n)
-        for s in range(nslot):
-            cols = col[:, s]
-            has = cols >= 0
-            step = np.zeros(k)
-            # step backwards where a factor sits at its upper bound
-            sign = np.where(x[cols[has]] + h > upper, -1.0, 1.0)
-            step[cols[has]] = h * sign
-            r2 = data.wres(data.batch_with(data.objects_from_factors(x + step)), ee)
-            c_row = cols[data.obj]
-            ok = c_row >= 0
-            d = (r2 - res) / np.where(ok, step[np.maximum(c_row, 0)], 1.0)[:, None]
-            j[rows[ok], :, c_row[ok]] = d[ok]
-        return np.vstack([j.reshape(2 * n, k), np.diag(np.broadcast_to(w, (k,)).astype(float))])
-
-    return fun, jac
 
 
 def _stage2(
@@ -404,17 +325,6 @@ def _alternate(
             return
 
 
-def joint_jacobian(data: ThrowData, ee: EndEffectorParams, factors: np.ndarray) -> np.ndarray:
-    """Jacobian of the whitened landing residuals in η_ee's stage-1 vector and all
-    factors together, shape (2n, 8 + k)."""
-    batch = data.batch_with(data.objects_from_factors(factors))
-    z = ee_to_vector(ee)
-    _, jac1 = stage1_problem(data, batch, ee, z, 0.0)
-    _, jac2 = stage2_problem(data, ee, 0.0, np.inf)
-    n2 = 2 * len(data)
-    return np.hstack([jac1(z)[:n2], jac2(factors)[:n2]])
-
-
 def _hold_step(
     data: ThrowData,
     st: _State,
@@ -461,6 +371,32 @@ def _hold_step(
     st.ee, st.factors = split(sol.x)
 
 
+def _select(
+    data: ThrowData,
+    st: _State,
+    anchor: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    opt: IdentifyOptions,
+    progress: Callable[[int, float], None] | None,
+) -> tuple[list[ObjectChoice], np.ndarray]:
+    """Choose each object's prior width by cross-validation (η_ee as fitted so far),
+    then fit again with those widths. Returns the choices and the per-factor prior σ."""
+    from cell.identify.select import choose_object_priors, column_priors
+
+    _, k = data.factor_columns()
+    data.weigh(data.batch_with(data.objects_from_factors(st.factors)), st.ee, opt.noise)
+    ee_cv = st.ee
+
+    def solve(sub: ThrowData, p: np.ndarray) -> np.ndarray:
+        return _stage2(sub, ee_cv, np.ones(k), opt, p)
+
+    choices = choose_object_priors(data, st.ee, opt.object_priors, opt.cv_folds, solve)
+    std = column_priors(data, choices)
+    st.factors = np.where(std > 0, st.factors, 1.0)
+    _alternate(data, st, anchor, bounds, opt, std, progress)
+    return choices, std
+
+
 def _identify(
     table: ThrowTable,
     start: ModelParams | None,
@@ -468,8 +404,6 @@ def _identify(
     options: IdentifyOptions | None,
     progress: Callable[[int, float], None] | None,
 ) -> IdentifyResult:
-    from cell.identify.select import choose_object_priors, column_priors
-
     t0 = time.perf_counter()
     opt = options or IdentifyOptions()
     start = start or ModelParams()
@@ -482,19 +416,9 @@ def _identify(
     st = _State(ee=start.ee, factors=np.ones(k))
     std = np.full(k, opt.prior_rel if opt.fit_objects else 0.0)
     _alternate(data, st, anchor, bounds, opt, std, progress)
-    choices = []
+    choices: list[ObjectChoice] = []
     if opt.fit_objects and opt.object_priors:
-        batch = data.batch_with(data.objects_from_factors(st.factors))
-        data.weigh(batch, st.ee, opt.noise)
-        ee_cv = st.ee
-
-        def solve(sub: ThrowData, p: np.ndarray) -> np.ndarray:
-            return _stage2(sub, ee_cv, np.ones(k), opt, p)
-
-        choices = choose_object_priors(data, st.ee, opt.object_priors, opt.cv_folds, solve)
-        std = column_priors(data, choices)
-        st.factors = np.where(std > 0, st.factors, 1.0)
-        _alternate(data, st, anchor, bounds, opt, std, progress)
+        choices, std = _select(data, st, anchor, bounds, opt, progress)
     # degenerate directions: hold them at the prior; intervals
     batch = data.batch_with(data.objects_from_factors(st.factors))
     data.weigh(batch, st.ee, opt.noise)
