@@ -385,10 +385,11 @@ def _select(
 
     _, k = data.factor_columns()
     data.weigh(data.batch_with(data.objects_from_factors(st.factors)), st.ee, opt.noise)
-    ee_cv = st.ee
+    ee_cv, x_cv = st.ee, st.factors.copy()
 
     def solve(sub: ThrowData, p: np.ndarray) -> np.ndarray:
-        return _stage2(sub, ee_cv, np.ones(k), opt, p)
+        # warm start at the all-throw fit (the prior, centred at 1, decides the optimum)
+        return _stage2(sub, ee_cv, x_cv, opt, p)
 
     choices = choose_object_priors(data, st.ee, opt.object_priors, opt.cv_folds, solve)
     std = column_priors(data, choices)

@@ -80,12 +80,14 @@ class ObjectChoice:
 
 
 def _folds(data: ThrowData, k: int) -> np.ndarray:
-    """Fold of each throw: each object's throws dealt round the folds in a fixed shuffle."""
+    """Fold of each throw: each object's throws dealt round the folds in a fixed shuffle
+    (an object with fewer than 2k throws round fewer folds, each with two or more)."""
     rng = np.random.default_rng(0)
     fold = np.zeros(len(data), dtype=int)
     for j in range(len(data.object_ids)):
         rows = np.flatnonzero(data.obj == j)
-        fold[rng.permutation(rows)] = np.arange(rows.size) % k
+        kj = max(2, min(k, rows.size // 2))  # at least two throws in each of its folds
+        fold[rng.permutation(rows)] = np.arange(rows.size) % kj
     return fold
 
 
@@ -107,7 +109,7 @@ def choose_object_priors(
 
     Returns:
         One choice per object id, in `data.object_ids` order. An object with fewer than
-        two throws per fold on average keeps its start values.
+        four throws keeps its start values.
     """
     col, k = data.factor_columns()
     fold = _folds(data, folds)
@@ -127,7 +129,7 @@ def choose_object_priors(
             per[w_i, test] = np.sum(res**2, axis=1)
     out = []
     for j, oid in enumerate(data.object_ids):
-        if counts[j] < 2 * folds:
+        if counts[j] < 4:
             out.append(ObjectChoice(oid, int(counts[j]), 0.0))
             continue
         mine = per[:, data.obj == j]
