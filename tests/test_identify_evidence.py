@@ -148,3 +148,44 @@ def test_a_changed_object_is_fitted_and_the_others_kept_or_consistent() -> None:
         for name, (v, h) in res.intervals.items():
             if name.startswith(oid + "."):
                 assert abs(v - 1) <= h, (name, v, h)
+
+
+def test_directions_hold_the_null_combination_and_give_the_map_intervals() -> None:
+    """A linear problem whose parameters 2 and 3 enter only as their sum: their difference
+    is named undetermined and held at the prior; the rest is kept; the intervals are the
+    closed-form MAP covariance (JᵀJ + D⁻²)⁻¹ and the strengths J·D's singular values."""
+    from cell.identify.directions import analyse
+
+    rng = np.random.default_rng(0)
+    jac = rng.normal(size=(50, 4))
+    jac[:, 3] = jac[:, 2]
+    prior_std = np.array([0.5, 0.3, 0.3, 0.3])
+    theta0 = np.array([1.0, 2.0, 3.0, 4.0])
+    theta = theta0 + np.array([0.1, -0.2, 0.3, 0.1])
+    names = ["a", "b", "c", "d"]
+    ana = analyse(jac, prior_std, prior_std, theta, theta0, names, 1.0)
+    s = np.linalg.svd(jac * prior_std, compute_uv=False)
+    np.testing.assert_allclose([d.strength for d in ana.directions], s, atol=1e-6)
+    assert [d.determined for d in ana.directions] == [True, True, True, False]
+    held = ana.directions[-1]
+    assert {n for n, _ in held.components} == {"c", "d"}
+    # the analysis splits after η_ee's 8 slots; here all 4 parameters are in the first part
+    full = np.r_[ana.z, ana.factors][:4]
+    dev = (full - theta0) / prior_std
+    assert dev[2] - dev[3] == pytest.approx(0.0, abs=1e-9)  # held at the prior
+    assert dev[2] + dev[3] == pytest.approx((0.3 + 0.1) / 0.3, abs=1e-9)  # the sum kept
+    assert dev[:2] == pytest.approx([0.1 / 0.5, -0.2 / 0.3], abs=1e-9)
+    cov = np.linalg.inv(jac.T @ jac + np.diag(1 / prior_std**2))
+    std = np.r_[ana.std_z, ana.std_factors][:4]
+    np.testing.assert_allclose(std, np.sqrt(np.diag(cov)), rtol=1e-6)
+
+
+def test_bad_selection_options_are_refused() -> None:
+    from cell.errors import InvalidParameter
+
+    with pytest.raises(InvalidParameter, match="object_priors"):
+        IdentifyOptions(object_priors=(0.0, -0.1))
+    with pytest.raises(InvalidParameter, match="cv_folds"):
+        IdentifyOptions(cv_folds=1)
+    with pytest.raises(InvalidParameter, match="determined_ratio"):
+        IdentifyOptions(determined_ratio=0.0)

@@ -260,7 +260,7 @@ def identify(
         table: the throws to fit (rows without stroke or landing are left out).
         start: start η_ee and η_o (objects it does not name start from the values
             their rows log); None = reference defaults and the logged values.
-        prior: what the Tikhonov term pulls toward (None = the start). η_o priors
+        prior: what the Gaussian prior is centred on (None = the start). η_o priors
             are always the start values of the objects.
         options: iteration and solver settings.
         progress: called after each outer iteration with (iteration, landing RMSE [m]).

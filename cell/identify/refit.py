@@ -133,7 +133,7 @@ def refit_objects(
     Each object starts from `params.model_object(obj)` (obj as its first row logs it):
     the file's identified η_o, else the mass rule's effective mass with its own extents
     (its own mass when the file has no rule). Stage 2 of identification
-    (`cell.identify.algorithm._stage2`, the same Tikhonov prior toward the start and
+    (`cell.identify.algorithm._stage2`, the same Gaussian prior toward the start and
     the same bounds, 1 ± `options.object_bound`) is solved with `params.ee` fixed,
     again from its own result until no factor changes by more than `options.tol`
     (at most `options.max_iter` solves).
