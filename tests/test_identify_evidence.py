@@ -180,8 +180,20 @@ def test_directions_hold_the_null_combination_and_give_the_map_intervals() -> No
     np.testing.assert_allclose(std, np.sqrt(np.diag(cov)), rtol=1e-6)
 
 
-def test_bad_selection_options_are_refused() -> None:
+def test_bad_selection_options_are_refused(tmp_path: Path, capsys) -> None:  # noqa: ANN001
     from cell.errors import InvalidParameter
+
+    throws = tmp_path / "t.csv"
+    assert main(["synth", "-o", str(throws), "--n", "20", "--objects", "cube50"]) == 0
+    capsys.readouterr()
+    for flags, says in (
+        (["--noise-floor", "0"], "--noise-floor"),
+        (["--noise-along", "-1"], "along"),
+    ):
+        assert main(["identify", str(throws), "-o", str(tmp_path / "e.yaml"), *flags]) == 2
+        err = capsys.readouterr().err
+        assert "cell: error:" in err and says in err and "Traceback" not in err
+    assert not (tmp_path / "e.yaml").exists()
 
     with pytest.raises(InvalidParameter, match="object_priors"):
         IdentifyOptions(object_priors=(0.0, -0.1))
