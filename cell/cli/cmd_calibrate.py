@@ -253,6 +253,8 @@ def _summary(
     adhoc: ThrowTable | None,
 ) -> dict[str, Any]:
     """The result as `--json` prints it."""
+    from cell.identify.report import evidence_json
+
     return {
         "throws": len(table),
         "output": str(out),
@@ -260,6 +262,7 @@ def _summary(
         "after_fit": fitted.as_dict(),
         "end_effector": res.params.ee.as_dict(),
         "converged": res.converged,
+        **evidence_json(res),
         "mass_rule": {
             "kappa": rule.kappa,
             "band_mass_kg": rule.band_mass_kg,
@@ -335,4 +338,7 @@ def run(args: argparse.Namespace) -> int:
         print_json(summary)
         return 0
     _print_summary(table, out, nominal, fitted, rule, adhoc)
+    from cell.identify.report import evidence_lines
+
+    print("\n".join(evidence_lines(res)))
     return 0

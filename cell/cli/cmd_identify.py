@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -12,6 +13,9 @@ from cell.cli.common import print_json
 from cell.errors import InvalidInput
 from cell.log.table import ThrowTable
 from cell.params import ModelParams
+
+if TYPE_CHECKING:
+    from cell.synth import NoiseModel
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -46,6 +50,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-iter", type=int, default=30, help="most stage-1 + stage-2 iterations")
     p.add_argument("--tol", type=float, default=2e-3, help="relative parameter change to stop at")
     p.add_argument("--ee-only", action="store_true", help="stage 1 only (keep the objects' η_o)")
+    for flag, meta, text in (
+        ("--noise-along", "REL", "σ along the throw per metre of reach (default 0.0807)"),
+        ("--noise-across", "REL", "σ across the throw per metre of reach (default 0.04)"),
+        ("--noise-floor", "M", "reach-independent σ [m], > 0 (default 0.005)"),
+    ):
+        p.add_argument(
+            flag, type=float, default=None, metavar=meta,
+            help=f"landing noise the residuals are weighed by: {text}",
+        )  # fmt: skip
     p.add_argument("--plot", metavar="DIR", help="write reach-vs-stroke PNGs into DIR")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     p.set_defaults(func=run)
@@ -57,6 +70,8 @@ def run(args: argparse.Namespace) -> int:
     from cell.identify import IdentifyOptions, identify
     from cell.identify.report import (
         errors_by_object,
+        evidence_json,
+        evidence_lines,
         format_table,
         heldout_split,
         predicted_landing,
@@ -80,7 +95,9 @@ def run(args: argparse.Namespace) -> int:
     fit_idx, held_idx = heldout_split(table, args.holdout, args.seed)
     fit, held = table.take(fit_idx), table.take(held_idx)
     evaluated = held if len(held) else fit
-    opts = IdentifyOptions(max_iter=args.max_iter, tol=args.tol, fit_objects=not args.ee_only)
+    opts = IdentifyOptions(
+        max_iter=args.max_iter, tol=args.tol, fit_objects=not args.ee_only, noise=_noise(args)
+    )
     with tqdm(
         total=args.max_iter, desc="identify", unit="it", disable=args.json or None, leave=False
     ) as bar:
@@ -135,6 +152,7 @@ def run(args: argparse.Namespace) -> int:
                     }
                     for b, a in zip(before, after, strict=True)
                 },
+                **evidence_json(result),
                 "end_effector": params.ee.as_dict(),
                 "object_params": {
                     k: {"mass_kg": o.mass, "size_m": list(o.size)}
@@ -154,13 +172,45 @@ def run(args: argparse.Namespace) -> int:
         f"({result.seconds:.1f} s); landing RMSE on the fitted throws "
         f"{result.rmse_start_m:.4f} -> {result.rmse_fit_m:.4f} m"
     )
-    print("end effector (start -> identified):")
+    print("end effector (start -> identified, 95 % interval):")
     for k in start.ee.IDENTIFIABLE:
-        print(f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g}")
+        half = result.intervals.get(k, (0.0, float("nan")))[1]
+        print(
+            f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g} ± {half:.3g}"
+        )
+    print("\n".join(evidence_lines(result)))
     print(f"wrote {args.output}")
     for p in plots:
         print(f"wrote {p}")
     return 0
+
+
+def _noise(args: argparse.Namespace) -> NoiseModel:
+    """The landing noise from --noise-along/--noise-across/--noise-floor (documented defaults).
+
+    Raises:
+        InvalidInput: a value negative or not finite, or a floor of 0 (a throw of zero
+            reach would weigh infinitely).
+    """
+    from cell.errors import InvalidParameter
+    from cell.synth import NoiseModel
+
+    given = {
+        name: getattr(args, flag)
+        for flag, name in (
+            ("noise_along", "along_rel"),
+            ("noise_across", "across_rel"),
+            ("noise_floor", "floor_m"),
+        )
+        if getattr(args, flag) is not None
+    }
+    try:
+        noise = replace(NoiseModel(), **given)
+    except InvalidParameter as e:
+        raise InvalidInput(f"--noise-*: {e}") from None
+    if not noise.floor_m > 0:
+        raise InvalidInput(f"--noise-floor {noise.floor_m}: give a σ > 0 [m], e.g. 0.005")
+    return noise
 
 
 def _plot(

@@ -7,15 +7,24 @@
     until the change of η_ee and of every η_o is below a threshold
 
 Both stages are bounded nonlinear least squares (scipy's trust-region
-reflective solver) on the landing points (x and y). From landing data alone
-the parameters are strongly correlated (the launch depends on the impulse
-f_o·Δt, the band length only through l1 + r_r φ, a heavier object and a
-stronger band compensate each other), so each stage adds a small Tikhonov term
-pulling the parameters toward a prior (by default the start values): it decides
-the flat directions and moves nothing the data can see (its weight is 1 cm of
-landing error per 100 % of parameter change). Stage 2 solves the K objects'
-problems together: they are independent given η_ee (the objective is a sum of
-per-object terms with no shared parameter), so the joint minimiser is each
+reflective solver) on the landing points (x and y), each residual divided by its
+expected spread under the documented noise (`cell.synth.NoiseModel`: a far throw
+spreads more along its direction than a near one), so that the fit is the
+maximum-likelihood one; the weights follow the model's own predicted reach and
+are renewed every outer iteration. From landing data alone the parameters are
+strongly correlated (the launch depends on the impulse f_o·Δt, the band length
+only through l1 + r_r φ, a heavier object and a stronger band compensate each
+other), so each stage adds a Gaussian prior toward the start values (a MAP
+estimate): η_ee with 1 σ = prior_rel of each parameter's scale.
+
+Object factors by evidence (`cell.identify.select`): after a first fit, each
+object's prior width is chosen by K-fold cross-validation over its throws from
+a grid whose first entry, 0, keeps the catalogue values; the fit is then run
+again with the chosen widths. Degenerate directions (`cell.identify.directions`):
+at the solution, the SVD of the whitened joint Jacobian in units of the priors
+says which combinations of parameters the data determine; the others are held
+at their priors (a truncated-SVD step). Stage 2 solves the K objects' problems
+together: they are independent given η_ee, so the joint minimiser is each
 object's own; the joint solve shares the Jacobian evaluations.
 """
 
@@ -25,30 +34,44 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from cell.errors import InvalidParameter
+from cell.identify.directions import Analysis, Direction, analyse, intervals, parameter_names
 from cell.identify.problem import (
     EE_NAMES,
     ThrowData,
     ee_bounds,
     ee_from_vector,
     ee_to_vector,
-    push_jacobian,
 )
+from cell.identify.stages import joint_jacobian, stage1_problem, stage2_problem
 from cell.log.table import ThrowTable
-from cell.model.band import push_force
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.model.throw import ThrowBatch
 from cell.params import ModelParams
+from cell.synth import NoiseModel
 
-__all__ = ["IdentifyOptions", "IdentifyResult", "identify"]
+if TYPE_CHECKING:
+    from cell.identify.select import ObjectChoice
+
+__all__ = [
+    "IdentifyOptions",
+    "IdentifyResult",
+    "identify",
+    "joint_jacobian",
+    "stage1_problem",
+    "stage2_problem",
+]
 
 log = logging.getLogger(__name__)
+
+
+OBJECT_PRIORS = (0.0, 0.02, 0.05, 0.1, 0.3)
 
 
 @dataclass(frozen=True)
@@ -60,36 +83,51 @@ class IdentifyOptions:
         tol: stop when no parameter changed by more than this between iterations,
             relative to its scale (η_ee: its reference magnitude; η_o: its start value).
         object_bound: η_o factors stay within 1 ± this (mass and extents).
-        noise_m: the landing noise the prior is weighed against [m] (thesis §5.4: ~0.1 m).
-        prior_rel: how far (relative, 1 σ) the parameters are believed to lie from the
-            prior; the Tikhonov rows are noise_m / prior_rel · (relative change), a
-            MAP estimate with Gaussian noise and prior.
+        noise: the landing noise each residual is weighed by (maximum likelihood).
+        prior_rel: 1 σ of the Gaussian prior of η_ee, relative to each parameter's scale
+            (and of the objects' factors in the first pass).
         stage_nfev: most model evaluations of the solver per stage.
         stage_tol: the solver's relative cost and step tolerances within a stage.
         fit_objects: run stage 2 (False = identify η_ee only).
+        object_priors: the prior widths (1 σ of each factor) cross-validation chooses
+            from per object; 0 keeps the catalogue values. Empty: no selection, every
+            object's factors with prior_rel.
+        cv_folds: folds of the per-object cross-validation.
+        determined_ratio: a combination of parameters counts as determined when the data
+            pin it this many times tighter than its prior does; the others are held at
+            the prior.
     """
 
     max_iter: int = 30
     tol: float = 2e-3
     object_bound: float = 0.3
-    noise_m: float = 0.1
+    noise: NoiseModel = field(default_factory=NoiseModel)
     prior_rel: float = 0.3
     stage_nfev: int = 30
     stage_tol: float = 1e-6
     fit_objects: bool = True
+    object_priors: tuple[float, ...] = OBJECT_PRIORS
+    cv_folds: int = 5
+    determined_ratio: float = 1.0
 
     def __post_init__(self) -> None:
         if self.max_iter < 1 or self.stage_nfev < 1:
             raise InvalidParameter(
                 f"max_iter={self.max_iter} and stage_nfev={self.stage_nfev} must be ≥ 1"
             )
-        for name in ("tol", "noise_m", "prior_rel", "stage_tol"):
+        for name in ("tol", "prior_rel", "stage_tol", "determined_ratio"):
             if not getattr(self, name) > 0:
                 raise InvalidParameter(f"identify option {name}={getattr(self, name)} must be > 0")
         if not 0 < self.object_bound < 1:
             raise InvalidParameter(
                 f"identify option object_bound={self.object_bound} must be in (0, 1)"
             )
+        if any(not (np.isfinite(p) and p >= 0) for p in self.object_priors):
+            raise InvalidParameter(
+                f"identify option object_priors={self.object_priors}: each must be ≥ 0"
+            )
+        if self.cv_folds < 2:
+            raise InvalidParameter(f"identify option cv_folds={self.cv_folds} must be ≥ 2")
 
 
 @dataclass(frozen=True)
@@ -105,6 +143,12 @@ class IdentifyResult:
         history: per iteration (rmse_m after stage 1, rmse_m after stage 2, change).
         n_throws: throws fitted.
         seconds: wall time [s].
+        objects: per object, which factors were kept and why (empty with fit_objects off).
+        directions: the parameter combinations and whether the data determine them.
+        intervals: parameter name -> (value, 95 % half-width) in the parameter's units
+            (η_ee: SI; objects: "<id>.mass" etc. as factors of the start values).
+        chi2_fit: sum of squared whitened residuals on the fitted throws (-2 log L + c).
+        n_params: parameters free in the final fit (determined combinations).
     """
 
     params: ModelParams
@@ -115,49 +159,15 @@ class IdentifyResult:
     history: list[tuple[float, float, float]] = field(default_factory=list)
     n_throws: int = 0
     seconds: float = 0.0
+    objects: list[ObjectChoice] = field(default_factory=list)
+    directions: list[Direction] = field(default_factory=list)
+    intervals: dict[str, tuple[float, float]] = field(default_factory=dict)
+    chi2_fit: float = float("nan")
+    n_params: int = 0
 
 
 def _rmse(res: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum(res**2, axis=1))))
-
-
-Problem = tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]
-
-
-def stage1_problem(
-    data: ThrowData, batch: ThrowBatch, ee: EndEffectorParams, anchor: np.ndarray, w: float
-) -> Problem:
-    """Stage-1 residual and Jacobian functions of the stage-1 vector z.
-
-    Residuals: predicted minus observed landings (x, y per throw) [m], then the
-    Tikhonov rows w · (z − anchor). The Jacobian chains the analytic ∂f_o/∂θ with
-    one finite difference in the push of every throw at once, plus one in Δt.
-    """
-    n = len(data)
-    cache: dict[str, Any] = {}
-
-    def fun(z: np.ndarray) -> np.ndarray:
-        e = ee_from_vector(z, ee)
-        f_o = np.asarray(push_force(batch.stroke, batch.size[:, 0], e))
-        res = data.residual(batch, e, push=f_o)
-        cache.update(z=z.copy(), e=e, f_o=f_o, res=res)
-        return np.concatenate([res.ravel(), w * (z - anchor)])
-
-    def jac(z: np.ndarray) -> np.ndarray:
-        if cache.get("z") is None or not np.array_equal(cache["z"], z):
-            fun(z)
-        e: EndEffectorParams = cache["e"]
-        f_o: np.ndarray = cache["f_o"]
-        res: np.ndarray = cache["res"]
-        h_f = 1e-4 * np.maximum(np.abs(f_o), 1.0)  # [N]
-        d_push = (data.residual(batch, e, push=f_o + h_f) - res) / h_f[:, None]
-        j = d_push[:, :, None] * push_jacobian(batch, e)[:, None, :]
-        h_dt = 1e-4 * z[7]
-        e_dt = ee_from_vector(z + np.eye(8)[7] * h_dt, ee)
-        j[:, :, 7] = (data.residual(batch, e_dt, push=f_o) - res) / h_dt
-        return np.vstack([j.reshape(2 * n, 8), w * np.eye(8)])
-
-    return fun, jac
 
 
 def _stage1(
@@ -169,7 +179,7 @@ def _stage1(
     opt: IdentifyOptions,
 ) -> EndEffectorParams:
     """η_ee given η_o: bounded least squares with the chained push Jacobian."""
-    fun, jac = stage1_problem(data, batch, ee, anchor, opt.noise_m / opt.prior_rel)
+    fun, jac = stage1_problem(data, batch, ee, anchor, 1.0 / opt.prior_rel)
     z0 = np.clip(ee_to_vector(ee), bounds[0], bounds[1])
     sol = least_squares(
         fun,
@@ -186,63 +196,44 @@ def _stage1(
     return ee_from_vector(sol.x, ee)
 
 
-def stage2_problem(data: ThrowData, ee: EndEffectorParams, w: float, upper: float) -> Problem:
-    """Stage-2 residual and Jacobian functions of the vector of all objects' factors.
-
-    Residuals: predicted minus observed landings [m], then w · (factors − 1). The
-    Jacobian is block diagonal; slot s of every object is perturbed at once (a
-    throw sees only its own object's factors), backwards where a factor is within
-    a step of `upper`.
-    """
-    col, k = data.factor_columns()
-    n = len(data)
-    nslot = int((col >= 0).sum(axis=1).max())
-    cache: dict[str, Any] = {}
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        res = data.residual(data.batch_with(data.objects_from_factors(x)), ee)
-        cache.update(x=x.copy(), res=res)
-        return np.concatenate([res.ravel(), w * (x - 1.0)])
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        if cache.get("x") is None or not np.array_equal(cache["x"], x):
-            fun(x)
-        res: np.ndarray = cache["res"]
-        j = np.zeros((n, 2, k))
-        h = 1e-5
-        rows = np.arange(n)
-        for s in range(nslot):
-            cols = col[:, s]
-            has = cols >= 0
-            step = np.zeros(k)
-            # step backwards where a factor sits at its upper bound
-            sign = np.where(x[cols[has]] + h > upper, -1.0, 1.0)
-            step[cols[has]] = h * sign
-            r2 = data.residual(data.batch_with(data.objects_from_factors(x + step)), ee)
-            c_row = cols[data.obj]
-            ok = c_row >= 0
-            d = (r2 - res) / np.where(ok, step[np.maximum(c_row, 0)], 1.0)[:, None]
-            j[rows[ok], :, c_row[ok]] = d[ok]
-        return np.vstack([j.reshape(2 * n, k), w * np.eye(k)])
-
-    return fun, jac
-
-
 def _stage2(
     data: ThrowData,
     ee: EndEffectorParams,
     factors: np.ndarray,
     opt: IdentifyOptions,
+    prior_std: np.ndarray | None = None,
 ) -> np.ndarray:
-    """All objects' factors given η_ee: one block-diagonal bounded least-squares solve."""
+    """All objects' factors given η_ee: one block-diagonal bounded least-squares solve.
+
+    prior_std: 1 σ of each factor's prior (None: prior_rel for all); 0 holds a factor
+    at 1 (the catalogue value).
+    """
     _, k = data.factor_columns()
-    fun, jac = stage2_problem(data, ee, opt.noise_m / opt.prior_rel, 1 + opt.object_bound)
-    lo = np.full(k, 1 - opt.object_bound)
-    hi = np.full(k, 1 + opt.object_bound)
+    std = np.full(k, opt.prior_rel) if prior_std is None else np.asarray(prior_std, float)
+    free = std > 0
+    x = np.where(free, factors, 1.0)
+    if not free.any():
+        return x
+    w = np.where(free, 1.0 / np.where(free, std, 1.0), 0.0)
+    fun, jac = stage2_problem(data, ee, w, 1 + opt.object_bound)
+    rows = np.r_[np.ones(2 * len(data), bool), free]
+
+    def f(xf: np.ndarray) -> np.ndarray:
+        full = x.copy()
+        full[free] = xf
+        return fun(full)[rows]
+
+    def j(xf: np.ndarray) -> np.ndarray:
+        full = x.copy()
+        full[free] = xf
+        return jac(full)[rows][:, free]
+
+    nf = int(free.sum())
+    lo, hi = np.full(nf, 1 - opt.object_bound), np.full(nf, 1 + opt.object_bound)
     sol = least_squares(
-        fun,
-        np.clip(factors, lo, hi),
-        jac=jac,
+        f,
+        np.clip(x[free], lo, hi),
+        jac=j,
         bounds=(lo, hi),
         method="trf",
         max_nfev=opt.stage_nfev,
@@ -251,7 +242,8 @@ def _stage2(
         xtol=opt.stage_tol,
     )
     log.debug("stage 2: %d evaluations, %d Jacobians, %s", sol.nfev, sol.njev, sol.message)
-    return sol.x
+    x[free] = sol.x
+    return x
 
 
 def identify(
@@ -268,7 +260,7 @@ def identify(
         table: the throws to fit (rows without stroke or landing are left out).
         start: start η_ee and η_o (objects it does not name start from the values
             their rows log); None = reference defaults and the logged values.
-        prior: what the Tikhonov term pulls toward (None = the start). η_o priors
+        prior: what the Gaussian prior is centred on (None = the start). η_o priors
             are always the start values of the objects.
         options: iteration and solver settings.
         progress: called after each outer iteration with (iteration, landing RMSE [m]).
@@ -289,6 +281,123 @@ def identify(
         return _identify(table, start, prior, options, progress)
 
 
+@dataclass
+class _State:
+    """The fit in progress: η_ee, the factors, and the iteration record."""
+
+    ee: EndEffectorParams
+    factors: np.ndarray
+    history: list[tuple[float, float, float]] = field(default_factory=list)
+    converged: bool = False
+
+
+def _alternate(
+    data: ThrowData,
+    st: _State,
+    anchor: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    opt: IdentifyOptions,
+    prior_std: np.ndarray,
+    progress: Callable[[int, float], None] | None,
+) -> None:
+    """Stage 1 and stage 2 in turn, the weights renewed each time, until nothing moves."""
+    st.converged = False
+    for _ in range(opt.max_iter):
+        z_old, f_old = ee_to_vector(st.ee), st.factors.copy()
+        batch = data.batch_with(data.objects_from_factors(st.factors))
+        data.weigh(batch, st.ee, opt.noise)
+        st.ee = _stage1(data, batch, st.ee, anchor, bounds, opt)
+        r1 = _rmse(data.residual(batch, st.ee))
+        if opt.fit_objects:
+            st.factors = _stage2(data, st.ee, st.factors, opt, prior_std)
+            batch = data.batch_with(data.objects_from_factors(st.factors))
+        r2 = _rmse(data.residual(batch, st.ee))
+        change = float(
+            max(np.max(np.abs(ee_to_vector(st.ee) - z_old)), np.max(np.abs(st.factors - f_old)))
+        )
+        st.history.append((r1, r2, change))
+        it = len(st.history)
+        log.info("iteration %d: rmse %.4f m (stage 1 %.4f m), change %.2e", it, r2, r1, change)
+        if progress is not None:
+            progress(it, r2)
+        if change < opt.tol:
+            st.converged = True
+            return
+
+
+def _hold_step(
+    data: ThrowData,
+    st: _State,
+    ana: Analysis,
+    prior_std: np.ndarray,
+    theta_prior: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    opt: IdentifyOptions,
+) -> None:
+    """The truncated-SVD step: from the projected point, refit η_ee and the factors
+    jointly with the undetermined combinations held at the prior (stiff rows on
+    V_uᵀ D⁻¹ (θ − θ_prior)), so the determined ones take up the model's curvature."""
+    n_ee = len(EE_NAMES)
+    free = prior_std > 0
+    d = prior_std[free]
+    vu = np.array([v for v, det in zip(ana.vectors, ana.determined, strict=True) if not det])
+    vu = vu.reshape(-1, d.size)
+    hold = 1e3
+    theta = np.r_[ana.z, ana.factors]
+    lo = np.r_[bounds[0], np.full(theta.size - n_ee, 1 - opt.object_bound)][free]
+    hi = np.r_[bounds[1], np.full(theta.size - n_ee, 1 + opt.object_bound)][free]
+
+    def split(t: np.ndarray) -> tuple[EndEffectorParams, np.ndarray]:
+        full = theta.copy()
+        full[free] = t
+        return ee_from_vector(full[:n_ee], st.ee), full[n_ee:]
+
+    def fun(t: np.ndarray) -> np.ndarray:
+        ee, x = split(t)
+        res = data.wres(data.batch_with(data.objects_from_factors(x)), ee)
+        dev = (t - theta_prior[free]) / d
+        return np.concatenate([res.ravel(), dev, hold * (vu @ dev)])
+
+    def jac(t: np.ndarray) -> np.ndarray:
+        ee, x = split(t)
+        j = joint_jacobian(data, ee, x)[:, free]
+        return np.vstack([j, np.diag(1 / d), hold * vu / d[None, :]])
+
+    t0 = np.clip(theta[free], lo, hi)
+    sol = least_squares(
+        fun, t0, jac=jac, bounds=(lo, hi), method="trf", max_nfev=opt.stage_nfev,
+        x_scale=1.0, ftol=opt.stage_tol, xtol=opt.stage_tol,
+    )  # fmt: skip
+    st.ee, st.factors = split(sol.x)
+
+
+def _select(
+    data: ThrowData,
+    st: _State,
+    anchor: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    opt: IdentifyOptions,
+    progress: Callable[[int, float], None] | None,
+) -> tuple[list[ObjectChoice], np.ndarray]:
+    """Choose each object's prior width by cross-validation (η_ee as fitted so far),
+    then fit again with those widths. Returns the choices and the per-factor prior σ."""
+    from cell.identify.select import choose_object_priors, column_priors
+
+    _, k = data.factor_columns()
+    data.weigh(data.batch_with(data.objects_from_factors(st.factors)), st.ee, opt.noise)
+    ee_cv, x_cv = st.ee, st.factors.copy()
+
+    def solve(sub: ThrowData, p: np.ndarray) -> np.ndarray:
+        # warm start at the all-throw fit (the prior, centred at 1, decides the optimum)
+        return _stage2(sub, ee_cv, x_cv, opt, p)
+
+    choices = choose_object_priors(data, st.ee, opt.object_priors, opt.cv_folds, solve)
+    std = column_priors(data, choices)
+    st.factors = np.where(std > 0, st.factors, 1.0)
+    _alternate(data, st, anchor, bounds, opt, std, progress)
+    return choices, std
+
+
 def _identify(
     table: ThrowTable,
     start: ModelParams | None,
@@ -301,52 +410,69 @@ def _identify(
     start = start or ModelParams()
     prior = prior or start
     data = ThrowData.from_table(table, start.objects)
-    ee = start.ee
     bounds = ee_bounds(prior.ee)
     anchor = np.clip(ee_to_vector(prior.ee), bounds[0], bounds[1])
     _, k = data.factor_columns()
-    factors = np.ones(k)
-    batch = data.batch
-    rmse_start = _rmse(data.residual(batch, ee))
-    history: list[tuple[float, float, float]] = []
-    converged = False
-    it = 0
-    for it in range(1, opt.max_iter + 1):
-        z_old, f_old = ee_to_vector(ee), factors.copy()
-        ee = _stage1(data, batch, ee, anchor, bounds, opt)
-        r1 = _rmse(data.residual(batch, ee))
-        if opt.fit_objects:
-            factors = _stage2(data, ee, factors, opt)
-            batch = data.batch_with(data.objects_from_factors(factors))
-        r2 = _rmse(data.residual(batch, ee))
-        change = float(
-            max(np.max(np.abs(ee_to_vector(ee) - z_old)), np.max(np.abs(factors - f_old)))
-        )
-        history.append((r1, r2, change))
-        log.info("iteration %d: rmse %.4f m (stage 1 %.4f m), change %.2e", it, r2, r1, change)
-        if progress is not None:
-            progress(it, r2)
-        if change < opt.tol:
-            converged = True
-            break
-    objects: dict[str, ObjectParams] = (
-        data.objects_from_factors(factors) if opt.fit_objects else dict(data.start_objects)
+    rmse_start = _rmse(data.residual(data.batch, start.ee))
+    st = _State(ee=start.ee, factors=np.ones(k))
+    std = np.full(k, opt.prior_rel if opt.fit_objects else 0.0)
+    _alternate(data, st, anchor, bounds, opt, std, progress)
+    choices: list[ObjectChoice] = []
+    if opt.fit_objects and opt.object_priors:
+        choices, std = _select(data, st, anchor, bounds, opt, progress)
+    # degenerate directions: hold them at the prior; intervals
+    batch = data.batch_with(data.objects_from_factors(st.factors))
+    data.weigh(batch, st.ee, opt.noise)
+    names = parameter_names(data)
+    jac = joint_jacobian(data, st.ee, st.factors)
+    theta = np.r_[ee_to_vector(st.ee), st.factors]
+    ee_std = np.full(len(EE_NAMES), opt.prior_rel)
+    ana = analyse(
+        jac,
+        np.r_[ee_std, std],
+        np.r_[ee_std, np.where(std > 0, std, opt.prior_rel)],
+        theta,
+        np.r_[anchor, np.ones(k)],
+        names,
+        opt.determined_ratio,
     )
+    if not all(ana.determined):
+        _hold_step(data, st, ana, np.r_[ee_std, std], np.r_[anchor, np.ones(k)], bounds, opt)
+    batch = data.batch_with(data.objects_from_factors(st.factors))
+    res = data.residual(batch, st.ee)
+    rmse_fit = _rmse(res)
+    chi2 = float(np.sum(data.whitened(res) ** 2))
+    objects: dict[str, ObjectParams] = data.objects_from_factors(st.factors)
+    it = len(st.history)
+    kept = sum(c.kept for c in choices)
     note = (
-        f"identified by two-stage least squares (Algorithm 1) from {len(data)} throws of "
+        f"identified by two-stage maximum-likelihood least squares (Algorithm 1, residuals "
+        f"weighted by the documented landing noise) from {len(data)} throws of "
         f"{len(objects)} objects: {it} iteration(s), "
-        f"{'converged' if converged else 'stopped at max_iter'}; landing RMSE on the fitted "
-        f"throws {rmse_start:.4f} m -> {history[-1][1]:.4f} m; identified: "
+        f"{'converged' if st.converged else 'stopped at max_iter'}; landing RMSE on the fitted "
+        f"throws {rmse_start:.4f} m -> {rmse_fit:.4f} m; identified: "
         + ", ".join(EE_NAMES)
-        + " and each object's mass and extents"
+        + (
+            f" and the objects' mass and extents where cross-validation supports it "
+            f"({len(choices) - kept} fitted, {kept} kept at their start values)"
+            if choices
+            else (" and each object's mass and extents" if opt.fit_objects else "")
+        )
+        + f"; {ana.n_determined} of {len(ana.directions)} parameter combinations determined, "
+        "the others held at the prior"
     )
     return IdentifyResult(
-        params=ModelParams(ee=ee, objects=objects, effects={}, note=note),
+        params=ModelParams(ee=st.ee, objects=objects, effects={}, note=note),
         iterations=it,
-        converged=converged,
+        converged=st.converged,
         rmse_start_m=rmse_start,
-        rmse_fit_m=history[-1][1],
-        history=history,
+        rmse_fit_m=rmse_fit,
+        history=st.history,
         n_throws=len(data),
         seconds=time.perf_counter() - t0,
+        objects=choices,
+        directions=ana.directions,
+        intervals=intervals(names, ee_to_vector(st.ee), st.factors, ana),
+        chi2_fit=chi2,
+        n_params=ana.n_determined,
     )

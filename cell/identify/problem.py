@@ -31,6 +31,7 @@ from cell.model.band import band_angle, band_stretch
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.model.throw import ThrowBatch, predict_landing
+from cell.synth import NoiseModel
 
 __all__ = [
     "EE_NAMES",
@@ -39,8 +40,10 @@ __all__ = [
     "ee_bounds",
     "ee_from_vector",
     "ee_to_vector",
+    "factor_names",
     "push_jacobian",
     "size_slots",
+    "whitening",
 ]
 
 log = logging.getLogger(__name__)
@@ -123,6 +126,44 @@ def size_slots(shape: str) -> list[tuple[int, ...]]:
     return [(0,), (1,), (2,)]
 
 
+def factor_names(shape: str) -> list[str]:
+    """Names of an object's factor slots: mass, then its extent groups."""
+    groups = {
+        "cube": ["size"],
+        "sphere": ["size"],
+        "cylinder": ["diameter", "height"],
+    }.get(shape, ["x", "y", "z"])
+    return ["mass", *groups]
+
+
+def whitening(
+    release_xy: np.ndarray, landing_xy: np.ndarray, azimuth: np.ndarray, noise: NoiseModel
+) -> np.ndarray:
+    """Per throw the 2x2 map taking a landing residual [m, W] to units of its noise σ.
+
+    The documented noise (`cell.synth.NoiseModel`) is Gaussian in the throw's horizontal
+    frame with σ_along and σ_across growing with the reach: row 1 of the map is the unit
+    along-throw direction over σ_along, row 2 the across direction over σ_across, so the
+    sum of squares of mapped residuals is -2 log-likelihood (up to a constant). The reach
+    and direction are those of `landing_xy` (the model's current prediction), from the
+    release; where it is not finite or shorter than 1 mm, the azimuth and a reach of 0.
+
+    Returns:
+        shape (n, 2, 2) [1/m].
+    """
+    d = np.asarray(landing_xy, float) - np.asarray(release_xy, float)
+    ok = np.all(np.isfinite(d), axis=1)
+    reach = np.where(ok, np.hypot(d[:, 0], d[:, 1]), 0.0)
+    az = np.c_[np.cos(azimuth), np.sin(azimuth)]
+    use = ok & (reach > 1e-3)
+    along = np.where(
+        use[:, None], np.where(ok[:, None], d, 0.0) / np.maximum(reach, 1e-3)[:, None], az
+    )
+    across = np.c_[-along[:, 1], along[:, 0]]
+    s_along, s_across = noise.sigma(reach)
+    return np.stack([along / s_along[:, None], across / s_across[:, None]], axis=1)
+
+
 @dataclass
 class ThrowData:
     """Throws prepared for identification (only those with stroke and landing).
@@ -134,6 +175,8 @@ class ThrowData:
         obj: index into object_ids per throw, shape (n,).
         start_objects: start η_o per object id.
         rows: indices of these throws in the source table.
+        whiten: per throw the map of a residual into units of its noise σ (`whitening`),
+            shape (n, 2, 2); None = residuals in metres (unweighted least squares).
     """
 
     batch: ThrowBatch
@@ -142,6 +185,7 @@ class ThrowData:
     obj: np.ndarray
     start_objects: dict[str, ObjectParams]
     rows: np.ndarray
+    whiten: np.ndarray | None = None
 
     @classmethod
     def from_table(
@@ -205,6 +249,40 @@ class ThrowData:
             obj=obj,
             start_objects=objects,
             rows=rows,
+        )
+
+    def weigh(self, batch: ThrowBatch, ee: EndEffectorParams, noise: NoiseModel) -> None:
+        """Set the residual weights from the landings these parameters predict.
+
+        The weights are held while a stage solves (iteratively reweighted least squares:
+        the fixed point is the maximum-likelihood fit, the spread following the fit's
+        own reach rather than the noisy observed one, which would favour short throws).
+        """
+        land = predict_landing(batch, ee, strict=False, check_stroke=False).xy
+        land = np.where(np.isfinite(land).all(axis=1)[:, None], land, self.observed)
+        self.whiten = whitening(batch.position[:, :2], land, batch.azimuth, noise)
+
+    def whitened(self, res: np.ndarray) -> np.ndarray:
+        """Residuals [m] in units of their noise σ (unchanged when no weights are set)."""
+        if self.whiten is None:
+            return res
+        return np.einsum("nij,nj->ni", self.whiten, res)
+
+    def wres(
+        self, batch: ThrowBatch, ee: EndEffectorParams, push: np.ndarray | None = None
+    ) -> np.ndarray:
+        """`residual` in units of the noise σ, shape (n, 2)."""
+        return self.whitened(self.residual(batch, ee, push))
+
+    def take(self, rows: np.ndarray) -> ThrowData:
+        """These throws only (rows index this data; objects and factor layout kept)."""
+        return replace(
+            self,
+            batch=self.batch.take(rows),
+            observed=self.observed[rows],
+            obj=self.obj[rows],
+            rows=self.rows[rows],
+            whiten=None if self.whiten is None else self.whiten[rows],
         )
 
     def __len__(self) -> int:

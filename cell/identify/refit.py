@@ -5,7 +5,9 @@ objects move each object's effective mass and extents toward what its landings
 showed, from where the parameter file puts them (`ModelParams.model_object`:
 the identified η_o when the file names the object, else the mass rule's), with
 the priors and bounds identification uses (`IdentifyOptions`: factors within
-1 ± object_bound of the start, a Tikhonov pull toward it). The end-effector's
+1 ± object_bound of the start, a Gaussian prior toward it, residuals weighed by the
+documented landing noise). No cross-validated selection here: a job's few throws
+of an object are too few to split. The end-effector's
 η_ee is the file's: a few throws of a few objects cannot say more about the band
 than the campaign the file was identified from, and holding it keeps an object's
 refit from moving every other object's plan.
@@ -131,7 +133,7 @@ def refit_objects(
     Each object starts from `params.model_object(obj)` (obj as its first row logs it):
     the file's identified η_o, else the mass rule's effective mass with its own extents
     (its own mass when the file has no rule). Stage 2 of identification
-    (`cell.identify.algorithm._stage2`, the same Tikhonov prior toward the start and
+    (`cell.identify.algorithm._stage2`, the same Gaussian prior toward the start and
     the same bounds, 1 ± `options.object_bound`) is solved with `params.ee` fixed,
     again from its own result until no factor changes by more than `options.tol`
     (at most `options.max_iter` solves).
@@ -187,6 +189,8 @@ def _refit(
         _, k = data.factor_columns()
         factors = np.ones(k)
         for _ in range(opt.max_iter):
+            # residuals weighed by the documented noise at the current fit (as identify)
+            data.weigh(data.batch_with(data.objects_from_factors(factors)), params.ee, opt.noise)
             new = _stage2(data, params.ee, factors, opt)
             change = float(np.max(np.abs(new - factors)))
             factors = new

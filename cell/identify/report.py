@@ -10,6 +10,7 @@ predicted and observed landing points on the plane.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from cell.log.table import ThrowTable
 from cell.model.throw import predict_landing
 from cell.params import ModelParams
 
+if TYPE_CHECKING:
+    from cell.identify.algorithm import IdentifyResult
+
 __all__ = [
     "ObjectErrors",
     "heldout_split",
@@ -25,6 +29,8 @@ __all__ = [
     "reach",
     "errors_by_object",
     "format_table",
+    "evidence_json",
+    "evidence_lines",
 ]
 
 
@@ -147,3 +153,44 @@ def format_table(
             f"{b.landing_rmse_m:8.4f} {a.landing_rmse_m:8.4f}{extra}"
         )
     return "\n".join(lines)
+
+
+def evidence_lines(result: IdentifyResult, most: int = 12) -> list[str]:
+    """Per object which factors were kept and why (with their 95 % intervals), and the
+    parameter combinations involving η_ee the landings determine or not."""
+    from cell.identify.problem import EE_NAMES
+
+    lines = []
+    if result.objects:
+        lines.append("objects (cross-validated prior width of the factors; 0 = catalogue kept):")
+        for c in result.objects:
+            facs = ", ".join(
+                f"{k.split('.', 1)[1]} {v:.3f}±{h:.3f}"
+                for k, (v, h) in result.intervals.items()
+                if k.startswith(c.object_id + ".")
+            )
+            lines.append(f"  {c.object_id:12s} {c.reason()}; factors {facs}")
+    held = [d for d in result.directions if not d.determined]
+    lines.append(
+        f"parameter combinations: {result.n_params} of {len(result.directions)} determined "
+        f"by the landings; {len(held)} held at the prior"
+    )
+    ee = set(EE_NAMES)
+    shown = [d for d in result.directions if any(n in ee for n, _ in d.components)]
+    lines += [f"  {d.text()}" for d in shown[:most]]
+    if len(shown) > most:
+        lines.append(f"  ... {len(shown) - most} more with the end effector (--json lists all)")
+    return lines
+
+
+def evidence_json(result: IdentifyResult) -> dict[str, Any]:
+    """The same for JSON: object choices, combinations, 95 % intervals, -2 log L."""
+    return {
+        "chi2_fit": result.chi2_fit,
+        "determined_combinations": result.n_params,
+        "object_choice": {c.object_id: c.as_dict() for c in result.objects},
+        "directions": [d.as_dict() for d in result.directions],
+        "intervals_95": {
+            k: {"value": v, "half_width": h} for k, (v, h) in result.intervals.items()
+        },
+    }
