@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.cli.common import print_json
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 from cell.errors import InvalidInput
 from cell.log.table import ThrowTable
 from cell.params import ModelParams
@@ -45,7 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tol", type=float, default=2e-3, help="relative parameter change to stop at")
     p.add_argument("--ee-only", action="store_true", help="stage 1 only (keep the objects' η_o)")
     p.add_argument("--plot", metavar="DIR", help="write reach-vs-stroke PNGs into DIR")
-    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_json_arg(p, "the results")
     p.set_defaults(func=run)
 
 
@@ -55,7 +55,6 @@ def run(args: argparse.Namespace) -> int:
     from cell.identify import IdentifyOptions, identify
     from cell.identify.report import (
         errors_by_object,
-        format_table,
         heldout_split,
         predicted_landing,
     )
@@ -80,7 +79,11 @@ def run(args: argparse.Namespace) -> int:
     evaluated = held if len(held) else fit
     opts = IdentifyOptions(max_iter=args.max_iter, tol=args.tol, fit_objects=not args.ee_only)
     with tqdm(
-        total=args.max_iter, desc="identify", unit="it", disable=args.json or None, leave=False
+        total=args.max_iter,
+        desc="identify",
+        unit="it",
+        disable=json_to_stdout(args) or None,
+        leave=False,
     ) as bar:
 
         def progress(it: int, rmse: float) -> None:
@@ -102,48 +105,61 @@ def run(args: argparse.Namespace) -> int:
         f"{before[-1].landing_rmse_m:.4f} m -> {after[-1].landing_rmse_m:.4f} m"
     )
     params = replace(params, note=note)
-    save_params(params, args.output)
     n_fit: dict[str, int] = {}
     for oid in fit.text("object_id"):
         n_fit[oid] = n_fit.get(oid, 0) + 1
+    doc = {
+        "source": source,
+        "throws": len(table),
+        "fit_throws": result.n_throws,
+        "heldout_throws": int(len(held)),
+        "evaluated_on": "heldout" if len(held) else "fit",
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "seconds": result.seconds,
+        "rmse_fit_start_m": result.rmse_start_m,
+        "rmse_fit_m": result.rmse_fit_m,
+        "objects": {
+            b.object_id: {
+                "n_fit": n_fit.get(b.object_id, result.n_throws),
+                "n_eval": b.n,
+                "reach_rmse_before_m": b.reach_rmse_m,
+                "reach_rmse_after_m": a.reach_rmse_m,
+                "landing_rmse_before_m": b.landing_rmse_m,
+                "landing_rmse_after_m": a.landing_rmse_m,
+            }
+            for b, a in zip(before, after, strict=True)
+        },
+        "end_effector": params.ee.as_dict(),
+        "object_params": {
+            k: {"mass_kg": o.mass, "size_m": list(o.size)} for k, o in params.objects.items()
+        },
+        "output": args.output,
+    }
+    if not json_to_stdout(args):  # the results are printed before any file is written
+        _print(table, source, result, where, before, after, params, start, n_fit)
+    save_params(params, args.output)
     plots = []
     if args.plot:
         plots = [str(p) for p in _plot(table, start, params, args.plot, np.asarray(held_idx))]
-    if args.json:
-        print_json(
-            {
-                "source": source,
-                "throws": len(table),
-                "fit_throws": result.n_throws,
-                "heldout_throws": int(len(held)),
-                "evaluated_on": "heldout" if len(held) else "fit",
-                "iterations": result.iterations,
-                "converged": result.converged,
-                "seconds": result.seconds,
-                "rmse_fit_start_m": result.rmse_start_m,
-                "rmse_fit_m": result.rmse_fit_m,
-                "objects": {
-                    b.object_id: {
-                        "n_fit": n_fit.get(b.object_id, result.n_throws),
-                        "n_eval": b.n,
-                        "reach_rmse_before_m": b.reach_rmse_m,
-                        "reach_rmse_after_m": a.reach_rmse_m,
-                        "landing_rmse_before_m": b.landing_rmse_m,
-                        "landing_rmse_after_m": a.landing_rmse_m,
-                    }
-                    for b, a in zip(before, after, strict=True)
-                },
-                "end_effector": params.ee.as_dict(),
-                "object_params": {
-                    k: {"mass_kg": o.mass, "size_m": list(o.size)}
-                    for k, o in params.objects.items()
-                },
-                "output": args.output,
-                "plots": plots,
-            }
-        )
+    doc["plots"] = plots
+    if json_to_stdout(args):  # after the plots, whose files it lists
+        print_json(doc)
         return 0
-    print(f"{source}: {len(table)} throws of {len(set(table.text('object_id')))} objects")
+    print(f"wrote {args.output}")
+    for p in plots:
+        print(f"wrote {p}")
+    write_json(args, doc)
+    return 0
+
+
+def _print(table, source, result, where, before, after, params, start, n_fit) -> None:  # type: ignore[no-untyped-def]
+    """The results as text."""
+    from cell.identify.report import format_table
+
+    print(
+        f"{source}: {plural(len(table), 'throw')} of {plural(len(set(table.text('object_id'))), 'object')}"
+    )
     print(f"fitted on {result.n_throws} throws; errors below are on {where}")
     print(format_table(before, after, params, n_fit))
     print(
@@ -155,10 +171,6 @@ def run(args: argparse.Namespace) -> int:
     print("end effector (start -> identified):")
     for k in start.ee.IDENTIFIABLE:
         print(f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g}")
-    print(f"wrote {args.output}")
-    for p in plots:
-        print(f"wrote {p}")
-    return 0
 
 
 def _plot(

@@ -6,7 +6,14 @@ import argparse
 import sys
 from typing import Any
 
-from cell.cli.common import print_json
+from cell.cli.common import (
+    add_json_arg,
+    human,
+    json_to_stdout,
+    plural,
+    print_json,
+    write_json,
+)
 from cell.errors import InvalidInput
 from cell.log import read_throws_csv
 from cell.params import load_params
@@ -54,11 +61,44 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
     p.add_argument("--plot", metavar="PNG", help="write the Table 5.1 bar chart here")
-    p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_json_arg(p, "the table")
     from cell.parallel import add_campaign_args
 
     add_campaign_args(p)  # the round-robin's fits (learner x fold) on Ray
     p.set_defaults(func=run)
+
+
+MIN_THROWS = 20  # usable throws a residual is learned from (distinct ones in the log, too)
+MIN_PER_OBJECT = 5  # an object's usable throws; fewer leave the inner CV a one-sample fold
+
+
+def _enough(data: Any, path: str) -> None:
+    """Leave out objects with fewer than MIN_PER_OBJECT usable throws (said on stderr) and
+    refuse a log with fewer than MIN_THROWS usable throws of 2 objects.
+
+    Raises:
+        InvalidInput: naming the log, the counts and the minimums.
+    """
+    import numpy as np
+
+    ids, counts = np.unique(data.groups[data.usable], return_counts=True)
+    few = {str(o): int(n) for o, n in zip(ids, counts, strict=True) if n < MIN_PER_OBJECT}
+    if few:
+        data.usable[np.isin(data.groups, list(few))] = False
+        print(
+            f"cell learn: left out {plural(len(few), 'object')} with fewer than "
+            f"{MIN_PER_OBJECT} usable throws: "
+            + ", ".join(f"{o} ({plural(n, 'throw')})" for o, n in few.items()),
+            file=sys.stderr,
+        )
+    n = int(data.usable.sum())
+    kept = len(ids) - len(few)
+    if n < MIN_THROWS or kept < 2:
+        raise InvalidInput(
+            f"{path}: learning the residual needs at least {MIN_THROWS} usable throws of at "
+            f"least 2 objects with {MIN_PER_OBJECT} or more each; this log has "
+            f"{plural(n, 'usable throw')} of {plural(kept, 'such object')}"
+        )
 
 
 def _learners(text: str) -> tuple[str, ...]:
@@ -77,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
 
     compare = _learners(args.compare)
     table = read_throws_csv(args.throws)
+    table.require_varied(MIN_THROWS, "learning the residual")
     mp = load_params(args.params)
     if mp.effects:
         raise InvalidInput(
@@ -88,14 +129,15 @@ def run(args: argparse.Namespace) -> int:
     if n_bad:
         print(
             f"cell learn: {n_bad} of {len(table)} throws excluded (no observed landing, or "
-            f"observed reach outside the model's range): {data.targets.excluded_counts()}",
+            f"observed reach outside the model's range): {human(data.targets.excluded_counts())}",
             file=sys.stderr,
         )
+    _enough(data, args.throws)
     summary: dict[str, Any] = {}
     if compare:
         ids = sorted(set(data.groups[data.usable].tolist()))
         n_fits = len(compare) * len(round_robin_folds(ids, hold_out=args.hold_out, seed=args.seed))
-        with tqdm(total=n_fits, desc="round-robin", disable=args.json or None) as bar:
+        with tqdm(total=n_fits, desc="round-robin", disable=json_to_stdout(args) or None) as bar:
 
             def step(text: str) -> None:
                 bar.set_postfix_str(text, refresh=False)
@@ -112,14 +154,24 @@ def run(args: argparse.Namespace) -> int:
                 address=args.ray_address,
             )
     model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
-    model.save(args.output)
+    doc = {name: s.as_dict() for name, s in summary.items()}
+    if json_to_stdout(args):
+        print_json(doc)
+    else:
+        _print(args, summary, compare, model)
+    model.save(args.output)  # the results are printed before any file is written
     if args.plot and summary:
         from cell.residual.plot import plot_table51
 
         plot_table51(summary, args.plot)
-    if args.json:
-        print_json({name: s.as_dict() for name, s in summary.items()})
-        return 0
+    write_json(args, doc)
+    return 0
+
+
+def _print(
+    args: argparse.Namespace, summary: dict[str, Any], compare: tuple[str, ...], model: Any
+) -> None:
+    """The Table 5.1 rows and the learner saved, as text."""
     if summary:
         print(
             f"Table 5.1: hold out {args.hold_out} objects at a time ({len(summary[compare[0]].folds)} folds)"
@@ -142,8 +194,7 @@ def run(args: argparse.Namespace) -> int:
         )
     print(
         f"saved {model.learner} residual ({model.n_train} throws of "
-        f"{len(model.training_objects)} objects; "
+        f"{plural(len(model.training_objects), 'object')}; "
         + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
         + f") -> {args.output}"
     )
-    return 0

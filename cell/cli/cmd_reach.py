@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from cell.cli.common import add_axis_args, print_json
+from cell.cli.common import add_axis_args, add_json_arg, json_to_stdout, print_json, write_json
 from cell.kinds import ROBOTS
 
 
@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="Q",
         help="current configuration [rad] (default: home)",
     )
-    p.add_argument("--json", action="store_true", help="print JSON")
+    add_json_arg(p, "the solution")
     p.set_defaults(func=run)
 
 
@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         "move_time_s": t_move,
         "from_q": q0,
     }
-    if args.json:
+    if json_to_stdout(args):
         print_json(out)
         return 0
     print(f"robot           {args.robot}")
@@ -75,4 +75,5 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"move time       {t_move:.3f} s (jerk-limited, from {'home' if args.q_from is None else 'the given q'})"
     )
+    write_json(args, out)
     return 0

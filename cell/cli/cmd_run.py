@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 from typing import Any
 
-from cell.cli.common import to_jsonable
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 from cell.jobs import ORDERS, load_job
 from cell.kinds import EE_BACKENDS, PICKS, RELEASES
 
@@ -18,7 +17,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a sort job (YAML) in the cell")
     p.add_argument("job", help="job file, e.g. tasks/bins.yaml")
     p.add_argument("--gui", action="store_true", help="show the PyBullet GUI")
-    p.add_argument("--json", metavar="OUT.json", help="write the summary as JSON")
+    add_json_arg(p, "the summary")
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no line per item as it finishes (on standard error)",
+    )
     p.add_argument("--snapshot", metavar="OUT.png", help="render the scene at the end (headless)")
     p.add_argument(
         "--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)"
@@ -123,9 +128,17 @@ EXIT_HARDWARE_FAULT = 3  # the end-effector failed mid-run: stopped safely, torq
 EXIT_NOTHING_SORTED = 4  # the run ended with no item in its target bin
 
 
-def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
+def _item_line(r: Any, k: int, n: int) -> str:
+    """One finished item as a line: what happened to it, where it landed, how long it took."""
+    where = f"in {r.bin_id}" if r.bin_id else "in no bin"
+    how = "in its bin" if r.in_bin else (r.failure or "not in its bin")
+    t = f", {r.cycle_time_s:.1f} s" if math.isfinite(r.cycle_time_s) else ""
+    return (
+        f"[{k}/{n}] item {r.index} {r.object_id}: {r.action} to {r.target_bin}, {where} ({how}{t})"
+    )
 
+
+def run(args: argparse.Namespace) -> int:
     from cell.errors import HardwareError, InvalidInput
     from cell.orchestrator import Orchestrator
 
@@ -182,20 +195,17 @@ def run(args: argparse.Namespace) -> int:
             cycle_search=args.cycle_search,
             order=args.order,
         )
-    bar = tqdm(
-        total=len(job.expanded_items(args.order)),
-        desc=f"sorting {Path(args.job).name}",
-        unit="item",
-        file=sys.stderr,
-        disable=None,
-    )
+    total = len(job.expanded_items(args.order))
+    image = None
     try:
-        done: list[object] = []  # items finished (the bar does not count when disabled)
+        done: list[object] = []  # items finished
 
         def progress(r):  # type: ignore[no-untyped-def]
             done.append(r)
-            bar.update(1)
-            bar.set_postfix_str(f"{r.object_id}: {r.action} -> {r.bin_id or '-'}")
+            if (
+                not args.quiet
+            ):  # a line per item, on a terminal or not (stderr: stdout is the table)
+                print(_item_line(r, len(done), total), file=sys.stderr, flush=True)
 
         try:
             summary = orch.run(progress)
@@ -209,21 +219,28 @@ def run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_HARDWARE_FAULT
-        if args.snapshot:
-            orch.scene.snapshot(args.snapshot)
+        if args.snapshot:  # rendered now, written after the results are printed
+            from cell.sim.snapshot import render
+
+            image = render(orch.scene.client)
         if rec is not None:
             rec.finish(summary)
     finally:
-        bar.close()
         if rec is not None:
             rec.close()
         orch.close()
         if store is not None:
             store.close()
-    _table(summary, job.path, store)
-    if args.json:
-        d = summary.as_dict()
-        Path(args.json).write_text(json.dumps(to_jsonable(d), indent=2))
+    if json_to_stdout(args):
+        print_json(summary.as_dict())
+    else:
+        _table(summary, job.path, store)
+    if image is not None:
+        from cell.sim.snapshot import save_png
+
+        save_png(image, args.snapshot)
+    if not json_to_stdout(args):
+        write_json(args, summary.as_dict())
     if summary.items and not summary.in_bin:
         print("cell run: no item came to rest in its target bin", file=sys.stderr)
         return EXIT_NOTHING_SORTED
@@ -284,8 +301,8 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
                 params, report = refit_objects(found.table, params)
                 n = sum(r.throws for r in report.refitted)
                 print(
-                    f"{say} refitted {len(report.refitted)} object(s) from {n} earlier "
-                    f"throw(s) in {path} (η_ee kept from {source}):",
+                    f"{say} refitted {plural(len(report.refitted), 'object')} from "
+                    f"{plural(n, 'earlier throw')} in {path} (η_ee kept from {source}):",
                     file=sys.stderr,
                 )
                 for r in report.objects:
@@ -293,7 +310,7 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
             if found.left_out:
                 print(
                     f"{say} left out: "
-                    + "; ".join(f"{n} row(s): {why}" for why, n in found.left_out.items()),
+                    + "; ".join(f"{plural(n, 'row')}: {why}" for why, n in found.left_out.items()),
                     file=sys.stderr,
                 )
         except (CellError, sqlite3.Error, ValueError) as exc:
