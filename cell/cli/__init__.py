@@ -72,10 +72,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def json_spelling(argv: list[str]) -> list[str]:
+    """`--json` followed by anything but `-` or a name ending in .json is the bare flag (JSON
+    on stdout), as it was before --json took a path: `cell ee --json status` keeps working,
+    and `cell identify --json t.csv -o ee.yaml` reads t.csv instead of writing JSON into it."""
+    out: list[str] = []
+    for k, a in enumerate(argv):
+        out.append(a)
+        if a == "--":
+            out.extend(argv[k + 1 :])
+            break
+        nxt = argv[k + 1] if k + 1 < len(argv) else "-"
+        if a == "--json" and not nxt.startswith("-") and not nxt.lower().endswith(".json"):
+            out.append("-")
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `cell` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(json_spelling(sys.argv[1:] if argv is None else list(argv)))
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from cell.cli.common import add_json_arg, json_to_stdout, print_json, write_json
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -62,7 +62,8 @@ def run_import(args: argparse.Namespace) -> int:
         total = len(store)
         path = store.path
     print(
-        f"imported {n} throws ({len(tracks)} tracks) from {args.file} into {path}; {total} in all"
+        f"imported {plural(n, 'throw')} ({plural(len(tracks), 'track')}) from {args.file} "
+        f"into {path}; {total} in all"
     )
     return 0
 
@@ -85,7 +86,10 @@ def run_export(args: argparse.Namespace) -> int:
             for tid, arr in tracks.items():
                 for row in arr:
                     w.writerow([tid, *(repr(float(v)) for v in row)])
-    print(f"exported {len(table)} throws ({len(tracks)} tracks) from {path} to {args.output}")
+    print(
+        f"exported {plural(len(table), 'throw')} ({plural(len(tracks), 'track')}) from {path} "
+        f"to {args.output}"
+    )
     return 0
 
 
@@ -100,7 +104,7 @@ def run_show(args: argparse.Namespace) -> int:
     if json_to_stdout(args):
         print_json(doc)
         return 0
-    print(f"{path}: {counts['throws']} throws, {counts['tracks']} with a track")
+    print(f"{path}: {plural(counts['throws'], 'throw')}, {counts['tracks']} with a track")
     for key, title in (("object_id", "object"), ("platform", "platform"), ("session", "session")):
         print(f"\nper {title}:")
         for k, v in counts[key].items():

@@ -17,7 +17,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a sort job (YAML) in the cell")
     p.add_argument("job", help="job file, e.g. tasks/bins.yaml")
     p.add_argument("--gui", action="store_true", help="show the PyBullet GUI")
-    add_json_arg(p, "the summary")
+    add_json_arg(p, "the summary")  # --json PATH writes it after the table, as before
     p.add_argument(
         "-q",
         "--quiet",

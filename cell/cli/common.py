@@ -118,7 +118,7 @@ def add_json_arg(p: argparse.ArgumentParser, what: str = "the result") -> None:
         const="-",
         metavar="PATH",
         help=f"{what} as JSON: on standard output instead of the text (--json or --json -), "
-        "or written to PATH after the text is printed (--json PATH)",
+        "or written to PATH, a name ending in .json, after the text is printed (--json PATH)",
     )
 
 
