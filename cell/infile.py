@@ -88,7 +88,7 @@ def check_input_file(path: str | Path, what: str, max_bytes: int) -> Path:
         raise InvalidInput(f"{p}: cannot read the {what} ({exc.strerror})") from None
     if not stat.S_ISREG(st.st_mode):
         raise InvalidInput(
-            f"{p}: is {kind_of(st.st_mode)}; give a {what} (a regular file), which is read whole"
+            f"{p}: is {kind_of(st.st_mode)}; a {what} must be a regular file (it is read whole)"
         )
     if not os.access(p, os.R_OK):
         raise InvalidInput(f"{p}: the {what} is not readable (permission denied)")

@@ -128,13 +128,10 @@ def json_to_stdout(args: argparse.Namespace) -> bool:
 
 
 def write_json(args: argparse.Namespace, obj: Any) -> None:
-    """The JSON of `obj` where --json says: standard output, a file (written whole, then
-    moved into place), or nowhere when --json was not given."""
+    """The JSON of `obj` into the file --json names (written whole, then moved into place);
+    nothing when --json was not given or is standard output (`print_json` prints that)."""
     target = getattr(args, "json", None)
-    if not target:
-        return
-    if target == "-":
-        print_json(obj)
+    if not target or target == "-":
         return
     text = json.dumps(to_jsonable(obj), indent=2) + "\n"
     out = Path(target)

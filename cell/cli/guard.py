@@ -87,7 +87,7 @@ INT_RANGES: dict[str, tuple[int, int]] = {
     "adhoc": (0, 1_000_000),
     "max_iter": (1, 100_000),
     "repeats": (1, 1_000),
-    "hold_out": (1, 1_000),
+    "hold_out": (0, 1_000),
     "max_items": (0, 1_000_000),
     "layouts": (1, 10_000),
 }

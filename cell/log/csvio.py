@@ -63,7 +63,7 @@ def _readable(path: str | Path) -> str:
     opening it (a folder, a device such as /dev/zero or a FIFO is refused by name, unopened)."""
     p = str(path)
     try:
-        check_input_file(p, "CSV file", MAX_CSV_BYTES)
+        check_input_file(p, "file", MAX_CSV_BYTES)
     except InvalidInput as exc:
         text = str(exc)
         raise LogFormatError(p, None, None, text.removeprefix(f"{p}: ")) from None
