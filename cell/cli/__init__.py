@@ -11,8 +11,9 @@ import argparse
 import importlib
 import logging
 import os
+import re
 import sys
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -41,7 +42,16 @@ COMMANDS = (
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse's parser, with its refusals said as `cell: error:` lines (exit 2)."""
+    """argparse's parser, with its refusals said as `cell: error:` lines (exit 2), and
+    `-inf`, `-nan` and `-1e300` read as the values they are (argparse's own pattern of a
+    negative number takes only `-1` and `-1.5`, and `--at 0 -inf 0` would end the option
+    there, with a message that does not name it)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
+        )
 
     def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)

@@ -14,7 +14,7 @@ from cell.cli.common import (
     print_json,
     write_json,
 )
-from cell.errors import InvalidInput
+from cell.errors import CellError, InvalidInput
 from cell.log import read_throws_csv
 from cell.params import load_params
 from cell.residual.learners import LEARNERS
@@ -68,36 +68,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-MIN_THROWS = 20  # usable throws a residual is learned from (distinct ones in the log, too)
-MIN_PER_OBJECT = 5  # an object's usable throws; fewer leave the inner CV a one-sample fold
+MIN_THROWS = 20  # usable throws (and distinct ones in the log) a residual is learned from
 
 
 def _enough(data: Any, path: str) -> None:
-    """Leave out objects with fewer than MIN_PER_OBJECT usable throws (said on stderr) and
-    refuse a log with fewer than MIN_THROWS usable throws of 2 objects.
+    """Refuse a log with fewer than MIN_THROWS usable throws, or of fewer than 2 objects.
 
     Raises:
         InvalidInput: naming the log, the counts and the minimums.
     """
-    import numpy as np
-
-    ids, counts = np.unique(data.groups[data.usable], return_counts=True)
-    few = {str(o): int(n) for o, n in zip(ids, counts, strict=True) if n < MIN_PER_OBJECT}
-    if few:
-        data.usable[np.isin(data.groups, list(few))] = False
-        print(
-            f"cell learn: left out {plural(len(few), 'object')} with fewer than "
-            f"{MIN_PER_OBJECT} usable throws: "
-            + ", ".join(f"{o} ({plural(n, 'throw')})" for o, n in few.items()),
-            file=sys.stderr,
-        )
     n = int(data.usable.sum())
-    kept = len(ids) - len(few)
-    if n < MIN_THROWS or kept < 2:
+    objects = len(set(data.groups[data.usable].tolist()))
+    if n < MIN_THROWS or objects < 2:
         raise InvalidInput(
             f"{path}: learning the residual needs at least {MIN_THROWS} usable throws of at "
-            f"least 2 objects with {MIN_PER_OBJECT} or more each; this log has "
-            f"{plural(n, 'usable throw')} of {plural(kept, 'such object')}"
+            f"least 2 objects; this log has {plural(n, 'usable throw')} of "
+            f"{plural(objects, 'object')}"
         )
 
 
@@ -110,10 +96,7 @@ def _learners(text: str) -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from cell.residual.evaluate import round_robin, round_robin_folds
-    from cell.residual.model import train_residual, training_data
+    from cell.residual.model import training_data
 
     compare = _learners(args.compare)
     table = read_throws_csv(args.throws)
@@ -133,6 +116,38 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     _enough(data, args.throws)
+    try:
+        summary, model = _fit(args, data, compare)
+    except CellError:
+        raise
+    except ValueError as exc:  # scikit-learn's refusal of a split too small to fit
+        raise InvalidInput(
+            f"{args.throws}: too few throws of some objects for the learners' "
+            f"cross-validation ({exc}); log more throws of each object"
+        ) from None
+    doc = {name: s.as_dict() for name, s in summary.items()}
+    if json_to_stdout(args):
+        print_json(doc)
+    else:
+        _print(args, summary, compare, model)
+    model.save(args.output)  # the results are printed before any file is written
+    if args.plot and summary:
+        from cell.residual.plot import plot_table51
+
+        plot_table51(summary, args.plot)
+    write_json(args, doc)
+    return 0
+
+
+def _fit(
+    args: argparse.Namespace, data: Any, compare: tuple[str, ...]
+) -> tuple[dict[str, Any], Any]:
+    """The round-robin table (when --compare names learners) and the learner to save."""
+    from tqdm import tqdm
+
+    from cell.residual.evaluate import round_robin, round_robin_folds
+    from cell.residual.model import train_residual
+
     summary: dict[str, Any] = {}
     if compare:
         ids = sorted(set(data.groups[data.usable].tolist()))
@@ -154,18 +169,7 @@ def run(args: argparse.Namespace) -> int:
                 address=args.ray_address,
             )
     model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
-    doc = {name: s.as_dict() for name, s in summary.items()}
-    if json_to_stdout(args):
-        print_json(doc)
-    else:
-        _print(args, summary, compare, model)
-    model.save(args.output)  # the results are printed before any file is written
-    if args.plot and summary:
-        from cell.residual.plot import plot_table51
-
-        plot_table51(summary, args.plot)
-    write_json(args, doc)
-    return 0
+    return summary, model
 
 
 def _print(
