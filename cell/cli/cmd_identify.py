@@ -108,7 +108,27 @@ def run(args: argparse.Namespace) -> int:
     n_fit: dict[str, int] = {}
     for oid in fit.text("object_id"):
         n_fit[oid] = n_fit.get(oid, 0) + 1
-    doc = {
+    doc = _doc(args, table, source, result, held, before, after, params, n_fit)
+    if not json_to_stdout(args):  # the results are printed before any file is written
+        _print(table, source, result, where, before, after, params, start, n_fit)
+    save_params(params, args.output)
+    plots = []
+    if args.plot:
+        plots = [str(p) for p in _plot(table, start, params, args.plot, np.asarray(held_idx))]
+    doc["plots"] = plots
+    if json_to_stdout(args):  # after the plots, whose files it lists
+        print_json(doc)
+        return 0
+    print(f"wrote {args.output}")
+    for p in plots:
+        print(f"wrote {p}")
+    write_json(args, doc)
+    return 0
+
+
+def _doc(args, table, source, result, held, before, after, params, n_fit) -> dict:  # type: ignore[no-untyped-def,type-arg]
+    """The results as `--json` gives them."""
+    return {
         "source": source,
         "throws": len(table),
         "fit_throws": result.n_throws,
@@ -136,21 +156,6 @@ def run(args: argparse.Namespace) -> int:
         },
         "output": args.output,
     }
-    if not json_to_stdout(args):  # the results are printed before any file is written
-        _print(table, source, result, where, before, after, params, start, n_fit)
-    save_params(params, args.output)
-    plots = []
-    if args.plot:
-        plots = [str(p) for p in _plot(table, start, params, args.plot, np.asarray(held_idx))]
-    doc["plots"] = plots
-    if json_to_stdout(args):  # after the plots, whose files it lists
-        print_json(doc)
-        return 0
-    print(f"wrote {args.output}")
-    for p in plots:
-        print(f"wrote {p}")
-    write_json(args, doc)
-    return 0
 
 
 def _print(table, source, result, where, before, after, params, start, n_fit) -> None:  # type: ignore[no-untyped-def]

@@ -40,6 +40,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)"
     )
     p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
+    _add_arm_args(p)
+    p.add_argument(
+        "--learn",
+        action="store_true",
+        help="learn from the throws: before the run, refit each of the job's objects' "
+        "effective mass and extents from its earlier sort throws in the --db store (the "
+        "parameter file is not changed); during it, correct each aim from the landings "
+        "so far (arm platform)",
+    )
+    p.add_argument(
+        "--learn-save",
+        metavar="EE.yaml",
+        help="with --learn: write the parameters this run plans with (the file's, with the "
+        "refitted objects) to this new file (never the input parameter file)",
+    )
+    p.add_argument(
+        "--speed-scale",
+        type=float,
+        default=1.0,
+        help="fraction of the arm's joint velocity and acceleration limits its moves use, "
+        "in (0, 1] (1; a carry goes slower where the grip needs it)",
+    )
+    p.set_defaults(func=run)
+
+
+def _add_arm_args(p: argparse.ArgumentParser) -> None:
+    """The options of the arm platform: pick, release, turn, cycle search, order."""
     p.add_argument(
         "--pick",
         choices=PICKS,
@@ -80,28 +107,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "default), or each bin's items one after another (bins: the items all at hand, as in "
         "a tote; see the README's Limits)",
     )
-    p.add_argument(
-        "--learn",
-        action="store_true",
-        help="learn from the throws: before the run, refit each of the job's objects' "
-        "effective mass and extents from its earlier sort throws in the --db store (the "
-        "parameter file is not changed); during it, correct each aim from the landings "
-        "so far (arm platform)",
-    )
-    p.add_argument(
-        "--learn-save",
-        metavar="EE.yaml",
-        help="with --learn: write the parameters this run plans with (the file's, with the "
-        "refitted objects) to this new file (never the input parameter file)",
-    )
-    p.add_argument(
-        "--speed-scale",
-        type=float,
-        default=1.0,
-        help="fraction of the arm's joint velocity and acceleration limits its moves use, "
-        "in (0, 1] (1; a carry goes slower where the grip needs it)",
-    )
-    p.set_defaults(func=run)
 
 
 def _store(args: argparse.Namespace):  # type: ignore[no-untyped-def]
@@ -138,32 +143,13 @@ def _item_line(r: Any, k: int, n: int) -> str:
     )
 
 
-def run(args: argparse.Namespace) -> int:
-    from cell.errors import HardwareError, InvalidInput
+def _runner(
+    args: argparse.Namespace, job: Any, hardware: Any, params: Any, rec: Any, store: Any
+) -> Any:
+    """The orchestrator of the job's platform (the arm's, or a drone's or mobile base's)."""
+    from cell.errors import InvalidInput
     from cell.orchestrator import Orchestrator
 
-    job = load_job(args.job)
-    if not 0.0 < args.speed_scale <= 1.0:
-        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
-    kind = args.ee or job.ee
-    if args.emulate and kind != "dynamixel":
-        raise InvalidInput(
-            f"--emulate drives an emulated Dynamixel bus; this run's end-effector is {kind!r}: "
-            "add --ee dynamixel (or set ee: dynamixel in the job)"
-        )
-    hardware = None
-    if kind == "dynamixel":
-        from cell.endeffector.factory import make_end_effector
-
-        cfg = args.ee_config or job.ee_config or None
-        hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
-    if args.learn_save and not args.learn:
-        raise InvalidInput("--learn-save writes what --learn refits: add --learn")
-    params = None
-    if args.learn and job.platform == "arm":
-        params = _refit(args, job)
-    rec = _recorder(args, job)
-    store = _store(args)
     orch: Any
     if job.platform != "arm":
         from cell.platforms.runner import PlatformRunner
@@ -195,6 +181,35 @@ def run(args: argparse.Namespace) -> int:
             cycle_search=args.cycle_search,
             order=args.order,
         )
+    return orch
+
+
+def run(args: argparse.Namespace) -> int:
+    from cell.errors import HardwareError, InvalidInput
+
+    job = load_job(args.job)
+    if not 0.0 < args.speed_scale <= 1.0:
+        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
+    kind = args.ee or job.ee
+    if args.emulate and kind != "dynamixel":
+        raise InvalidInput(
+            f"--emulate drives an emulated Dynamixel bus; this run's end-effector is {kind!r}: "
+            "add --ee dynamixel (or set ee: dynamixel in the job)"
+        )
+    hardware = None
+    if kind == "dynamixel":
+        from cell.endeffector.factory import make_end_effector
+
+        cfg = args.ee_config or job.ee_config or None
+        hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
+    if args.learn_save and not args.learn:
+        raise InvalidInput("--learn-save writes what --learn refits: add --learn")
+    params = None
+    if args.learn and job.platform == "arm":
+        params = _refit(args, job)
+    rec = _recorder(args, job)
+    store = _store(args)
+    orch = _runner(args, job, hardware, params, rec, store)
     total = len(job.expanded_items(args.order))
     image = None
     try:
@@ -202,9 +217,7 @@ def run(args: argparse.Namespace) -> int:
 
         def progress(r):  # type: ignore[no-untyped-def]
             done.append(r)
-            if (
-                not args.quiet
-            ):  # a line per item, on a terminal or not (stderr: stdout is the table)
+            if not args.quiet:  # a line per item, on a terminal or not; stdout is the table
                 print(_item_line(r, len(done), total), file=sys.stderr, flush=True)
 
         try:

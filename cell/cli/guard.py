@@ -204,9 +204,8 @@ def _files(args: argparse.Namespace, names: dict[str, str]) -> None:
         check_path_length(value, flag)
     command = getattr(args, "command", None)
     seen: dict[Any, str] = {}
-    for flag, value in inputs:
-        if Path(value).exists():
-            seen.setdefault(_key(Path(value)), f"{flag} {value}")
+    for flag, value in inputs:  # a missing one too: `synth -o s.db --db s.db` would make both
+        seen.setdefault(_key(Path(value)), f"{flag} {value}")
     shipped = shipped_dirs()
     for dest, flag, value in outputs:
         if (command, dest) in _FOLDER_OUTPUTS:
