@@ -34,6 +34,8 @@ def check_path_length(path: str | Path, what: str) -> None:
         InvalidInput: naming `what`, the longest component's length and the bound.
     """
     raw = os.fsencode(str(path))
+    if b"\0" in raw:
+        raise InvalidInput(f"{what}: a path with a NUL byte; no file has such a name")
     if len(raw) > MAX_PATH_BYTES:
         raise InvalidInput(
             f"{what}: a path of {len(raw)} bytes; at most {MAX_PATH_BYTES} bytes are valid"
@@ -61,6 +63,10 @@ def kind_of(mode: int) -> str:
     return "not a regular file"
 
 
+def _a(what: str) -> str:
+    return ("an " if what[:1].lower() in "aeiou" else "a ") + what
+
+
 def check_input_file(path: str | Path, what: str, max_bytes: int) -> Path:
     """Check, without opening it, that `path` is a readable regular file of at most `max_bytes`.
 
@@ -76,6 +82,8 @@ def check_input_file(path: str | Path, what: str, max_bytes: int) -> Path:
         InvalidInput: naming the file: missing, too long a name, a folder, a device, a FIFO
             or a socket, not readable, or larger than `max_bytes`.
     """
+    if not str(path):
+        raise InvalidInput(f"an empty path where a {what} was expected; give its file name")
     p = Path(path)
     check_path_length(p, f"{p.name[:40]}…" if len(str(p)) > 80 else str(p))
     try:
@@ -88,10 +96,10 @@ def check_input_file(path: str | Path, what: str, max_bytes: int) -> Path:
         raise InvalidInput(f"{p}: cannot read the {what} ({exc.strerror})") from None
     if not stat.S_ISREG(st.st_mode):
         raise InvalidInput(
-            f"{p}: is {kind_of(st.st_mode)}; a {what} must be a regular file (it is read whole)"
+            f"{p}: is {kind_of(st.st_mode)}; {_a(what)} must be a regular file (it is read whole)"
         )
     if not os.access(p, os.R_OK):
         raise InvalidInput(f"{p}: the {what} is not readable (permission denied)")
     if st.st_size > max_bytes:
-        raise InvalidInput(f"{p}: {st.st_size} bytes; a {what} is at most {max_bytes} bytes")
+        raise InvalidInput(f"{p}: {st.st_size} bytes; {_a(what)} is at most {max_bytes} bytes")
     return p

@@ -51,6 +51,13 @@ def run(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     q0 = robot.home if args.q_from is None else np.asarray(args.q_from, dtype=float)
+    if len(q0) != len(robot.home):
+        from cell.errors import InvalidInput
+
+        raise InvalidInput(
+            f"--from: {len(q0)} joint values given; the {args.robot} has {len(robot.home)} "
+            "joints: give one angle [rad] for each"
+        )
     pose = ReleasePose.from_angles(tuple(args.at), args.elevation, args.azimuth, args.roll)
     res = solve_ik(robot, pose, q0)
     t_move = move_time(q0, res.q, robot)

@@ -167,8 +167,8 @@ def _key(p: Path) -> tuple[int, int] | Path:
     try:
         st = os.stat(p)
         return (st.st_dev, st.st_ino)
-    except OSError:
-        return p.resolve()
+    except (OSError, ValueError):
+        return Path(os.path.abspath(p))  # a missing file (or a symbolic-link loop)
 
 
 def _outputs(args: argparse.Namespace, names: dict[str, str]) -> list[tuple[str, str, str]]:
@@ -219,7 +219,7 @@ def _files(args: argparse.Namespace, names: dict[str, str]) -> None:
                 "writes; give another file (an input is never overwritten)"
             )
         seen[key] = f"{flag} {value}"
-        where = out.resolve()
+        where = Path(os.path.realpath(out))
         for folder in shipped:
             if where.is_relative_to(folder) and not getattr(args, "replace", False):
                 raise InvalidInput(
