@@ -126,7 +126,7 @@ def _open_store(path: str, plan: list[dict]) -> Any:  # type: ignore[type-arg]
     if known:
         store.close()
         raise InvalidInput(
-            f"--db {store.path}: already holds {len(known)} throw(s) of this campaign "
+            f"--db {store.path}: already holds {plural(len(known), 'throw')} of this campaign "
             f"(e.g. {sorted(known)[0]!r}); give another --seed or another store"
         )
     return store
@@ -298,7 +298,7 @@ def _print_summary(
     if adhoc is None:
         fit = f"{100 * rule.rms_log_error:.1f} % RMS on the identified masses"
     else:
-        fit = f"{100 * rule.rms_reach_error:.1f} % RMS reach error on {len(adhoc)} ad-hoc throws"
+        fit = f"{100 * rule.rms_reach_error:.1f} % RMS reach error on {plural(len(adhoc), 'ad-hoc throw')}"
     print(
         f"effective mass rule m_eff = {rule.kappa:.4f} sqrt(m + {rule.band_mass_kg:.4f} kg) "
         f"(a / 0.05 m)^{rule.width_exponent:.3f} ({fit}) for the objects outside the campaign"

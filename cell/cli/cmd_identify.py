@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         result = identify(fit, start, options=opts, progress=progress)
     params = result.params
     where = (
-        f"{len(held)} held-out throws (a stratified {args.holdout:.0%} of each object's, "
+        f"{plural(len(held), 'held-out throw')} (a stratified {args.holdout:.0%} of each object's, "
         f"seed {args.seed}), not used in the fit"
         if len(held)
         else "the fitted throws themselves (--holdout 0: in-sample figures)"
@@ -165,10 +165,10 @@ def _print(table, source, result, where, before, after, params, start, n_fit) ->
     print(
         f"{source}: {plural(len(table), 'throw')} of {plural(len(set(table.text('object_id'))), 'object')}"
     )
-    print(f"fitted on {result.n_throws} throws; errors below are on {where}")
+    print(f"fitted on {plural(result.n_throws, 'throw')}; errors below are on {where}")
     print(format_table(before, after, params, n_fit))
     print(
-        f"\n{result.iterations} iteration(s), "
+        f"\n{plural(result.iterations, 'iteration')}, "
         f"{'converged' if result.converged else 'stopped at --max-iter'} "
         f"({result.seconds:.1f} s); landing RMSE on the fitted throws "
         f"{result.rmse_start_m:.4f} -> {result.rmse_fit_m:.4f} m"

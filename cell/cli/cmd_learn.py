@@ -178,7 +178,8 @@ def _print(
     """The Table 5.1 rows and the learner saved, as text."""
     if summary:
         print(
-            f"Table 5.1: hold out {args.hold_out} objects at a time ({len(summary[compare[0]].folds)} folds)"
+            f"Table 5.1: hold out {plural(args.hold_out, 'object')} at a time "
+            f"({plural(len(summary[compare[0]].folds), 'fold')})"
         )
         print(f"{'learner':8s} {'ΔL_s MSE [mm²]':>20s} {'held-out landing RMSE [m]':>28s}")
         for name, s in summary.items():
@@ -197,7 +198,7 @@ def _print(
             "The log shows no systematic ΔL_s this learner can predict."
         )
     print(
-        f"saved {model.learner} residual ({model.n_train} throws of "
+        f"saved {model.learner} residual ({plural(model.n_train, 'throw')} of "
         f"{plural(len(model.training_objects), 'object')}; "
         + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
         + f") -> {args.output}"

@@ -224,10 +224,12 @@ def run(args: argparse.Namespace) -> int:
             summary = orch.run(progress)
         except HardwareError as exc:
             orch.close()  # torque off on the servos before anything else
-            kept = f"; {len(store)} throws kept in {store.path}" if store is not None else ""
+            kept = (
+                f"; {plural(len(store), 'throw')} kept in {store.path}" if store is not None else ""
+            )
             print(
                 f"cell: hardware fault: {type(exc).__name__}: {exc}\n"
-                f"cell: the run stopped after {len(done)} of {len(job.expanded_items())} items with the servos' "
+                f"cell: the run stopped after {len(done)} of {plural(total, 'item')} with the servos' "
                 f"torque off{kept}",
                 file=sys.stderr,
             )
