@@ -243,10 +243,13 @@ def test_an_input_or_a_shipped_file_is_never_written(
 
 
 def test_replace_allows_writing_a_shipped_file(work: Path, capsys) -> None:
-    out = ROOT / "tasks" / "i62_replace_probe.yaml"
+    out = ROOT / "tasks" / "i62_replace_probe.txt"  # not a .yaml: no test globs it
     try:
+        assert main(["job", "random", "-o", str(out)]) == 2 and not out.exists()
+        assert "--replace" in capsys.readouterr().err
         assert main(["job", "random", "-o", str(out), "--replace"]) == 0
-        assert out.read_text().startswith("robot:") or "bins:" in out.read_text()
+        text = out.read_text()
+        assert "\nbins:\n" in text and "\nitems:\n" in text
     finally:
         out.unlink(missing_ok=True)
 
