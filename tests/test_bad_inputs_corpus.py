@@ -123,6 +123,13 @@ BAD_PARAMS = [
     ("a: &x 1\nb: *x", "aliases"),
     ("{{{{", "YAML"),
     ("!!python/object/apply:os.system ['true']", "YAML"),
+    # issue 62: absurd magnitudes in a parameter file are named with the valid range
+    ("end_effector: {L0: 1e300}", "L0"),
+    ("end_effector: {Ke3: 1e300}", "Ke3"),
+    ("end_effector: {C: -1e300}", "C"),
+    ("end_effector: {dt: 1e30}", "dt"),
+    ("objects: {cube: {shape: cube, mass_kg: 1e300, size_m: [0.05, 0.05, 0.05]}}", "1000 kg"),
+    ("objects: {cube: {shape: cube, mass_kg: 0.1, size_m: [1e300, 0.05, 0.05]}}", "10 m"),
 ]
 
 
