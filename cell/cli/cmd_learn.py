@@ -110,9 +110,10 @@ def run(args: argparse.Namespace) -> int:
     data = training_data(table, mp.ee, objects=mp.objects if args.identified_objects else None)
     n_bad = int((~data.usable).sum())
     if n_bad:
+        why = {k: v for k, v in data.targets.excluded_counts().items() if v}
         print(
-            f"cell learn: {n_bad} of {len(table)} throws excluded (no observed landing, or "
-            f"observed reach outside the model's range): {human(data.targets.excluded_counts())}",
+            f"cell learn: {n_bad} of {plural(len(table), 'throw')} excluded (no observed "
+            f"landing, or observed reach outside the model's range): {human(why)}",
             file=sys.stderr,
         )
     _enough(data, args.throws)
