@@ -40,7 +40,7 @@ FIG := docs/figures
 TMP := build/figures
 figures: install
 	rm -rf $(TMP) && mkdir -p $(TMP)
-	$(BIN)/cell calibrate --n 0 --snapshot robots/cell_scene/scene.png
+	$(BIN)/cell calibrate --n 0 --snapshot robots/cell_scene/scene.png --replace
 	$(BIN)/cell run tasks/bins.yaml --no-log --json $(FIG)/run.json
 	$(BIN)/cell synth -o $(TMP)/throws.csv --seed 0
 	$(BIN)/cell identify $(TMP)/throws.csv -o $(TMP)/ee.yaml --plot $(TMP)/identify --json > $(FIG)/identify.json

@@ -66,6 +66,10 @@ class ModelParams:
         return replace(obj, mass=float(m_eff))
 
 
+MAX_FILE_MASS_KG = 1000.0  # [kg] an object of a parameter file: beyond is a typo (1e300)
+MAX_FILE_SIZE_M = 10.0  # [m]
+
+
 def load_params(path: str | Path | None) -> ModelParams:
     """Read a parameter file; None gives the reference defaults.
 
@@ -100,6 +104,12 @@ def load_params(path: str | Path | None) -> ModelParams:
                 size=tuple(float(s) for s in spec["size_m"]),  # type: ignore[arg-type]
                 name=str(oid),
             )
+            o = objects[str(oid)]
+            if o.mass > MAX_FILE_MASS_KG or max(o.size) > MAX_FILE_SIZE_M:
+                raise ValueError(
+                    f"mass {o.mass:g} kg, size {max(o.size):g} m: an absurd magnitude; valid are "
+                    f"masses up to {MAX_FILE_MASS_KG:g} kg and extents up to {MAX_FILE_SIZE_M:g} m"
+                )
         except (KeyError, TypeError, ValueError, InvalidParameter) as exc:
             raise InvalidInput(
                 f"{p}: objects.{oid}: {exc}; each object needs shape, mass_kg, size_m [3 numbers]"

@@ -16,6 +16,7 @@ from typing import Any
 import yaml
 
 from cell.errors import InvalidInput
+from cell.infile import check_input_file
 
 __all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "check_yaml", "read_yaml_text", "safe_load"]
 
@@ -70,21 +71,21 @@ def read_yaml_text(path: str | Path, what: str) -> str:
         what: what it should be, for the messages ("parameter file").
 
     Raises:
-        InvalidInput: missing, a folder, unreadable, too large or not UTF-8 text.
+        InvalidInput: missing, a folder, a device or FIFO, unreadable, too large or not
+            UTF-8 text.
     """
-    p = Path(path)
-    if not p.exists():
-        raise InvalidInput(f"{p}: no such {what}")
-    if p.is_dir():
-        raise InvalidInput(f"{p}: is a folder; give a {what} (YAML)")
+    p = check_input_file(path, what, MAX_BYTES)
     try:
-        if p.stat().st_size > MAX_BYTES:
-            raise InvalidInput(f"{p}: {p.stat().st_size} bytes; a {what} is at most {MAX_BYTES}")
-        return p.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError:
-        raise InvalidInput(f"{p}: not a text file; a {what} is YAML text") from None
+        with open(p, "rb") as fh:
+            raw = fh.read(MAX_BYTES + 1)  # a file that grew since it was checked stays bounded
     except OSError as exc:
         raise InvalidInput(f"{p}: cannot read it ({exc.strerror})") from None
+    if len(raw) > MAX_BYTES:
+        raise InvalidInput(f"{p}: more than {MAX_BYTES} bytes; a {what} is at most {MAX_BYTES}")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InvalidInput(f"{p}: not a text file; a {what} is YAML text") from None
 
 
 def safe_load(text: str, path: str) -> Any:

@@ -156,7 +156,7 @@ def test_cli_calibrate_refuses_a_store_that_holds_the_campaign_already(tmp_path,
     argv = ["calibrate", "--n", "16", "--seed", "4", "--db", str(db), "--workers", "2"]
     assert main(argv + ["-o", str(tmp_path / "e.yaml")]) == 2
     err = capsys.readouterr().err
-    assert "already holds 1 throw(s)" in err and "cal004-0000" in err
+    assert "already holds 1 throw of" in err and "cal004-0000" in err
     with ThrowStore(db) as store:
         assert len(store) == 1  # nothing thrown, nothing written
 

@@ -11,7 +11,11 @@ import argparse
 import importlib
 import logging
 import os
+import re
 import sys
+from typing import Any, NoReturn
+
+import numpy as np
 
 from cell.errors import CellError
 
@@ -37,12 +41,33 @@ COMMANDS = (
 )
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser, with its refusals said as `cell: error:` lines (exit 2), and
+    `-inf`, `-nan` and `-1e300` read as the values they are (argparse's own pattern of a
+    negative number takes only `-1` and `-1.5`, and `--at 0 -inf 0` would end the option
+    there, with a message that does not name it)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
+        )
+
+    def error(self, message: str) -> NoReturn:
+        self.print_usage(sys.stderr)
+        self.exit(2, f"cell: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every available subcommand."""
-    parser = argparse.ArgumentParser(
+    from cell import __version__
+    from cell.cli.guard import add_replace_args
+
+    parser = Parser(
         prog="cell",
         description="A pick-and-throw robot cell with an elastic slingshot end-effector.",
     )
+    parser.add_argument("--version", action="version", version=f"cell {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
@@ -53,52 +78,43 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # not built yet
             raise
         mod.register(sub)
+    add_replace_args(parser)
     return parser
 
 
-# Options that name a file a command writes: checked before the command's work starts, so a
-# long run never ends in an unwritable path. (--json is a path only where it takes a value.)
-_OUTPUT_OPTIONS = (
-    ("output", "-o"),
-    ("json", "--json"),
-    ("report", "--report"),
-    ("snapshot", "--snapshot"),
-    ("record", "--record"),
-    ("learn_save", "--learn-save"),
-)
-
-
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Check the seed and every output path before a command starts its work."""
-    from cell.cli.common import check_output_path
-    from cell.errors import InvalidInput
-
-    seed = getattr(args, "seed", None)
-    if isinstance(seed, int) and not 0 <= seed < 2**32:
-        raise InvalidInput(f"--seed {seed}: a seed is an integer from 0 to {2**32 - 1}")
-    workers = getattr(args, "workers", None)
-    if isinstance(workers, int) and not 1 <= workers <= 4096:
-        raise InvalidInput(f"--workers {workers}: give 1 (in this process) to 4096")
-    for attr, flag in _OUTPUT_OPTIONS:
-        value = getattr(args, attr, None)
-        if isinstance(value, str) and value:
-            check_output_path(value, flag)
+def json_spelling(argv: list[str]) -> list[str]:
+    """`--json` followed by anything but `-` or a name ending in .json is the bare flag (JSON
+    on stdout), as it was before --json took a path: `cell ee --json status` keeps working,
+    and `cell identify --json t.csv -o ee.yaml` reads t.csv instead of writing JSON into it."""
+    out: list[str] = []
+    for k, a in enumerate(argv):
+        out.append(a)
+        if a == "--":
+            out.extend(argv[k + 1 :])
+            break
+        nxt = argv[k + 1] if k + 1 < len(argv) else "-"
+        if a == "--json" and not nxt.startswith("-") and not nxt.lower().endswith(".json"):
+            out.append("-")
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `cell` console script."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(json_spelling(sys.argv[1:] if argv is None else list(argv)))
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
     if not getattr(args, "func", None):
-        parser.print_help()
+        parser.print_help(sys.stderr)
         return 2
+    from cell.cli.guard import check_args
+
     try:
-        _check_outputs(args)
-        return int(args.func(args) or 0)
+        check_args(args, parser)  # before the command's work starts
+        with np.errstate(all="ignore"):  # a non-finite result is reported, not warned about
+            return int(args.func(args) or 0)
     except CellError as exc:
         print(f"cell: error: {exc}", file=sys.stderr)
         return 2
@@ -108,6 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into a reader that stopped (e.g. `| head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
+    except OSError as exc:  # a file that failed between the checks and the write
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"cell: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

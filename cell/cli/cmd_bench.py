@@ -7,7 +7,7 @@ import platform
 import time
 
 from cell.bench import available
-from cell.cli.common import print_json
+from cell.cli.common import add_json_arg, human, json_to_stdout, print_json, write_json
 from cell.jobs import ORDERS
 
 
@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=("sort", "tradeoff"),
         help="sort: the random-layout benchmark; tradeoff: it at several arm speed scales",
     )
-    p.add_argument("--json", action="store_true", help="print one flat JSON object")
+    add_json_arg(p, "one flat object of the figures")
     p.add_argument("--layouts", type=int, default=8, help="sort: layouts to draw (8)")
     p.add_argument("--seed", type=int, default=0, help="sort: seed of the first layout (0)")
     p.add_argument(
@@ -132,12 +132,13 @@ def run_sort(args: argparse.Namespace) -> int:
         on_result=keep,
     )
     figures = summarise_layouts(layouts)
-    if args.json:
+    if json_to_stdout(args):
         print_json(figures)
     else:
-        rows = figures.pop("per_layout")
+        rows = figures["per_layout"]
         for k, v in figures.items():
-            print(f"{k:28s} {v if not isinstance(v, float) else round(v, 4)}")
+            if k != "per_layout":
+                print(f"{k:28s} {v if not isinstance(v, (float, dict, list)) else human(v)}")
         print(
             f"\n{'seed':>6s} {'robot':6s} {'in bin':>8s} {'sim [s]':>8s} {'items/h':>8s} "
             f"{'median cycle [s]':>16s}  slowest item [s]"
@@ -151,6 +152,7 @@ def run_sort(args: argparse.Namespace) -> int:
                 + (f"  {r['floor_items_per_hour']:.0f}" if "floor_items_per_hour" in r else "")
                 + ("  (refused)" if r["refused"] else "")
             )
+        write_json(args, figures)
     return 0
 
 
@@ -192,9 +194,7 @@ def run_tradeoff(args: argparse.Namespace) -> int:
         desc="layouts x speed scales",
     )
     rows = tradeoff_rows(results)
-    if args.plot:
-        plot_tradeoff(rows, args.plot)
-    if args.json:
+    if json_to_stdout(args):
         print(json.dumps({"points": rows}, indent=1))
     else:
         print(f"{'scale':>6s} {'items/h':>8s} {'in-bin':>7s}  95 % interval  items")
@@ -203,6 +203,9 @@ def run_tradeoff(args: argparse.Namespace) -> int:
                 f"{r['speed_scale']:6.2f} {r['items_per_hour']:8.0f} {r['in_bin_rate']:7.3f}  "
                 f"{r['in_bin_rate_lo']:.3f}-{r['in_bin_rate_hi']:.3f}   {r['items']}"
             )
+        write_json(args, {"points": rows})
+    if args.plot:  # after the results are printed
+        plot_tradeoff(rows, args.plot)
     return 0
 
 
@@ -225,11 +228,12 @@ def run(args: argparse.Namespace) -> int:
     for name, fn in benches.items():
         t0 = time.perf_counter()
         figures.update(fn(args.quick))
-        if not args.json:
+        if not json_to_stdout(args):
             print(f"[{name}: {time.perf_counter() - t0:.1f} s]")
-    if args.json:
+    if json_to_stdout(args):
         print_json(figures)
     else:
         for k, v in figures.items():
             print(f"{k:32s} {v}")
+        write_json(args, figures)
     return 0

@@ -12,6 +12,8 @@ if TYPE_CHECKING:
     from cell.log.table import ThrowTable
     from cell.workflows.calibrate import GapSummary, MassRule
 
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
+
 DEFAULT_OUTPUT = Path("ee_params.yaml")
 
 
@@ -67,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="render the cell scene headless (TinyRenderer) to a PNG; with --n 0 only that",
     )
     p.add_argument("--gui", action="store_true", help="watch the campaign in PyBullet's GUI")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_json_arg(p, "the result")
     p.add_argument("--record", metavar="CAL.rrd", help="write a Rerun recording (cell[record])")
     from cell.parallel import add_campaign_args
 
@@ -124,7 +126,7 @@ def _open_store(path: str, plan: list[dict]) -> Any:  # type: ignore[type-arg]
     if known:
         store.close()
         raise InvalidInput(
-            f"--db {store.path}: already holds {len(known)} throw(s) of this campaign "
+            f"--db {store.path}: already holds {plural(len(known), 'throw')} of this campaign "
             f"(e.g. {sorted(known)[0]!r}); give another --seed or another store"
         )
     return store
@@ -180,7 +182,7 @@ def _throw_campaign(args: argparse.Namespace, plan: list[dict]) -> ThrowTable:  
 
         scene = CellScene(robot=None, bins=(), pick_station_xy=(-1.0, -1.0), gui=True)
     try:
-        with tqdm(total=len(plan), desc="throws", disable=args.json or None) as bar:
+        with tqdm(total=len(plan), desc="throws", disable=json_to_stdout(args) or None) as bar:
             table = run_campaign(
                 plan,
                 scene=scene,
@@ -214,7 +216,7 @@ def _throw_adhoc(args: argparse.Namespace) -> ThrowTable | None:
     if not args.adhoc:
         return None
     aplan = adhoc_plan(args.adhoc, seed=args.seed)
-    with tqdm(total=len(aplan), desc="ad-hoc throws", disable=args.json or None) as bar:
+    with tqdm(total=len(aplan), desc="ad-hoc throws", disable=json_to_stdout(args) or None) as bar:
         return run_campaign(
             aplan,
             progress=lambda k: bar.update(k - bar.n),
@@ -283,7 +285,7 @@ def _print_summary(
 ) -> None:
     """Print the result as text: the gap before and after the fit, per object, and the
     mass rule."""
-    print(f"{len(table)} throws in the scene; parameters written to {out}")
+    print(f"{plural(len(table), 'throw')} in the scene; parameters written to {out}")
     print(
         f"nominal model vs scene: landing RMSE {nominal.rmse_m:.3f} m, reach error "
         f"{100 * nominal.reach_rel_rms:.1f} % RMS (bias {100 * nominal.reach_bias:+.1f} %)"
@@ -299,7 +301,7 @@ def _print_summary(
     if adhoc is None:
         fit = f"{100 * rule.rms_log_error:.1f} % RMS on the identified masses"
     else:
-        fit = f"{100 * rule.rms_reach_error:.1f} % RMS reach error on {len(adhoc)} ad-hoc throws"
+        fit = f"{100 * rule.rms_reach_error:.1f} % RMS reach error on {plural(len(adhoc), 'ad-hoc throw')}"
     print(
         f"effective mass rule m_eff = {rule.kappa:.4f} sqrt(m + {rule.band_mass_kg:.4f} kg) "
         f"(a / 0.05 m)^{rule.width_exponent:.3f} ({fit}) for the objects outside the campaign"
@@ -309,36 +311,36 @@ def _print_summary(
 def run(args: argparse.Namespace) -> int:
     """Throw the campaign (and the ad-hoc one), identify the parameters, write them to -o
     and print the gap before and after the fit (or only render --snapshot with --n 0)."""
-    from cell.cli.common import print_json
     from cell.log.csvio import write_throws_csv
     from cell.params import save_params
     from cell.workflows.campaign import campaign_plan
 
-    if args.snapshot:
+    if args.snapshot and args.n == 0:
         _snapshot(args.snapshot)
-        if args.n == 0:
-            print(f"snapshot written to {args.snapshot}")
-            return 0
+        print(f"snapshot written to {args.snapshot}")
+        return 0
     _check_args(args)
     plan = campaign_plan(args.n, seed=args.seed)
     table = _throw_campaign(args, plan)
     adhoc = _throw_adhoc(args)
+    res, nominal, fitted, rule = _identify(table, adhoc, json_to_stdout(args))
+    out = Path(args.output)
+    summary = _summary(table, out, res, nominal, fitted, rule, adhoc)
+    if json_to_stdout(args):  # the results are printed before any file is written
+        print_json(summary)
+    else:
+        _print_summary(table, out, nominal, fitted, rule, adhoc)
+        from cell.identify.report import evidence_lines
+
+        print("\n".join(evidence_lines(res)))
     if args.log:
         write_throws_csv(table, args.log)
-    res, nominal, fitted, rule = _identify(table, adhoc, args.json)
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
     save_params(res.params, out)
     if args.record:
         from cell.record.calibrate import record_calibration
 
         record_calibration(args.record, table, res.params)
-    summary = _summary(table, out, res, nominal, fitted, rule, adhoc)
-    if args.json:
-        print_json(summary)
-        return 0
-    _print_summary(table, out, nominal, fitted, rule, adhoc)
-    from cell.identify.report import evidence_lines
-
-    print("\n".join(evidence_lines(res)))
+    if args.snapshot:
+        _snapshot(args.snapshot)
+    write_json(args, summary)
     return 0

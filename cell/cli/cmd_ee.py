@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from cell.cli.common import print_json
+from cell.cli.common import add_json_arg, json_to_stdout, print_json, write_json
 from cell.endeffector.factory import DEFAULT_DYNAMIXEL_CONFIG
 
 _EPILOG = """\
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="use an emulated servo bus instead of hardware (nothing to plug in)",
     )
-    p.add_argument("--json", action="store_true", help="print the status as JSON")
+    add_json_arg(p, "the status")
     acts = p.add_subparsers(dest="action", metavar="ACTION", required=True)
     acts.add_parser("status", help="servo and stroke state")
     s = acts.add_parser("stroke", help="read the stroke, or wind/unwind to L [m]")
@@ -75,19 +75,19 @@ def run(args: argparse.Namespace) -> int:
         elif args.action == "throw":
             ee.throw()
         st = ee.status()
-    if args.json:
-        print_json(
-            {
-                "stroke_m": st.stroke_m,
-                "latch_engaged": st.latch_engaged,
-                "holding": st.holding,
-                "detail": st.detail,
-            }
-        )
-    else:
-        latch = "engaged" if st.latch_engaged else "open"
-        print(f"stroke {st.stroke_m:.4f} m, latch {latch}, holding {str(st.holding).lower()}")
-        print(st.detail)
+    doc = {
+        "stroke_m": st.stroke_m,
+        "latch_engaged": st.latch_engaged,
+        "holding": st.holding,
+        "detail": st.detail,
+    }
+    if json_to_stdout(args):
+        print_json(doc)
+        return 0
+    latch = "engaged" if st.latch_engaged else "open"
+    print(f"stroke {st.stroke_m:.4f} m, latch {latch}, holding {str(st.holding).lower()}")
+    print(st.detail)
+    write_json(args, doc)
     return 0
 
 

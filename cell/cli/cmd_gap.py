@@ -28,7 +28,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("throws", help="throws.csv, or `check` for the withheld-effect check")
     p.add_argument("--tracks", metavar="CSV", help="observed tracks (tracks.csv)")
     p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference)")
-    p.add_argument("--json", metavar="FILE", help="write the report (or the check) as JSON")
+    p.add_argument(
+        "--json",
+        nargs="?",
+        const="-",
+        metavar="PATH",
+        help="the report (or the check) as JSON: on standard output instead of the table "
+        "(--json or --json -), or written to PATH, a name ending in .json (--json PATH)",
+    )
     p.add_argument("--report", metavar="HTML", help="write the report as HTML with plots")
     p.add_argument(
         "--identify",
@@ -58,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         return _check(args)
     from tqdm import tqdm
 
-    from cell.gap.report import format_table, write_html, write_json
+    from cell.gap.report import format_table, jsonable, write_html, write_json
     from cell.gap.run import diagnose_log
     from cell.log import read_throws_csv
     from cell.log.csvio import read_tracks_csv
@@ -92,8 +99,11 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             progress=tick,
         )
-    print(format_table(d.report))
-    if args.json:
+    if args.json == "-":  # JSON on stdout instead of the table
+        print(json.dumps(jsonable(d.report), indent=2, allow_nan=False))
+    else:
+        print(format_table(d.report))
+    if args.json and args.json != "-":
         write_json(d.report, args.json)
         print(f"report -> {args.json}")
     if args.report:
@@ -138,8 +148,11 @@ def _check(args: argparse.Namespace) -> int:
             workers=args.workers,
             address=args.ray_address,
         )
-    print(format_check(rows))
-    if args.json:
+    if args.json == "-":  # JSON on stdout instead of the table
+        print(json.dumps(jsonable(check_json(rows)), indent=2, allow_nan=False))
+    else:
+        print(format_check(rows))
+    if args.json and args.json != "-":
         with open(args.json, "w") as fh:
             json.dump(jsonable(check_json(rows)), fh, indent=2, allow_nan=False)
         print(f"check -> {args.json}")

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cell.cli.common import print_json
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 from cell.errors import InvalidInput
 from cell.log.table import ThrowTable
 from cell.params import ModelParams
@@ -60,7 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
             help=f"landing noise the residuals are weighed by: {text}",
         )  # fmt: skip
     p.add_argument("--plot", metavar="DIR", help="write reach-vs-stroke PNGs into DIR")
-    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_json_arg(p, "the results")
     p.set_defaults(func=run)
 
 
@@ -70,9 +70,6 @@ def run(args: argparse.Namespace) -> int:
     from cell.identify import IdentifyOptions, identify
     from cell.identify.report import (
         errors_by_object,
-        evidence_json,
-        evidence_lines,
-        format_table,
         heldout_split,
         predicted_landing,
     )
@@ -99,7 +96,11 @@ def run(args: argparse.Namespace) -> int:
         max_iter=args.max_iter, tol=args.tol, fit_objects=not args.ee_only, noise=_noise(args)
     )
     with tqdm(
-        total=args.max_iter, desc="identify", unit="it", disable=args.json or None, leave=False
+        total=args.max_iter,
+        desc="identify",
+        unit="it",
+        disable=json_to_stdout(args) or None,
+        leave=False,
     ) as bar:
 
         def progress(it: int, rmse: float) -> None:
@@ -109,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         result = identify(fit, start, options=opts, progress=progress)
     params = result.params
     where = (
-        f"{len(held)} held-out throws (a stratified {args.holdout:.0%} of each object's, "
+        f"{plural(len(held), 'held-out throw')} (a stratified {args.holdout:.0%} of each object's, "
         f"seed {args.seed}), not used in the fit"
         if len(held)
         else "the fitted throws themselves (--holdout 0: in-sample figures)"
@@ -121,53 +122,73 @@ def run(args: argparse.Namespace) -> int:
         f"{before[-1].landing_rmse_m:.4f} m -> {after[-1].landing_rmse_m:.4f} m"
     )
     params = replace(params, note=note)
-    save_params(params, args.output)
     n_fit: dict[str, int] = {}
     for oid in fit.text("object_id"):
         n_fit[oid] = n_fit.get(oid, 0) + 1
+    doc = _doc(args, table, source, result, held, before, after, params, n_fit)
+    if not json_to_stdout(args):  # the results are printed before any file is written
+        _print(table, source, result, where, before, after, params, start, n_fit)
+    save_params(params, args.output)
     plots = []
     if args.plot:
         plots = [str(p) for p in _plot(table, start, params, args.plot, np.asarray(held_idx))]
-    if args.json:
-        print_json(
-            {
-                "source": source,
-                "throws": len(table),
-                "fit_throws": result.n_throws,
-                "heldout_throws": int(len(held)),
-                "evaluated_on": "heldout" if len(held) else "fit",
-                "iterations": result.iterations,
-                "converged": result.converged,
-                "seconds": result.seconds,
-                "rmse_fit_start_m": result.rmse_start_m,
-                "rmse_fit_m": result.rmse_fit_m,
-                "objects": {
-                    b.object_id: {
-                        "n_fit": n_fit.get(b.object_id, result.n_throws),
-                        "n_eval": b.n,
-                        "reach_rmse_before_m": b.reach_rmse_m,
-                        "reach_rmse_after_m": a.reach_rmse_m,
-                        "landing_rmse_before_m": b.landing_rmse_m,
-                        "landing_rmse_after_m": a.landing_rmse_m,
-                    }
-                    for b, a in zip(before, after, strict=True)
-                },
-                **evidence_json(result),
-                "end_effector": params.ee.as_dict(),
-                "object_params": {
-                    k: {"mass_kg": o.mass, "size_m": list(o.size)}
-                    for k, o in params.objects.items()
-                },
-                "output": args.output,
-                "plots": plots,
-            }
-        )
+    doc["plots"] = plots
+    if json_to_stdout(args):  # after the plots, whose files it lists
+        print_json(doc)
         return 0
-    print(f"{source}: {len(table)} throws of {len(set(table.text('object_id')))} objects")
-    print(f"fitted on {result.n_throws} throws; errors below are on {where}")
+    print(f"wrote {args.output}")
+    for p in plots:
+        print(f"wrote {p}")
+    write_json(args, doc)
+    return 0
+
+
+def _doc(args, table, source, result, held, before, after, params, n_fit) -> dict:  # type: ignore[no-untyped-def,type-arg]
+    """The results as `--json` gives them."""
+    from cell.identify.report import evidence_json
+
+    return {
+        "source": source,
+        "throws": len(table),
+        "fit_throws": result.n_throws,
+        "heldout_throws": int(len(held)),
+        "evaluated_on": "heldout" if len(held) else "fit",
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "seconds": result.seconds,
+        "rmse_fit_start_m": result.rmse_start_m,
+        "rmse_fit_m": result.rmse_fit_m,
+        "objects": {
+            b.object_id: {
+                "n_fit": n_fit.get(b.object_id, result.n_throws),
+                "n_eval": b.n,
+                "reach_rmse_before_m": b.reach_rmse_m,
+                "reach_rmse_after_m": a.reach_rmse_m,
+                "landing_rmse_before_m": b.landing_rmse_m,
+                "landing_rmse_after_m": a.landing_rmse_m,
+            }
+            for b, a in zip(before, after, strict=True)
+        },
+        **evidence_json(result),
+        "end_effector": params.ee.as_dict(),
+        "object_params": {
+            k: {"mass_kg": o.mass, "size_m": list(o.size)} for k, o in params.objects.items()
+        },
+        "output": args.output,
+    }
+
+
+def _print(table, source, result, where, before, after, params, start, n_fit) -> None:  # type: ignore[no-untyped-def]
+    """The results as text."""
+    from cell.identify.report import evidence_lines, format_table
+
+    print(
+        f"{source}: {plural(len(table), 'throw')} of {plural(len(set(table.text('object_id'))), 'object')}"
+    )
+    print(f"fitted on {plural(result.n_throws, 'throw')}; errors below are on {where}")
     print(format_table(before, after, params, n_fit))
     print(
-        f"\n{result.iterations} iteration(s), "
+        f"\n{plural(result.iterations, 'iteration')}, "
         f"{'converged' if result.converged else 'stopped at --max-iter'} "
         f"({result.seconds:.1f} s); landing RMSE on the fitted throws "
         f"{result.rmse_start_m:.4f} -> {result.rmse_fit_m:.4f} m"
@@ -179,10 +200,6 @@ def run(args: argparse.Namespace) -> int:
             f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g} ± {half:.3g}"
         )
     print("\n".join(evidence_lines(result)))
-    print(f"wrote {args.output}")
-    for p in plots:
-        print(f"wrote {p}")
-    return 0
 
 
 def _noise(args: argparse.Namespace) -> NoiseModel:

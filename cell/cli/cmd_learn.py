@@ -6,8 +6,15 @@ import argparse
 import sys
 from typing import Any
 
-from cell.cli.common import print_json
-from cell.errors import InvalidInput
+from cell.cli.common import (
+    add_json_arg,
+    human,
+    json_to_stdout,
+    plural,
+    print_json,
+    write_json,
+)
+from cell.errors import CellError, InvalidInput
 from cell.log import read_throws_csv
 from cell.params import load_params
 from cell.residual.learners import LEARNERS
@@ -54,11 +61,30 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
     p.add_argument("--plot", metavar="PNG", help="write the Table 5.1 bar chart here")
-    p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_json_arg(p, "the table")
     from cell.parallel import add_campaign_args
 
     add_campaign_args(p)  # the round-robin's fits (learner x fold) on Ray
     p.set_defaults(func=run)
+
+
+MIN_THROWS = 20  # usable throws (and distinct ones in the log) a residual is learned from
+
+
+def _enough(data: Any, path: str) -> None:
+    """Refuse a log with fewer than MIN_THROWS usable throws, or of fewer than 2 objects.
+
+    Raises:
+        InvalidInput: naming the log, the counts and the minimums.
+    """
+    n = int(data.usable.sum())
+    objects = len(set(data.groups[data.usable].tolist()))
+    if n < MIN_THROWS or objects < 2:
+        raise InvalidInput(
+            f"{path}: learning the residual needs at least {MIN_THROWS} usable throws of at "
+            f"least 2 objects; this log has {plural(n, 'usable throw')} of "
+            f"{plural(objects, 'object')}"
+        )
 
 
 def _learners(text: str) -> tuple[str, ...]:
@@ -70,13 +96,11 @@ def _learners(text: str) -> tuple[str, ...]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from cell.residual.evaluate import round_robin, round_robin_folds
-    from cell.residual.model import train_residual, training_data
+    from cell.residual.model import training_data
 
     compare = _learners(args.compare)
     table = read_throws_csv(args.throws)
+    table.require_varied(MIN_THROWS, "learning the residual")
     mp = load_params(args.params)
     if mp.effects:
         raise InvalidInput(
@@ -86,16 +110,50 @@ def run(args: argparse.Namespace) -> int:
     data = training_data(table, mp.ee, objects=mp.objects if args.identified_objects else None)
     n_bad = int((~data.usable).sum())
     if n_bad:
+        why = {k: v for k, v in data.targets.excluded_counts().items() if v}
         print(
-            f"cell learn: {n_bad} of {len(table)} throws excluded (no observed landing, or "
-            f"observed reach outside the model's range): {data.targets.excluded_counts()}",
+            f"cell learn: {n_bad} of {plural(len(table), 'throw')} excluded (no observed "
+            f"landing, or observed reach outside the model's range): {human(why)}",
             file=sys.stderr,
         )
+    _enough(data, args.throws)
+    try:
+        summary, model = _fit(args, data, compare)
+    except CellError:
+        raise
+    except ValueError as exc:  # scikit-learn's refusal of a split too small to fit
+        raise InvalidInput(
+            f"{args.throws}: too few throws of some objects for the learners' "
+            f"cross-validation ({exc}); log more throws of each object"
+        ) from None
+    doc = {name: s.as_dict() for name, s in summary.items()}
+    if json_to_stdout(args):
+        print_json(doc)
+    else:
+        _print(args, summary, compare, model)
+    model.save(args.output)  # the results are printed before any file is written
+    if args.plot and summary:
+        from cell.residual.plot import plot_table51
+
+        plot_table51(summary, args.plot)
+    write_json(args, doc)
+    return 0
+
+
+def _fit(
+    args: argparse.Namespace, data: Any, compare: tuple[str, ...]
+) -> tuple[dict[str, Any], Any]:
+    """The round-robin table (when --compare names learners) and the learner to save."""
+    from tqdm import tqdm
+
+    from cell.residual.evaluate import round_robin, round_robin_folds
+    from cell.residual.model import train_residual
+
     summary: dict[str, Any] = {}
     if compare:
         ids = sorted(set(data.groups[data.usable].tolist()))
         n_fits = len(compare) * len(round_robin_folds(ids, hold_out=args.hold_out, seed=args.seed))
-        with tqdm(total=n_fits, desc="round-robin", disable=args.json or None) as bar:
+        with tqdm(total=n_fits, desc="round-robin", disable=json_to_stdout(args) or None) as bar:
 
             def step(text: str) -> None:
                 bar.set_postfix_str(text, refresh=False)
@@ -112,17 +170,17 @@ def run(args: argparse.Namespace) -> int:
                 address=args.ray_address,
             )
     model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
-    model.save(args.output)
-    if args.plot and summary:
-        from cell.residual.plot import plot_table51
+    return summary, model
 
-        plot_table51(summary, args.plot)
-    if args.json:
-        print_json({name: s.as_dict() for name, s in summary.items()})
-        return 0
+
+def _print(
+    args: argparse.Namespace, summary: dict[str, Any], compare: tuple[str, ...], model: Any
+) -> None:
+    """The Table 5.1 rows and the learner saved, as text."""
     if summary:
         print(
-            f"Table 5.1: hold out {args.hold_out} objects at a time ({len(summary[compare[0]].folds)} folds)"
+            f"Table 5.1: hold out {plural(args.hold_out, 'object')} at a time "
+            f"({plural(len(summary[compare[0]].folds), 'fold')})"
         )
         print(f"{'learner':8s} {'ΔL_s MSE [mm²]':>20s} {'held-out landing RMSE [m]':>28s}")
         for name, s in summary.items():
@@ -141,9 +199,8 @@ def run(args: argparse.Namespace) -> int:
             "The log shows no systematic ΔL_s this learner can predict."
         )
     print(
-        f"saved {model.learner} residual ({model.n_train} throws of "
-        f"{len(model.training_objects)} objects; "
+        f"saved {model.learner} residual ({plural(model.n_train, 'throw')} of "
+        f"{plural(len(model.training_objects), 'object')}; "
         + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
         + f") -> {args.output}"
     )
-    return 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from cell.cli.common import print_json
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     exp.add_argument("--session", metavar="ID", help="only this session's throws")
     exp.set_defaults(func=run_export)
     show = lsub.add_parser("show", help="counts per object, platform and session")
-    show.add_argument("--json", action="store_true", help="print the counts as JSON")
+    add_json_arg(show, "the counts")
     show.set_defaults(func=run_show)
     for sp in (imp, exp, show):  # --db also after the action; SUPPRESS keeps the parent's value
         sp.add_argument("--db", metavar="PATH", default=argparse.SUPPRESS, help="store file")
@@ -62,7 +62,8 @@ def run_import(args: argparse.Namespace) -> int:
         total = len(store)
         path = store.path
     print(
-        f"imported {n} throws ({len(tracks)} tracks) from {args.file} into {path}; {total} in all"
+        f"imported {plural(n, 'throw')} ({plural(len(tracks), 'track')}) from {args.file} "
+        f"into {path}; {total} in all"
     )
     return 0
 
@@ -85,7 +86,10 @@ def run_export(args: argparse.Namespace) -> int:
             for tid, arr in tracks.items():
                 for row in arr:
                     w.writerow([tid, *(repr(float(v)) for v in row)])
-    print(f"exported {len(table)} throws ({len(tracks)} tracks) from {path} to {args.output}")
+    print(
+        f"exported {plural(len(table), 'throw')} ({plural(len(tracks), 'track')}) from {path} "
+        f"to {args.output}"
+    )
     return 0
 
 
@@ -96,12 +100,14 @@ def run_show(args: argparse.Namespace) -> int:
     with ThrowStore(args.db, read_only=True) as store:
         counts = store.counts()
         path = store.path
-    if args.json:
-        print_json({"store": str(path), **counts})
+    doc = {"store": str(path), **counts}
+    if json_to_stdout(args):
+        print_json(doc)
         return 0
-    print(f"{path}: {counts['throws']} throws, {counts['tracks']} with a track")
+    print(f"{path}: {plural(counts['throws'], 'throw')}, {counts['tracks']} with a track")
     for key, title in (("object_id", "object"), ("platform", "platform"), ("session", "session")):
         print(f"\nper {title}:")
         for k, v in counts[key].items():
             print(f"  {k or '(none)':24s} {v:6d}")
+    write_json(args, doc)
     return 0

@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 import math
 
-from cell.cli.common import add_object_args, object_from_args, print_json
+from cell.cli.common import (
+    add_json_arg,
+    add_object_args,
+    json_to_stdout,
+    object_from_args,
+    print_json,
+    write_json,
+)
 from cell.errors import InvalidInput, InvalidParameter
 from cell.params import load_params
 
@@ -70,7 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="throw-axis elevation range [rad] (0 1.1345 = 0…65°)",
     )
     p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference values)")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    add_json_arg(p, "the plan")
     p.set_defaults(func=run)
 
 
@@ -113,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
-    if args.json:
+    if json_to_stdout(args):
         print_json(plan.as_dict())
         return 0
     d = plan.as_dict()
@@ -139,4 +146,5 @@ def run(args: argparse.Namespace) -> int:
     print(f"flight time   {plan.t_flight_s:.4f} s (from the start of the push)")
     print(f"stored energy {plan.energy_j:.4f} J (both band halves)")
     print(f"method        {plan.method}")
+    write_json(args, plan.as_dict())
     return 0

@@ -6,6 +6,7 @@ import argparse
 
 import numpy as np
 
+from cell.cli.common import plural
 from cell.errors import LogFormatError
 from cell.log import read_throws_csv, write_throws_csv
 from cell.model import predict_landing
@@ -75,5 +76,5 @@ def run(args: argparse.Namespace) -> int:
         {"pred_x_m": land.x, "pred_y_m": land.y, "pred_t_flight_s": land.t_flight}
     )
     write_throws_csv(out, args.output)
-    print(f"predicted {len(table)} throws -> {args.output}")
+    print(f"predicted {plural(len(table), 'throw')} -> {args.output}")
     return 0

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from cell.cli.common import add_axis_args, print_json
+from cell.cli.common import add_axis_args, add_json_arg, json_to_stdout, print_json, write_json
 from cell.kinds import ROBOTS
 
 
@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="Q",
         help="current configuration [rad] (default: home)",
     )
-    p.add_argument("--json", action="store_true", help="print JSON")
+    add_json_arg(p, "the solution")
     p.set_defaults(func=run)
 
 
@@ -51,6 +51,13 @@ def run(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     q0 = robot.home if args.q_from is None else np.asarray(args.q_from, dtype=float)
+    if len(q0) != len(robot.home):
+        from cell.errors import InvalidInput
+
+        raise InvalidInput(
+            f"--from: {len(q0)} joint values given; the {args.robot} has {len(robot.home)} "
+            "joints: give one angle [rad] for each"
+        )
     pose = ReleasePose.from_angles(tuple(args.at), args.elevation, args.azimuth, args.roll)
     res = solve_ik(robot, pose, q0)
     t_move = move_time(q0, res.q, robot)
@@ -63,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         "move_time_s": t_move,
         "from_q": q0,
     }
-    if args.json:
+    if json_to_stdout(args):
         print_json(out)
         return 0
     print(f"robot           {args.robot}")
@@ -75,4 +82,5 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"move time       {t_move:.3f} s (jerk-limited, from {'home' if args.q_from is None else 'the given q'})"
     )
+    write_json(args, out)
     return 0

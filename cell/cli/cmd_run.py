@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 from typing import Any
 
-from cell.cli.common import to_jsonable
+from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 from cell.jobs import ORDERS, load_job
 from cell.kinds import EE_BACKENDS, PICKS, RELEASES
 
@@ -18,7 +17,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a sort job (YAML) in the cell")
     p.add_argument("job", help="job file, e.g. tasks/bins.yaml")
     p.add_argument("--gui", action="store_true", help="show the PyBullet GUI")
-    p.add_argument("--json", metavar="OUT.json", help="write the summary as JSON")
+    add_json_arg(p, "the summary")  # --json PATH writes it after the table, as before
+    p.add_argument(
+        "-q",
+        "--quiet",
+        action="store_true",
+        help="no line per item as it finishes (on standard error)",
+    )
     p.add_argument("--snapshot", metavar="OUT.png", help="render the scene at the end (headless)")
     p.add_argument(
         "--db", metavar="PATH", help="throw-log store (default: $CELL_LOG_DB or cell_log.sqlite)"
@@ -35,6 +40,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--emulate", action="store_true", help="drive an emulated Dynamixel bus (no hardware)"
     )
     p.add_argument("--record", metavar="RUN.rrd", help="write a Rerun recording (cell[record])")
+    _add_arm_args(p)
+    p.add_argument(
+        "--learn",
+        action="store_true",
+        help="learn from the throws: before the run, refit each of the job's objects' "
+        "effective mass and extents from its earlier sort throws in the --db store (the "
+        "parameter file is not changed); during it, correct each aim from the landings "
+        "so far (arm platform)",
+    )
+    p.add_argument(
+        "--learn-save",
+        metavar="EE.yaml",
+        help="with --learn: write the parameters this run plans with (the file's, with the "
+        "refitted objects) to this new file (never the input parameter file)",
+    )
+    p.add_argument(
+        "--speed-scale",
+        type=float,
+        default=1.0,
+        help="fraction of the arm's joint velocity and acceleration limits its moves use, "
+        "in (0, 1] (1; a carry goes slower where the grip needs it)",
+    )
+    p.set_defaults(func=run)
+
+
+def _add_arm_args(p: argparse.ArgumentParser) -> None:
+    """The options of the arm platform: pick, release, turn, cycle search, order."""
     p.add_argument(
         "--pick",
         choices=PICKS,
@@ -75,28 +107,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         "default), or each bin's items one after another (bins: the items all at hand, as in "
         "a tote; its figures: docs/figures.md)",
     )
-    p.add_argument(
-        "--learn",
-        action="store_true",
-        help="learn from the throws: before the run, refit each of the job's objects' "
-        "effective mass and extents from its earlier sort throws in the --db store (the "
-        "parameter file is not changed); during it, correct each aim from the landings "
-        "so far (arm platform)",
-    )
-    p.add_argument(
-        "--learn-save",
-        metavar="EE.yaml",
-        help="with --learn: write the parameters this run plans with (the file's, with the "
-        "refitted objects) to this new file (never the input parameter file)",
-    )
-    p.add_argument(
-        "--speed-scale",
-        type=float,
-        default=1.0,
-        help="fraction of the arm's joint velocity and acceleration limits its moves use, "
-        "in (0, 1] (1; a carry goes slower where the grip needs it)",
-    )
-    p.set_defaults(func=run)
 
 
 def _store(args: argparse.Namespace):  # type: ignore[no-untyped-def]
@@ -123,34 +133,23 @@ EXIT_HARDWARE_FAULT = 3  # the end-effector failed mid-run: stopped safely, torq
 EXIT_NOTHING_SORTED = 4  # the run ended with no item in its target bin
 
 
-def run(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
+def _item_line(r: Any, k: int, n: int) -> str:
+    """One finished item as a line: what happened to it, where it landed, how long it took."""
+    where = f"in {r.bin_id}" if r.bin_id else "in no bin"
+    how = "in its bin" if r.in_bin else (r.failure or "not in its bin")
+    t = f", {r.cycle_time_s:.1f} s" if math.isfinite(r.cycle_time_s) else ""
+    return (
+        f"[{k}/{n}] item {r.index} {r.object_id}: {r.action} to {r.target_bin}, {where} ({how}{t})"
+    )
 
-    from cell.errors import HardwareError, InvalidInput
+
+def _runner(
+    args: argparse.Namespace, job: Any, hardware: Any, params: Any, rec: Any, store: Any
+) -> Any:
+    """The orchestrator of the job's platform (the arm's, or a drone's or mobile base's)."""
+    from cell.errors import InvalidInput
     from cell.orchestrator import Orchestrator
 
-    job = load_job(args.job)
-    if not 0.0 < args.speed_scale <= 1.0:
-        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
-    kind = args.ee or job.ee
-    if args.emulate and kind != "dynamixel":
-        raise InvalidInput(
-            f"--emulate drives an emulated Dynamixel bus; this run's end-effector is {kind!r}: "
-            "add --ee dynamixel (or set ee: dynamixel in the job)"
-        )
-    hardware = None
-    if kind == "dynamixel":
-        from cell.endeffector.factory import make_end_effector
-
-        cfg = args.ee_config or job.ee_config or None
-        hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
-    if args.learn_save and not args.learn:
-        raise InvalidInput("--learn-save writes what --learn refits: add --learn")
-    params = None
-    if args.learn and job.platform == "arm":
-        params = _refit(args, job)
-    rec = _recorder(args, job)
-    store = _store(args)
     orch: Any
     if job.platform != "arm":
         from cell.platforms.runner import PlatformRunner
@@ -182,48 +181,81 @@ def run(args: argparse.Namespace) -> int:
             cycle_search=args.cycle_search,
             order=args.order,
         )
-    bar = tqdm(
-        total=len(job.expanded_items(args.order)),
-        desc=f"sorting {Path(args.job).name}",
-        unit="item",
-        file=sys.stderr,
-        disable=None,
-    )
+    return orch
+
+
+def run(args: argparse.Namespace) -> int:
+    from cell.errors import HardwareError, InvalidInput
+
+    job = load_job(args.job)
+    if not 0.0 < args.speed_scale <= 1.0:
+        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
+    kind = args.ee or job.ee
+    if args.emulate and kind != "dynamixel":
+        raise InvalidInput(
+            f"--emulate drives an emulated Dynamixel bus; this run's end-effector is {kind!r}: "
+            "add --ee dynamixel (or set ee: dynamixel in the job)"
+        )
+    hardware = None
+    if kind == "dynamixel":
+        from cell.endeffector.factory import make_end_effector
+
+        cfg = args.ee_config or job.ee_config or None
+        hardware = make_end_effector("dynamixel", cfg, port=args.port, emulate=args.emulate)
+    if args.learn_save and not args.learn:
+        raise InvalidInput("--learn-save writes what --learn refits: add --learn")
+    params = None
+    if args.learn and job.platform == "arm":
+        params = _refit(args, job)
+    rec = _recorder(args, job)
+    store = _store(args)
+    orch = _runner(args, job, hardware, params, rec, store)
+    total = len(job.expanded_items(args.order))
+    image = None
     try:
-        done: list[object] = []  # items finished (the bar does not count when disabled)
+        done: list[object] = []  # items finished
 
         def progress(r):  # type: ignore[no-untyped-def]
             done.append(r)
-            bar.update(1)
-            bar.set_postfix_str(f"{r.object_id}: {r.action} -> {r.bin_id or '-'}")
+            if not args.quiet:  # a line per item, on a terminal or not; stdout is the table
+                print(_item_line(r, len(done), total), file=sys.stderr, flush=True)
 
         try:
             summary = orch.run(progress)
         except HardwareError as exc:
             orch.close()  # torque off on the servos before anything else
-            kept = f"; {len(store)} throws kept in {store.path}" if store is not None else ""
+            kept = (
+                f"; {plural(len(store), 'throw')} kept in {store.path}" if store is not None else ""
+            )
             print(
                 f"cell: hardware fault: {type(exc).__name__}: {exc}\n"
-                f"cell: the run stopped after {len(done)} of {len(job.expanded_items())} items with the servos' "
+                f"cell: the run stopped after {len(done)} of {plural(total, 'item')} with the servos' "
                 f"torque off{kept}",
                 file=sys.stderr,
             )
             return EXIT_HARDWARE_FAULT
-        if args.snapshot:
-            orch.scene.snapshot(args.snapshot)
+        if args.snapshot:  # rendered now, written after the results are printed
+            from cell.sim.snapshot import render
+
+            image = render(orch.scene.client)
         if rec is not None:
             rec.finish(summary)
     finally:
-        bar.close()
         if rec is not None:
             rec.close()
         orch.close()
         if store is not None:
             store.close()
-    _table(summary, job.path, store)
-    if args.json:
-        d = summary.as_dict()
-        Path(args.json).write_text(json.dumps(to_jsonable(d), indent=2))
+    if json_to_stdout(args):
+        print_json(summary.as_dict())
+    else:
+        _table(summary, job.path, store)
+    if image is not None:
+        from cell.sim.snapshot import save_png
+
+        save_png(image, args.snapshot)
+    if not json_to_stdout(args):
+        write_json(args, summary.as_dict())
     if summary.items and not summary.in_bin:
         print("cell run: no item came to rest in its target bin", file=sys.stderr)
         return EXIT_NOTHING_SORTED
@@ -284,8 +316,8 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
                 params, report = refit_objects(found.table, params)
                 n = sum(r.throws for r in report.refitted)
                 print(
-                    f"{say} refitted {len(report.refitted)} object(s) from {n} earlier "
-                    f"throw(s) in {path} (η_ee kept from {source}):",
+                    f"{say} refitted {plural(len(report.refitted), 'object')} from "
+                    f"{plural(n, 'earlier throw')} in {path} (η_ee kept from {source}):",
                     file=sys.stderr,
                 )
                 for r in report.objects:
@@ -293,7 +325,7 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
             if found.left_out:
                 print(
                     f"{say} left out: "
-                    + "; ".join(f"{n} row(s): {why}" for why, n in found.left_out.items()),
+                    + "; ".join(f"{plural(n, 'row')}: {why}" for why, n in found.left_out.items()),
                     file=sys.stderr,
                 )
         except (CellError, sqlite3.Error, ValueError) as exc:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import math
 
+from cell.cli.common import add_json_arg, json_to_stdout, print_json, write_json
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("study", help="case studies against the thesis' experiments")
@@ -14,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="Table 5.2: reach from the arm and from the drone at 4 rotor speeds, "
         "with the downwash law fitted to the drone means",
     )
-    r.add_argument("--json", action="store_true", help="print the rows as JSON (a list of objects)")
+    add_json_arg(r, "the rows (a list of objects)")
     r.add_argument("--plot", metavar="FILE.png", help="write the plot (thesis vs fitted laws)")
     r.add_argument(
         "--arm-height",
@@ -34,15 +36,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cell.cli.common import print_json
     from cell.study.repeatability import StudySetup, plot_study, run_study
 
     setup = StudySetup(arm_height_m=args.arm_height, elevation_rad=args.elevation)
     study = run_study(setup)
-    if args.plot:
-        plot_study(study, args.plot)
-    if args.json:
+    if json_to_stdout(args):
         print_json(study.as_rows())
+        if args.plot:
+            plot_study(study, args.plot)
         return 0
     print(
         f"Repeatability (thesis §5.3.1, Table 5.2): cube50 at stroke {study.stroke_m * 1000:.2f} mm, "
@@ -71,5 +72,7 @@ def run(args: argparse.Namespace) -> int:
         )
     print(study.verdict)
     if args.plot:
+        plot_study(study, args.plot)
         print(f"plot: {args.plot}")
+    write_json(args, study.as_rows())
     return 0

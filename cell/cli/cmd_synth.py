@@ -67,6 +67,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from cell.cli.common import plural
     from cell.log import ThrowStore, write_throws_csv
     from cell.params import load_params, save_params
     from cell.synth import Campaign, NoiseModel, default_world, draw_campaign, world_from_params
@@ -88,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
     table = draw_campaign(world, campaign, seed=args.seed)
     write_throws_csv(table, args.output)
     print(
-        f"drew {len(table)} throws of {len(campaign.objects)} objects (seed {args.seed}) -> {args.output}"
+        f"drew {plural(len(table), 'throw')} of {plural(len(campaign.objects), 'object')} "
+        f"(seed {args.seed}) -> {args.output}"
     )
     if args.save_world:
         save_params(
@@ -101,5 +103,5 @@ def run(args: argparse.Namespace) -> int:
     if args.db is not None:
         with ThrowStore(args.db or None) as store:
             store.import_table(table)
-            print(f"appended {len(table)} throws to {store.path}")
+            print(f"appended {plural(len(table), 'throw')} to {store.path}")
     return 0

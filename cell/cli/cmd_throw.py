@@ -7,7 +7,15 @@ import argparse
 import numpy as np
 
 from cell.catalogue import catalogue
-from cell.cli.common import add_axis_args, add_object_args, object_from_args, print_json
+from cell.cli.common import (
+    add_axis_args,
+    add_json_arg,
+    add_object_args,
+    json_to_stdout,
+    object_from_args,
+    print_json,
+    write_json,
+)
 from cell.model import ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
@@ -40,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--land-z", type=float, default=0.0, metavar="M", help="landing plane height [m]"
     )
     p.add_argument("--params", metavar="EE.yaml", help="parameter file (default: reference values)")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    add_json_arg(p, "the prediction")
     p.set_defaults(func=run)
 
 
@@ -79,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         "grip_force_n": float(band.grip),
         "stored_energy_j": float(band.energy),
     }
-    if args.json:
+    if json_to_stdout(args):
         print_json(out)
         return 0
     print(f"object        {out['object']}  ({obj.mass:.3f} kg, {obj.shape})")
@@ -94,4 +102,5 @@ def run(args: argparse.Namespace) -> int:
         f"{out['push_force_n']:.3f} N, grip f_g = {out['grip_force_n']:.3f} N"
     )
     print(f"stored energy {out['stored_energy_j']:.4f} J (both band halves)")
+    write_json(args, out)
     return 0

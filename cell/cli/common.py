@@ -19,12 +19,17 @@ from cell.parallel import add_campaign_args  # --workers N, --ray-address ADDR
 
 __all__ = [
     "add_axis_args",
+    "add_json_arg",
     "add_campaign_args",
     "add_object_args",
     "check_output_path",
+    "human",
+    "json_to_stdout",
     "object_from_args",
+    "plural",
     "print_json",
     "to_jsonable",
+    "write_json",
 ]
 
 
@@ -104,8 +109,61 @@ def print_json(obj: Any) -> None:
     sys.stdout.write("\n")
 
 
+def add_json_arg(p: argparse.ArgumentParser, what: str = "the result") -> None:
+    """--json [PATH]: `--json` or `--json -` prints `what` as JSON on standard output instead of
+    the text; `--json PATH` prints the text and then writes the JSON to PATH."""
+    p.add_argument(
+        "--json",
+        nargs="?",
+        const="-",
+        metavar="PATH",
+        help=f"{what} as JSON: on standard output instead of the text (--json or --json -), "
+        "or written to PATH, a name ending in .json, after the text is printed (--json PATH)",
+    )
+
+
+def json_to_stdout(args: argparse.Namespace) -> bool:
+    """True when --json asks for JSON on standard output (bare `--json` or `--json -`)."""
+    return getattr(args, "json", None) == "-"
+
+
+def write_json(args: argparse.Namespace, obj: Any) -> None:
+    """The JSON of `obj` into the file --json names (written whole, then moved into place);
+    nothing when --json was not given or is standard output (`print_json` prints that)."""
+    target = getattr(args, "json", None)
+    if not target or target == "-":
+        return
+    text = json.dumps(to_jsonable(obj), indent=2) + "\n"
+    out = Path(target)
+    tmp = out.with_name(out.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(out)
+
+
+def plural(n: int, word: str, words: str | None = None) -> str:
+    """`n` and the word as a person writes them: "1 object", "3 objects", "0 objects"."""
+    return f"{n} {word if n == 1 else (words or word + 's')}"
+
+
+def human(v: Any) -> str:
+    """A value as a person writes it: a dict as "a 2, b 3" ("none" when empty), a list joined
+    by commas, a float to 4 significant figures; no raw Python reprs."""
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {human(x)}" for k, x in v.items()) or "none"
+    if isinstance(v, (list, tuple)):
+        return ", ".join(human(x) for x in v) or "none"
+    if isinstance(v, (float, np.floating)):
+        f = float(v)
+        return "n/a" if not math.isfinite(f) else f"{f:.4g}"
+    return str(v)
+
+
 def check_output_path(path: str | Path, flag: str) -> Path:
     """Check, before any work starts, that a result can be written to `path`.
+
+    The check writes nothing that stays: a file that does not exist yet is created and
+    removed again (the only test that holds for every user and file system, /proc included);
+    one that exists is opened for appending, which does not change it.
 
     Args:
         path: the output file the user named.
@@ -115,14 +173,37 @@ def check_output_path(path: str | Path, flag: str) -> Path:
         The path.
 
     Raises:
-        InvalidInput: the path is a folder, its folder does not exist, or is not writable.
+        InvalidInput: the path is too long, a folder, a device or FIFO (but /dev/null), its
+            folder does not exist, or it cannot be written.
     """
+    import stat
+
+    from cell.infile import check_path_length, kind_of
+
+    check_path_length(path, flag)
     p = Path(path)
-    if p.is_dir():
+    try:
+        st: os.stat_result | None = os.stat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise InvalidInput(f"{flag} {p}: cannot be written ({exc.strerror})") from None
+    if st is not None and stat.S_ISDIR(st.st_mode):
         raise InvalidInput(f"{flag} {p}: is a folder; give a file name")
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        if os.path.samefile(p, os.devnull):
+            return p
+        raise InvalidInput(f"{flag} {p}: is {kind_of(st.st_mode)}; give a file name")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise InvalidInput(f"{flag} {p}: the folder {parent} does not exist; create it first")
-    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise InvalidInput(f"{flag} {p}: not writable here")
+    try:
+        if st is None:
+            fd = os.open(p, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            os.close(fd)
+            os.unlink(p)
+        else:
+            os.close(os.open(p, os.O_WRONLY | os.O_APPEND))
+    except OSError as exc:
+        raise InvalidInput(f"{flag} {p}: cannot be written here ({exc.strerror})") from None
     return p

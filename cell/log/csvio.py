@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import csv
 import math
-import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cell.errors import LogFormatError
+from cell.errors import InvalidInput, LogFormatError
+from cell.infile import check_input_file
 from cell.log.table import (
     NUMERIC_COLUMNS,
     PLATFORMS,
@@ -59,19 +59,14 @@ MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is r
 
 
 def _readable(path: str | Path) -> str:
-    """Check that `path` is a file this process can read, of a bounded size, before opening it."""
+    """Check that `path` is a regular file this process can read, of a bounded size, before
+    opening it (a folder, a device such as /dev/zero or a FIFO is refused by name, unopened)."""
     p = str(path)
-    f = Path(p)
-    if not f.exists():
-        raise LogFormatError(p, None, None, "no such file")
-    if f.is_dir():
-        raise LogFormatError(p, None, None, "is a folder; give a CSV file")
-    if not os.access(f, os.R_OK):
-        raise LogFormatError(p, None, None, "is not readable (permission denied)")
-    if f.stat().st_size > MAX_CSV_BYTES:
-        raise LogFormatError(
-            p, None, None, f"is {f.stat().st_size} bytes; at most {MAX_CSV_BYTES} are read"
-        )
+    try:
+        check_input_file(p, "file", MAX_CSV_BYTES)
+    except InvalidInput as exc:
+        text = str(exc)
+        raise LogFormatError(p, None, None, text.removeprefix(f"{p}: ")) from None
     return p
 
 

@@ -29,6 +29,7 @@ from urllib.parse import quote
 import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
+from cell.infile import check_input_file, check_path_length
 from cell.log.table import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
 
 __all__ = ["DEFAULT_DB", "ThrowStore", "default_db_path"]
@@ -38,6 +39,7 @@ log = logging.getLogger(__name__)
 DEFAULT_DB = "cell_log.sqlite"
 _ENV = "CELL_LOG_DB"
 _SCHEMA_VERSION = "1"
+MAX_STORE_BYTES = 16 * 1024**3  # [B] ~70 million throws; a larger file is refused unopened
 APPLICATION_ID = 0x43454C4C  # "CELL" in the SQLite header: marks a throw-log store
 OPTIONAL_TEXT = ("mesh", "session")
 OPTIONAL_NUM = ("time_s", "t_flight_s")
@@ -97,8 +99,11 @@ class ThrowStore:
     def __init__(self, path: str | Path | None = None, *, read_only: bool = False) -> None:
         self.path = default_db_path(path)
         self.read_only = read_only
+        check_path_length(self.path, "--db")
         if self.path.is_dir():
             raise InvalidInput(f"{self.path}: is a folder; give a throw-log store file (--db PATH)")
+        if self.path.exists():  # a regular file (never a device or FIFO), opened unread
+            check_input_file(self.path, "throw-log store (SQLite)", MAX_STORE_BYTES)
         if self.path.exists() and self.path.stat().st_size > 0:
             self._conn = self._open_existing()
             if read_only:
@@ -129,6 +134,11 @@ class ThrowStore:
         Nothing is written to a file that is not one (no tables, no journal mode change).
         """
         uri = "file:" + quote(str(self.path.resolve())) + "?mode=ro"
+        if not Path(str(self.path) + "-wal").exists():
+            # no writer has it open (a store in WAL mode has a -wal file while one does): read
+            # the file as it is, so a read leaves no -wal/-shm file behind (a read-only
+            # connection cannot remove the ones it creates)
+            uri += "&immutable=1"
         try:
             conn = sqlite3.connect(uri, uri=True, isolation_level=None, timeout=30.0)
             app_id = conn.execute("PRAGMA application_id").fetchone()[0]

@@ -127,6 +127,12 @@ class EndEffectorParams:
                 numbers[k] = float(v)
             except (TypeError, ValueError):
                 raise InvalidParameter(f"{where}.{k}: {v!r} is not a number") from None
+            bound, unit = _FILE_BOUNDS.get(k, (1e9, ""))
+            if math.isfinite(numbers[k]) and abs(numbers[k]) > bound:
+                raise InvalidParameter(
+                    f"{where}.{k}: {numbers[k]:g}{unit} is an absurd magnitude; a value "
+                    f"within ±{bound:g}{unit} is valid"
+                )
         try:
             return replace(cls(), **numbers)
         except (TypeError, ValueError) as exc:
@@ -137,5 +143,13 @@ class EndEffectorParams:
     # Parameters stage 1 of identification may change (thesis Algorithm 1).
     IDENTIFIABLE = ("Ke3", "Ke2", "Ke1", "C", "r_r", "l1", "phi", "dt")
 
+
+# The largest magnitude a parameter file may give (typos like 1e300, not physics: the
+# constructor's own checks say what is physical); stiffnesses and others up to 1e9.
+_FILE_BOUNDS = {
+    **{k: (10.0, " m") for k in ("r_r", "l1", "d", "L_t", "L0", "stroke_min", "stroke_max", "L_e")},
+    "dt": (10.0, " s"),
+    "C": (1e6, " N"),
+}
 
 DEFAULT_EE = EndEffectorParams()

@@ -12,9 +12,12 @@ from pathlib import Path
 from typing import Any
 
 from cell.errors import InvalidInput
+from cell.infile import check_input_file
 from cell.record.stream import import_rerun
 
 __all__ = ["read_rows", "entities"]
+
+MAX_RECORDING_BYTES = 4 * 1024**3  # [B] read whole into memory: larger is refused unread
 
 
 def read_rows(path: str | Path) -> dict[str, list[dict[str, Any]]]:
@@ -30,9 +33,7 @@ def read_rows(path: str | Path) -> dict[str, list[dict[str, Any]]]:
     import pyarrow as pa
     from rerun.chunk import RrdReader
 
-    p = Path(path)
-    if not p.is_file():
-        raise InvalidInput(f"{path}: no such recording")
+    p = check_input_file(path, "recording", MAX_RECORDING_BYTES)  # a regular file, bounded
     try:
         chunks = list(RrdReader(p).stream())
     except (ValueError, OSError, RuntimeError) as exc:  # Rerun reports a bad file so

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput, InvalidParameter
+from cell.infile import check_input_file
 from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
@@ -144,13 +145,7 @@ class ResidualModel:
         import sklearn
         import skops.io as sio
 
-        p = Path(path)
-        if not p.is_file():
-            raise InvalidInput(f"{p}: no such residual model file")
-        if p.stat().st_size > MAX_MODEL_BYTES:
-            raise InvalidInput(
-                f"{p}: {p.stat().st_size} bytes; a residual model is at most {MAX_MODEL_BYTES}"
-            )
+        p = check_input_file(path, "residual model file", MAX_MODEL_BYTES)
         not_ours = f"{p}: not a residual model file (expected one written by `cell learn`"
         try:
             untrusted = set(sio.get_untrusted_types(file=p))
