@@ -21,6 +21,7 @@ MIN_SPAN_S = 0.1  # [s] a shorter track does not show gravity
 MIN_TRAVEL_M = 0.02  # [m] a track that moves less is not a flight
 MAX_GAP_SHARE = 0.5  # a gap longer than this share of the span leaves the flight unseen
 MAX_SAMPLES = 200_000  # samples per track read at most
+UP_CURVE_G = 0.3  # a free flight's height never bends upward (drag stays under gravity)
 
 
 @dataclass(frozen=True)
@@ -92,11 +93,13 @@ def _unusable(arr: np.ndarray) -> str | None:
     gap = float(np.max(np.diff(arr[:, 0])))
     if gap > MAX_GAP_SHARE * span:
         return f"a gap of {gap:.2f} s in a track of {span:.2f} s: the flight is not seen"
-    z = arr[:, 3]
     t = arr[:, 0] - arr[0, 0]
-    curve = float(np.polyfit(t, z, 2)[0]) if k >= 3 else 0.0
-    if float(np.max(np.maximum.accumulate(z) - z)) < 2e-3 and curve >= 0:
-        return "no descent: the height never falls and its path bends upward (is z up?)"
+    z_acc = 2.0 * float(np.polynomial.polynomial.polyfit(t, arr[:, 3], 2)[2])
+    if z_acc > UP_CURVE_G * 9.80665:
+        return (
+            f"no descent under gravity: the height's path bends upward ({z_acc:+.1f} m/s²); "
+            "is z up, and is this a free flight?"
+        )
     return None
 
 
