@@ -1,8 +1,9 @@
 """The launch state of each tracked throw, from its whole track with drag in the dynamics.
 
 The track is fitted by the flight integrated with quadratic drag (`cell.gap.track_ode`,
-model "accel": start position and velocity and a free constant acceleration besides
-gravity and drag, so that any steady flight effect and a tracker's scale show as such).
+model "accel_drag": start position and velocity, a free constant acceleration besides
+gravity and drag, so that any steady flight effect and a tracker's scale show as such,
+and the drag's scale over the configured C_d where the track identifies it).
 The first samples after a release may still be disturbed (contact with the launcher, the
 tracker's lock): a fit to the samples after DISTURBED_S gives the scatter σ of the rest;
 the leading run of samples off that fit by more than DROP_SIGMA σ is dropped (and the
@@ -87,7 +88,8 @@ def whole_track_launch(tracks: list[np.ndarray], k: np.ndarray) -> dict[str, np.
     Returns:
         {"t0": time of the first kept sample [s], "p0" [m], "v0" [m/s] there, "a0": the
         constant acceleration besides gravity and drag [m/s²], "g_ratio": apparent gravity
-        / G (NaN: kept span under 0.1 s), "dropped": leading samples dropped, "sigma": the
+        / G (NaN: kept span under 0.1 s), "drag_ratio": the drag over the configured one,
+        "dropped": leading samples dropped, "sigma": the
         fit's scatter [m], "theta": the fitted flight (`track_ode`), "rms_m": RMS residual
         of the final fit [m]}.
     """
@@ -100,7 +102,7 @@ def whole_track_launch(tracks: list[np.ndarray], k: np.ndarray) -> dict[str, np.
                 "theta": np.zeros((0, 12)), "rms_m": z}  # fmt: skip
     drops, sigma = _drops(tracks, k)
     tau, pos = pad_tracks(tracks, drops)
-    fit = fit_ode(tau, pos, k, "accel", _start_guess(tau, pos))
+    fit = fit_ode(tau, pos, k, "accel_drag", _start_guess(tau, pos))
     t0 = np.array([tr[d, 0] for tr, d in zip(tracks, drops, strict=True)])
     span = np.array([tr[-1, 0] - tr[d, 0] for tr, d in zip(tracks, drops, strict=True)])
     g_ratio = np.where(span >= MIN_G_SPAN_S, 1.0 - fit.theta[:, 8] / G, np.nan)
@@ -114,4 +116,5 @@ def whole_track_launch(tracks: list[np.ndarray], k: np.ndarray) -> dict[str, np.
         "sigma": sigma,
         "theta": fit.theta,
         "rms_m": np.sqrt(fit.ssr / np.maximum(fit.m, 1)),
+        "drag_ratio": np.exp(fit.theta[:, 9]),
     }

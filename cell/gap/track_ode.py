@@ -12,7 +12,8 @@ on a light object's flight drag changes the velocity itself. The parameters are
     θ = (p0 [m] ×3, v0 [m/s] ×3, a [m/s²] ×3, λ [-], w_x, w_y [m/s])
 
 and a model frees a subset of them (`MODELS`): "accel" (a free constant acceleration, the
-apparent gravity is G - a_z), "scale" (a vertical acceleration and the drag scale λ free:
+apparent gravity is G - a_z), "accel_drag" (that and the drag scale λ: the launch
+state of a track whose drag the configured C_d may miss), "scale" (a vertical acceleration and the drag scale λ free:
 what a tracker off in scale s shows, g' = s·G and k' = k/s, bending nothing sideways),
 "wind" (a steady horizontal wind, gravity and drag nominal: a wind bends the path
 sideways), "nominal" (the start state alone), "drag" (the drag scale alone: where the
@@ -34,6 +35,7 @@ STEP_S = 0.004  # [s] RK4 grid
 N_THETA = 12
 MODELS: dict[str, tuple[int, ...]] = {
     "accel": (0, 1, 2, 3, 4, 5, 6, 7, 8),
+    "accel_drag": (0, 1, 2, 3, 4, 5, 6, 7, 8, 9),
     "scale": (0, 1, 2, 3, 4, 5, 8, 9),
     "wind": (0, 1, 2, 3, 4, 5, 10, 11),
     "nominal": (0, 1, 2, 3, 4, 5),

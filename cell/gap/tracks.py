@@ -65,6 +65,8 @@ class TrackFit:
         theta: the whole track's flight fitted with drag (`cell.gap.track_ode`, model
             "accel"), shape (n, 12).
         rms_m: the RMS residual of that fit [m], shape (n,).
+        drag_ratio: the drag that fit finds over the configured one, shape (n,) (1 where
+            the track does not identify it).
         unusable: the tracks the fit could not use, [{"throw_id", "why"}].
         mended: what was mended in the tracks used, [{"throw_id", "note"}].
     """
@@ -83,6 +85,7 @@ class TrackFit:
     samples: list[np.ndarray | None]
     theta: np.ndarray
     rms_m: np.ndarray
+    drag_ratio: np.ndarray
     unusable: tuple[dict[str, str], ...] = ()
     mended: tuple[dict[str, str], ...] = ()
 
@@ -121,6 +124,7 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
         "halves": np.full((2, 6, n, 3), np.nan),
         "theta": np.full((n, 12), np.nan),
         "rms_m": np.full(n, np.nan),
+        "drag_ratio": np.full(n, np.nan),
     }
     usable, bad, mended = check_tracks(list(throw_ids), tracks)
     samples: list[np.ndarray | None] = [usable.get(t) for t in throw_ids]
@@ -137,7 +141,7 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             hv = halves(tr, float(k[i]), drop)
             end = end_state(tr, float(k[i]))
             row = {key: wl[key][j] for key in ("t0", "p0", "v0", "a0", "g_ratio", "dropped",
-                                               "theta", "rms_m")}  # fmt: skip
+                                               "theta", "rms_m", "drag_ratio")}  # fmt: skip
             if len(_CACHE) >= _CACHE_MAX:
                 _CACHE.clear()
             _CACHE[_key(throw_ids[i], tr, float(k[i]))] = (row, hv, end)
@@ -367,6 +371,11 @@ def _evidence(r: dict[str, Any]) -> str:
         f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, spread over "
         f"objects {r['g_ratio_object_spread']:.3f})"
     )
+    if np.isfinite(r.get("drag_ratio", float("nan"))):
+        parts.append(
+            f"the whole tracks, integrated with drag, fit within {r['track_fit_rms_m'] * 1000:.1f}"
+            f" mm with a drag {r['drag_ratio']:.2f} × the configured C_d's"
+        )
     side = r.get("sideways")
     if side:
         parts.append(
@@ -458,6 +467,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "bend_z": bend_z,
         "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
         "track_fit_rms_m": float(np.median(fit.rms_m[idx])),
+        "drag_ratio": float(np.median(fit.drag_ratio[idx])),
         "sideways": side,
     }
     ev = _evidence(figures) if finite else "no phase share could be computed from the tracks"
