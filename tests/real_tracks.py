@@ -85,3 +85,34 @@ def write_log(rows: list[dict], tracks: dict[str, np.ndarray], folder: Path) -> 
             for s in tr:
                 w2.writerow([tid, f"{s[0]:.6f}", f"{s[1]:.5f}", f"{s[2]:.5f}", f"{s[3]:.5f}"])
     return tp, kp
+
+
+TT_RATE_HZ = 120.0  # not given by the source; the rate the flights imply (README)
+TT_BALL_MASS_KG = 0.0027  # a regulation 40 mm table-tennis ball
+TT_BALL_DIAMETER_M = 0.040
+
+
+def _first_bounce(z: np.ndarray) -> int:
+    """Index of the first local minimum of the height followed by a rise of over 1 cm
+    below 0.15 m (a bounce on the table), or len(z)."""
+    for j in range(2, len(z) - 3):
+        if z[j] <= z[j - 1] and z[j] <= z[j + 1] and z[j + 3] - z[j] > 0.01 and z[j] < 0.15:
+            return j
+    return len(z)
+
+
+def tabletennis_flights(cut_bounce: bool = True) -> dict[str, np.ndarray]:
+    """{"tt0": (k, 4) t [s] (frame / 120 Hz, from the first), x, y, z [m]}: the 3-camera
+    reconstructions, each up to its first bounce on the table when `cut_bounce`."""
+    out: dict[str, list[list[float]]] = {}
+    with open(DATA / "tabletennis_3cam" / "flights.csv") as fh:
+        for r in csv.DictReader(fh):
+            out.setdefault(f"tt{r['seq']}", []).append(
+                [float(r["frame"]) / TT_RATE_HZ] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    res = {}
+    for key, v in out.items():
+        a = np.asarray(v)
+        a[:, 0] -= a[0, 0]
+        res[key] = a[: _first_bounce(a[:, 3])] if cut_bounce else a
+    return res

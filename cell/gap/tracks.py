@@ -90,6 +90,7 @@ class TrackFit:
     mended: tuple[dict[str, str], ...] = ()
 
 
+MAX_FIT_RMS_M = 0.03  # [m] a track the whole-track fit misses by more is not one free flight
 _CACHE: dict[tuple[str, float, bytes], tuple] = {}
 _CACHE_MAX = 5000
 
@@ -149,6 +150,14 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
         if tr is None:
             continue
         row, hv, end = _CACHE[_key(throw_ids[i], tr, float(k[i]))]
+        if not row["rms_m"] <= MAX_FIT_RMS_M:
+            why = (
+                f"not one free flight: the whole-track fit with drag misses it by "
+                f"{row['rms_m'] * 1000:.0f} mm RMS (a bounce, a catch, two objects?)"
+            )
+            bad.append({"throw_id": str(throw_ids[i]), "why": why})
+            samples[i] = None
+            continue
         for key, val in row.items():
             out[key][i] = val
         if hv is not None:
