@@ -144,8 +144,9 @@ def test_bad_tracks_are_named_never_raised() -> None:
 
 
 def test_gap_cli_with_bad_tracks(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    """`cell gap` on a campaign whose tracks file has one-row, unknown and non-finite
-    tracks: exit 0, the unusable tracks listed by throw id in the JSON report."""
+    """`cell gap` on a campaign whose tracks file has a one-row track, an unsorted one,
+    lost samples (empty and NaN cells) and a track of no throw: exit 0, the unusable
+    tracks listed by throw id with why, the mended ones with what was done."""
     from cell.log.csvio import write_throws_csv
 
     camp = draw_tracked_campaign((), np.random.default_rng(2), n=60)
@@ -163,6 +164,10 @@ def test_gap_cli_with_bad_tracks(tmp_path) -> None:  # type: ignore[no-untyped-d
                 tr = tr[::-1]  # unsorted
             for s in tr:
                 fh.write(f"{tid},{s[0]:.5f},{s[1]:.5f},{s[2]:.5f},{s[3]:.5f}\n")
+            if j == 2:  # lost samples: an empty cell and a NaN
+                fh.write(
+                    f"{tid},{tr[-1, 0] + 0.001:.5f},,0,0\n{tid},{tr[-1, 0] + 0.002:.5f},nan,0,0\n"
+                )
         fh.write("ghost,0.1,0,0,1\nghost,0.2,0,0,1.1\n")
     out = tmp_path / "rep.json"
     assert main(["gap", str(throws), "--tracks", str(tracks), "--json", str(out)]) == 0
@@ -170,7 +175,10 @@ def test_gap_cli_with_bad_tracks(tmp_path) -> None:  # type: ignore[no-untyped-d
     why = {u["throw_id"]: u["why"] for u in rep["tracks"]["unusable"]}
     assert "too short" in why[ids[0]]
     assert "ghost" in why
-    assert ids[1] not in why
+    assert ids[1] not in why and ids[2] not in why
+    notes = {(m["throw_id"], m["note"]) for m in rep["tracks"]["mended"]}
+    n2 = len(camp.tracks[ids[2]]) + 2
+    assert (ids[2], f"2 of {n2} samples not finite (dropped)") in notes
 
 
 @pytest.mark.parametrize(
