@@ -96,15 +96,17 @@ def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
 _LOST = ("", "nan", "NaN", "NAN", "inf", "-inf")  # a position cell a tracker left lost
 
 
-def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
+def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, np.ndarray]:
     """Read a tracks.csv into {throw_id: array (k, 4) of t_s, x_m, y_m, z_m}, sorted by time.
 
-    An empty or NaN position cell is a lost sample, kept as NaN (the diagnosis drops it
-    and says so, `cell.gap.track_check`).
+    Args:
+        path: the file.
+        keep_lost: keep an empty or NaN position cell as NaN, a lost sample (the
+            diagnosis drops it and says so, `cell.gap.track_check`); else it is an error.
 
     Raises:
-        LogFormatError: a missing column, a non-numeric cell, a time that is not a
-            finite number.
+        LogFormatError: a missing column, a non-numeric cell, a time (or, without
+            `keep_lost`, a position) that is not a finite number.
     """
     p = _readable(path)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
@@ -120,14 +122,14 @@ def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
                 vals = []
                 for c in need[1:]:
                     cell = row[c]
-                    if c != "t_s" and (cell is None or cell.strip() in _LOST):
+                    if keep_lost and c != "t_s" and (cell is None or cell.strip() in _LOST):
                         vals.append(math.nan)  # a lost sample: the track check drops it
                         continue
                     try:
                         vals.append(float(cell))
                     except (TypeError, ValueError):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
-                    if c == "t_s" and not math.isfinite(vals[-1]):
+                    if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
                 out.setdefault(row["throw_id"], []).append(vals)
     except (UnicodeDecodeError, csv.Error) as exc:
