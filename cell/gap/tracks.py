@@ -30,6 +30,7 @@ import numpy as np
 
 from cell.gap.problem import GapProblem
 from cell.gap.track_check import check_tracks
+from cell.gap.track_evidence import evidence, flight_time
 from cell.gap.track_halves import _state, end_state, halves
 from cell.gap.track_launch import whole_track_launch
 from cell.gap.track_sideways import scale_or_wind
@@ -357,49 +358,6 @@ def _apparent_gravity(
     return g_med, g_se, spread, bool(measurement)
 
 
-def _evidence(r: dict[str, Any]) -> str:
-    """The tracks' evidence in words, from `track_phase`'s figures."""
-    speed_pct, launch_m = r["launch_speed_pct"], r["launch_m"]
-    parts = []
-    if np.isfinite(speed_pct):
-        parts.append(
-            f"launch speed from tracks is {abs(speed_pct):.1f}% "
-            f"{'below' if speed_pct < 0 else 'above'} the model"
-        )
-    parts.append(
-        f"launch accounts for {launch_m:.3f} m of landing miss"
-        if np.isfinite(launch_m)
-        else "no launch comparison (no stroke logged)"
-    )
-    parts.append(
-        f"the flight after launch bends {r['bend_m']:.3f} m off the nominal path over the tracks "
-        f"(z {r['bend_z']:.1f}; {r['flight_m']:.3f} m at the landing from the release)"
-    )
-    parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
-    parts.append(
-        f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, spread over "
-        f"objects {r['g_ratio_object_spread']:.3f})"
-    )
-    if np.isfinite(r.get("drag_ratio", float("nan"))):
-        parts.append(
-            f"the whole tracks, integrated with drag, fit within {r['track_fit_rms_m'] * 1000:.1f}"
-            f" mm with a drag {r['drag_ratio']:.2f} × the configured C_d's"
-        )
-    side = r.get("sideways")
-    if side:
-        parts.append(
-            f"over the whole tracks a tracker scale gains χ² {side['scale_chi2_gain']:.0f} and "
-            f"a wind {side['wind_chi2_gain']:.0f} (noise alone {side['noise_chi2']:.0f}): "
-            + {
-                "scale": "the tracks bend nothing sideways, a scale",
-                "wind": "the tracks bend sideways, a wind",
-                "either": "either",
-                "neither": "neither",
-            }[side["prefers"]]  # fmt: skip
-        )
-    return "; ".join(parts)
-
-
 def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     """Each phase's share of the landing miss on the tracked throws, and the phase it points to.
 
@@ -437,7 +395,9 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     has_h = np.all(np.isfinite(hv[:, 0, :, 0]), axis=0)
     bend_m, bend_z = _bend(prob, fit, idx, hv, kk, has_h)
     # the track's touchdown: nominal flight from the state fitted to its last samples
-    end_land = fly(fit.p1[idx], fit.v1[idx], kk, lz, step=prob.step).position[:, :2]
+    end_fl = fly(fit.p1[idx], fit.v1[idx], kk, lz, t0=fit.t1[idx], step=prob.step)
+    end_land = end_fl.position[:, :2]
+    tof_ms, tof_z = flight_time(prob, fit, idx, kk, lz, end_fl.t)
     own = prob.has_stroke[idx] & has_h
     launch_m, launch_z, speed_pct = _launch_share(prob, idx, hv, own, kk, lz, back, rel_land)
     flight_land_m, flight_z = _cross_rms(
@@ -474,10 +434,12 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "flight_z": flight_z,
         "bend_m": bend_m,
         "bend_z": bend_z,
+        "flight_time_ms": tof_ms,
+        "flight_time_z": tof_z,
         "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
         "track_fit_rms_m": float(np.median(fit.rms_m[idx])),
         "drag_ratio": float(np.median(fit.drag_ratio[idx])),
         "sideways": side,
     }
-    ev = _evidence(figures) if finite else "no phase share could be computed from the tracks"
+    ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
     return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}
