@@ -133,6 +133,34 @@ def _residuals(
     return r
 
 
+def _jacobian(
+    th: np.ndarray,
+    k: np.ndarray,
+    tau: np.ndarray,
+    pos: np.ndarray,
+    free: tuple[int, ...],
+    eps: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals (a, R) at th (a, 12) and their Jacobian (a, f, R) in the free
+    parameters. The start position only shifts the flight (no force depends on it): its
+    columns are exact; the others are forward differences of step eps (f,)."""
+    dyn = [c for c, j in enumerate(free) if j >= 3]
+    stack = np.repeat(th[:, None], 1 + len(dyn), axis=1)
+    for q, c in enumerate(dyn):
+        stack[:, 1 + q, free[c]] += eps[c]
+    r_all = _residuals(stack, k, tau, pos, free)
+    r0 = r_all[:, 0]
+    jac = np.zeros((th.shape[0], len(free), r0.shape[1]))
+    jac[:, dyn] = (r_all[:, 1:] - r0[:, None]) / eps[dyn][None, :, None]
+    mask = np.isfinite(tau)
+    for c, j in enumerate(free):
+        if j < 3:
+            col = np.zeros((th.shape[0], tau.shape[1], 3))
+            col[..., j] = mask
+            jac[:, c, : 3 * tau.shape[1]] = col.reshape(th.shape[0], -1)
+    return r0, jac
+
+
 def fit_ode(
     tau: np.ndarray,
     pos: np.ndarray,
@@ -166,22 +194,7 @@ def fit_ode(
         if act.size == 0:
             break
         ta = th[act]
-        # the start position only shifts the flight (no force depends on it): its
-        # Jacobian columns are exact; the others by forward differences
-        dyn = [c for c, j in enumerate(free) if j >= 3]
-        stack = np.repeat(ta[:, None], 1 + len(dyn), axis=1)
-        for q, c in enumerate(dyn):
-            stack[:, 1 + q, free[c]] += eps[c]
-        r_all = _residuals(stack, k[act], tau[act], pos[act], free)
-        r0 = r_all[:, 0]
-        jac = np.zeros((act.size, len(free), r0.shape[1]))
-        jac[:, dyn] = (r_all[:, 1:] - r0[:, None]) / eps[dyn][None, :, None]
-        mask = np.isfinite(tau[act])
-        for c, j in enumerate(free):
-            if j < 3:
-                col = np.zeros((act.size, tau.shape[1], 3))
-                col[..., j] = mask
-                jac[:, c, : 3 * tau.shape[1]] = col.reshape(act.size, -1)
+        r0, jac = _jacobian(ta, k[act], tau[act], pos[act], free, eps)
         jtj = np.einsum("afr,agr->afg", jac, jac)
         jtr = np.einsum("afr,ar->af", jac, r0)
         diag = np.einsum("aff->af", jtj)

@@ -358,6 +358,17 @@ def _apparent_gravity(
     return g_med, g_se, spread, bool(measurement)
 
 
+def _sideways(
+    prob: GapProblem, fit: TrackFit, idx: np.ndarray, k: np.ndarray
+) -> dict[str, Any] | None:
+    """A tracker scale or a wind, on the tracked throws of another launcher."""
+    other = idx[~prob.has_stroke[idx]]
+    return scale_or_wind(
+        [fit.samples[i] for i in other], fit.dropped[other], fit.theta[other],
+        fit.rms_m[other], k[other],
+    )  # fmt: skip
+
+
 def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     """Each phase's share of the landing miss on the tracked throws, and the phase it points to.
 
@@ -382,12 +393,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     idx = np.flatnonzero(ok)
     kk = k[idx]
     lz = b.land_z[idx]
-    # each half's free flight carried back to the release (its acceleration, linear in time,
-    # extrapolated) against the model's launch state there. launch share: the landing
-    # difference the two release states make under the nominal flight; flight share: the
-    # landing difference between the nominal flight from the release state and the
-    # observed flight (the nominal flight from the track's last state). Each is the mean
-    # product of the two halves' differences: the tracks' scatter drops out on average.
+    # launch and flight shares from the halves (module docstring)
     hv = fit.halves[:, :, idx]
     t_rel0 = np.where(prob.has_stroke[idx], prob.ee.dt, fit.t0[idx])
     back = np.clip(fit.t0[idx] - t_rel0, 0.0, None)[:, None]
@@ -412,14 +418,9 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     g_med, g_se, spread, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
-    phase = (
-        "measurement" if measurement else max(finite, key=lambda p: finite[p]) if finite else None
-    )
-    other = idx[~prob.has_stroke[idx]]
-    side = scale_or_wind(
-        [fit.samples[i] for i in other], fit.dropped[other], fit.theta[other],
-        fit.rms_m[other], k[other],
-    )  # fmt: skip
+    top = max(finite, key=lambda p: finite[p]) if finite else None
+    phase = "measurement" if measurement else top
+    side = _sideways(prob, fit, idx, k)
     figures = {
         "launch_m": launch_m,
         "flight_m": flight_land_m,
