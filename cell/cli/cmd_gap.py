@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         base = tuple(effects_from_mapping(mp.effects))
     except InvalidParameter as exc:
         raise InvalidInput(f"{args.params}: {exc}") from None
-    tracks = read_tracks_csv(args.tracks) if args.tracks else None
+    tracks = read_tracks_csv(args.tracks, keep_lost=True) if args.tracks else None
     with tqdm(desc="cell gap", unit="step", leave=False, disable=None) as bar:
 
         def tick(label: str) -> None:

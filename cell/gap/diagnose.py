@@ -86,6 +86,11 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) ->
     if bad:
         p = eff.params()
         return "implausible: " + ", ".join(f"{k}={p[k]:.4g}" for k in bad)
+    side = (tracks or {}).get("sideways") or {}
+    if eff.name == "wind" and side.get("prefers") == "scale":
+        return "the tracks bend nothing sideways: a tracker scale explains them, a wind does not"
+    if isinstance(eff, TrackingScale) and side.get("prefers") == "wind":
+        return "the tracks bend sideways: a wind explains them, a tracker scale does not"
     if not tracks or not tracks.get("phase"):
         return None
     if eff.phase == "measurement":

@@ -144,6 +144,8 @@ def diagnose_log(
     if tracks:
         tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
         tp = track_phase(prob, tf)
+        # every track given is accounted for, also those of throws the problem dropped
+        tp["unusable"], tp["mended"] = list(fit_all.unusable), list(fit_all.mended)
     d = diagnose(prob, identify=identify, tracks=tp, progress=progress)
     rep = d.report
     where: dict[str, Any] = {}

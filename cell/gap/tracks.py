@@ -2,8 +2,9 @@
 
 For each tracked throw:
 
-* launch state: fitted to the whole track (not its first samples alone) with a free
-  start state and a free constant acceleration besides gravity and drag; the first
+* launch state: fitted to the whole track (not its first samples alone), the flight
+  integrated with drag, with a free start state and a free constant acceleration
+  besides gravity and drag (`cell.gap.track_launch`); the first
   samples after a release may still be disturbed (contact with the launcher, the
   tracker's lock), so a leading run of samples off the fit to the rest is dropped. This
   is the launch of a throw from another launcher;
@@ -21,23 +22,24 @@ For each tracked throw:
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from cell.gap.problem import GapProblem
+from cell.gap.track_check import check_tracks
+from cell.gap.track_evidence import evidence, flight_time
+from cell.gap.track_halves import _state, end_state, halves
+from cell.gap.track_launch import whole_track_launch
+from cell.gap.track_sideways import scale_or_wind
 from cell.model.effects import launch_overrides
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import G
 from cell.model.throw import drag_constant, launch_state
 
-__all__ = ["TrackFit", "fit_tracks", "track_phase", "launch_arrays"]
-
-WINDOW_S = 0.15  # [s] samples used for an end state
-MIN_SAMPLES = 4
-DISTURBED_S = 0.08  # [s] the first samples a release may still disturb (fit to the rest)
-DROP_SIGMA = 3.0  # a leading sample this many σ (per axis) off the rest's fit is dropped
+__all__ = ["TrackFit", "fit_tracks", "track_phase", "launch_arrays", "phase_evidence", "_state"]
 
 
 @dataclass(frozen=True)
@@ -60,7 +62,14 @@ class TrackFit:
             linear in time): position [m] and velocity [m/s] at the first and at the last
             kept sample, the extra acceleration [m/s²] at the first and its rate [m/s³],
             shape (2 halves, 6, n, 3).
-        samples: the track per throw (k, 4) arrays t, x, y, z (None: no track).
+        samples: the track per throw (k, 4) arrays t, x, y, z (None: no usable track).
+        theta: the whole track's flight fitted with drag (`cell.gap.track_ode`, model
+            "accel"), shape (n, 12).
+        rms_m: the RMS residual of that fit [m], shape (n,).
+        drag_ratio: the drag that fit finds over the configured one, shape (n,) (1 where
+            the track does not identify it).
+        unusable: the tracks the fit could not use, [{"throw_id", "why"}].
+        mended: what was mended in the tracks used, [{"throw_id", "note"}].
     """
 
     t0: np.ndarray
@@ -75,151 +84,27 @@ class TrackFit:
     a0: np.ndarray
     halves: np.ndarray
     samples: list[np.ndarray | None]
+    theta: np.ndarray
+    rms_m: np.ndarray
+    drag_ratio: np.ndarray
+    unusable: tuple[dict[str, str], ...] = ()
+    mended: tuple[dict[str, str], ...] = ()
 
 
-def _state(
-    tr: np.ndarray, k: float, at_start: bool
-) -> tuple[float, np.ndarray, np.ndarray, np.ndarray]:
-    """Position and velocity at the first (or last) sample, fitted to the samples within
-    WINDOW_S of it with gravity and drag (at the fitted velocity) as known acceleration."""
-    if at_start:
-        sel = tr[:, 0] <= tr[0, 0] + WINDOW_S
-        if sel.sum() < MIN_SAMPLES:
-            sel = np.arange(len(tr)) < MIN_SAMPLES
-        t_ref = tr[0, 0]
-    else:
-        sel = tr[:, 0] >= tr[-1, 0] - WINDOW_S
-        if sel.sum() < MIN_SAMPLES:
-            sel = np.arange(len(tr)) >= len(tr) - MIN_SAMPLES
-        t_ref = tr[-1, 0]
-    tau = tr[sel, 0] - t_ref
-    pos = tr[sel, 1:4]
-    a_mat = np.stack([np.ones_like(tau), tau], axis=1)
-    acc = np.array([0.0, 0.0, -G])
-    sol = np.zeros((2, 3))
-    for _ in range(3):
-        rhs = pos - 0.5 * tau[:, None] ** 2 * acc
-        sol = np.linalg.lstsq(a_mat, rhs, rcond=None)[0]
-        v = sol[1]
-        acc = np.array([0.0, 0.0, -G]) - k * np.linalg.norm(v) * v
-    bias = np.linalg.lstsq(a_mat, 0.5 * tau**2, rcond=None)[0]
-    return float(t_ref), sol[0], sol[1], bias
+MAX_FIT_RMS_M = 0.03  # [m] a track the whole-track fit misses by more is not one free flight
+_CACHE: dict[tuple[str, float, bytes], tuple] = {}
+_CACHE_MAX = 5000
 
 
-def _drag_path(
-    tau: np.ndarray, v0: np.ndarray, acc: np.ndarray, k: float, jerk: np.ndarray | None = None
-) -> np.ndarray:
-    """Displacement [m] drag adds at times tau (from 0) along the path with start velocity
-    v0, acceleration acc and jerk (drag evaluated on that path, integrated twice by the
-    trapezoid rule from tau = 0)."""
-    t = np.r_[0.0, tau] if tau[0] > 0 else tau
-    v = v0[None, :] + t[:, None] * acc[None, :]
-    if jerk is not None:
-        v = v + 0.5 * t[:, None] ** 2 * jerk[None, :]
-    d = -k * np.linalg.norm(v, axis=1)[:, None] * v
-    dt = np.diff(t)[:, None]
-    vel = np.vstack([np.zeros(3), np.cumsum(0.5 * (d[1:] + d[:-1]) * dt, axis=0)])
-    pos = np.vstack([np.zeros(3), np.cumsum(0.5 * (vel[1:] + vel[:-1]) * dt, axis=0)])
-    return pos[1:] if tau[0] > 0 else pos
-
-
-def _free_fit(
-    tau: np.ndarray, pos: np.ndarray, k: float, jerk: bool = False
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Position, velocity at tau = 0 and a constant extra acceleration (besides gravity and
-    drag) fitted to samples (tau (m,) [s], pos (m, 3) [m]); also the residuals (m, 3).
-    With `jerk` the extra acceleration is linear in time (returned as (a, j) stacked, (2, 3))."""
-    gvec = np.array([0.0, 0.0, -G])
-    cols = [np.ones_like(tau), tau, 0.5 * tau**2] + ([tau**3 / 6] if jerk else [])
-    a_mat = np.stack(cols, axis=1)
-    sol = np.linalg.lstsq(a_mat, pos, rcond=None)[0]
-    for _ in range(3):
-        drag = _drag_path(tau, sol[1], sol[2], k, sol[3] if jerk else None)
-        sol = np.linalg.lstsq(a_mat, pos - drag, rcond=None)[0]
-    drag = _drag_path(tau, sol[1], sol[2], k, sol[3] if jerk else None)
-    res = pos - drag - a_mat @ sol
-    extra = np.stack([sol[2] - gvec, sol[3]]) if jerk else sol[2] - gvec
-    return sol[0], sol[1], extra, res
-
-
-def _whole_track(
-    tr: np.ndarray, k: float
-) -> tuple[float, np.ndarray, np.ndarray, np.ndarray, float, int]:
-    """The launch state from the whole track, its disturbed first samples dropped.
-
-    The track is fitted with a free start state and a free constant acceleration (gravity,
-    any steady flight effect and a tracking scale all show as such) plus drag. The first
-    samples after a release may still be disturbed (contact with the launcher, the
-    tracker's lock): a fit to the samples after DISTURBED_S gives the scatter σ of the
-    rest; the leading samples off that fit by more than DROP_SIGMA σ are dropped, and
-    the state is fitted again from the first sample kept.
-
-    Returns:
-        (t0 [s], p0 [m], v0 [m/s] at the first kept sample, the extra acceleration
-        [m/s²], apparent gravity / g, samples dropped).
-    """
-    t = tr[:, 0]
-    pos = tr[:, 1:4]
-    core = t >= t[0] + DISTURBED_S
-    if core.sum() < 8:
-        core = np.ones(len(t), bool)
-    _, _, _, res_core = _free_fit(t[core] - t[0], pos[core], k)
-    sigma = float(np.sqrt(np.mean(np.sum(res_core**2, axis=1))))
-    p_c, v_c, a_c, _ = _free_fit(t[core] - t[0], pos[core], k)
-    tau_all = t - t[0]
-    gvec = np.array([0.0, 0.0, -G])
-    pred = p_c + np.outer(tau_all, v_c) + 0.5 * np.outer(tau_all**2, gvec + a_c)
-    pred = pred + _drag_path(np.maximum(tau_all, 1e-9), v_c, gvec + a_c, k)
-    off = np.linalg.norm(pos - pred, axis=1) / max(sigma / np.sqrt(3.0), 1e-4)
-    # the leading run of samples off the fit (a disturbance decays: the two samples after
-    # the last one detected are dropped as well)
-    out = off[: max(len(t) // 2, 1)] > DROP_SIGMA
-    drop = int(np.argmin(out)) if not out.all() else int(out.size)
-    drop = drop + 2 if drop else 0
-    if len(t) - drop < 8:
-        drop = max(len(t) - 8, 0)
-    t0 = float(t[drop])
-    p0, v0, a, _ = _free_fit(t[drop:] - t0, pos[drop:], k)
-    g_ratio = float(-(a[2] - G) / G) if np.ptp(t[drop:]) >= 0.1 else float("nan")
-    return t0, p0, v0, a, g_ratio, drop
-
-
-def _halves(tr: np.ndarray, k: float, drop: int) -> np.ndarray | None:
-    """The free flight (acceleration linear in time) fitted to the even and to the odd
-    samples kept: per half, position and velocity at the first and at the last kept sample,
-    the extra acceleration at the first and its rate, (2, 6, 3) [m, m/s, m/s², m/s³] (None:
-    too few samples). Two independent estimates
-    of the same path: the product of their deviations from a reference is free of the
-    track's scatter on average."""
-    t = tr[drop:, 0]
-    pos = tr[drop:, 1:4]
-    if len(t) < 16:
-        return None
-    out = np.zeros((2, 6, 3))
-    gvec = np.array([0.0, 0.0, -G])
-    for h in range(2):
-        sel = slice(h, None, 2)
-        p0, v0, aj, _ = _free_fit(t[sel] - t[0], pos[sel], k, jerk=True)
-        a, j = aj
-        grid = np.linspace(0.0, float(t[-1] - t[0]), 60)
-        vg = v0 + np.outer(grid, gvec + a) + 0.5 * np.outer(grid**2, j)
-        d = -k * np.linalg.norm(vg, axis=1)[:, None] * vg
-        dvel = np.vstack(
-            [np.zeros(3), np.cumsum(0.5 * (d[1:] + d[:-1]) * np.diff(grid)[:, None], 0)]
-        )
-        dpos = np.vstack(
-            [np.zeros(3), np.cumsum(0.5 * (dvel[1:] + dvel[:-1]) * np.diff(grid)[:, None], 0)]
-        )
-        tau = grid[-1]
-        out[h, 0], out[h, 1] = p0, v0
-        out[h, 2] = p0 + v0 * tau + 0.5 * (gvec + a) * tau**2 + j * tau**3 / 6 + dpos[-1]
-        out[h, 3] = vg[-1] + dvel[-1]
-        out[h, 4], out[h, 5] = a, j
-    return out
+def _key(tid: str, tr: np.ndarray, k: float) -> tuple[str, float, bytes]:
+    return (tid, k, hashlib.sha1(np.ascontiguousarray(tr).tobytes()).digest())
 
 
 def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarray) -> TrackFit:
     """Fit launch and end states and the apparent gravity to each throw's track.
+
+    A track the fit cannot use is named in `unusable` with why (`cell.gap.track_check`);
+    none stops the fit. Fits are cached by throw, track and drag constant.
 
     Args:
         throw_ids: the throws, in problem order.
@@ -239,23 +124,47 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
         "dropped": np.zeros(n),
         "a0": np.full((n, 3), np.nan),
         "halves": np.full((2, 6, n, 3), np.nan),
+        "theta": np.full((n, 12), np.nan),
+        "rms_m": np.full(n, np.nan),
+        "drag_ratio": np.full(n, np.nan),
     }
-    samples: list[np.ndarray | None] = []
-    for i, tid in enumerate(throw_ids):
-        tr = tracks.get(tid)
-        if tr is None or len(tr) < MIN_SAMPLES or not np.all(np.isfinite(tr)):
-            samples.append(None)
+    usable, bad, mended = check_tracks(list(throw_ids), tracks)
+    samples: list[np.ndarray | None] = [usable.get(t) for t in throw_ids]
+    todo = [
+        i for i, tr in enumerate(samples)
+        if tr is not None and _key(throw_ids[i], tr, float(k[i])) not in _CACHE
+    ]  # fmt: skip
+    if todo:
+        wl = whole_track_launch([samples[i] for i in todo], np.asarray(k, float)[todo])  # type: ignore[misc]
+        for j, i in enumerate(todo):
+            tr = samples[i]
+            assert tr is not None
+            drop = int(wl["dropped"][j])
+            hv = halves(tr, float(k[i]), drop)
+            end = end_state(tr, float(k[i]))
+            row = {key: wl[key][j] for key in ("t0", "p0", "v0", "a0", "g_ratio", "dropped",
+                                               "theta", "rms_m", "drag_ratio")}  # fmt: skip
+            if len(_CACHE) >= _CACHE_MAX:
+                _CACHE.clear()
+            _CACHE[_key(throw_ids[i], tr, float(k[i]))] = (row, hv, end)
+    for i, tr in enumerate(samples):
+        if tr is None:
             continue
-        samples.append(tr)
-        t0, p0, v0, a, g_ratio, drop = _whole_track(tr, float(k[i]))
-        out["t0"][i], out["p0"][i], out["v0"][i], out["g_ratio"][i] = t0, p0, v0, g_ratio
-        out["a0"][i] = a
-        out["dropped"][i] = drop
-        hv = _halves(tr, float(k[i]), drop)
+        row, hv, end = _CACHE[_key(throw_ids[i], tr, float(k[i]))]
+        if not row["rms_m"] <= MAX_FIT_RMS_M:
+            why = (
+                f"not one free flight: the whole-track fit with drag misses it by "
+                f"{row['rms_m'] * 1000:.0f} mm RMS (a bounce, a catch, two objects?)"
+            )
+            bad.append({"throw_id": str(throw_ids[i]), "why": why})
+            samples[i] = None
+            continue
+        for key, val in row.items():
+            out[key][i] = val
         if hv is not None:
             out["halves"][:, :, i] = hv
-        out["t1"][i], out["p1"][i], out["v1"][i], _ = _state(tr, float(k[i]), False)
-    return TrackFit(samples=samples, **out)
+        out["t1"][i], out["p1"][i], out["v1"][i], _ = end
+    return TrackFit(samples=samples, unusable=tuple(bad), mended=tuple(mended), **out)
 
 
 def launch_arrays(
@@ -449,53 +358,42 @@ def _apparent_gravity(
     return g_med, g_se, spread, bool(measurement)
 
 
-def _evidence(r: dict[str, Any]) -> str:
-    """The tracks' evidence in words, from `track_phase`'s figures."""
-    speed_pct, launch_m = r["launch_speed_pct"], r["launch_m"]
-    parts = []
-    if np.isfinite(speed_pct):
-        parts.append(
-            f"launch speed from tracks is {abs(speed_pct):.1f}% "
-            f"{'below' if speed_pct < 0 else 'above'} the model"
-        )
-    parts.append(
-        f"launch accounts for {launch_m:.3f} m of landing miss"
-        if np.isfinite(launch_m)
-        else "no launch comparison (no stroke logged)"
-    )
-    parts.append(
-        f"the flight after launch bends {r['bend_m']:.3f} m off the nominal path over the tracks "
-        f"(z {r['bend_z']:.1f}; {r['flight_m']:.3f} m at the landing from the release)"
-    )
-    parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
-    parts.append(
-        f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, spread over "
-        f"objects {r['g_ratio_object_spread']:.3f})"
-    )
-    return "; ".join(parts)
+def _sideways(
+    prob: GapProblem, fit: TrackFit, idx: np.ndarray, k: np.ndarray
+) -> dict[str, Any] | None:
+    """A tracker scale or a wind, on the tracked throws of another launcher."""
+    other = idx[~prob.has_stroke[idx]]
+    return scale_or_wind(
+        [fit.samples[i] for i in other], fit.dropped[other], fit.theta[other],
+        fit.rms_m[other], k[other],
+    )  # fmt: skip
 
 
 def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     """Each phase's share of the landing miss on the tracked throws, and the phase it points to.
 
     Returns:
-        {"phase", "evidence", "launch_m", "flight_m", "landing_m", "g_ratio", "tracked"}.
+        {"phase", "evidence", "launch_m", "flight_m", "landing_m", "g_ratio", "tracked",
+        "unusable": [{"throw_id", "why"}], "mended": [{"throw_id", "note"}], "sideways":
+        `cell.gap.track_sideways.scale_or_wind` on the throws of another launcher or None}.
+        "phase" is None when the tracks cannot place the gap (too few usable tracks, no
+        share computable).
     """
     ok = np.isfinite(fit.t0) & np.isfinite(fit.t1)
     n_tr = int(ok.sum())
+    named = {"unusable": list(fit.unusable), "mended": list(fit.mended)}
     if n_tr < 5:
-        return {"phase": None, "evidence": "fewer than 5 usable tracks", "tracked": n_tr}
+        why = f"{n_tr} usable track{'s' if n_tr != 1 else ''} (5 needed)"
+        if fit.unusable:
+            why += f"; {len(fit.unusable)} unusable, e.g. {fit.unusable[0]['throw_id']}: "
+            why += fit.unusable[0]["why"]
+        return {"phase": None, "evidence": why, "tracked": n_tr, **named}
     b = prob.batch
     k = drag_constant(b.shape, b.mass, b.size)
     idx = np.flatnonzero(ok)
     kk = k[idx]
     lz = b.land_z[idx]
-    # each half's free flight carried back to the release (its acceleration, linear in time,
-    # extrapolated) against the model's launch state there. launch share: the landing
-    # difference the two release states make under the nominal flight; flight share: the
-    # landing difference between the nominal flight from the release state and the
-    # observed flight (the nominal flight from the track's last state). Each is the mean
-    # product of the two halves' differences: the tracks' scatter drops out on average.
+    # launch and flight shares from the halves (module docstring)
     hv = fit.halves[:, :, idx]
     t_rel0 = np.where(prob.has_stroke[idx], prob.ee.dt, fit.t0[idx])
     back = np.clip(fit.t0[idx] - t_rel0, 0.0, None)[:, None]
@@ -503,7 +401,9 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     has_h = np.all(np.isfinite(hv[:, 0, :, 0]), axis=0)
     bend_m, bend_z = _bend(prob, fit, idx, hv, kk, has_h)
     # the track's touchdown: nominal flight from the state fitted to its last samples
-    end_land = fly(fit.p1[idx], fit.v1[idx], kk, lz, step=prob.step).position[:, :2]
+    end_fl = fly(fit.p1[idx], fit.v1[idx], kk, lz, t0=fit.t1[idx], step=prob.step)
+    end_land = end_fl.position[:, :2]
+    tof_ms, tof_z = flight_time(prob, fit, idx, kk, lz, end_fl.t)
     own = prob.has_stroke[idx] & has_h
     launch_m, launch_z, speed_pct = _launch_share(prob, idx, hv, own, kk, lz, back, rel_land)
     flight_land_m, flight_z = _cross_rms(
@@ -518,7 +418,9 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     g_med, g_se, spread, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
-    phase = "measurement" if measurement else max(finite, key=lambda p: finite[p])
+    top = max(finite, key=lambda p: finite[p]) if finite else None
+    phase = "measurement" if measurement else top
+    side = _sideways(prob, fit, idx, k)
     figures = {
         "launch_m": launch_m,
         "flight_m": flight_land_m,
@@ -533,6 +435,12 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "flight_z": flight_z,
         "bend_m": bend_m,
         "bend_z": bend_z,
+        "flight_time_ms": tof_ms,
+        "flight_time_z": tof_z,
         "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
+        "track_fit_rms_m": float(np.median(fit.rms_m[idx])),
+        "drag_ratio": float(np.median(fit.drag_ratio[idx])),
+        "sideways": side,
     }
-    return {"tracked": n_tr, "phase": phase, "evidence": _evidence(figures), **figures}
+    ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
+    return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}

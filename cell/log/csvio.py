@@ -88,11 +88,20 @@ def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
     tmp.replace(path)
 
 
-def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
+_LOST = ("", "nan", "NaN", "NAN", "inf", "-inf")  # a position cell a tracker left lost
+
+
+def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, np.ndarray]:
     """Read a tracks.csv into {throw_id: array (k, 4) of t_s, x_m, y_m, z_m}, sorted by time.
 
+    Args:
+        path: the file.
+        keep_lost: keep an empty or NaN position cell as NaN, a lost sample (the
+            diagnosis drops it and says so, `cell.gap.track_check`); else it is an error.
+
     Raises:
-        LogFormatError: a missing column or a non-numeric cell.
+        LogFormatError: a missing column, a non-numeric cell, a time (or, without
+            `keep_lost`, a position) that is not a finite number.
     """
     p = _readable(path)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
@@ -107,12 +116,16 @@ def read_tracks_csv(path: str | Path) -> dict[str, np.ndarray]:
             for r, row in enumerate(reader, start=1):
                 vals = []
                 for c in need[1:]:
+                    cell = row[c]
+                    if keep_lost and c != "t_s" and (cell is None or cell.strip() in _LOST):
+                        vals.append(math.nan)  # a lost sample: the track check drops it
+                        continue
                     try:
-                        vals.append(float(row[c]))
+                        vals.append(float(cell))
                     except (TypeError, ValueError):
-                        raise LogFormatError(p, r, c, f"{row[c]!r} is not a number") from None
-                    if not math.isfinite(vals[-1]):
-                        raise LogFormatError(p, r, c, f"{row[c]!r} is not a finite number")
+                        raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
+                    if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
+                        raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
                 out.setdefault(row["throw_id"], []).append(vals)
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None

@@ -59,6 +59,9 @@ def record_gap(
         r.document("verdict", _verdict_markdown(d.report))
         for k in range(len(obs)):
             tr = None if tracks is None else tracks.get(str(ids[k]))
+            if tr is not None:  # lost samples (NaN) are not drawn
+                tr = np.asarray(tr, float)
+                tr = tr[np.all(np.isfinite(tr), axis=1)] if tr.ndim == 2 else None
             if tr is None or len(tr) < 2:
                 continue
             r.stream.set_time(THROW, sequence=k)

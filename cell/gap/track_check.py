@@ -1,0 +1,133 @@
+"""Which tracks the diagnosis can use, and why not the others.
+
+A track is a (k, 4) array of t [s], x, y, z [m] (`cell.log.csvio.read_tracks_csv`, or
+built in code). Real tracks come unsorted, with repeated time stamps, lost samples
+(NaN rows), gaps, a single sample, or no flight at all; none of them stops the
+diagnosis: each is mended where it can be (sorted; repeated and non-finite samples
+dropped, and said so) or set aside with the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["MIN_SAMPLES", "MIN_SPAN_S", "CheckedTrack", "check_track", "check_tracks"]
+
+MIN_SAMPLES = 8  # a whole-track fit frees up to 9 parameters from 3 coordinates per sample
+MIN_SPAN_S = 0.1  # [s] a shorter track does not show gravity
+MIN_TRAVEL_M = 0.02  # [m] a track that moves less is not a flight
+MAX_GAP_SHARE = 0.5  # a gap longer than this share of the span leaves the flight unseen
+MAX_SAMPLES = 200_000  # samples per track read at most
+UP_CURVE_G = 0.3  # a free flight's height never bends upward (drag stays under gravity)
+
+
+@dataclass(frozen=True)
+class CheckedTrack:
+    """A track as the diagnosis uses it, or why it cannot.
+
+    Attributes:
+        samples: the (k, 4) samples kept, sorted by time (None: unusable).
+        why: why the track cannot be used (None: usable).
+        notes: what was mended (sorted, samples dropped), in words.
+    """
+
+    samples: np.ndarray | None
+    why: str | None
+    notes: tuple[str, ...] = ()
+
+
+def check_track(raw: object) -> CheckedTrack:
+    """Check and mend one track.
+
+    Args:
+        raw: the track, anything array-like of shape (k, 4): t [s], x, y, z [m].
+
+    Returns:
+        The track kept (sorted, non-finite and repeated samples dropped) or why not.
+    """
+    try:
+        arr = np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        return CheckedTrack(None, "not a table of numbers (t_s, x_m, y_m, z_m)")
+    if arr.size == 0:
+        return CheckedTrack(None, "no samples")
+    if arr.ndim == 1 and arr.shape[0] == 4:
+        return CheckedTrack(None, "a single sample (a flight needs at least 8)")
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        return CheckedTrack(None, f"samples of shape {arr.shape}, not (k, 4): t_s, x_m, y_m, z_m")
+    if arr.shape[0] > MAX_SAMPLES:
+        return CheckedTrack(None, f"{arr.shape[0]} samples: more than {MAX_SAMPLES} in one track")
+    notes = []
+    fin = np.all(np.isfinite(arr), axis=1)
+    if not fin.all():
+        notes.append(f"{int((~fin).sum())} of {arr.shape[0]} samples not finite (dropped)")
+        arr = arr[fin]
+    if arr.shape[0] and np.any(np.diff(arr[:, 0]) < 0):
+        notes.append("samples not in time order (sorted)")
+        arr = arr[np.argsort(arr[:, 0], kind="stable")]
+    if arr.shape[0] > 1:
+        rep = np.r_[False, np.diff(arr[:, 0]) <= 0]
+        if rep.any():
+            notes.append(f"{int(rep.sum())} repeated time stamps (later ones dropped)")
+            arr = arr[~rep]
+    why = _unusable(arr)
+    return CheckedTrack(None if why else arr, why, tuple(notes))
+
+
+def _unusable(arr: np.ndarray) -> str | None:
+    """Why the sorted finite samples arr (k, 4) cannot carry a flight (None: they can)."""
+    k = arr.shape[0]
+    if k == 0:
+        return "no finite samples"
+    if k < MIN_SAMPLES:
+        return f"too short: {k} sample{'s' if k != 1 else ''} (a flight needs {MIN_SAMPLES})"
+    span = float(arr[-1, 0] - arr[0, 0])
+    if span < MIN_SPAN_S:
+        return f"too short: {span * 1000:.0f} ms of flight (gravity needs {MIN_SPAN_S:.1f} s)"
+    travel = float(np.max(np.ptp(arr[:, 1:4], axis=0)))
+    if travel < MIN_TRAVEL_M:
+        return f"not a flight: the object moves {travel * 1000:.0f} mm over the track"
+    gap = float(np.max(np.diff(arr[:, 0])))
+    if gap > MAX_GAP_SHARE * span:
+        return f"a gap of {gap:.2f} s in a track of {span:.2f} s: the flight is not seen"
+    t = arr[:, 0] - arr[0, 0]
+    z_acc = 2.0 * float(np.polynomial.polynomial.polyfit(t, arr[:, 3], 2)[2])
+    if z_acc > UP_CURVE_G * 9.80665:
+        return (
+            f"no descent under gravity: the height's path bends upward ({z_acc:+.1f} m/s²); "
+            "is z up, and is this a free flight?"
+        )
+    return None
+
+
+def check_tracks(
+    throw_ids: list[str], tracks: Mapping[str, object] | None
+) -> tuple[dict[str, np.ndarray], list[dict[str, str]], list[dict[str, str]]]:
+    """Check every track given.
+
+    Args:
+        throw_ids: the throws of the log.
+        tracks: {throw_id: samples} as read.
+
+    Returns:
+        (the usable tracks by throw id, the unusable ones [{"throw_id", "why"}], what was
+        mended [{"throw_id", "note"}]); a track of a throw not in the log is unusable.
+    """
+    usable: dict[str, np.ndarray] = {}
+    bad: list[dict[str, str]] = []
+    mended: list[dict[str, str]] = []
+    known = set(throw_ids)
+    for tid, raw in (tracks or {}).items():
+        if tid not in known:
+            bad.append({"throw_id": str(tid), "why": "no throw with this id in the throw log"})
+            continue
+        c = check_track(raw)
+        mended.extend({"throw_id": str(tid), "note": nt} for nt in c.notes)
+        if c.samples is None:
+            bad.append({"throw_id": str(tid), "why": str(c.why)})
+        else:
+            usable[tid] = c.samples
+    return usable, bad, mended

@@ -1,0 +1,118 @@
+"""Real tracked flights shipped under tests/data, as throw logs and tracks (test helper)."""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import math
+from pathlib import Path
+
+import numpy as np
+
+DATA = Path(__file__).parent / "data"
+JUGGLEBOT_HZ = 300.0
+BALL_MASS_KG = 0.07  # the Jugglebot project's own simulation constant for its balls
+BALL_DIAMETER_M = 0.065  # assumed (a juggling ball); README says so
+
+
+def jugglebot_flights() -> dict[str, np.ndarray]:
+    """{"s4-b1": (k, 4) frame, x, y, z [m]} from the first rest frame to the floor contact."""
+    out: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "jugglebot_mocap" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            key = f"{r['session']}-{r['marker']}"
+            out.setdefault(key, []).append(
+                [float(r["frame"])] + [float(r[c]) / 1000.0 for c in ("x_mm", "y_mm", "z_mm")]
+            )
+    return {k: np.asarray(v) for k, v in out.items()}
+
+
+def jugglebot_log(trim_contact: int = 3) -> tuple[list[dict], dict[str, np.ndarray]]:
+    """The flights as a throw log of another launcher (no stroke) and its tracks.
+
+    Time 0 is the last frame the ball rests in the launcher; the landing is the ball's
+    centre at its first floor contact (the lowest sample), on the plane at that height;
+    the track stops `trim_contact` frames before the contact.
+    """
+    rows, tracks = [], {}
+    for tid, f in jugglebot_flights().items():
+        t = (f[:, 0] - f[0, 0]) / JUGGLEBOT_HZ
+        p = f[:, 1:4]
+        free = slice(20, 30)  # frames of free flight: the axis of the throw
+        d = p[free][-1] - p[free][0]
+        rows.append(
+            {
+                "throw_id": tid,
+                "object_id": "juggling_ball",
+                "shape": "sphere",
+                "mass_kg": BALL_MASS_KG,
+                "size_x_m": BALL_DIAMETER_M,
+                "size_y_m": BALL_DIAMETER_M,
+                "size_z_m": BALL_DIAMETER_M,
+                "stroke_m": "",
+                "x_m": p[0, 0],
+                "y_m": p[0, 1],
+                "z_m": p[0, 2],
+                "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+                "azimuth_rad": math.atan2(d[1], d[0]),
+                "roll_rad": 0.0,
+                "vx_mps": 0.0,
+                "vy_mps": 0.0,
+                "vz_mps": 0.0,
+                "platform": "arm",
+                "rotor_rpm": 0.0,
+                "land_z_m": p[-1, 2],
+                "landed_x_m": p[-1, 0],
+                "landed_y_m": p[-1, 1],
+                "session": tid.split("-")[0],
+            }
+        )
+        tracks[tid] = np.c_[t, p][: len(t) - trim_contact]
+    return rows, tracks
+
+
+def write_log(rows: list[dict], tracks: dict[str, np.ndarray], folder: Path) -> tuple[Path, Path]:
+    """throws.csv and tracks.csv (THROW_LOG.md) in folder."""
+    tp, kp = folder / "throws.csv", folder / "tracks.csv"
+    with open(tp, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with open(kp, "w", newline="") as fh:
+        w2 = csv.writer(fh)
+        w2.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for tid, tr in tracks.items():
+            for s in tr:
+                w2.writerow([tid, f"{s[0]:.6f}", f"{s[1]:.5f}", f"{s[2]:.5f}", f"{s[3]:.5f}"])
+    return tp, kp
+
+
+TT_RATE_HZ = 120.0  # not given by the source; the rate the flights imply (README)
+TT_BALL_MASS_KG = 0.0027  # a regulation 40 mm table-tennis ball
+TT_BALL_DIAMETER_M = 0.040
+
+
+def _first_bounce(z: np.ndarray) -> int:
+    """Index of the first local minimum of the height followed by a rise of over 1 cm
+    below 0.15 m (a bounce on the table), or len(z)."""
+    for j in range(2, len(z) - 3):
+        if z[j] <= z[j - 1] and z[j] <= z[j + 1] and z[j + 3] - z[j] > 0.01 and z[j] < 0.15:
+            return j
+    return len(z)
+
+
+def tabletennis_flights(cut_bounce: bool = True) -> dict[str, np.ndarray]:
+    """{"tt0": (k, 4) t [s] (frame / 120 Hz, from the first), x, y, z [m]}: the 3-camera
+    reconstructions, each up to its first bounce on the table when `cut_bounce`."""
+    out: dict[str, list[list[float]]] = {}
+    with open(DATA / "tabletennis_3cam" / "flights.csv") as fh:
+        for r in csv.DictReader(fh):
+            out.setdefault(f"tt{r['seq']}", []).append(
+                [float(r["frame"]) / TT_RATE_HZ] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    res = {}
+    for key, v in out.items():
+        a = np.asarray(v)
+        a[:, 0] -= a[0, 0]
+        res[key] = a[: _first_bounce(a[:, 3])] if cut_bounce else a
+    return res
