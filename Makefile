@@ -45,6 +45,7 @@ figures: install
 	$(BIN)/cell synth -o $(TMP)/throws.csv --seed 0
 	$(BIN)/cell identify $(TMP)/throws.csv -o $(TMP)/ee.yaml --plot $(TMP)/identify --json > $(FIG)/identify.json
 	cp $(TMP)/identify/reach_overview.png $(FIG)/identify_reach_overview.png
+	$(BIN)/python examples/10_identify_far_campaigns.py 300 650 865 --seeds 3 4 5 --unseen-seeds 10 11 12 --json $(FIG)/identify_far.json > /dev/null
 	$(BIN)/python examples/08_residual_unseen_objects.py $(TMP)/08
 	cp $(TMP)/08/table51.png $(FIG)/table51_synthetic.png
 	cp $(TMP)/08/unseen_targets.png $(FIG)/residual_unseen_synthetic.png
@@ -57,6 +58,7 @@ figures: install
 	$(BIN)/cell gap $(TMP)/scene.csv --report docs/scene_gap/nominal.html --json docs/scene_gap/nominal.json
 	$(BIN)/cell gap $(TMP)/scene.csv --identify --report docs/scene_gap/identified.html --json docs/scene_gap/identified.json
 	$(BIN)/cell gap check --json $(FIG)/gap_check.json
+	$(BIN)/python -m cell.bench.bench_real_tracks --json $(FIG)/real_tracks.json > /dev/null
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json

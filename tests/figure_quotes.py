@@ -11,16 +11,16 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-# the pages whose numbers must each have a source (docs/HISTORY.md is a dated record)
-PAGES = (
-    "README.md",
-    "docs/jobs.md",
-    "docs/throw_log.md",
-    "docs/diagnosis.md",
-    "docs/campaigns.md",
-    "docs/recordings.md",
-    "docs/hardware.md",
-    "docs/figures.md",
+# the pages whose numbers must each have a source: README.md and every guide page under
+# docs/ (a new page is covered as soon as it exists), but for the exemptions below
+NOT_CHECKED = (
+    "docs/HISTORY.md",  # a dated record of past measurements at named commits
+    "docs/gap_laws.md",  # TEMPORARY: arrives from another branch; remove when it is merged
+)
+PAGES = ("README.md",) + tuple(
+    p
+    for p in sorted(f"docs/{f.name}" for f in (ROOT / "docs").glob("*.md"))
+    if p not in NOT_CHECKED
 )
 COVERED: dict[str, list[tuple[int, int]]] = {p: [] for p in PAGES}
 

@@ -14,6 +14,13 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.figure_checks_guides import (
+    check_the_cli_limits,
+    check_the_gap_tracks_rules,
+    check_the_identify_evidence,
+    check_the_real_table_tennis,
+    check_the_real_tracks,
+)
 from tests.figure_checks_model import (
     check_identification,
     check_the_bench_table,
@@ -307,6 +314,11 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_repeatability,
     check_the_gap_check,
     check_the_scene_gap,
+    check_the_gap_tracks_rules,
+    check_the_real_tracks,
+    check_the_real_table_tennis,
+    check_the_identify_evidence,
+    check_the_cli_limits,
 )
 
 

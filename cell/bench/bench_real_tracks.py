@@ -1,0 +1,233 @@
+"""What the whole-track fit and `cell gap` find on the real tracked flights shipped under
+tests/data/ (docs/gap-tracks.md quotes these figures).
+
+Two public sets (each folder has its LICENSE and a README saying where it came from):
+Jugglebot's Ball Butler (`jugglebot_mocap`, 300 Hz motion capture, two sessions) and
+table-tennis balls from a ball machine (`tabletennis_3cam`, three-camera triangulation,
+time base 120 Hz). Per set: cell's whole-track fit (`cell.gap.tracks.fit_tracks`), a
+second fit written here without `cell.gap` (scipy `solve_ivp` + `least_squares`: start
+state, gravity and a drag constant k free), and for Jugglebot `cell gap` itself on the
+flights as a throw log of another launcher with their tracks.
+
+    python -m cell.bench.bench_real_tracks [--json OUT.json]
+
+(one step of `make figures`, `docs/figures/real_tracks.json`; about a minute).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import gzip
+import json
+import math
+import sys
+import tempfile
+from contextlib import redirect_stdout
+from io import StringIO
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import least_squares
+
+__all__ = ["jugglebot", "main", "tabletennis"]
+
+DATA = Path(__file__).resolve().parents[2] / "tests" / "data"
+G0 = 9.80665  # [m/s²] standard gravity
+JB_HZ = 300.0  # the motion capture's rate (tests/data/jugglebot_mocap/README.md)
+JB_MASS_KG = 0.07  # the Jugglebot project's own simulation constant for its balls
+JB_DIAMETER_M = 0.065  # assumed (a juggling ball)
+JB_SKIP = 30  # frames after the last rest frame: the ball has left the launcher (0.1 s)
+JB_EVERY = 3  # the second fit takes every third flight of a session
+TT_HZ = 120.0  # the time base used: the source gives no rate
+TT_MASS_KG = 0.0027  # a regulation 40 mm table-tennis ball
+TT_DIAMETER_M = 0.040
+TT_CD = 0.47  # a sphere's drag coefficient, for the table-tennis ball's nominal drag
+TT_RHO = 1.204  # [kg/m³] air at 20 °C, the same
+TT_CLEAN = ("tt2", "tt5", "tt6", "tt7", "tt8", "tt9")  # flights whose first stretch is clean
+
+
+def _jugglebot_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
+    """The flights as a throw log of another launcher (no stroke) and their tracks: time 0
+    at the last rest frame, the landing at the lowest sample, the track cut 3 frames
+    before it."""
+    frames: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "jugglebot_mocap" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            frames.setdefault(f"{r['session']}-{r['marker']}", []).append(
+                [float(r["frame"])] + [float(r[c]) / 1000.0 for c in ("x_mm", "y_mm", "z_mm")]
+            )
+    rows, tracks = [], {}
+    for tid, v in frames.items():
+        f = np.asarray(v)
+        t, p = (f[:, 0] - f[0, 0]) / JB_HZ, f[:, 1:4]
+        d = p[29] - p[20]  # frames of free flight: the axis of the throw
+        rows.append({
+            "throw_id": tid, "object_id": "juggling_ball", "shape": "sphere",
+            "mass_kg": JB_MASS_KG, "size_x_m": JB_DIAMETER_M, "size_y_m": JB_DIAMETER_M,
+            "size_z_m": JB_DIAMETER_M, "stroke_m": "", "x_m": p[0, 0], "y_m": p[0, 1],
+            "z_m": p[0, 2], "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+            "land_z_m": p[-1, 2], "landed_x_m": p[-1, 0], "landed_y_m": p[-1, 1],
+        })  # fmt: skip
+        tracks[tid] = np.c_[t, p][: len(t) - 3]
+    return rows, tracks
+
+
+def _write_log(rows: list[dict[str, Any]], tracks: dict[str, np.ndarray], folder: Path) -> None:
+    with open(folder / "throws.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with open(folder / "tracks.csv", "w", newline="") as fh:
+        w2 = csv.writer(fh)
+        w2.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for tid, tr in tracks.items():
+            for s in tr:
+                w2.writerow([tid, f"{s[0]:.6f}", f"{s[1]:.5f}", f"{s[2]:.5f}", f"{s[3]:.5f}"])
+
+
+def _fit(t: np.ndarray, p: np.ndarray, g_vector: bool) -> np.ndarray:
+    """Start state (6), gravity (a vector [m/s²], or its size along -z) and k [1/m] of a
+    free flight ṗ = v, v̇ = g - k|v|v, by least squares through solve_ivp."""
+
+    def sim(th: np.ndarray) -> np.ndarray:
+        g = th[6:9] if g_vector else np.array([0.0, 0.0, -th[6]])
+        k = th[-1]
+
+        def rhs(_: float, s: np.ndarray) -> np.ndarray:
+            return np.r_[s[3:], g - k * np.linalg.norm(s[3:]) * s[3:]]
+
+        sol = solve_ivp(rhs, (0.0, float(t[-1])), th[:6], t_eval=t, rtol=1e-9, atol=1e-11)
+        return np.asarray(sol.y[:3].T)
+
+    v = (p[3] - p[0]) / (t[3] - t[0])
+    g0 = [0.0, 0.0, -G0] if g_vector else [G0]
+    th0 = np.r_[p[0], v, g0, 0.013 if g_vector else 0.1]
+    return np.asarray(least_squares(lambda th: (sim(th) - p).ravel(), th0).x)
+
+
+def _span(a: np.ndarray) -> list[float]:
+    return [float(np.min(a)), float(np.max(a))]
+
+
+def jugglebot() -> dict[str, Any]:
+    """cell's track fit and the second fit per session, and `cell gap` on all flights."""
+    from cell.cli import main as cell_main
+    from cell.gap.run import _k_of
+    from cell.gap.tracks import fit_tracks
+    from cell.log.table import ThrowTable
+
+    rows, tracks = _jugglebot_log()
+    table = ThrowTable.from_records(rows)
+    ids = table.text("throw_id")
+    k = _k_of(table)
+    fit = fit_tracks(ids, tracks, k)
+    sessions: dict[str, Any] = {}
+    for ses in sorted({t.split("-")[0] for t in ids}):
+        sel = [i for i, t in enumerate(ids) if t.startswith(ses + "-")]
+        ind = []
+        for i in sel[::JB_EVERY]:
+            tr = tracks[ids[i]]
+            ind.append(_fit(tr[JB_SKIP:, 0] - tr[JB_SKIP, 0], tr[JB_SKIP:, 1:4], True))
+        a = np.array(ind)
+        gh = np.median(a[:, 6:8], axis=0)
+        sessions[ses] = {
+            "flights": len(sel),
+            "second_fit_flights": len(ind),
+            "second_g_ratio": float(np.median(np.linalg.norm(a[:, 6:9], axis=1)) / G0),
+            "second_drag_ratio": float(np.median(a[:, 9]) / k[sel[0]]),
+            "second_sideways_mps2": float(np.linalg.norm(gh)),
+            "second_tilt_deg": math.degrees(math.atan2(float(np.linalg.norm(gh)), G0)),
+            "cell_g_ratio": float(np.median(fit.g_ratio[sel])),
+            "cell_drag_ratio": float(np.median(fit.drag_ratio[sel])),
+            "cell_sideways_mps2": float(np.linalg.norm(np.median(fit.a0[sel, :2], axis=0))),
+        }
+    with tempfile.TemporaryDirectory() as tmp:
+        _write_log(rows, tracks, Path(tmp))
+        out = Path(tmp) / "gap.json"
+        args = ["gap", f"{tmp}/throws.csv", "--tracks", f"{tmp}/tracks.csv", "--json", str(out)]
+        with redirect_stdout(StringIO()):
+            rc = cell_main(args)
+        if rc != 0:
+            raise RuntimeError(f"cell gap on the Jugglebot flights exited {rc}")
+        gap = json.loads(out.read_text())
+    return {
+        "rate_hz": JB_HZ,
+        "throws": len(ids),
+        "mass_kg": JB_MASS_KG,
+        "diameter_m": JB_DIAMETER_M,
+        "sessions": sessions,
+        "cell_g_ratio": float(np.median(fit.g_ratio)),
+        "cell_drag_ratio": float(np.median(fit.drag_ratio)),
+        "cell_fit_rms_m": float(np.median(fit.rms_m)),
+        "cell_dropped_median": float(np.median(fit.dropped)),
+        "unusable": len(fit.unusable),
+        "gap": gap,
+    }
+
+
+def tabletennis() -> dict[str, Any]:
+    """cell's track fit and the second fit on the clean flights up to their first bounce;
+    the rate each flight implies (the 120 Hz base scaled by the second fit's gravity)."""
+    from cell.gap.tracks import fit_tracks
+
+    seqs: dict[str, list[list[float]]] = {}
+    with open(DATA / "tabletennis_3cam" / "flights.csv") as fh:
+        for r in csv.DictReader(fh):
+            seqs.setdefault(f"tt{r['seq']}", []).append(
+                [float(r["frame"]) / TT_HZ] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    flights = {}
+    for key, v in seqs.items():
+        f = np.asarray(v)
+        f[:, 0] -= f[0, 0]
+        z, end = f[:, 3], len(f)
+        for j in range(2, len(z) - 3):  # the first bounce on the table
+            if z[j] <= z[j - 1] and z[j] <= z[j + 1] and z[j + 3] - z[j] > 0.01 and z[j] < 0.15:
+                end = j
+                break
+        flights[key] = f[:end]
+    k_nom = 0.5 * TT_RHO * TT_CD * math.pi * (TT_DIAMETER_M / 2) ** 2 / TT_MASS_KG
+    ids = list(TT_CLEAN)
+    fit = fit_tracks(ids, {i: flights[i] for i in ids}, np.full(len(ids), k_nom))
+    ind = np.array([_fit(flights[i][:, 0], flights[i][:, 1:4], False) for i in ids])
+    g_ind, k_ind = ind[:, 6] / G0, ind[:, 7]
+    v0 = np.linalg.norm(ind[:, 3:6], axis=1)
+    return {
+        "flights": len(flights),
+        "clean_flights": len(ids),
+        "time_base_hz": TT_HZ,
+        "mass_kg": TT_MASS_KG,
+        "diameter_m": TT_DIAMETER_M,
+        "drag_coefficient": TT_CD,
+        "air_density_kg_m3": TT_RHO,
+        "k_nominal_per_m": k_nom,
+        "second_k_per_m": _span(k_ind),
+        "second_g_ratio": _span(g_ind),
+        "implied_rate_hz": _span(TT_HZ / np.sqrt(g_ind)),
+        "drag_over_gravity_at_launch": float(np.median(k_ind * v0**2 / (g_ind * G0))),
+        "cell_g_ratio_max_dev": float(np.max(np.abs(fit.g_ratio - g_ind))),
+        "cell_drag_ratio_median": float(np.median(fit.drag_ratio)),
+        "second_drag_ratio_median": float(np.median(k_ind) / k_nom),
+        "unusable": len(fit.unusable),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m cell.bench.bench_real_tracks")
+    p.add_argument("--json", metavar="PATH", help="write the figures as JSON to PATH")
+    a = p.parse_args(argv)
+    doc = {"jugglebot": jugglebot(), "tabletennis": tabletennis()}
+    text = json.dumps(doc, indent=1)
+    print(text)
+    if a.json:
+        Path(a.json).write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,243 @@
+"""The checks of the figures the guide pages docs/gap-tracks.md, docs/identify_evidence.md
+and docs/cli_inputs.md quote (run by tests/test_readme_figures.py): measured figures
+against the JSON `make figures` writes, rules and limits against the code's constants."""
+
+from __future__ import annotations
+
+import scipy.constants
+
+from tests.figure_quotes import close, every, load_json, page_text, quoted
+
+
+# -- docs/gap-tracks.md ----------------------------------------------------------------------
+def check_the_gap_tracks_rules() -> None:
+    from cell.gap.diagnose import SCALE_AGREE
+    from cell.gap.run import MIN_THROWS
+    from cell.gap.track_check import MAX_GAP_SHARE, MIN_SAMPLES, MIN_SPAN_S, MIN_TRAVEL_M
+    from cell.gap.track_launch import DISTURBED_S, DROP_SIGMA
+    from cell.gap.tracks import MAX_FIT_RMS_M
+    from cell.model.params import G
+
+    page = "docs/gap-tracks.md"
+    after, sigma = quoted(page, r"samples after ([\d.]+) s are fitted first and the leading run "
+                          r"of samples more than (\d+)σ off")  # fmt: skip
+    assert (float(after), float(sigma)) == (DISTURBED_S, DROP_SIGMA)
+    (g,) = quoted(page, r"`g_ratio` \(apparent gravity over the model's g, ([\d.]+) m/s²\)")
+    assert float(g) == G
+    (agree,) = quoted(page, r"apparent gravity \(within ([\d.]+) %\)")
+    close(agree, 100 * SCALE_AGREE, 1)
+    (n,) = quoted(page, r"a single sample, fewer than (\d+) \|")
+    assert int(n) == MIN_SAMPLES
+    (span,) = quoted(page, r"\| under ([\d.]+) s of samples \|")
+    assert float(span) == MIN_SPAN_S
+    (travel,) = quoted(page, r"does not move \(< (\d+) cm\)")
+    assert float(travel) == 100 * MIN_TRAVEL_M
+    assert MAX_GAP_SHARE == 0.5 and "a gap over half the track's span" in page_text(page)
+    (rms,) = quoted(page, r"misses it by over (\d+) cm RMS")
+    assert float(rms) == 100 * MAX_FIT_RMS_M
+    (need,) = quoted(page, r"`cell gap` says it needs at least (\d+)")
+    assert int(need) == MIN_THROWS
+
+
+def check_the_real_tracks() -> None:
+    from cell.model.objects import DRAG_COEFFICIENT
+
+    page, doc = "docs/gap-tracks.md", load_json("docs/figures/real_tracks.json")
+    jb = doc["jugglebot"]
+    s4, s7 = jb["sessions"]["s4"], jb["sessions"]["s7"]
+    hz, n, mass = quoted(page, r"motion capture at (\d+) Hz, (\d+) near-vertical throws of a "
+                         r"(\d+) g ball")  # fmt: skip
+    assert (float(hz), int(n), float(mass)) == (jb["rate_hz"], jb["throws"], 1000 * jb["mass_kg"])
+    g, g0, k, d, cd = quoted(
+        page,
+        r"finds gravity ([\d.]+) × the standard ([\d.]+) m/s² in both sessions, a drag ([\d.]+) "
+        r"× that of a (\d+) mm sphere of C_d ([\d.]+) in both",
+    )
+    for ses in (s4, s7):
+        close(g, ses["second_g_ratio"], 3)
+        close(k, ses["second_drag_ratio"], 1)
+    assert float(g0) == scipy.constants.g
+    assert float(d) == 1000 * jb["diameter_m"] and float(cd) == DRAG_COEFFICIENT["sphere"]
+    tilt7, pull7, tilt4 = quoted(
+        page,
+        r"tilted from gravity's by ([\d.]+)° in one session \(a steady sideways pull of ([\d.]+) "
+        r"m/s²\) and ([\d.]+)° in the other",
+    )
+    close(tilt7, s7["second_tilt_deg"], 1)
+    close(pull7, s7["second_sideways_mps2"], 2)
+    close(tilt4, s4["second_tilt_deg"], 2)
+    g7, g4, p7, p4, kc, rms, dropped = quoted(
+        page,
+        r"apparent gravity ([\d.]+) g and ([\d.]+) g, a sideways pull of ([\d.]+) m/s² and "
+        r"([\d.]+) m/s² \(in that order\), a drag ([\d.]+) × over all flights, the tracks fitted within ([\d.]+) mm "
+        r"RMS, the launcher's push, about (\d+) samples",
+    )
+    close(g7, s7["cell_g_ratio"], 3)
+    close(g4, s4["cell_g_ratio"], 3)
+    close(p7, s7["cell_sideways_mps2"], 2)
+    close(p4, s4["cell_sideways_mps2"], 2)
+    close(kc, jb["cell_drag_ratio"], 2)
+    close(rms, 1000 * jb["cell_fit_rms_m"], 1)
+    gap = jb["gap"]
+    tr = gap["tracks"]
+    close(dropped, tr["dropped_samples_mean"], 0)
+    bend, early, z, land = quoted(
+        page,
+        r"bends ([\d.]+) cm off the tracks and comes down ([\d.]+) ms early, z (\d+); the logged "
+        r"landings lie (\d+) mm from",
+    )
+    close(bend, 100 * tr["bend_m"], 1)
+    close(early, tr["flight_time_ms"], 1)
+    close(z, tr["flight_time_z"], 0)
+    close(land, 1000 * tr["landing_m"], 0)
+    assert tr["phase"] == "flight" and gap["where"]["phase"] == "flight"
+    ga, se = quoted(page, r"\(apparent gravity ([\d.]+) g, standard error ([\d.]+)\)")
+    close(ga, tr["g_ratio"], 3)
+    close(se, tr["g_ratio_se"], 4)
+    assert tr["measurement"] is False
+    held, floor, wind = quoted(
+        page,
+        r"gives `unknown`: held-out ([\d.]+) m against a noise floor of ([\d.]+) m, wind the best "
+        r"partial explanation \(([\d.]+) m\)",
+    )
+    assert gap["verdict"]["effects"] == ["unknown"]
+    assert gap["verdict"]["partial_effects"] == ["wind"]
+    close(held, gap["baseline"]["heldout_rmse_m"], 3)
+    close(floor, gap["noise_floor_m"], 3)
+    close(wind, gap["verdict"]["heldout_rmse_m"], 3)
+
+
+def check_the_real_table_tennis() -> None:
+    page, doc = "docs/gap-tracks.md", load_json("docs/figures/real_tracks.json")
+    tt = doc["tabletennis"]
+    flights, clean, lo, hi, base = quoted(
+        page,
+        r"MIT; (\d+) flights triangulated .*? the (\d+) clean flights imply (\d+)–(\d+) Hz, so "
+        r"(\d+) Hz",
+    )
+    assert (int(flights), int(clean)) == (tt["flights"], tt["clean_flights"])
+    close(lo, tt["implied_rate_hz"][0], 0)
+    close(hi, tt["implied_rate_hz"][1], 0)
+    assert float(base) == tt["time_base_hz"]
+    klo, khi, dmm, mg, cd, rho, knom, share = quoted(
+        page,
+        r"drag k = ([\d.]+)–([\d.]+) m⁻¹, that of a (\d+) mm, ([\d.]+) g sphere of C_d ([\d.]+) "
+        r"in air of ([\d.]+) kg/m³ \(([\d.]+) m⁻¹\), ([\d.]+) of gravity at launch",
+    )
+    close(klo, tt["second_k_per_m"][0], 2)
+    close(khi, tt["second_k_per_m"][1], 2)
+    assert (float(dmm), float(mg)) == (1000 * tt["diameter_m"], 1000 * tt["mass_kg"])
+    assert (float(cd), float(rho)) == (tt["drag_coefficient"], tt["air_density_kg_m3"])
+    close(knom, tt["k_nominal_per_m"], 3)
+    close(share, tt["drag_over_gravity_at_launch"], 2)
+    dev, kcell, kind, n10 = quoted(
+        page,
+        r"the same gravity within ([\d.]+) g flight by flight and a median drag ratio of "
+        r"([\d.]+) against the second fit's ([\d.]+);.*?With (\d+) throws",
+    )
+    assert tt["cell_g_ratio_max_dev"] <= float(dev)
+    close(dev, tt["cell_g_ratio_max_dev"], 3)
+    close(kcell, tt["cell_drag_ratio_median"], 2)
+    close(kind, tt["second_drag_ratio_median"], 2)
+    assert int(n10) == tt["flights"] and tt["unusable"] == 0
+
+
+# -- docs/identify_evidence.md ---------------------------------------------------------------
+def check_the_identify_evidence() -> None:
+    from cell.identify.algorithm import IdentifyOptions
+    from cell.synth import NoiseModel
+
+    page, doc = "docs/identify_evidence.md", load_json("docs/figures/identify_far.json")
+    noise, opt = NoiseModel(), IdentifyOptions()
+    along, across, floor = quoted(
+        page,
+        r"σ along the throw = ([\d.]+) % of the reach, across = (\d+) %, both with a (\d+) mm floor",
+    )
+    close(along, 100 * noise.along_rel, 2)
+    close(across, 100 * noise.across_rel, 0)
+    close(floor, 1000 * noise.floor_m, 0)
+    folds, *widths = quoted(
+        page,
+        r"(\d+)-fold cross-validation over that object's throws from (\d+) \(keep the "
+        r"catalogue\), ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+);",
+    )
+    assert int(folds) == opt.cv_folds
+    assert tuple(float(w) for w in widths) == tuple(opt.object_priors)
+    (ratio,) = quoted(page, r"tighter than the prior \(ratio < (\d+)\)")
+    assert float(ratio) == opt.determined_ratio
+
+    lo, hi, objects, fit_pct, held_pct, fresh = quoted(
+        page,
+        r"each (\d+)–(\d+) % off the defaults.*?noise, (\d+) thesis objects.*?stratified (\d+) %"
+        r".*?on the other (\d+) %.*?on (\d+) new throws",
+    )
+    assert [float(lo) / 100, float(hi) / 100] == doc["offset_range"]
+    cases = doc["cases"]
+    assert {c["objects"] for c in cases} == {int(objects)}
+    close(fit_pct, 100 * (1 - doc["heldout_fraction"]), 0)
+    close(held_pct, 100 * doc["heldout_fraction"], 0)
+    (fresh_head,) = quoted(page, r"\| held-out / floor \| fresh (\d+) / floor \|")
+    assert int(fresh) == int(fresh_head) == doc["fresh_throws"]
+    three = r"([\d.]+), ([\d.]+), ([\d.]+)"
+    rows = every(
+        page,
+        rf"\n\| (\d+) \| (seeds|unseen) (\d+), (\d+), (\d+) \| {three} \| {three} \| {three} \|",
+    )
+    seen = []
+    for n, world, *seeds_and_values in rows:
+        seeds, values = seeds_and_values[:3], seeds_and_values[3:]
+        for i, seed in enumerate(seeds):
+            (c,) = [
+                c
+                for c in cases
+                if (c["n"], c["seed"], c["unseen"]) == (int(n), int(seed), world == "unseen")
+            ]
+            seen.append(id(c))
+            for col, key in enumerate(
+                ("heldout_over_floor", "fresh3000_over_floor", "train_over_true")
+            ):
+                close(values[3 * col + i], c[key], 3)
+    assert sorted(seen) == sorted(id(c) for c in cases)  # every case is on the page, once
+
+
+# -- docs/cli_inputs.md ----------------------------------------------------------------------
+def check_the_cli_limits() -> None:
+    import math
+
+    from cell.cli.guard import ABSURD, FLOAT_RANGES
+    from cell.infile import MAX_NAME_BYTES, MAX_PATH_BYTES
+    from cell.log.csvio import MAX_CSV_BYTES
+    from cell.log.store import MAX_STORE_BYTES
+    from cell.residual.model import MAX_MODEL_BYTES
+    from cell.yamlsafe import MAX_BYTES
+
+    page = "docs/cli_inputs.md"
+    yaml_mb, csv_mib, model_mib, store_gib = quoted(
+        page,
+        r"Dynamixel configuration at (\d+) MB .*? a throw or track log at (\d+) MiB, a residual "
+        r"model at (\d+) MiB, a throw store at (\d+) GiB\.",
+    )
+    assert int(yaml_mb) * 10**6 == MAX_BYTES
+    assert int(csv_mib) * 2**20 == MAX_CSV_BYTES
+    assert int(model_mib) * 2**20 == MAX_MODEL_BYTES
+    assert int(store_gib) * 2**30 == MAX_STORE_BYTES
+    m_lo, m_hi, s_lo, s_hi, pos, vel, deg, tau, absurd = quoted(
+        page,
+        r"mass (\d+) to (\d+) kg, extents (\d+) to (\d+) m, positions and targets ±(\d+) m, base "
+        r"velocity ±(\d+) m/s, elevation ±π/2 rad \(±(\d+)°\), azimuth and roll ±(\d+)π rad; any "
+        r"other number beyond ±(\d+)e6",
+    )
+    assert (float(m_lo), float(m_hi)) == FLOAT_RANGES["mass"][:2]
+    assert (float(s_lo), float(s_hi)) == FLOAT_RANGES["size"][:2]
+    for dest in ("at", "target", "current", "box", "land_z"):
+        assert FLOAT_RANGES[dest][:2] == (-float(pos), float(pos)), dest
+    assert FLOAT_RANGES["base_velocity"][:2] == (-float(vel), float(vel))
+    assert FLOAT_RANGES["elevation"][:2] == (-math.pi / 2, math.pi / 2)
+    assert math.degrees(FLOAT_RANGES["elevation"][1]) == float(deg)
+    for dest in ("azimuth", "roll"):
+        assert FLOAT_RANGES[dest][:2] == (-int(tau) * math.pi, int(tau) * math.pi), dest
+    assert float(absurd) * 1e6 == ABSURD
+    path, name = quoted(
+        page, r"A path longer than (\d+) bytes, or with a name longer than (\d+) bytes"
+    )
+    assert (int(path), int(name)) == (MAX_PATH_BYTES, MAX_NAME_BYTES)
