@@ -170,11 +170,10 @@ def jugglebot() -> dict[str, Any]:
     }
 
 
-def tabletennis() -> dict[str, Any]:
-    """cell's track fit and the second fit on the clean flights up to their first bounce;
-    the rate each flight implies (the 120 Hz base scaled by the second fit's gravity)."""
-    from cell.gap.tracks import fit_tracks
-
+def _tabletennis_flights() -> dict[str, np.ndarray]:
+    """{"tt0": (k, 4) t [s] (frame / 120 Hz, from the first), x, y, z [m]}, each up to its
+    first bounce on the table (a local minimum of the height under 0.15 m followed by a
+    rise of over 1 cm)."""
     seqs: dict[str, list[list[float]]] = {}
     with open(DATA / "tabletennis_3cam" / "flights.csv") as fh:
         for r in csv.DictReader(fh):
@@ -191,6 +190,15 @@ def tabletennis() -> dict[str, Any]:
                 end = j
                 break
         flights[key] = f[:end]
+    return flights
+
+
+def tabletennis() -> dict[str, Any]:
+    """cell's track fit and the second fit on the clean flights up to their first bounce;
+    the rate each flight implies (the 120 Hz base scaled by the second fit's gravity)."""
+    from cell.gap.tracks import fit_tracks
+
+    flights = _tabletennis_flights()
     k_nom = 0.5 * TT_RHO * TT_CD * math.pi * (TT_DIAMETER_M / 2) ** 2 / TT_MASS_KG
     ids = list(TT_CLEAN)
     fit = fit_tracks(ids, {i: flights[i] for i in ids}, np.full(len(ids), k_nom))
