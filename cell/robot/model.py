@@ -40,10 +40,11 @@ class Robot:
         spec: the MountSpec (robots/<mount>/mount.yaml).
         urdf: the composite URDF file.
         model: pinocchio.Model reduced to the arm joints (end-effector joints locked).
-        data: a pinocchio.Data for `model` (not thread-safe; one Robot per thread).
+        data: a pinocchio.Data for `model`, scratch space every kinematics call fills anew
+            before reading it (not thread-safe; one Robot per thread).
         tcp_frame: frame index of `ee_tcp` in `model`.
-        limits: JointLimits of the arm joints.
-        home: home configuration [rad], shape (n,).
+        limits: JointLimits of the arm joints (read-only arrays).
+        home: home configuration [rad], shape (n,) (read-only).
     """
 
     def __init__(self, spec: MountSpec) -> None:
@@ -82,6 +83,10 @@ class Robot:
         )
         self.home = np.array(spec.home, dtype=float)
         self.limits.check_position(self.home, name=f"{spec.name} home")
+        # one Robot per process is shared by every run in it (`load_robot`): its arrays are
+        # read-only, so no run can change what a later one plans with
+        for a in (self.home, *vars(self.limits).values()):
+            a.setflags(write=False)
 
     @property
     def dof(self) -> int:
