@@ -7,7 +7,8 @@ a scene that places the arm elsewhere transforms poses into it first.
 from __future__ import annotations
 
 import math
-from functools import cache
+from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,7 @@ from cell.errors import InvalidInput, MissingDependency
 from cell.frames import axis_frame
 from cell.robot.composite import MOUNTS, MountSpec, composite_urdf, load_mount
 from cell.robot.limits import JointLimits
+from cell.robot.paths import example_robot_data_dir, robots_dir
 
 __all__ = [
     "EE_JOINTS",
@@ -152,13 +154,17 @@ class Robot:
         return rng.uniform(lo, hi, size=(n, self.dof))
 
 
-@cache
-def _load(name: str) -> Robot:
+@lru_cache(maxsize=8)
+def _load(name: str, robots: Path, robot_data: Path) -> Robot:
+    """The Robot of `name` as described in these folders (`load_robot`): the key names where
+    the description is read from, so a run never gets an arm read from folders it does
+    not use ($CELL_ROBOTS_DIR, $CELL_EXAMPLE_ROBOT_DATA set or changed since)."""
     return Robot(load_mount(name))
 
 
 def load_robot(name: str) -> Robot:
-    """The arm with the end-effector, by name (cached per process).
+    """The arm with the end-effector, by name (cached per process, per the folders its
+    description is read from: `cell.robot.paths`).
 
     Args:
         name: "panda" or "ur5".
@@ -172,4 +178,4 @@ def load_robot(name: str) -> Robot:
     """
     if name not in MOUNTS:
         raise InvalidInput(f"unknown robot {name!r}; valid: {', '.join(sorted(MOUNTS))}")
-    return _load(name)
+    return _load(name, robots_dir(), example_robot_data_dir())
