@@ -101,3 +101,33 @@ def test_cli_tradeoff_says_which_set_and_seeds_it_ran(capsys: pytest.CaptureFixt
     assert out["set"] == "tune" and out["seeds"] == [3, 3]
     assert [p["speed_scale"] for p in out["points"]] == [1.0]
     assert out["points"][0]["items"] == 1
+
+
+def test_the_shared_arm_is_read_only_and_read_from_the_folders_in_use(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    import shutil
+
+    import numpy as np
+
+    from cell.robot import load_robot, paths
+
+    panda = load_robot("panda")
+    with pytest.raises(ValueError, match="read-only"):
+        panda.home[0] = 0.1  # a run cannot change what the next one plans with
+    with pytest.raises(ValueError, match="read-only"):
+        panda.limits.velocity *= 0.5
+    # another robots/ folder: its arm, not the one loaded from the first
+    for d in ("throwing_ee", "panda_throwing"):
+        shutil.copytree(ROOT / "robots" / d, tmp_path / d)
+    mount = tmp_path / "panda_throwing" / "mount.yaml"
+    mount.write_text(mount.read_text().replace("home: [0.0,", "home: [0.25,"))
+    monkeypatch.setenv(paths.ROBOTS_ENV, str(tmp_path))
+    paths.robots_dir.cache_clear()
+    try:
+        assert load_robot("panda").home[0] == 0.25
+    finally:
+        monkeypatch.delenv(paths.ROBOTS_ENV)
+        paths.robots_dir.cache_clear()
+    assert load_robot("panda") is panda
+    np.testing.assert_array_equal(panda.home[:1], [0.0])
