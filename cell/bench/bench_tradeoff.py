@@ -4,8 +4,9 @@ speed scale varies, on random layouts (`cell bench tradeoff`).
 Each point is `cell bench sort` over the same layouts with the arm's moves at a
 fraction of its joint limits (`Orchestrator(speed_scale=…)`; a carry may still go
 slower, as the grip allows), drawn from one set of layouts (`cell bench tradeoff --set`,
-the `test` set by default: `cell.bench.bench_sort.LAYOUT_SETS`). The plot shows items per hour (honest cycle:
-`cell.orchestrator`) on x and the in-bin rate with its 95 % Wilson interval on y.
+the `test` set by default: `cell.bench.bench_sort.LAYOUT_SETS`). The plot shows items
+per hour (honest cycle: `cell.orchestrator`) on x and the in-bin rate with its 95 %
+Wilson interval on y.
 """
 
 from __future__ import annotations
