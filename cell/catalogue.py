@@ -80,7 +80,9 @@ def mesh_vertices(mesh: str, scale: tuple[float, float, float]) -> np.ndarray:
     if not verts:
         raise InvalidInput(f"mesh {mesh} has no vertices")
     v = np.asarray(verts) * np.asarray(scale)
-    return v - (v.max(axis=0) + v.min(axis=0)) / 2
+    v = v - (v.max(axis=0) + v.min(axis=0)) / 2
+    v.setflags(write=False)  # cached and shared by every caller in the process
+    return v
 
 
 def _entry(name: str, spec: dict, where: str) -> CatalogueEntry:

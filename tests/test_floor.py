@@ -122,7 +122,7 @@ def test_the_floor_rate_is_the_in_bin_count_over_the_floor_cycles() -> None:
 def test_cli_bench_sort_with_the_floor_reports_a_rate_no_lower_than_its_own(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    argv = ["bench", "sort", "--layouts", "1", "--seed", "12", "--max-items", "2"]
+    argv = ["bench", "sort", "--set", "tune", "--layouts", "1", "--seed", "12", "--max-items", "2"]
     assert main([*argv, "--floor", "--json", "--out", str(tmp_path)]) == 0
     figures = json.loads(capsys.readouterr().out)
     layout = json.loads((tmp_path / "layout_12.json").read_text())

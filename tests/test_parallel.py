@@ -14,7 +14,6 @@ import pytest
 
 ray = pytest.importorskip("ray")
 
-from cell.bench.bench_sort import layout_units, run_layout, summarise_layouts  # noqa: E402
 from cell.parallel import CampaignFailed, run_campaign  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
@@ -40,16 +39,29 @@ def _strip(layouts):
     return json.dumps([{k: v for k, v in lay.items() if k != "wall_time_s"} for lay in layouts])
 
 
-def test_a_campaign_on_two_workers_equals_the_serial_run(local_ray):
-    units = layout_units(2, seed=5, max_items=3)
-    serial = run_campaign(run_layout, units, workers=1, progress=False)
-    on_ray = run_campaign(run_layout, units, workers=2, progress=False)
-    assert _strip(serial) == _strip(on_ray)
-    a, b = summarise_layouts(serial), summarise_layouts(on_ray)
-    for d in (a, b):
-        d.pop("wall_time_s")
-    assert json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
-    assert a["items"] == 6
+def _bench_sort(tmp_path, tag, capsys, *extra):
+    """`cell bench sort` on 4 test-set layouts of 2 items each: its figures without the
+    wall time, and each layout's result (--out) as JSON text without its wall time."""
+    from cell.cli import main
+
+    out = tmp_path / tag
+    argv = ["bench", "sort", "--layouts", "4", "--robots", "panda,ur5", "--max-items", "2"]
+    assert main([*argv, "--json", "--out", str(out), *extra]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    figures.pop("wall_time_s")
+    layouts = [json.loads((out / f"layout_{s}.json").read_text()) for s in range(1000, 1004)]
+    return json.dumps(figures, sort_keys=True), _strip(layouts)
+
+
+def test_cli_bench_sort_on_two_workers_equals_the_serial_run(local_ray, tmp_path, capsys):
+    # 4 layouts on 2 workers: each worker process runs a layout after another one
+    serial = _bench_sort(tmp_path, "serial", capsys)
+    on_ray = _bench_sort(tmp_path, "ray", capsys, "--workers", "2")
+    assert serial[1] == on_ray[1]  # every layout, item for item, to the last digit
+    assert serial[0] == on_ray[0]
+    figures = json.loads(serial[0])
+    assert figures["set"] == "test" and figures["seeds"] == [1000, 1003]
+    assert figures["items"] == 8 and figures["layouts"] == 4
 
 
 def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ray, tmp_path):

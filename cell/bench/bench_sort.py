@@ -22,6 +22,11 @@ Figures (`summarise_layouts`):
     failures_by_object     per reason, which objects failed so and how often
                            (`failures_by_object`: where to look first);
     per_layout             each layout's own figures (`per_layout`).
+
+Two sets of layouts (`LAYOUT_SETS`, `cell bench sort --set`): `tune`, the seeds the
+cell's constants may be chosen on (the arm's constants were chosen on seeds 0–19), and
+`test`, a disjoint range of seeds no choice is made on (from 1000): the figure a user
+should expect on jobs the cell has never seen is the `test` set's.
 """
 
 from __future__ import annotations
@@ -36,7 +41,9 @@ import yaml
 from cell.loop import rate_per_hour
 
 __all__ = [
+    "LAYOUT_SETS",
     "LayoutUnit",
+    "first_seed",
     "failures_by_object",
     "floor_figures",
     "layout_units",
@@ -46,6 +53,33 @@ __all__ = [
     "summarise_layouts",
     "wilson_interval",
 ]
+
+
+LAYOUT_SETS: dict[str, tuple[int, int]] = {"tune": (0, 1000), "test": (1000, 2**32)}
+"""The seeds of each set of layouts, [first, end): `tune` may be looked at to choose a
+constant, `test` never is (`random_job` takes seeds below 2³²)."""
+
+
+def first_seed(layout_set: str, layouts: int, seed: int | None = None) -> int:
+    """The first seed of `layouts` layouts of a set: `seed`, or the set's first.
+
+    Raises:
+        InvalidInput: an unknown set, or seeds seed … seed + layouts − 1 not all in it.
+    """
+    from cell.errors import InvalidInput
+
+    if layout_set not in LAYOUT_SETS:
+        raise InvalidInput(f"--set {layout_set!r}: give one of {', '.join(LAYOUT_SETS)}")
+    lo, end = LAYOUT_SETS[layout_set]
+    first = lo if seed is None else seed
+    if not (lo <= first and first + layouts <= end):
+        other = [n for n, (a, b) in LAYOUT_SETS.items() if a <= first < b and n != layout_set]
+        hint = f" (seed {first} is in the {other[0]} set: --set {other[0]})" if other else ""
+        raise InvalidInput(
+            f"--seed {first} --layouts {layouts}: the {layout_set} set's seeds are "
+            f"{lo}–{end - 1}; give a first seed from {lo} to {end - layouts}{hint}"
+        )
+    return first
 
 
 @dataclass(frozen=True)

@@ -3,8 +3,10 @@ speed scale varies, on random layouts (`cell bench tradeoff`).
 
 Each point is `cell bench sort` over the same layouts with the arm's moves at a
 fraction of its joint limits (`Orchestrator(speed_scale=…)`; a carry may still go
-slower, as the grip allows). The plot shows items per hour (honest cycle:
-`cell.orchestrator`) on x and the in-bin rate with its 95 % Wilson interval on y.
+slower, as the grip allows), drawn from one set of layouts (`cell bench tradeoff --set`,
+the `test` set by default: `cell.bench.bench_sort.LAYOUT_SETS`). The plot shows items
+per hour (honest cycle: `cell.orchestrator`) on x and the in-bin rate with its 95 %
+Wilson interval on y.
 """
 
 from __future__ import annotations
@@ -44,8 +46,9 @@ def tradeoff_rows(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
-def plot_tradeoff(rows: list[dict[str, Any]], path: str | Path) -> Path:
-    """Items per hour (x) against in-bin rate (y, 95 % interval), one point per scale."""
+def plot_tradeoff(rows: list[dict[str, Any]], path: str | Path, layout_set: str = "") -> Path:
+    """Items per hour (x) against in-bin rate (y, 95 % interval), one point per scale;
+    `layout_set` (tune or test, `cell.bench.bench_sort.LAYOUT_SETS`) named in the title."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -66,7 +69,8 @@ def plot_tradeoff(rows: list[dict[str, Any]], path: str | Path) -> Path:
     ax.set_xlabel("items per hour in the right bin (simulated, honest cycle)")
     ax.set_ylabel("in-bin rate (95 % interval)")
     n = rows[0]["layouts"] if rows else 0
-    ax.set_title(f"Speed scale of the arm's limits vs accuracy ({n} random layouts)")
+    which = f"{n} {layout_set}-set random layouts" if layout_set else f"{n} random layouts"
+    ax.set_title(f"Speed scale of the arm's limits vs accuracy ({which})")
     ax.grid(alpha=0.3)
     fig.tight_layout()
     out = Path(path)

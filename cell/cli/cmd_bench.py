@@ -19,7 +19,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "Without a subject: the speed and accuracy figures of the model, planner, IK, "
             "identification and gap diagnosis. `cell bench sort`: sort N random layouts "
             "(cell job random) in the scene and report in_bin_rate (95 %% interval), "
-            "in_bin_rate_unseen, items_per_hour and failures by reason. `cell bench tradeoff`: "
+            "in_bin_rate_unseen, items_per_hour and failures by reason, on the test set of "
+            "layouts (seeds from 1000, never tuned on) unless --set tune. `cell bench tradeoff`: "
             "the same at several arm speed scales, items per hour against in-bin rate."
         ),
     )
@@ -31,7 +32,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_json_arg(p, "one flat object of the figures")
     p.add_argument("--layouts", type=int, default=8, help="sort: layouts to draw (8)")
-    p.add_argument("--seed", type=int, default=0, help="sort: seed of the first layout (0)")
+    p.add_argument(
+        "--set",
+        choices=("tune", "test"),
+        default="test",
+        help="sort, tradeoff: the layouts drawn: test (the default), seeds from 1000 that no "
+        "constant of the cell was chosen on; tune, seeds 0-999, where the arm's constants "
+        "were chosen (on 0-19)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        help="sort, tradeoff: seed of the first layout, within the --set (its first: 1000 for "
+        "test, 0 for tune)",
+    )
     p.add_argument(
         "--robots",
         default="panda",
@@ -94,7 +109,7 @@ def run_sort(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from cell.bench.bench_sort import layout_units, run_layout, summarise_layouts
+    from cell.bench.bench_sort import first_seed, layout_units, run_layout, summarise_layouts
     from cell.errors import InvalidInput
     from cell.parallel import run_campaign
 
@@ -106,9 +121,10 @@ def run_sort(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
     if not 0.0 < args.speed_scale <= 1.0:
         raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
+    first = first_seed(args.set, args.layouts, args.seed)
     units = layout_units(
         args.layouts,
-        args.seed,
+        first,
         robots,
         args.learn,
         max(0, args.max_items),
@@ -131,7 +147,7 @@ def run_sort(args: argparse.Namespace) -> int:
         desc="random layouts",
         on_result=keep,
     )
-    figures = summarise_layouts(layouts)
+    figures = {**_set_figures(args.set, first, args.layouts), **summarise_layouts(layouts)}
     if json_to_stdout(args):
         print_json(figures)
     else:
@@ -156,6 +172,11 @@ def run_sort(args: argparse.Namespace) -> int:
     return 0
 
 
+def _set_figures(layout_set: str, first: int, layouts: int) -> dict[str, object]:
+    """Which layouts a campaign ran: {"set": tune|test, "seeds": [first, last]}."""
+    return {"set": layout_set, "seeds": [first, first + layouts - 1]}
+
+
 def _robots(text: str) -> tuple[str, ...]:
     from cell.errors import InvalidInput
     from cell.kinds import ROBOTS
@@ -170,7 +191,7 @@ def _robots(text: str) -> tuple[str, ...]:
 def run_tradeoff(args: argparse.Namespace) -> int:
     import json
 
-    from cell.bench.bench_sort import run_layout
+    from cell.bench.bench_sort import first_seed, run_layout
     from cell.bench.bench_tradeoff import plot_tradeoff, tradeoff_rows, tradeoff_units
     from cell.errors import InvalidInput
     from cell.parallel import run_campaign
@@ -183,8 +204,9 @@ def run_tradeoff(args: argparse.Namespace) -> int:
         raise InvalidInput(f"--scales {args.scales!r}: give fractions in (0, 1], e.g. 0.5,1.0")
     if not 1 <= args.layouts <= 10_000:
         raise InvalidInput(f"--layouts {args.layouts}: give 1 to 10000")
+    first = first_seed(args.set, args.layouts, args.seed)
     units = tradeoff_units(
-        scales, args.layouts, args.seed, _robots(args.robots), max(0, args.max_items)
+        scales, args.layouts, first, _robots(args.robots), max(0, args.max_items)
     )
     results = run_campaign(
         run_layout,
@@ -194,18 +216,20 @@ def run_tradeoff(args: argparse.Namespace) -> int:
         desc="layouts x speed scales",
     )
     rows = tradeoff_rows(results)
+    doc = {**_set_figures(args.set, first, args.layouts), "points": rows}
     if json_to_stdout(args):
-        print(json.dumps({"points": rows}, indent=1))
+        print(json.dumps(doc, indent=1))
     else:
+        print(f"{args.set} set, seeds {first}-{first + args.layouts - 1}")
         print(f"{'scale':>6s} {'items/h':>8s} {'in-bin':>7s}  95 % interval  items")
         for r in rows:
             print(
                 f"{r['speed_scale']:6.2f} {r['items_per_hour']:8.0f} {r['in_bin_rate']:7.3f}  "
                 f"{r['in_bin_rate_lo']:.3f}-{r['in_bin_rate_hi']:.3f}   {r['items']}"
             )
-        write_json(args, {"points": rows})
+        write_json(args, doc)
     if args.plot:  # after the results are printed
-        plot_tradeoff(rows, args.plot)
+        plot_tradeoff(rows, args.plot, args.set)
     return 0
 
 

@@ -262,6 +262,8 @@ def reach_table(
     with np.errstate(invalid="ignore"):
         valid = error <= TABLE_TOL
     table = ReachTable(elev, DROPS.copy(), strokes, reach, error, valid)
+    for a in vars(table).values():  # cached and shared by every plan in the process
+        a.setflags(write=False)
     log.debug(
         "reach table %s: %d of %d cells valid, max error %.2e m",
         obj.name,

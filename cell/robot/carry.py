@@ -267,6 +267,7 @@ def _sphere_directions(n: int = 128) -> tuple[np.ndarray, float]:
     phi = k * math.pi * (3.0 - math.sqrt(5.0))
     r = np.sqrt(1.0 - z * z)
     dirs = np.c_[r * np.cos(phi), r * np.sin(phi), z]
+    dirs.setflags(write=False)  # cached and shared by every carry in the process
     u = _sphere_sample(20000)
     # less a margin for the directions between the samples (the cover's error is below
     # the sample's spacing squared, about 1e-3)

@@ -7,7 +7,8 @@ a scene that places the arm elsewhere transforms poses into it first.
 from __future__ import annotations
 
 import math
-from functools import cache
+from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,7 @@ from cell.errors import InvalidInput, MissingDependency
 from cell.frames import axis_frame
 from cell.robot.composite import MOUNTS, MountSpec, composite_urdf, load_mount
 from cell.robot.limits import JointLimits
+from cell.robot.paths import example_robot_data_dir, robots_dir
 
 __all__ = [
     "EE_JOINTS",
@@ -40,10 +42,11 @@ class Robot:
         spec: the MountSpec (robots/<mount>/mount.yaml).
         urdf: the composite URDF file.
         model: pinocchio.Model reduced to the arm joints (end-effector joints locked).
-        data: a pinocchio.Data for `model` (not thread-safe; one Robot per thread).
+        data: a pinocchio.Data for `model`, scratch space every kinematics call fills anew
+            before reading it (not thread-safe; one Robot per thread).
         tcp_frame: frame index of `ee_tcp` in `model`.
-        limits: JointLimits of the arm joints.
-        home: home configuration [rad], shape (n,).
+        limits: JointLimits of the arm joints (read-only arrays).
+        home: home configuration [rad], shape (n,) (read-only).
     """
 
     def __init__(self, spec: MountSpec) -> None:
@@ -82,6 +85,10 @@ class Robot:
         )
         self.home = np.array(spec.home, dtype=float)
         self.limits.check_position(self.home, name=f"{spec.name} home")
+        # one Robot per process is shared by every run in it (`load_robot`): its arrays are
+        # read-only, so no run can change what a later one plans with
+        for a in (self.home, *vars(self.limits).values()):
+            a.setflags(write=False)
 
     @property
     def dof(self) -> int:
@@ -147,13 +154,17 @@ class Robot:
         return rng.uniform(lo, hi, size=(n, self.dof))
 
 
-@cache
-def _load(name: str) -> Robot:
+@lru_cache(maxsize=8)
+def _load(name: str, robots: Path, robot_data: Path) -> Robot:
+    """The Robot of `name` as described in these folders (`load_robot`): the key names where
+    the description is read from, so a run never gets an arm read from folders it does
+    not use ($CELL_ROBOTS_DIR, $CELL_EXAMPLE_ROBOT_DATA set or changed since)."""
     return Robot(load_mount(name))
 
 
 def load_robot(name: str) -> Robot:
-    """The arm with the end-effector, by name (cached per process).
+    """The arm with the end-effector, by name (cached per process, per the folders its
+    description is read from: `cell.robot.paths`).
 
     Args:
         name: "panda" or "ur5".
@@ -167,4 +178,4 @@ def load_robot(name: str) -> Robot:
     """
     if name not in MOUNTS:
         raise InvalidInput(f"unknown robot {name!r}; valid: {', '.join(sorted(MOUNTS))}")
-    return _load(name)
+    return _load(name, robots_dir(), example_robot_data_dir())
