@@ -121,7 +121,7 @@ def check_the_demo_variants() -> None:
 
 # -- the random layouts ----------------------------------------------------------------------
 def check_the_random_layouts() -> None:
-    bench = load_json("docs/figures/bench_sort.json")
+    bench = load_json("docs/figures/bench_sort_tune.json")
     for page in ("docs/figures.md",):
         rate, lo, hi = quoted(
             page, r"`in_bin_rate` \*\*([\d.]+)\*\* \(95 % interval ([\d.]+)–([\d.]+)\)"
@@ -146,8 +146,15 @@ def check_the_random_layouts() -> None:
         n, last = quoted(page, r"draws (\d+) sort jobs \(`cell job random`, seeds 0–(\d+),")
         assert (int(n), int(last)) == (bench["layouts"], bench["layouts"] - 1)
         COVERED[page].append(
-            re.search(r"seeds\s+(0)–", page_text(page)).span(1)  # type: ignore[union-attr]
+            re.search(r"random`, seeds\s+(0)–", page_text(page)).span(1)  # type: ignore[union-attr]
         )
+    check_the_headline(bench)
+
+
+def check_the_headline(tune: dict) -> None:
+    """README's headline is the `test` layouts (bench_sort.json); the `tune` figure beside it."""
+    bench = load_json("docs/figures/bench_sort.json")
+    assert (bench["set"], tune["set"]) == ("test", "tune")
     n_items, rate, lo, hi, unseen, rate_h = quoted(
         "README.md",
         r"\| (\d+) items: in-bin rate ([\d.]+) \(95 % interval ([\d.]+)–([\d.]+)\), ([\d.]+) on "
@@ -158,23 +165,53 @@ def check_the_random_layouts() -> None:
         close(q, bench[key], 3)
     close(unseen, bench["in_bin_rate_unseen"], 3)
     assert num(rate_h) == round(bench["items_per_hour"])
-    (n_layouts,) = quoted("README.md", r"\| (\d+) random jobs the cell has never seen \|")
+    (n_layouts,) = quoted("README.md", r"\| (\d+) random jobs the cell has never seen \(the `test`")
     assert int(n_layouts) == bench["layouts"]
+    n_tune, rate_tune, rate_h_tune = quoted(
+        "README.md", r"\| (\d+) items: in-bin rate ([\d.]+), ([\d,]+) items per hour \|"
+    )
+    assert int(n_tune) == tune["items"]
+    close(rate_tune, tune["in_bin_rate"], 3)
+    assert num(rate_h_tune) == round(tune["items_per_hour"])
     (floor,) = quoted("README.md", r"\(a floor for the cell's poses\) \| ([\d,]+) items per hour")
     assert num(floor) == round(bench["floor_items_per_hour"])
-    (rate_h,) = quoted("README.md", r"make ([\d,]+) items per\s+hour against a goal")
-    assert num(rate_h) == round(bench["items_per_hour"])
-    dropped, items = quoted("README.md", r"layouts (\d+) of (\d+) items were\s+dropped")
-    assert (int(dropped), int(items)) == (
-        bench["failures"]["dropped_while_carried"],
-        bench["items"],
+    rate_h, rate_h_tune = quoted(
+        "README.md",
+        r"make\s+([\d,]+) items per hour against a goal of 1,500 \(the `tune` layouts ([\d,]+)\)",
     )
-    (missed,) = quoted("README.md", r"Of the (\d+) items that missed their bins")
+    assert (num(rate_h), num(rate_h_tune)) == (
+        round(bench["items_per_hour"]),
+        round(tune["items_per_hour"]),
+    )
+    dropped, items, items_test = quoted(
+        "README.md", r"layouts (\d+) of (\d+) items were\s+dropped.*?none of the (\d+) on"
+    )
+    assert (int(dropped), int(items)) == (tune["failures"]["dropped_while_carried"], tune["items"])
+    assert int(items_test) == bench["items"]
+    assert bench["failures"].get("dropped_while_carried", 0) == 0
+    (missed,) = quoted("README.md", r"Of the (\d+) items that missed their bins over the `test`")
     assert int(missed) == bench["failures"]["missed_bin"]
 
 
+def check_the_layout_sets() -> None:
+    """The sets' seeds as docs/figures.md gives them are `cell.bench.bench_sort.LAYOUT_SETS`."""
+    from cell.bench.bench_sort import LAYOUT_SETS
+
+    test_from, tune_lo, tune_hi, chosen_lo, chosen_hi = quoted(
+        "docs/figures.md",
+        r"`--set test` \(the default,\s+seeds from (\d+)\).*?`--set tune` \(seeds (\d+)–(\d+)\),"
+        r".*?\(on (\d+)–(\d+)\)",
+    )
+    assert int(test_from) == LAYOUT_SETS["test"][0]
+    assert (int(tune_lo), int(tune_hi) + 1) == LAYOUT_SETS["tune"]
+    tune = load_json("docs/figures/bench_sort_tune.json")
+    assert [int(chosen_lo), int(chosen_hi)] == tune["seeds"]
+    (seed,) = quoted("docs/figures.md", r"`cell bench sort --set tune --layouts 20 --seed (\d+)")
+    assert int(seed) == tune["seeds"][0]
+
+
 def check_the_floor() -> None:
-    page, bench = "docs/figures.md", load_json("docs/figures/bench_sort.json")
+    page, bench = "docs/figures.md", load_json("docs/figures/bench_sort_tune.json")
     rate, floor_s, sim_s, panda, ur5 = quoted(
         page,
         r"`floor_items_per_hour` \*\*([\d,]+)\*\* \(([\d,]+) s instead of ([\d,]+) s; "
@@ -196,7 +233,7 @@ def check_the_floor() -> None:
 
 
 def check_the_moving_releases_and_repeat_throws() -> None:
-    page, bench = "docs/figures.md", load_json("docs/figures/bench_sort.json")
+    page, bench = "docs/figures.md", load_json("docs/figures/bench_sort_tune.json")
     moving, thrown = quoted(page, r"(\d+) of the (\d+) throws were released on the move")
     assert (int(moving), int(thrown)) == (bench["released_moving"], bench["thrown"])
     pairs, second, first, closer = quoted(
@@ -319,11 +356,12 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_real_table_tennis,
     check_the_identify_evidence,
     check_the_cli_limits,
+    check_the_layout_sets,
 )
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=lambda f: f.__name__)
-def test_the_quoted_figures_are_the_last_generatedload_json(check: Callable[[], None]) -> None:
+def test_the_quoted_figures_are_the_last_generated(check: Callable[[], None]) -> None:
     check()
 
 
@@ -339,7 +377,7 @@ EXEMPT: tuple[tuple[str, str, str], ...] = (
     ("*", r"\d{4}-\d{2}-\d{2}", "a date"),
     ("*", r"[≥≤] [\d,.]+ (?:m?s|mm)?|goal [\d,]+|goal of [\d,]+", "a goal, not a measurement"),
     ("README.md", r"\(100\.0 %\)", "checked with its count (in_bin_rate)"),
-    ("docs/figures.md", r"interval 0\.945–0\.975", "checked (bench_sort.json)"),
+    ("docs/figures.md", r"interval 0\.945–0\.975", "checked (bench_sort_tune.json)"),
 )
 
 
