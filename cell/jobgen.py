@@ -180,8 +180,7 @@ def random_job(
         params: the model parameters the feasibility check uses.
         refused: appended to with the kinds drawn again.
     """
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     if params is None:
         params = load_params(scene_params_path())

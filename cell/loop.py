@@ -222,7 +222,7 @@ class ItemResult:
         in_bin: True when that is the target bin.
         landing_error_m: throws: distance of the crossing of the rim plane from the
             point the throw was for (the bin's centre, or the point of it clear of
-            what the bin holds: CellScene.throw_spot); places: distance
+            what the bin holds: cell.arm.spots.throw_spot); places: distance
             of the rest point from the bin centre [m].
         stroke_m: commanded stroke at release [m] (NaN for failures before planning).
         delta_stroke_m: learned correction ΔL_s included in stroke_m [m].

@@ -32,6 +32,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from cell.arm.spots import place_spots, throw_spot
 from cell.errors import (
     CannotGrip,
     CellError,
@@ -45,7 +46,7 @@ from cell.jobs import ItemSpec, Job, check_order
 from cell.kinds import PICKS, RELEASES
 from cell.loop import FAILURES, Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
-from cell.params import ModelParams, load_params
+from cell.params import ModelParams, load_params, scene_params_path
 
 __all__ = [
     "FAILURES",  # re-exported from cell.loop, where it is defined
@@ -463,14 +464,6 @@ def check_sortable(
     plan_clean(params, obj, params.model_object(obj), goal, b)
 
 
-def scene_params_path() -> str | None:
-    """The scene's calibrated parameter file (robots/cell_scene/ee_params.yaml), if present."""
-    from cell.robot.paths import robots_dir
-
-    p = robots_dir() / "cell_scene" / "ee_params.yaml"
-    return str(p) if p.is_file() else None
-
-
 @dataclass
 class LandingCorrection:
     """What the landings of one object (or class) taught the planner.
@@ -510,7 +503,7 @@ RELEASE_FALLBACKS = ((math.radians(45.0), 0.7), (math.radians(30.0), 0.6))
 # turn: the optimiser puts a long throw of a heavy item in the box's far upper corner, which
 # the arm does not reach with the throw axis tilted (a 174 g disc to a bin 2.5 m out: 15 mm
 # short). The 0.75 box can leave the target out of reach: the same disc aimed 0.1 m
-# farther (a point of the bin clear of what it holds, `CellScene.throw_spot`) lay 2.17 m
+# farther (a point of the bin clear of what it holds, `cell.arm.spots.throw_spot`) lay 2.17 m
 # beyond its nearest release, and the item failed (random layout 0); the 0.9 box reaches
 # both (tests/test_release_box.py)
 RELEASE_BOX_SHRINKS = (0.75, 0.9)
@@ -664,7 +657,7 @@ class Orchestrator:
         self.ee = self.effector.sim  # the plant's end-effector: the physical pick's steps
         self._q_release = np.zeros(0)
         self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
-        self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (throw_spot)
+        self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (`throw_spot`)
         self._aim = np.zeros(3)  # where the last plan aims (the goal, or the learned aim)
         self._model_obj: Any = None  # the object as the last plan knew it (ObjectParams)
         self.residual = None
@@ -673,7 +666,6 @@ class Orchestrator:
 
             self.residual = ResidualModel.load(job.residual)
         self.q = np.asarray(self.scene.ready_q, float)
-        self.rng = np.random.default_rng(job.seed)
         self.observer = observer
         self.learn = learn
         self.corrections: dict[str, LandingCorrection] = {}
@@ -729,7 +721,7 @@ class Orchestrator:
         self, centre: np.ndarray, elevation: float, azimuth: float, stroke: float, obj: ObjectParams
     ) -> np.ndarray:
         """TCP position [m, W] that puts the gripped item's centre at `centre`."""
-        from cell.sim.frames import tcp_for_item_centre
+        from cell.frames import tcp_for_item_centre
 
         return tcp_for_item_centre(centre, elevation, azimuth, stroke, obj)
 
@@ -2246,7 +2238,7 @@ class Orchestrator:
                 return centre, q_above, self._ik_frame(tcp_down)
             return centre, q_above, self._down_vertical(q_above, tcp_down)[-1]
 
-        spots = sc.place_spots(target.id, obj, wall_margin_m=pads)
+        spots = place_spots(sc, target.id, obj, wall_margin_m=pads)
         for spot in self._spots_to_try(spots, sc.bin_spec(target.id).wall):
             try:
                 centre, q_above, q_down = poses(spot, on_branch=True)
@@ -2408,7 +2400,7 @@ class Orchestrator:
         """
         # the bin's centre, or a point of it clear of what the bin holds: the same for
         # every bounds tried (the scene does not move meanwhile)
-        goal = (*self.scene.throw_spot(target.id, obj), target.rim_height)
+        goal = (*throw_spot(self.scene, target.id, obj), target.rim_height)
         self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         err: CellError | None = None
         best: tuple[Any, ...] | None = None

@@ -230,8 +230,7 @@ def _carry(
     to a release pose (TCP [m, W], elevation [rad], azimuth 0) at the grip limit computed
     with `margin` (`plan_carry`, with or without `shape`); (still held, the item's drift
     in the grip [m], the path's peak use of the grip, its duration [s])."""
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     ee = load_params(scene_params_path()).ee
     m_hold = holding_mass_kg(ee, STROKE_M, WIDTH_M)
@@ -388,8 +387,7 @@ def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():
     for a short box, above 1 for a tall one; the scene's pads hold the first still and
     let the second turn."""
     from cell.model.objects import ObjectParams
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
     stroke = 0.07
@@ -408,8 +406,8 @@ def test_the_pads_couple_of_a_cylinder_is_that_of_a_line_contact():
     (length L = the pads' overlap with it): the mean arm of the friction against a turn
     about the pads' axis is then L/4, not that of a face as for a box."""
     from cell.model.objects import ObjectParams
-    from cell.orchestrator import PAD_COUPLE_FACTOR, scene_params_path
-    from cell.params import load_params
+    from cell.orchestrator import PAD_COUPLE_FACTOR
+    from cell.params import load_params, scene_params_path
     from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
 
     params = load_params(scene_params_path())

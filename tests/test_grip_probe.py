@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from cell.catalogue import get_object
-from cell.orchestrator import carry_hold, mesh_grip, scene_params_path
-from cell.params import load_params
+from cell.orchestrator import carry_hold, mesh_grip
+from cell.params import load_params, scene_params_path
 from cell.sim.grip_probe import probe_grip, probe_load
 
 

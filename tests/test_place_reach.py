@@ -2,7 +2,7 @@
 
 Random layout 3's bin_3 (UR5): 0.87 m from the base, 0.38 x 0.37 m, a 0.089 m rim. Placed
 pointing down, a 200 mm bottle's TCP is 0.30 m up: the UR5 misses the bin's centre by 40 mm
-there. The eight best place spots (`CellScene.place_spots`: clear, nearest the centre) are
+there. The eight best place spots (`cell.arm.spots.place_spots`: clear, nearest the centre) are
 all beyond its reach; the spots nearest the base, then, are tried as well
 (`Orchestrator._spots_to_try`). Checked in the scene: the bottle at rest in its bin, and a
 spot nearer the base than the centre by more than the reach it was missed by."""

@@ -89,8 +89,8 @@ def test_a_tall_item_wound_to_the_shortest_stroke_stays_in_the_pads_where_it_fel
     use 0.96; held at 50 mm, 0.90). Winding carries the bottle with the carriage, the
     stroke's change along the throw axis, and the pads close by the band law's f_g."""
     from cell.catalogue import catalogue
-    from cell.orchestrator import release_grip_use, scene_params_path
-    from cell.params import load_params
+    from cell.orchestrator import release_grip_use
+    from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
     bottle = catalogue()["o6_bottle"].params

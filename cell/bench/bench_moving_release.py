@@ -48,11 +48,11 @@ def scenario(
 ) -> Scenario:
     """The static plan to the bin and the lift pose over the station (+ offset) [m]."""
     from cell.catalogue import get_object
+    from cell.frames import tcp_for_item_centre
     from cell.optimize.bounds import ThrowBounds
     from cell.optimize.plan import plan_facing
     from cell.orchestrator import carry_hold
     from cell.robot.ik import solve_release_ik
-    from cell.sim.frames import tcp_for_item_centre
 
     obj = get_object(obj_name)
     mo = params.model_object(obj)
@@ -148,8 +148,7 @@ def main(n: int = 8, seed: int = 1) -> None:
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.errors import CellError
     from cell.optimize.verify import fly as model_fly
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.robot.model import load_robot
     from cell.robot.moving_release import choose_release, plan_moving_release
     from cell.sim import CellScene

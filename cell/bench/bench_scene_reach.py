@@ -48,8 +48,8 @@ def scene_reach_errors(
     from cell.log.table import ThrowTable
     from cell.model.objects import ObjectParams
     from cell.model.throw import launch_state, predict_landing
-    from cell.orchestrator import clean_launch, grip_stroke_limit, scene_params_path
-    from cell.params import load_params
+    from cell.orchestrator import clean_launch, grip_stroke_limit
+    from cell.params import load_params, scene_params_path
     from cell.sim import CellScene
     from cell.workflows.campaign import throw_once
 

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.jobs import ItemSpec, Job
+from cell.jobs import Job
 from cell.loop import Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
@@ -81,7 +81,7 @@ class PlatformRunner:
         end_effector: Any = None,
     ) -> None:
         from cell.endeffector.factory import make_in_step
-        from cell.orchestrator import scene_params_path
+        from cell.params import scene_params_path
         from cell.sim import BinSpec
 
         if job.platform not in ("drone", "mobile"):
@@ -219,10 +219,6 @@ class PlatformRunner:
         """No learning on these platforms."""
 
     # -- the run -------------------------------------------------------------------
-    def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
-        """Load, plan, release, observe and record one item (`cell.loop.ItemLoop`);
-        its cycle time runs to the moment the next item can be loaded."""
-        return self.loop.run_item(index, spec)
 
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
         """Throw every item of the job; `on_item` is called after each (progress)."""
