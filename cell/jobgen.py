@@ -145,9 +145,9 @@ def _object_of(entry: dict[str, Any]) -> Any:
 
 def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any) -> list[str]:
     """The ids of the bins the cell can sort this item into (cell.orchestrator.check_sortable)."""
+    from cell.arm.launch import check_sortable
     from cell.errors import CannotGrip, UnreachableTarget
     from cell.jobs import BinSpec
-    from cell.orchestrator import check_sortable
 
     obj = _object_of(entry)
     ok = []

@@ -36,6 +36,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from cell.decision import Decision
 from cell.errors import (
     CannotGrip,
     CellError,
@@ -122,32 +123,6 @@ class Plant(Protocol):
     ) -> tuple[float, float, float]:
         """Observe the released item until it crosses z = land_z going down: (x, y, t)."""
         ...
-
-
-@dataclass
-class Decision:
-    """What a platform will do with an item.
-
-    Attributes:
-        action: "throw" or "place".
-        stroke_m: stroke the item is gripped and released at [m].
-        plan: the throw plan (`cell.optimize.ThrowPlan`; None for a place).
-        delta_stroke_m: learned ΔL_s included in `stroke_m` [m].
-        model_obj: the item as the plan modelled it (for an observer).
-        ee_params: the end-effector parameters the plan used (for an observer).
-        moving: the latch opens while the platform moves; the release point is known
-            once it has (`Platform.release` returns it).
-        state: the platform's own data for the later steps (poses, configurations).
-    """
-
-    action: str
-    stroke_m: float
-    plan: Any = None
-    delta_stroke_m: float = 0.0
-    model_obj: Any = None
-    ee_params: Any = None
-    moving: bool = False
-    state: dict[str, Any] = field(default_factory=dict)
 
 
 class Platform(Protocol):

@@ -20,13 +20,14 @@ at all, the static one being as soon (tests/test_moving_release.py).
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from cell import orchestrator
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot import moving_release
@@ -53,6 +54,7 @@ def _run(tmp_path: Path, release: str, seen: list[bool] | None = None) -> Any:
         release=release,
         cycle_search=False,
         turn_release=False,
+        tuning=replace(TUNING, settle_s=SETTLE_THEN_S),
     )
     try:
         if seen is not None:
@@ -73,7 +75,6 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, Any, l
     tmp = tmp_path_factory.mktemp("moving_choice")
     seen: list[bool] = []
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(orchestrator, "SETTLE_S", SETTLE_THEN_S)
         mp.setattr(moving_release, "SETTLE_S", SETTLE_THEN_S)
         out = _run(tmp, "auto", seen), _run(tmp, "static"), seen
     yield out

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from cell.orchestrator import PLACE_SPOTS_TRIED, Orchestrator
+from cell.arm.tuning import TUNING
+from cell.orchestrator import Orchestrator
 from tests.job_rows import job_rows
 
 JOB = """\
@@ -35,14 +36,16 @@ def test_a_bin_beyond_reach_at_its_middle_is_placed_into_on_its_near_side(
     tried_m: list[float] = []  # the spots tried, from the base [m]
     tried = Orchestrator._spots_to_try
 
-    def watch(spots, floor_z):
-        out = tried(spots, floor_z)
-        assert len(out) <= 2 * PLACE_SPOTS_TRIED
-        assert out[:PLACE_SPOTS_TRIED] == spots[:PLACE_SPOTS_TRIED]  # the best ones first
+    def watch(self, spots, floor_z):
+        out = tried(self, spots, floor_z)
+        assert len(out) <= 2 * TUNING.place_spots_tried
+        assert (
+            out[: TUNING.place_spots_tried] == spots[: TUNING.place_spots_tried]
+        )  # the best ones first
         tried_m.extend(math.hypot(x, y) for x, y, _ in out)
         return out
 
-    monkeypatch.setattr(Orchestrator, "_spots_to_try", staticmethod(watch))
+    monkeypatch.setattr(Orchestrator, "_spots_to_try", watch)
     assert job_rows(JOB, tmp_path, "place-reach") == [("place", "", True)]
     centre = math.hypot(0.843, 0.23)
     assert min(tried_m) < centre - 0.04  # nearer the base than the centre was missed by

@@ -1,6 +1,6 @@
 """A long throw of a heavy item whose optimised release lies where the arm does not reach
 (the release box's far upper corner, the throw axis tilted): the cell plans it again in a
-smaller release box (`cell.orchestrator.RELEASE_BOX_SHRINKS`) instead of failing the item.
+smaller release box (`cell.arm.tuning.TUNING.release_box_shrinks`) instead of failing the item.
 
 Independent checks: the release configuration's forward kinematics (Pinocchio) against
 the plan's release pose, and the throw's crossing of the rim plane in the scene."""
@@ -85,8 +85,8 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
     in the 0.9 box and lands, where it had failed with `ik`."""
     from dataclasses import replace
 
+    from cell.arm.tuning import TUNING
     from cell.errors import IKFailed
-    from cell.orchestrator import RELEASE_BOX_SHRINKS
 
     job = parse_job(JOB.replace("[2.119, -1.268]", "[2.208, -1.306]"), str(tmp_path / "j.yaml"))
     orch, d, obj = _decided(job, "release-box-far")
@@ -97,7 +97,7 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
         assert np.allclose(half, (hi - lo) * 0.9)  # planned in the larger of the two boxes
         # the boxes tried before it: from the cell's own the release is out of the arm's
         # reach, from the smaller one the target
-        k = RELEASE_BOX_SHRINKS[0]
+        k = TUNING.release_box_shrinks[0]
         mid = (lo + hi) / 2
         small = replace(
             b,

@@ -8,7 +8,7 @@ Random layout 2's geometry (Panda). Without the search the carry solves the rele
 from the pick, and on this job's second item (a 67 mm cube) that lands 3.13 rad away in a
 wrist joint from the configuration the decision timed: its carry took 2.11 s in the scene
 against the 1.06 s timed. And without it the plan is made in the cell's release bounds,
-the lower ones (RELEASE_FALLBACKS) only where IK finds nothing there.
+the lower ones (TUNING.release_fallbacks) only where IK finds nothing there.
 
 Independent checks: where the arm is when the latch opens, the scene's clock against the
 time `_static_carry` gave the carry before it, and the same job run in the scene with the
@@ -24,9 +24,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.joints import joint_gap
 from cell.jobs import parse_job
 from cell.loop import Decision
-from cell.orchestrator import Orchestrator, joint_gap
+from cell.orchestrator import Orchestrator
 
 JOB = """\
 cell: {robot: panda, ee: pybullet}

@@ -18,8 +18,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.planner import _Release
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
-from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator, _Release
+from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from cell.robot.motion import move_time
 from cell.robot.moving_release import COAST_S
@@ -83,7 +85,7 @@ def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: A
     rng = np.random.default_rng(3)
     for _ in range(20):
         q0, q1 = o.robot.random_configuration(rng, 2)
-        each_way = (o._cycle_bound_s(q0, q1) - SETTLE_S - COAST_S) / 2
+        each_way = (o._cycle_bound_s(q0, q1) - TUNING.settle_s - COAST_S) / 2
         # ruckig's rest-to-rest move at the full limits, jerk-limited: no quicker
         assert each_way <= move_time(q0, q1, o.robot) + 1e-9
         assert each_way <= move_time(q1, q0, o.robot) + 1e-9
@@ -98,7 +100,7 @@ def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: A
             expected = 2 * math.sqrt(d_rad / a)
         else:
             expected = d_rad / v + v / a
-        assert o._cycle_bound_s(q0, q1) == pytest.approx(2 * expected + SETTLE_S + COAST_S)
+        assert o._cycle_bound_s(q0, q1) == pytest.approx(2 * expected + TUNING.settle_s + COAST_S)
 
 
 def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any) -> None:
@@ -108,7 +110,7 @@ def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any)
     o._ik_memo.clear()
     with pytest.raises(IKNoSolution) as first:
         o._release_ik(o.robot, pose, np.asarray(o.robot.home, float))
-    assert first.value.position_error_m >= IK_OUT_OF_REACH_M
+    assert first.value.position_error_m >= TUNING.ik_out_of_reach_m
     # from another seed: the same verdict, not searched again
     with pytest.raises(IKNoSolution) as again:
         o._release_ik(o.robot, pose, np.asarray(o.q, float) + 0.1)

@@ -47,11 +47,11 @@ def scenario(
     scene: Any, robot: Any, params: Any, obj_name: str, bin_id: str, offset_xy: np.ndarray
 ) -> Scenario:
     """The static plan to the bin and the lift pose over the station (+ offset) [m]."""
+    from cell.arm.grip_limits import carry_hold
     from cell.catalogue import get_object
     from cell.frames import tcp_for_item_centre
     from cell.optimize.bounds import ThrowBounds
     from cell.optimize.plan import plan_facing
-    from cell.orchestrator import carry_hold
     from cell.robot.ik import solve_release_ik
 
     obj = get_object(obj_name)

@@ -194,9 +194,9 @@ def adhoc_plan(n: int, *, seed: int = 0) -> list[dict[str, Any]]:
     Raises:
         InvalidParameter: n < 1.
     """
+    from cell.arm.grip_limits import grip_stroke_limit
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
-    from cell.orchestrator import grip_stroke_limit
     from cell.params import ModelParams
 
     if n < 1:
