@@ -4,7 +4,7 @@ carry and release (`cell.loop.ItemLoop`); the platforms make it (`cell.arm`,
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 __all__ = ["Decision"]
@@ -23,7 +23,10 @@ class Decision:
         ee_params: the end-effector parameters the plan used (for an observer).
         moving: the latch opens while the platform moves; the release point is known
             once it has (`Platform.release` returns it).
-        state: the platform's own data for the later steps (poses, configurations).
+        goal_xy: the point (x, y) [m, W] of the target's rim plane a throw is for (a
+            point of the bin clear of what it holds); None: the bin's centre.
+        state: the platform's own typed state for its later steps (the arm's:
+            `cell.arm.state.ArmState`; None where a platform keeps none).
     """
 
     action: str
@@ -33,4 +36,5 @@ class Decision:
     model_obj: Any = None
     ee_params: Any = None
     moving: bool = False
-    state: dict[str, Any] = field(default_factory=dict)
+    goal_xy: tuple[float, float] | None = None
+    state: Any = None

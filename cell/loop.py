@@ -583,7 +583,7 @@ class ItemLoop:
             )
         t_release = self.plant.t
         # the point the throw was for: the bin's centre, or one clear of what it holds
-        bx, by = d.state.get("goal", target.position)[:2]
+        bx, by = target.position[:2] if d.goal_xy is None else d.goal_xy
         pf = self.platform
 
         def score(out: Any) -> tuple[ItemResult, Any]:

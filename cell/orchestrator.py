@@ -41,6 +41,7 @@ from cell.arm.place import Place
 from cell.arm.planner import Planner
 from cell.arm.release import ReleaseChoice
 from cell.arm.routes import Routes
+from cell.arm.state import ArmState
 from cell.arm.tuning import TUNING, ArmTuning
 from cell.decision import Decision
 from cell.errors import (
@@ -155,7 +156,6 @@ class Orchestrator(
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.bounds = ThrowBounds()
-        self.bounds_now = self.bounds  # the bounds of the plan being made (see _plan)
         self._check_job()  # before the scene is built: a refused job leaves nothing open
         self.store = store
         self.session = session or f"run-{uuid.uuid4().hex[:8]}"
@@ -210,11 +210,6 @@ class Orchestrator(
         """What the parts keep while an item is handled (see `cell.arm.base.ArmBase`)."""
         self._index = -1  # the item being handled (`present`)
         self._presented: Any = None  # the item the plant presented last
-        self._q_release = np.zeros(0)
-        self._steepened = False  # the last plan was raised for the grip (`_steep_enough`)
-        self._goal = np.zeros(3)  # the point of the rim plane the last plan is for (`throw_spot`)
-        self._aim = np.zeros(3)  # where the last plan aims (the goal, or the learned aim)
-        self._model_obj: Any = None  # the object as the last plan knew it (ObjectParams)
         self._frame: tuple[float, float] | None = None  # the grip's (azimuth, roll) now
         # IK solved and approaches timed since the decision began (`_solve_ik`,
         # `_approach_s`; `decide` clears them)
@@ -298,44 +293,42 @@ class Orchestrator(
         )
         s_grip = grip_stroke_limit(self.params, obj)
         if place:
-            return Decision(
-                "place", min(self.tuning.pick_stroke_m, s_grip), state={"target": target}
-            )
-        plan, delta = self._plan(obj, target, index, s_grip)
+            stroke = min(self.tuning.pick_stroke_m, s_grip)
+            return Decision("place", stroke, state=ArmState(target))
+        choice = self._plan(obj, target, index, s_grip)
+        plan, delta = choice.plan, choice.delta
+        assert choice.goal is not None
+        state = ArmState(target, choice, choice.q_release)
         d = Decision(
             "throw",
             plan.stroke_m + delta,
             plan,
             delta,
-            model_obj=self._model_obj,
+            model_obj=choice.model_obj,
             ee_params=self.params.ee,
-            state={
-                "target": target,
-                "goal": self._goal,
-                "aim": self._aim,
-                "q_release": self._q_release,
-            },
+            goal_xy=(float(choice.goal[0]), float(choice.goal[1])),
+            state=state,
         )
         mt = None
         if self._may_release_moving(obj, d):
-            mt = self._moving_choice(obj, plan, delta, s_grip)
+            mt = self._moving_choice(obj, choice, s_grip)
         if mt is not None:
             d.plan, d.stroke_m, d.moving = mt.plan, mt.plan.stroke_m + delta, True
-            d.state.update(moving=mt, q_release=mt.motion.q_release)
+            state.moving, state.q_release = mt, mt.motion.q_release
         return d
 
     def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
         """Grip the item turned as the release will hold it: the carry then only swings
         the throw axis up, it does not twist the item about it (a twist in the grip
         spoils the launch, see `_pick_frame`)."""
-        self._q_release = d.state.get("q_release", self._q_release)
-        self._frame = self._pick_frame(d.plan)
+        st: ArmState = d.state
+        self._frame = self._pick_frame(d.plan, st.q_release)
         if self.pick_mode == "physical":
-            heading = self._carry_heading(d.plan, d.state["target"])
-            d.state["q_lift"] = self._pick(obj, item, d.stroke_m, *heading)
+            heading = self._carry_heading(d.plan, st.target, st.q_release)
+            st.q_lift = self._pick(obj, item, d.stroke_m, *heading)
             self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
         else:
-            d.state["q_lift"] = self._pick_kinematic(obj, item, d.stroke_m)
+            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m)
         self.effector.grasp(d.stroke_m)  # held in the plant already: the hardware winds
         stroke = self._carry_stroke(obj, d)
         if stroke != d.stroke_m:  # the item held, the carriage draws it up off the station
@@ -345,7 +338,9 @@ class Orchestrator(
     def carry(self, d: Decision, obj: ObjectParams, item: Any) -> None:
         """To the release pose: over the bin and down into it (a place), or along the
         twist-free swing to the release configuration (a throw); the item still held."""
-        q_lift = d.state["q_lift"]
+        st: ArmState = d.state
+        q_lift = st.q_lift
+        assert q_lift is not None
         if d.action == "place":
             self._carry_to_place(d, obj, q_lift)
         elif d.moving:
@@ -355,11 +350,11 @@ class Orchestrator(
             # need not go straight up: it can sweep the item out of the pads across the
             # station's top, `tests/test_moving_station.py`), or leaves the joint limits,
             # the arm goes up to the lift, where `_moving_choice` timed the release from
-            lifted, motion = self._moving_route(d.state["moving"], obj, d.stroke_m, self.q, q_lift)
+            lifted, motion = self._moving_route(st.moving, obj, d.stroke_m, self.q, q_lift)
             if lifted:
                 log.info("%s: up to the lift, then the release on the move", obj.name or obj.shape)
                 self._move([q_lift])
-            d.state["motion"] = motion
+            st.motion = motion
         else:
             plan = d.plan
             centre = np.array([plan.x_m, plan.y_m, plan.z_m])
@@ -369,8 +364,9 @@ class Orchestrator(
             try:  # IK from the lift pose the arm is at; _plan checked one exists before
                 q_rel = self._ik_gripped(tcp, plan.elevation_rad, plan.azimuth_rad)
             except IKFailed:
-                q_rel = d.state["q_release"]
-            q_rel = self._release_branch(q_lift, q_rel, d.state.get("q_release"), tcp, plan)
+                assert st.q_release is not None
+                q_rel = st.q_release
+            q_rel = self._release_branch(q_lift, q_rel, st.q_release, tcp, plan)
             q0, t0 = self.q, self.scene.t
             self._move(self._departure(q_lift, q_rel, plan))
             self._time_floor(q0, t0, settle_s=self.tuning.settle_s)
@@ -392,12 +388,12 @@ class Orchestrator(
         if not d.moving:
             self.effector.throw()
             return None
-        return self._release_on_the_move(d.state["motion"])
+        return self._release_on_the_move(d.state.motion)
 
     def after_place(self, d: Decision) -> None:
         """Back up out of the bin; no settle: nothing is held, and the next move starts
         from rest."""
-        self._move(d.state.get("rise") or [d.state["q_above"]], settle_s=0.0)
+        self._move(d.state.rise or [d.state.q_above], settle_s=0.0)
 
     def finish(self, d: Decision | None) -> None:
         """Nothing of the item is held any more."""
@@ -406,7 +402,7 @@ class Orchestrator(
     def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
         """The flywheel: learn from the throw's observed crossing."""
         if self.learn:
-            self._learn_from(obj, d.plan, crossing, d.state["aim"])
+            self._learn_from(obj, d.plan, crossing, d.state.choice.aim)
 
     # -- the pick ----------------------------------------------------------------
 

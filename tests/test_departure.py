@@ -76,7 +76,7 @@ def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_h
         d = orch.decide(index, obj, target)
         assert d.action == "throw" and not d.moving
         orch.pick(d, obj, item)
-        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        q_pick, q_lift = orch.q.copy(), d.state.q_lift
         commanded.clear()
         touching.clear()
         t0 = sc.t
@@ -221,7 +221,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
             return Rotation.from_matrix(tcp.T @ np.asarray(sc.item_pose(item)[1]))
 
         assert orch._turns_if_rolled()
-        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        q_pick, q_lift = orch.q.copy(), d.state.q_lift
         before, t0 = in_grip(), sc.t
         carry(d, obj, item)
         took, way = sc.t - t0, ways[-1]

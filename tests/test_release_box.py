@@ -47,7 +47,7 @@ def _released_where_planned(orch: Orchestrator, d: Any, obj: Any) -> None:
     plan = d.plan
     centre = np.array([plan.x_m, plan.y_m, plan.z_m])
     tcp = orch._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
-    p, _ = orch.robot.tcp_pose(d.state["q_release"])
+    p, _ = orch.robot.tcp_pose(d.state.q_release)
     assert np.linalg.norm(p - tcp) < 1e-3
 
 
@@ -69,7 +69,7 @@ def test_a_heavy_disc_thrown_far_is_planned_in_a_smaller_release_box_and_lands(
     orch, d, obj = _decided(job, "release-box")
     try:
         # the cell's own release box: the optimiser's release is out of the arm's reach
-        assert orch.bounds_now.position_max[0] < orch.bounds.position_max[0]  # a smaller box
+        assert d.state.choice.bounds.position_max[0] < orch.bounds.position_max[0]  # a smaller box
         _released_where_planned(orch, d, obj)
     finally:
         orch.close()
@@ -93,7 +93,8 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
     try:
         b = orch.bounds
         lo, hi = np.asarray(b.position_min), np.asarray(b.position_max)
-        half = np.asarray(orch.bounds_now.position_max) - np.asarray(orch.bounds_now.position_min)
+        chosen = d.state.choice.bounds
+        half = np.asarray(chosen.position_max) - np.asarray(chosen.position_min)
         assert np.allclose(half, (hi - lo) * 0.9)  # planned in the larger of the two boxes
         # the boxes tried before it: from the cell's own the release is out of the arm's
         # reach, from the smaller one the target
@@ -104,7 +105,7 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
             position_min=tuple(mid - k * (hi - lo) / 2),
             position_max=tuple(mid + k * (hi - lo) / 2),
         )
-        gx, gy, gz = (float(v) for v in orch._goal)
+        gx, gy, gz = (float(v) for v in d.state.choice.goal)
         with pytest.raises(IKFailed):
             orch._plan_in(obj, (gx, gy, gz), 0, math.inf, b)
         with pytest.raises(UnreachableTarget):

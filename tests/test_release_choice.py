@@ -61,13 +61,13 @@ def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(tmp_path: Path)
         if d.action != "throw" or d.moving or o._grip_stroke != d.stroke_m:
             carry(d, obj, item)
             return
-        plan, chosen = d.plan, d.state["q_release"]
+        plan, chosen = d.plan, d.state.q_release
         e, a = plan.elevation_rad, plan.azimuth_rad
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = o._tcp_for_item_centre(centre, e, a, d.stroke_m, obj)
         resolved = o._ik_gripped(tcp, e, a)  # IK from the pick, where the arm is
         at = (o.q, o.scene.item_position(item), obj, d.stroke_m)
-        _, timed = o._static_carry(at, d.state["q_lift"], chosen, plan)
+        _, timed = o._static_carry(at, d.state.q_lift, chosen, plan)
         t0 = o.scene.t
         carry(d, obj, item)
         rows.append((joint_gap(o.q, chosen), joint_gap(resolved, chosen), o.scene.t - t0, timed))

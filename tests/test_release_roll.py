@@ -83,7 +83,7 @@ def test_a_physical_pick_keeps_the_roll_nearer_where_the_arm_is(tmp_path: Path) 
         obj, target = spec.obj, o.job.bin(spec.bin)
         o.present(0, obj)
         d = o.decide(0, obj, target)
-        plan, q_rel = d.plan, d.state["q_release"]
+        plan, q_rel = d.plan, d.state.q_release
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = o._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
         nearer = ik.solve_release_ik(o.robot, tcp, plan.elevation_rad, plan.azimuth_rad, o.q).q

@@ -12,13 +12,14 @@ can beat by more than the bound allows), and the bound's closed form for one joi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
 import numpy as np
 import pytest
 
-from cell.arm.planner import _Release
+from cell.arm.planner import ThrowChoice
 from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
@@ -72,7 +73,7 @@ def test_the_cheaper_search_chooses_as_the_exhaustive_one(orchestrator: Any, k: 
     assert fast.action == full.action == "throw"
     assert fast.plan == full.plan
     assert fast.stroke_m == full.stroke_m
-    np.testing.assert_allclose(fast.state["q_release"], full.state["q_release"], atol=1e-12)
+    np.testing.assert_allclose(fast.state.q_release, full.state.q_release, atol=1e-12)
     # fewer cycles timed, never more
     assert len(timed_fast) <= len(timed_full), (timed_fast, timed_full)
     for b, t in timed_full:
@@ -163,7 +164,7 @@ def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrato
             o._frame = kept
     finally:
         o.scene.remove_item(o._presented)
-    first = _Release(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
-    pruned = first._replace(cost=none[0])
+    first = ThrowChoice(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
+    pruned = dataclasses.replace(first, cost=none[0])
     assert Orchestrator._soonest_of([first, pruned]) is first
     assert o._beat([first, pruned]) == full[0][1]

@@ -63,12 +63,6 @@ class ArmBase:
     _placing: bool
     _ik_memo: dict[tuple[bytes, ...], Any]
     _approach_memo: dict[tuple[Any, ...], float]
-    _q_release: np.ndarray
-    bounds_now: Any
-    _goal: np.ndarray
-    _aim: np.ndarray
-    _model_obj: Any
-    _steepened: bool
 
     if TYPE_CHECKING:  # the parts call each other through the facade that joins them
 

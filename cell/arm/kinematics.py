@@ -107,9 +107,10 @@ class Kinematics(ArmBase):
         x0 = ReleasePose.from_angles(np.zeros(3), elevation, azimuth, 0.0).rotation()[:, 0]
         return 0.0 if float(self.robot.tcp_pose(q)[1][:, 0] @ x0) >= 0.0 else math.pi
 
-    def _pick_frame(self, plan: Any) -> tuple[float, float] | None:
-        """(azimuth, roll) [rad] of the grip pointing down that the release's frame swings
-        up from without a twist about the throw axis, or None (a place: any roll).
+    def _pick_frame(self, plan: Any, q_release: Any) -> tuple[float, float] | None:
+        """(azimuth, roll) [rad] of the grip pointing down that the release's frame (at the
+        release configuration q_release [rad]) swings up from without a twist about the
+        throw axis, or None (a place: any roll).
 
         axis_frame(e, a, roll) = Rz(a) Ry(π/2 − e) Rz(roll): with the same a and roll, the
         down frame (e = −π/2) turns into the release frame about one horizontal axis. A
@@ -127,7 +128,7 @@ class Kinematics(ArmBase):
         """
         if plan is None:
             return None
-        roll = self._roll_of(self._q_release, plan.elevation_rad, plan.azimuth_rad)
+        roll = self._roll_of(q_release, plan.elevation_rad, plan.azimuth_rad)
         return (float(plan.azimuth_rad), roll)
 
     def _over_item(

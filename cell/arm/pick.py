@@ -224,17 +224,20 @@ class Pick(ArmBase):
                 break
         return p, elevation, azimuth, rolls, float(h_min)
 
-    def _carry_heading(self, plan: Any, target: Any) -> tuple[float, bool]:
+    def _carry_heading(
+        self, plan: Any, target: Any, q_release: np.ndarray | None
+    ) -> tuple[float, bool]:
         """Where the pads' axis (E's x) should point while the item is carried, and whether
         its sense matters (see `_grip_axes`): for a throw, along the azimuth, the way the
-        release's roll (0 or π, `_q_release`) turns up to about E's y alone; for a place,
+        release's roll (0 or π, of q_release [rad]) turns up to about E's y alone; for a place,
         either way along the line from the station to the bin."""
         if plan is None:
             x0, y0 = self.scene.pick_station_xy
             return math.atan2(target.position[1] - y0, target.position[0] - x0), False
         # at the release, roll 0 puts E's x at (sin e cos a, sin e sin a, −cos e): turned
         # down about E's y it points back along the azimuth; roll π, forward
-        roll = self._roll_of(self._q_release, plan.elevation_rad, plan.azimuth_rad)
+        assert q_release is not None
+        roll = self._roll_of(q_release, plan.elevation_rad, plan.azimuth_rad)
         return plan.azimuth_rad + math.pi - roll, True
 
     def _pick(

@@ -38,7 +38,7 @@ class Place(ArmBase):
         from cell.endeffector.pybullet_backend import PLACE_OPENING_M
 
         sc = self.scene
-        target = d.state["target"]
+        target = d.state.target
         # a spot on the bin's floor clear of what it holds (its centre while it is empty),
         # and of the walls by the pads that open beside the item (PLACE_OPENING_M) and 1 cm
         # (5 mm: an open pad still met a tote's wall as the grip rose out of it)
@@ -85,7 +85,7 @@ class Place(ArmBase):
         # configurations on it: a joint-space line between the two strays sideways, and
         # the housing met the bin's wall
         inner = self._vertical(q_above, q_down) if housing_low else []
-        d.state["rise"] = [*inner[::-1], q_above]
+        d.state.rise = [*inner[::-1], q_above]
         way = self._departure(q_lift, q_above)
         bottom = centre[2] - obj.size[2] / 2  # the item's lowest point at the spot [m]
         # over the spot without stopping there, straight, or through the point where the
@@ -111,7 +111,7 @@ class Place(ArmBase):
             log.debug("place: stopping over the spot")
             self._move(way)
             self._move([*inner, q_down])
-        d.state["q_above"] = q_above
+        d.state.q_above = q_above
 
     def _spots_to_try(
         self, spots: list[tuple[float, float, float]], floor_z: float

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any, NamedTuple
+from dataclasses import dataclass
+from dataclasses import replace as dc_replace
+from typing import Any
 
 import numpy as np
 
@@ -30,16 +32,32 @@ from cell.model.objects import ObjectParams
 log = logging.getLogger(__name__)
 
 
-class _Release(NamedTuple):
-    """A throw's plan in one release bounds, as `Orchestrator._plan_facing` compares them."""
+@dataclass(frozen=True)
+class ThrowChoice:
+    """A throw as the planner chose it: the plan in one release bounds and its release.
+    `Planner._plan` returns one; the release bounds compare them (`_plan_facing`).
 
-    cost: tuple[bool, float] | None  # (asks more of the grip than it holds, cycle [s]) or None
+    Attributes:
+        cost: (asks more of the grip than it holds, cycle estimate [s]), or None where no
+            estimate was made.
+        plan: the static throw plan (`cell.optimize.ThrowPlan`).
+        delta: [m] the learned ΔL_s (the residual's), added to the plan's stroke.
+        q_release: [rad] the release configuration chosen.
+        bounds: the release bounds it was planned in (the grip's cap not applied).
+        aim: [m, W] where the plan aims to cross the rim plane (the goal, or the learned aim).
+        model_obj: the object as the plan's model assumed it.
+        goal: [m, W] the point of the rim plane the throw is for (`throw_spot`); None until
+            `_plan` has set it.
+    """
+
+    cost: tuple[bool, float] | None
     plan: Any
-    delta: float  # [m] the learned ΔL_s
-    q_release: np.ndarray  # [rad] the release configuration chosen
-    bounds: Any  # the release bounds it was planned in
-    aim: np.ndarray  # [m, W] where the plan aims to cross the rim plane
-    model_obj: ObjectParams  # the object the plan's model assumed
+    delta: float
+    q_release: np.ndarray
+    bounds: Any
+    aim: np.ndarray
+    model_obj: ObjectParams
+    goal: np.ndarray | None = None
 
 
 class Planner(ArmBase):
@@ -47,9 +65,9 @@ class Planner(ArmBase):
 
     def _plan(
         self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float = math.inf
-    ) -> tuple[Any, float]:
-        """The throw plan to a bin (and the learned ΔL_s) whose release pose the arm
-        reaches (its configuration is kept for the throw), or UnreachableTarget / IKFailed.
+    ) -> ThrowChoice:
+        """The throw to a bin whose release pose the arm reaches: its plan, the learned
+        ΔL_s, the release configuration and the goal; or UnreachableTarget / IKFailed.
 
         With `turn_release`, planned twice (`_plan_facing`): with the arm facing the bin at
         the release, and turned from it toward the pick station (`_facing_toward_station`),
@@ -59,30 +77,27 @@ class Planner(ArmBase):
         # the bin's centre, or a point of it clear of what the bin holds: the same for
         # every bounds tried (the scene does not move meanwhile)
         goal = (*throw_spot(self.scene, target.id, obj), target.rim_height)
-        self._goal = np.asarray(goal, float)  # where it should cross the rim plane
         err: CellError | None = None
-        best: tuple[Any, ...] | None = None
+        best: ThrowChoice | None = None
         turned = self._facing_toward_station(target)
         for facing in (None,) if turned is None else (None, turned):
             try:
-                plan, delta, cost = self._plan_facing(
-                    obj, goal, target, index, stroke_max_m, facing
-                )
+                r = self._plan_facing(obj, goal, target, index, stroke_max_m, facing)
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
                 continue
+            cost = r.cost
             log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
-            if best is not None and (cost is None or best[0] is None or not cost < best[0]):
+            if best is not None and (cost is None or best.cost is None or not cost < best.cost):
                 continue
-            best = (cost, plan, delta, self._q_release, self.bounds_now, self._aim, self._model_obj)
+            best = r
             if cost is None:  # nothing to compare by: the arm faces the bin
                 break
         if best is None:
             assert err is not None
             raise err
-        _, plan, delta, self._q_release, self.bounds_now, aim, model_obj = best
-        self._aim, self._model_obj = aim, model_obj
-        return plan, delta
+        # where it should cross the rim plane
+        return dc_replace(best, goal=np.asarray(goal, float))
 
     def _facing_toward_station(self, target: Any) -> float | None:
         """The azimuth [rad, W] the arm faces at a throw's release if it turns from the
@@ -132,8 +147,8 @@ class Planner(ArmBase):
         index: int,
         stroke_max_m: float,
         facing: float | None,
-    ) -> tuple[Any, float, tuple[bool, float] | None]:
-        """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), and
+    ) -> ThrowChoice:
+        """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), with
         the release's cycle estimate (`_release_q`; None where none was made).
 
         The plan is made in the cell's release bounds; where IK finds no configuration for
@@ -146,12 +161,10 @@ class Planner(ArmBase):
         is reached, the plan is made in a smaller release box (RELEASE_BOX_SHRINKS), the
         first reached kept.
         """
-        from dataclasses import replace as dc_replace
-
         err: CellError | None = None
         ordinary, shrunk = self._release_bounds(target)
         for tier in (ordinary, shrunk):
-            found: list[_Release] = []
+            found: list[ThrowChoice] = []
             for bounds in tier:
                 if found and (tier is shrunk or not self.cycle_search):
                     break  # the first reached is kept
@@ -169,10 +182,7 @@ class Planner(ArmBase):
                 except (UnreachableTarget, IKFailed) as exc:
                     err = err or exc
             if found:
-                r = self._soonest_release(obj, found)
-                self._q_release, self.bounds_now = r.q_release, r.bounds
-                self._aim, self._model_obj = r.aim, r.model_obj
-                return r.plan, r.delta, r.cost
+                return self._soonest_release(obj, found)
         assert err is not None
         raise err
 
@@ -184,16 +194,16 @@ class Planner(ArmBase):
         stroke_max_m: float,
         bounds: Any,
         beat: float | None = None,
-    ) -> _Release:
+    ) -> ThrowChoice:
         """The throw's plan in release `bounds` and its release (`_release_q`, which need
         not time a release whose cycle cannot beat `beat` [s]): steep enough for the grip
         to hold the item at its release first; where the arm reaches no such release, as
         the bounds are (`_steep_enough`). UnreachableTarget or IKFailed."""
         err: IKFailed | None = None
         for steep in (True, False):
-            self.bounds_now = bounds
-            self._steepened = False
-            plan, delta = self._plan_once(obj, goal, index, stroke_max_m, steep)
+            plan, delta, aim, model_obj, steepened = self._plan_once(
+                obj, goal, index, stroke_max_m, bounds, steep
+            )
             stroke = plan.stroke_m + delta
             centre = np.array([plan.x_m, plan.y_m, plan.z_m])
             try:
@@ -208,15 +218,15 @@ class Planner(ArmBase):
                 )
             except IKFailed as exc:
                 err = err or exc
-                if not self._steepened:
+                if not steepened:
                     break
                 continue
-            return _Release(cost, plan, delta, q_release, bounds, self._aim, self._model_obj)
+            return ThrowChoice(cost, plan, delta, q_release, bounds, aim, model_obj)
         assert err is not None
         raise err
 
     @staticmethod
-    def _soonest_of(found: list[_Release]) -> _Release:
+    def _soonest_of(found: list[ThrowChoice]) -> ThrowChoice:
         """Of the plans `found` in the release bounds in `_release_bounds`' order, the
         first, unless a later one's cycle estimate is sooner and its route asks no more of
         the grip than the first's; the first where an estimate is missing."""
@@ -228,7 +238,7 @@ class Planner(ArmBase):
                 best = r
         return best
 
-    def _beat(self, found: list[_Release]) -> float | None:
+    def _beat(self, found: list[ThrowChoice]) -> float | None:
         """The cycle estimate [s] a plan in the next release bounds must beat to be kept
         (`_soonest_of` of the plans `found` so far), where one that asks no more of the
         grip than it holds has it; None (nothing to beat: every release is timed) without
@@ -239,7 +249,7 @@ class Planner(ArmBase):
         return None if cost is None or cost[0] else cost[1]
 
     @classmethod
-    def _soonest_release(cls, obj: ObjectParams, found: list[_Release]) -> _Release:
+    def _soonest_release(cls, obj: ObjectParams, found: list[ThrowChoice]) -> ThrowChoice:
         """`_soonest_of` the plans `found`, logged where it is not the first."""
         first, best = found[0], cls._soonest_of(found)
         if best is not first:
@@ -288,50 +298,52 @@ class Planner(ArmBase):
         goal: tuple[float, float, float],
         index: int,
         stroke_max_m: float,
+        bounds: Any,
         steep: bool = True,
-    ) -> tuple[Any, float]:
+    ) -> tuple[Any, float, np.ndarray, ObjectParams, bool]:
+        """(the plan, the learned ΔL_s [m], the aim [m, W], the object as the plan models
+        it, whether it was steepened for the grip) of a throw to `goal` in release `bounds`,
+        its stroke within `stroke_max_m` [m]."""
         # Identified η_o where the parameter file has them (seen objects), else the
         # catalogue's; with a residual, only those the residual was trained with, so
         # that L_s + ΔL_s means what it meant in training.
         use_identified = self.residual is None or obj.name in self.residual.identified_objects
         model_obj = self.params.model_object(obj) if use_identified else obj
-        self._model_obj = model_obj  # what the plan assumed (for an observer)
-        bounds = self.bounds_now
         plan = plan_clean(self.params, obj, model_obj, goal, bounds)
         if plan.stroke_m > stroke_max_m:  # the grip would not hold it there: plan within it
             bounds = grip_bounds(bounds, self.params, stroke_max_m, obj.name or obj.shape)
             plan = plan_clean(self.params, obj, model_obj, goal, bounds)
+        steepened = False
         if steep:
-            plan, bounds = self._steep_enough(obj, model_obj, goal, plan, bounds)
-        self._aim = np.asarray(goal, float)
+            plan, bounds, steepened = self._steep_enough(obj, model_obj, goal, plan, bounds)
+        aimed = np.asarray(goal, float)
         if self.learn:
             aim = self._corrected_aim(obj, plan, np.asarray(goal, float))
             if aim is not None:
                 try:
                     plan = plan_clean(self.params, obj, model_obj, tuple(aim), bounds)
-                    self._aim = aim
+                    aimed = aim
                 except UnreachableTarget:
                     log.info(
                         "learned aim for %s is out of reach: the model's aim is kept", obj.name
                     )
         if self.residual is None:
-            return plan, 0.0
+            return plan, 0.0, aimed, model_obj, steepened
         from cell.residual.model import residual_for_plan
 
         corrected = residual_for_plan(self.residual, obj, plan)  # clipping is logged there
-        return plan, corrected.stroke_m - plan.stroke_m
+        return plan, corrected.stroke_m - plan.stroke_m, aimed, model_obj, steepened
 
     def _steep_enough(
         self, obj: ObjectParams, model_obj: ObjectParams, goal: Any, plan: Any, bounds: Any
-    ) -> tuple[Any, Any]:
+    ) -> tuple[Any, Any, bool]:
         """The plan, re-planned with its elevation raised where holding the item still at
         its release would ask more of the grip than a carry may (`release_elevation_min`:
         a tall item whose weight on a pad tilts it out, a 200 mm bottle below 37° at a
         58 mm stroke), and the bounds it was planned in. Up to three times, as the stroke
         of the steeper plan changes the grip; the plan kept when no steeper one reaches
-        the goal."""
-        from dataclasses import replace as dc_replace
-
+        the goal; and whether it was raised."""
+        steepened = False
         for _ in range(3):
             e_min = release_elevation_min(
                 self.params, obj, plan.stroke_m, plan.elevation_rad, bounds.elevation_max
@@ -341,7 +353,7 @@ class Planner(ArmBase):
             steep = dc_replace(bounds, elevation_min=max(bounds.elevation_min, e_min))
             try:
                 plan, bounds = plan_clean(self.params, obj, model_obj, goal, steep), steep
-                self._steepened = True
+                steepened = True
             except UnreachableTarget:
                 log.info("%s: no release steep enough for the grip reaches the goal", obj.name)
                 break
@@ -350,4 +362,4 @@ class Planner(ArmBase):
                 obj.name or obj.shape,
                 math.degrees(e_min),
             )
-        return plan, bounds
+        return plan, bounds, steepened

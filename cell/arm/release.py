@@ -265,27 +265,27 @@ class ReleaseChoice(ArmBase):
             and not self._turns_if_rolled(obj, d.stroke_m)
         )
 
-    def _moving_choice(
-        self, obj: ObjectParams, plan: Any, delta: float, stroke_max_m: float
-    ) -> Any:
+    def _moving_choice(self, obj: ObjectParams, throw: Any, stroke_max_m: float) -> Any:
         """The release on the move that the planner prefers to the static one by cycle
         time, landing in the bin by the model (`cell.robot.moving_release.choose_release`,
         from where the lift over the presented item will be, its stroke at most
         `stroke_max_m`: what the grip holds), and that is sooner than the static one as
-        the cell makes them from the pick (`_moving_sooner`); or None."""
+        the cell makes them from the pick (`_moving_sooner`); or None. `throw`: the static
+        throw the planner chose (`cell.arm.planner.ThrowChoice`)."""
         from cell.robot.moving_release import choose_release
 
+        plan, delta = throw.plan, throw.delta
         stroke = plan.stroke_m + delta
-        self._frame = self._pick_frame(plan)
+        self._frame = self._pick_frame(plan, throw.q_release)
         try:
             _, q_lift = self._over_item(self._presented, stroke, obj)
             choice = choose_release(
                 self.robot,
-                self._model_obj,
+                throw.model_obj,
                 plan,
                 q_lift,
                 self.params.ee,
-                bounds=grip_bounds(self.bounds_now, self.params, stroke_max_m),
+                bounds=grip_bounds(throw.bounds, self.params, stroke_max_m),
                 ik=lambda t, e, a: self._ik_gripped(t, e, a, q_lift),
                 hold=carry_hold(self.params, obj, stroke),
                 criterion="cycle",
@@ -293,7 +293,7 @@ class ReleaseChoice(ArmBase):
                 acceleration_scale=self.speed_scale,
             )
             if choice.moving is not None and not self._moving_sooner(
-                obj, plan, stroke, choice.moving, delta
+                obj, plan, stroke, choice.moving, delta, throw.q_release
             ):
                 return None
         except (IKFailed, TrajectoryError) as exc:
@@ -306,14 +306,21 @@ class ReleaseChoice(ArmBase):
         return choice.moving
 
     def _moving_sooner(
-        self, obj: ObjectParams, plan: Any, stroke: float, mt: Any, delta: float
+        self,
+        obj: ObjectParams,
+        plan: Any,
+        stroke: float,
+        mt: Any,
+        delta: float,
+        q_release: np.ndarray,
     ) -> bool:
         """Is the release on the move `mt` sooner than the static release of `plan` at
         `stroke` [m], each from the pick of the presented item to the release and back
         to that pick, as the cell makes them? The static: `_static_cycle_s`; the
         moving: its motion from the pick, or the move up to the lift, its settle and its
         motion from there (`_moving_route`), and the way back from where it stops. The
-        moving plan's stroke is its own plus `delta`.
+        moving plan's stroke is its own plus `delta`; the static one's release is at
+        q_release [rad].
 
         `choose_release` times both from rest at the lift and back to it; the cell's
         static carry leaves the pick without stopping, and a moving release whose move
@@ -338,7 +345,7 @@ class ReleaseChoice(ArmBase):
             lift = self._move_plan(q_pick, [q_lift], self.tuning.settle_s, held)
             t_moving += plan_time(lift, self.tuning.settle_s) + self.tuning.settle_s
         try:
-            t_static = self._static_cycle_s(obj, plan, stroke, self._q_release)
+            t_static = self._static_cycle_s(obj, plan, stroke, q_release)
         except (IKFailed, TrajectoryError):
             return True
         log.info(
