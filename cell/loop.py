@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from dataclasses import replace as dc_replace
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -58,6 +58,7 @@ __all__ = [
     "ItemLoop",
     "ItemResult",
     "Plant",
+    "Places",
     "Platform",
     "RunSummary",
     "failure_of",
@@ -155,16 +156,18 @@ class Platform(Protocol):
         returns the item's centre at the latch [m, W]; None: where it was held."""
         ...
 
-    def after_place(self, decision: Decision) -> None:
-        """After a placed item rests: leave the bin."""
-        ...
-
     def finish(self, decision: Decision | None) -> None:
         """The item is done with (scored, or failed): let go of anything of it."""
         ...
 
-    def landed(self, decision: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """A throw's observed crossing of its target's rim plane (for learning)."""
+
+@runtime_checkable
+class Places(Protocol):
+    """A platform that places items as well as throwing them (the arm): after the latch
+    has let a placed item down, it leaves the bin."""
+
+    def after_place(self, decision: Decision) -> None:
+        """After a placed item is let go: leave the bin."""
         ...
 
 
@@ -418,6 +421,8 @@ class ItemLoop:
             the next item starts (the arm's flywheel learns from its earlier throw).
         order: the order the job's items are taken in (`cell.jobs.ORDERS`: "job", as
             listed; "bins", bin by bin; `Job.expanded_items`).
+        on_landed: (decision, obj, crossing) → told of each throw's observed crossing of
+            its target's rim plane [m, W] (the arm's flywheel learns from it), or None.
     """
 
     def __init__(
@@ -431,6 +436,7 @@ class ItemLoop:
         observer: Any = None,
         wait_for: Callable[[ObjectParams, ObjectParams], bool] | None = None,
         order: str = "job",
+        on_landed: Callable[[Decision, ObjectParams, Any], None] | None = None,
     ) -> None:
         check_order(order)
         self._job = job
@@ -441,6 +447,7 @@ class ItemLoop:
         self.session = session
         self.observer = observer
         self.wait_for = wait_for
+        self.on_landed = on_landed
         self._flying: list[InFlight] = []  # thrown, not yet at rest
         self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
         self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
@@ -548,6 +555,8 @@ class ItemLoop:
         """Release slowly and leave; the item, settling in the bin, is scored where it
         comes to rest. The arm does not wait for it: a soft item rocks for up to 0.8 s
         (the demo's teddy), while a box rests before the pads are out of the bin."""
+        if not isinstance(self.platform, Places):
+            raise InvalidInput(f"the {self.platform.name} platform does not place items")
         self.platform.release(d)
         t_release = self.plant.t
         self.platform.after_place(d)
@@ -589,8 +598,8 @@ class ItemLoop:
         def score(out: Any) -> tuple[ItemResult, Any]:
             cross, land_z = landing(out, target.rim_height)
             err = math.hypot(cross[0] - bx, cross[1] - by)
-            if land_z == target.rim_height:
-                pf.landed(d, obj, cross)
+            if land_z == target.rim_height and self.on_landed is not None:
+                self.on_landed(d, obj, cross)
             throw_id = f"{self.session}-{base['index']:04d}"
             if self.store is not None:
                 self.store.append(

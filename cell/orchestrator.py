@@ -199,6 +199,7 @@ class Orchestrator(
             observer=observer,
             wait_for=self._same_kind if learn else None,
             order=order,
+            on_landed=self.landed,
         )
         # the loop's hook: after each move the mover makes, the flights that have come to
         # rest are scored (the arm itself never calls the loop)

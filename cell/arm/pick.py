@@ -339,19 +339,33 @@ class Pick(ArmBase):
         self.ee.close_on(item)
         self._carried = (obj, stroke)
         self._grip_stroke = stroke
-        # a short lift that shows whether the pads hold it (the move on starts at LIFT_M)
-        z0 = p[2]
+        # a short lift that shows whether the pads hold it (the move on starts at lift_m)
         held = at(0.0)  # where the grip holds it: lifted straight up from there
-        q_check = self._ik_grip(held + [0.0, 0.0, self.tuning.lift_check_m], stroke, obj, axes)
+        self._lift_check(obj, item, stroke, axes, held, z0=p[2])
+        return self._ik_grip(held + [0.0, 0.0, self.tuning.lift_m], stroke, obj, axes)
+
+    def _lift_check(
+        self,
+        obj: ObjectParams,
+        item: Any,
+        stroke: float,
+        axes: tuple[float, float, float],
+        held: np.ndarray,
+        z0: float,
+    ) -> None:
+        """A short lift (`lift_check_m` in `lift_check_s`) from `held` (the item's centre
+        in the grip [m, W], its centre z0 [m] before) that shows whether the pads hold it;
+        GraspLost when it did not come up with the grip."""
+        lift_m = self.tuning.lift_check_m
+        q_check = self._ik_grip(held + [0.0, 0.0, lift_m], stroke, obj, axes)
         self._straight(q_check, self.tuning.lift_check_s, smooth=True)
         self._run_for(0.05)
         z1 = float(self.scene.item_position(item)[2])
-        if not self.ee.holds_item() or z1 - z0 < self.tuning.lift_check_m / 2:
+        if not self.ee.holds_item() or z1 - z0 < lift_m / 2:
             self.ee.item = None
             raise GraspLost(
                 f"{obj.name or obj.shape} slipped out of the grip on the lift (its centre rose "
-                f"{(z1 - z0) * 1000:.0f} mm of {self.tuning.lift_check_m * 1000:.0f}; pads touching it: "
+                f"{(z1 - z0) * 1000:.0f} mm of {lift_m * 1000:.0f}; pads touching it: "
                 f"{sorted(self.ee.pads_touching(item)) or 'none'})",
                 "grasp",
             )
-        return self._ik_grip(held + [0.0, 0.0, self.tuning.lift_m], stroke, obj, axes)

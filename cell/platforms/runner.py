@@ -206,17 +206,11 @@ class PlatformRunner:
         """Open the latch at once."""
         self.effector.throw()
 
-    def after_place(self, d: Decision) -> None:
-        """Neither platform places."""
-
     def finish(self, d: Decision | None) -> None:
         """The base stops; nothing is held any more."""
         if self.mobile is not None:
             self.scene.stop_drive()
         self.ee.item = None
-
-    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """No learning on these platforms."""
 
     # -- the run -------------------------------------------------------------------
 

@@ -81,14 +81,8 @@ class ReleasePose:
     def release(self, d: Decision) -> None:
         self.ee.throw()
 
-    def after_place(self, d: Decision) -> None:
-        """A campaign only throws."""
-
     def finish(self, d: Decision | None) -> None:
         self.ee.item = None
-
-    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """A campaign does not learn as it throws (its landings are identified after)."""
 
 
 def throw_once(
