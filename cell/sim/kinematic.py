@@ -89,7 +89,8 @@ class KinematicPlant:
         """Release the item where it is with `velocity` [m/s, W]: its flight starts now."""
         item.released, item.rest = self.t, None
         item.p0, item.v0 = item.position.copy(), np.asarray(velocity, float).copy()
-        item.samples = [(0.0, *(float(v) for v in item.p0))]
+        x, y, z = (float(v) for v in item.p0)
+        item.samples = [(0.0, x, y, z)]
 
     def surface_z(self, item: KinematicItem, xy: Sequence[float]) -> float:
         """Where the item's centre rests over (x, y) [m, W]: on a bin's floor plate, else on
