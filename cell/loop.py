@@ -59,22 +59,17 @@ from cell.results import (
 )
 from cell.seams import Places, Plant, Platform
 
-__all__ = [
-    "FAILURES",
+__all__ = [  # and, for their callers, the seams, the results and the decision it uses
     "Decision",
+    "FAILURES",
     "InFlight",
     "ItemLoop",
     "ItemResult",
-    "Plant",
     "Places",
+    "Plant",
     "Platform",
     "RunSummary",
-    "failure_of",
-    "landing",
-    "missed_bin",
     "rate_per_hour",
-    "sorted_throw_record",
-    "summarise",
 ]
 
 log = logging.getLogger(__name__)

@@ -52,12 +52,13 @@ from cell.errors import (
 )
 from cell.jobs import ItemSpec, Job, check_order
 from cell.kinds import PICKS, RELEASES
-from cell.loop import FAILURES, ItemLoop, ItemResult, RunSummary
+from cell.loop import ItemLoop
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params, scene_params_path
+from cell.results import FAILURES, ItemResult, RunSummary
 
 __all__ = [
-    "FAILURES",  # re-exported from cell.loop, where it is defined
+    "FAILURES",  # re-exported from cell.results, where it is defined
     "ItemResult",
     "RunSummary",
     "Orchestrator",

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 from cell.arm.tuning import TUNING, ArmTuning
+from cell.decision import Decision
 from cell.jobs import parse_job
-from cell.loop import Decision
 from cell.optimize.bounds import DEFAULT_BOUNDS
 from cell.orchestrator import Orchestrator
 from cell.robot.model import load_robot

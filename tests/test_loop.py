@@ -188,7 +188,7 @@ def test_a_landing_on_a_pile_above_the_rim_is_scored_at_its_touchdown():
     """A throw into a low-rimmed bin can come down on the items the bin holds, above its
     rim plane: it is scored where it touched down (on that height's plane), not failed
     for never crossing the rim's plane; a normal descent is scored at the crossing."""
-    from cell.loop import landing
+    from cell.results import landing
     from cell.sim.settle import Outcome
 
     t = np.linspace(0.0, 1.0, 101)

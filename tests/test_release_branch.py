@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cell.loop import Decision
+from cell.decision import Decision
 from cell.orchestrator import Orchestrator
 from tests.job_rows import job_rows
 

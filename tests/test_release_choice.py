@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 
 from cell.arm.joints import joint_gap
+from cell.decision import Decision
 from cell.jobs import parse_job
-from cell.loop import Decision
 from cell.orchestrator import Orchestrator
 
 JOB = """\
