@@ -19,51 +19,12 @@ __all__ = [
     "THROW_CLEARANCE_M",
     "THROW_WALL_MARGIN_M",
     "clear_spots",
-    "place_spot",
     "place_spots",
     "throw_spot",
 ]
 
 THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item the bin holds (throw_spot)
 THROW_WALL_MARGIN_M = 0.03  # [m] a throw's aim from a wall when it is moved (throw_spot)
-
-
-def place_spot(
-    plant: Any,
-    bin_id: str,
-    obj: ObjectParams,
-    *,
-    margin_m: float = 0.01,
-    wall_margin_m: float | None = None,
-    grid: int = 7,
-) -> tuple[float, float, float]:
-    """Where in a bin of `plant` (a `cell.sim.CellScene`) to set an item down, clear of
-    what the bin already holds.
-
-    Candidates are a grid x grid of points on the bin's floor, kept half the item's
-    footprint plus `margin_m` from the walls. Of those that clear every item resting
-    in the bin (footprints as circles of half the largest extent, plus the margin),
-    the one nearest the bin's centre wins (the centre itself in an empty bin);
-    when none is clear, the one with the most room, on top of what lies under it.
-
-    Args:
-        plant: the scene (`bin_spec`, `kept_items`, `item_position`).
-        bin_id: the bin.
-        obj: the item to set down.
-        margin_m: clearance from other items [m], and from the walls unless…
-        wall_margin_m: … this is given [m] (room for the pads that open beside it).
-        grid: candidates per side.
-
-    Returns:
-        (x [m], y [m], z [m]) in W: the spot and the height of the surface under it
-        (the floor plate's top, or the top of the items there).
-
-    Raises:
-        InvalidInput: no such bin.
-    """
-    return place_spots(
-        plant, bin_id, obj, margin_m=margin_m, wall_margin_m=wall_margin_m, grid=grid
-    )[0]
 
 
 def place_spots(
@@ -75,8 +36,31 @@ def place_spots(
     wall_margin_m: float | None = None,
     grid: int = 7,
 ) -> list[tuple[float, float, float]]:
-    """Every candidate of `place_spot`, best first (the first is `place_spot`'s): for
-    a spot the arm does not reach, the next. Same arguments and units."""
+    """Where in a bin of `plant` (a `cell.sim.CellScene`) to set an item down, clear of
+    what the bin already holds: every candidate, best first (for a spot the arm does not
+    reach, the next).
+
+    Candidates are a grid x grid of points on the bin's floor, kept half the item's
+    footprint plus `margin_m` from the walls. Of those that clear every item resting
+    in the bin (footprints as circles of half the largest extent, plus the margin),
+    the one nearest the bin's centre comes first (the centre itself in an empty bin);
+    when none is clear, the one with the most room, on top of what lies under it.
+
+    Args:
+        plant: the scene (`bin_spec`, `kept_items`, `item_position`).
+        bin_id: the bin.
+        obj: the item to set down.
+        margin_m: clearance from other items [m], and from the walls unless…
+        wall_margin_m: … this is given [m] (room for the pads that open beside it).
+        grid: candidates per side.
+
+    Returns:
+        [(x [m], y [m], z [m]) in W, ...]: the spots and the height of the surface under
+        each (the floor plate's top, or the top of the items there).
+
+    Raises:
+        InvalidInput: no such bin.
+    """
     spec = plant.bin_spec(bin_id)
     held = [(plant.item_position(it), max(it.obj.size) / 2) for it in plant.kept_items(bin_id)]
     wall = margin_m if wall_margin_m is None else wall_margin_m
