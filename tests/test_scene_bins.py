@@ -83,7 +83,6 @@ def test_place_spots_are_ranked_clear_ones_nearest_the_centre_first(scene):
     obj = get_object("cuboid_c")
     kept, _ = drop_and_keep(scene, "cyl70", (1.0, 0.5))
     spots = place_spots(scene, "b1", obj, margin_m=0.01)
-    assert spots[0] == place_spots(scene, "b1", obj, margin_m=0.01)[0]
     assert len(set(spots)) == len(spots) > 8  # distinct grid points, enough to try others
     p = scene.client.getBasePositionAndOrientation(kept.body)[0]
     r_new, r_kept = max(obj.size[:2]) / 2, max(kept.obj.size) / 2
