@@ -16,7 +16,7 @@ from cell.arm.base import ArmBase
 from cell.arm.grip_limits import (
     carry_hold,
 )
-from cell.arm.joints import plan_time
+from cell.arm.joints import plan_time, spline_within_limits
 from cell.errors import (
     TrajectoryError,
 )
@@ -66,7 +66,7 @@ class Mover(ArmBase):
             if len(waypoints) < 2:
                 raise
         if len(waypoints) >= 2 and (
-            path is None or self._spline_within_limits([q_from, *waypoints], 400) is None
+            path is None or spline_within_limits(self.robot, [q_from, *waypoints], 400) is None
         ):
             stops = self._stops(q_from, waypoints, carried)
             t_stops = plan_time(stops, settle_s)

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from cell.arm.base import ArmBase
-from cell.arm.joints import GRIP_DOWN
+from cell.arm.joints import GRIP_DOWN, spline_within_limits
 from cell.arm.spots import place_spots
 from cell.decision import Decision
 from cell.errors import (
@@ -171,7 +171,7 @@ class Place(ArmBase):
             )
             return float(min(walls, items))
 
-        qs = self._spline_within_limits(waypoints, n)
+        qs = spline_within_limits(self.robot, waypoints, n)
         if qs is None:
             return False
         end = self.robot.tcp_pose(qs[-1])[0]

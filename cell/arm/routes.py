@@ -14,7 +14,14 @@ from cell.arm.base import ArmBase
 from cell.arm.grip_limits import (
     carry_hold,
 )
-from cell.arm.joints import GRIP_DOWN, PickState, distinct_waypoints, joint_gap, plan_time
+from cell.arm.joints import (
+    GRIP_DOWN,
+    PickState,
+    joint_gap,
+    plan_time,
+    spline_within_limits,
+    twist,
+)
 from cell.errors import (
     IKFailed,
     TrajectoryError,
@@ -62,7 +69,10 @@ class Routes(ArmBase):
             out = self._swing_waypoints(q_lift, q_rel, plan, n)
             if not out:  # none found with more: the sparser one (or none)
                 break
-            if best is not None and self._spline_within_limits([q_lift, *out, q_rel], 400) is None:
+            if (
+                best is not None
+                and spline_within_limits(self.robot, [q_lift, *out, q_rel], 400) is None
+            ):
                 break  # a denser one whose spline leaves the joint limits stops at each
             most, allowed = self._swing_static([q_lift, *out, q_rel], held, plan.elevation_rad)
             if best is None or most < best[0] - self.tuning.grip_use_tie:
@@ -82,14 +92,16 @@ class Routes(ArmBase):
         self, route: list[np.ndarray], most: float, held: tuple[ObjectParams, float], plan: Any
     ) -> bool:
         """For a sphere: does the spline between the swing's ends alone turn the grip no
-        more off one rotation (`_twist`) than the swing's `route`, ask no more of the grip
+        more off one rotation (`cell.arm.joints.twist`) than the swing's `route`, ask no more of the grip
         at rest (than `most`, the route's), and carry the item sooner?"""
         if held[0].shape != "sphere":
             # only a sphere is the same turned about the throw axis: for other items
             # without a couple in the grip, over the 20 random layouts, 6 fewer landed
             return False
         direct = [route[0], route[-1]]
-        if self._twist(direct) > self._twist(route):
+        if twist(self.robot, direct, self.tuning.swing_check_samples) > twist(
+            self.robot, route, self.tuning.swing_check_samples
+        ):
             return False
         if self._swing_static(direct, held, plan.elevation_rad)[0] > most:
             return False
@@ -102,39 +114,6 @@ class Routes(ArmBase):
         if sooner:
             log.debug("the spline between the swing's ends turns the grip less, and is sooner")
         return bool(sooner)
-
-    def _twist(self, waypoints: list[np.ndarray]) -> float:
-        """How far [rad] the grip turns off the one rotation that takes it from the first
-        waypoint's orientation to the last's, at most along the spline through the
-        `waypoints` (the path a carry follows): 0 for a swing about one fixed axis.
-
-        The twist-free swing's waypoints are solved in the frame the release swings up
-        from (`_pick_frame`), but a grip pointing down is solved at azimuth 0
-        (`ReleasePose` keeps the axis, which has no azimuth there): on random layout 4 a
-        sphere's swing to a bin behind the arm turned its grip 74° off that rotation and
-        its wrist 3.4 rad, where the spline between the ends turned it 27° and took
-        1.0 s against 2.5 s."""
-        from scipy.spatial.transform import Rotation
-
-        from cell.robot.motion import spline_path
-
-        keep = distinct_waypoints(waypoints)
-        if len(keep) < 2:
-            return 0.0
-        lim = self.robot.limits
-        qs = np.asarray(
-            spline_path(keep, lim.lower, lim.upper)(
-                np.linspace(0, 1, self.tuning.swing_check_samples)
-            )
-        )
-        rots = [self.robot.tcp_pose(q)[1] for q in qs]
-        # the axis of the one rotation between the ends (its sign does not matter here)
-        rotvec = Rotation.from_matrix(rots[-1] @ rots[0].T).as_rotvec()
-        angle = float(np.linalg.norm(rotvec))
-        # no turn between the ends: any turn of the throw axis on the way is a twist
-        k = rots[0][:, 2] if angle < 1e-6 else rotvec / angle
-        v = rots[0].T @ k
-        return max(math.acos(max(-1.0, min(1.0, float((r @ v) @ k)))) for r in rots)
 
     def _swing_waypoints(
         self, q_lift: np.ndarray, q_rel: np.ndarray, plan: Any, n: int
@@ -278,7 +257,7 @@ class Routes(ArmBase):
         carry follows whatever its timing) stay within the joint limits and leave the
         station upward (`_leaves_station_upward`)? Then the item leaves the station
         neither dragged across its top nor pushed into it."""
-        qs = self._spline_within_limits(waypoints, n)
+        qs = spline_within_limits(self.robot, waypoints, n)
         return qs is not None and self._leaves_station_upward(qs)
 
     def _moving_leaves_station(self, motion: Any, n: int = 200) -> bool:
@@ -304,23 +283,6 @@ class Routes(ArmBase):
             if near and p[2] - p0[2] < min(self.tuning.departure_clear_m, side) - 1e-3:
                 return False
         return True
-
-    def _spline_within_limits(self, waypoints: list[np.ndarray], n: int) -> np.ndarray | None:
-        """n configurations [rad] evenly along the cubic spline through the distinct
-        `waypoints` (`cell.robot.motion.spline_path` without limits: the path a move
-        follows whatever its timing), or None when they are fewer than two or that spline
-        leaves the joint limits: such a route is not chosen (a move along one, the last
-        resort of `_departure`, follows the shape-preserving path instead)."""
-        from cell.robot.motion import spline_path
-
-        keep = distinct_waypoints(waypoints)
-        if len(keep) < 2:
-            return None
-        qs = np.asarray(spline_path(keep)(np.linspace(0.0, 1.0, n)))
-        lim = self.robot.limits
-        if np.any(qs < lim.lower - 1e-6) or np.any(qs > lim.upper + 1e-6):
-            return None
-        return qs
 
     def _grip_reach_m(self) -> float:
         """How far [m] the grip reaches out from its centre, horizontally: the carriage's
