@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.arm.planner import ThrowChoice
+from cell.arm.planner import ThrowChoice, soonest_of
 from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
@@ -127,7 +127,7 @@ def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any)
 
 def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrator: Any) -> None:
     """`_release_search` with `beat`: every candidate whose bound is not under it is left
-    untimed; where that is all of them, the estimate (False, ∞), which `_soonest_of` never
+    untimed; where that is all of them, the estimate (False, ∞), which `soonest_of` never
     prefers to a plan that has one; with `beat` just over the soonest cycle, that cycle."""
     o = orchestrator
     spec = o.job.expanded_items()[2]
@@ -166,5 +166,5 @@ def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrato
         o.scene.remove_item(o._presented)
     first = ThrowChoice(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
     pruned = dataclasses.replace(first, cost=none[0])
-    assert Orchestrator._soonest_of([first, pruned]) is first
+    assert soonest_of([first, pruned]) is first
     assert o._beat([first, pruned]) == full[0][1]

@@ -18,6 +18,15 @@ from cell.model.objects import ObjectParams
 log = logging.getLogger(__name__)
 
 
+def roll_of(robot: Any, q: np.ndarray, elevation: float, azimuth: float) -> float:
+    """The roll (0 or π) of `robot`'s release configuration q [rad] for a throw axis at
+    (elevation, azimuth) [rad]: its pads' axis against roll 0's."""
+    from cell.robot.ik import ReleasePose
+
+    x0 = ReleasePose.from_angles(np.zeros(3), elevation, azimuth, 0.0).rotation()[:, 0]
+    return 0.0 if float(robot.tcp_pose(q)[1][:, 0] @ x0) >= 0.0 else math.pi
+
+
 class Kinematics(ArmBase):
     """The arm's kinematics (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
@@ -100,13 +109,6 @@ class Kinematics(ArmBase):
                 log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
         return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
 
-    def _roll_of(self, q: np.ndarray, elevation: float, azimuth: float) -> float:
-        """The roll (0 or π) of the release configuration q: its pads' axis against roll 0's."""
-        from cell.robot.ik import ReleasePose
-
-        x0 = ReleasePose.from_angles(np.zeros(3), elevation, azimuth, 0.0).rotation()[:, 0]
-        return 0.0 if float(self.robot.tcp_pose(q)[1][:, 0] @ x0) >= 0.0 else math.pi
-
     def _pick_frame(self, plan: Any, q_release: Any) -> tuple[float, float] | None:
         """(azimuth, roll) [rad] of the grip pointing down that the release's frame (at the
         release configuration q_release [rad]) swings up from without a twist about the
@@ -128,7 +130,7 @@ class Kinematics(ArmBase):
         """
         if plan is None:
             return None
-        roll = self._roll_of(q_release, plan.elevation_rad, plan.azimuth_rad)
+        roll = roll_of(self.robot, q_release, plan.elevation_rad, plan.azimuth_rad)
         return (float(plan.azimuth_rad), roll)
 
     def _over_item(

@@ -10,6 +10,7 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.joints import GRIP_DOWN, joint_gap
+from cell.arm.kinematics import roll_of
 from cell.errors import (
     GraspLost,
     IKFailed,
@@ -237,7 +238,7 @@ class Pick(ArmBase):
         # at the release, roll 0 puts E's x at (sin e cos a, sin e sin a, −cos e): turned
         # down about E's y it points back along the azimuth; roll π, forward
         assert q_release is not None
-        roll = self._roll_of(q_release, plan.elevation_rad, plan.azimuth_rad)
+        roll = roll_of(self.robot, q_release, plan.elevation_rad, plan.azimuth_rad)
         return plan.azimuth_rad + math.pi - roll, True
 
     def _pick(

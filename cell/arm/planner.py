@@ -60,6 +60,19 @@ class ThrowChoice:
     goal: np.ndarray | None = None
 
 
+def soonest_of(found: list[ThrowChoice]) -> ThrowChoice:
+    """Of the plans `found` in the release bounds in `Planner._release_bounds`' order, the
+    first, unless a later one's cycle estimate is sooner and its route asks no more of
+    the grip than the first's; the first where an estimate is missing."""
+    first = best = found[0]
+    for r in found[1:]:
+        if first.cost is None or r.cost is None or best.cost is None:
+            continue
+        if r.cost[0] <= first.cost[0] and r.cost < best.cost:
+            best = r
+    return best
+
+
 class Planner(ArmBase):
     """The throw planner (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
@@ -225,33 +238,20 @@ class Planner(ArmBase):
         assert err is not None
         raise err
 
-    @staticmethod
-    def _soonest_of(found: list[ThrowChoice]) -> ThrowChoice:
-        """Of the plans `found` in the release bounds in `_release_bounds`' order, the
-        first, unless a later one's cycle estimate is sooner and its route asks no more of
-        the grip than the first's; the first where an estimate is missing."""
-        first = best = found[0]
-        for r in found[1:]:
-            if first.cost is None or r.cost is None or best.cost is None:
-                continue
-            if r.cost[0] <= first.cost[0] and r.cost < best.cost:
-                best = r
-        return best
-
     def _beat(self, found: list[ThrowChoice]) -> float | None:
         """The cycle estimate [s] a plan in the next release bounds must beat to be kept
-        (`_soonest_of` of the plans `found` so far), where one that asks no more of the
+        (`soonest_of` of the plans `found` so far), where one that asks no more of the
         grip than it holds has it; None (nothing to beat: every release is timed) without
         `cycle_search`, or where there is none."""
         if not self.cycle_search or not found or found[0].cost is None:
             return None
-        cost = self._soonest_of(found).cost
+        cost = soonest_of(found).cost
         return None if cost is None or cost[0] else cost[1]
 
-    @classmethod
-    def _soonest_release(cls, obj: ObjectParams, found: list[ThrowChoice]) -> ThrowChoice:
-        """`_soonest_of` the plans `found`, logged where it is not the first."""
-        first, best = found[0], cls._soonest_of(found)
+    @staticmethod
+    def _soonest_release(obj: ObjectParams, found: list[ThrowChoice]) -> ThrowChoice:
+        """`soonest_of` the plans `found`, logged where it is not the first."""
+        first, best = found[0], soonest_of(found)
         if best is not first:
             log.info(
                 "%s: released %.2f m high, %.2f s sooner a cycle than in the cell's bounds",
