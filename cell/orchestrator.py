@@ -202,9 +202,7 @@ class Orchestrator(
             order=order,
             on_landed=self.landed,
         )
-        # the loop's hook: after each move the mover makes, the flights that have come to
-        # rest are scored (the arm itself never calls the loop)
-        self.on_moved = self.loop.land
+        self.on_moved = self.loop.land  # the loop's hook: the mover calls it after each move
         if observer is not None:
             observer.on_scene(self.scene, job)
 
