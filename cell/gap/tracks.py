@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from cell.gap.problem import GapProblem
-from cell.model.effects import launch_overrides
+from cell.model.effects_apply import launch_overrides
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import G
 from cell.model.throw import drag_constant, launch_state

@@ -34,8 +34,8 @@ from cell.model.effects import (
     StrokeOffset,
     TrackingScale,
     Wind,
-    predict_with_effects,
 )
+from cell.model.effects_apply import predict_with_effects
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.model.throw import ThrowBatch
 

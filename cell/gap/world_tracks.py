@@ -9,13 +9,8 @@ import numpy as np
 
 from cell.gap.world import throw_records
 from cell.log.table import ThrowTable
-from cell.model.effects import (
-    Effect,
-    TrackingScale,
-    flight_accel,
-    launch_overrides,
-    predict_with_effects,
-)
+from cell.model.effects import Effect, TrackingScale
+from cell.model.effects_apply import flight_accel, launch_overrides, predict_with_effects
 from cell.model.flight3d import sample_path
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.model.throw import drag_constant, launch_state
