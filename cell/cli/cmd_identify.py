@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -59,18 +60,9 @@ def run(args: argparse.Namespace) -> int:
         heldout_split,
         predicted_landing,
     )
-    from cell.log import ThrowStore, read_throws_csv
     from cell.params import load_params, save_params
 
-    if args.throws:
-        table = read_throws_csv(args.throws)
-        source = args.throws
-    else:
-        with ThrowStore(args.db, read_only=True) as store:
-            table = store.table()
-            source = str(store.path)
-        if len(table) == 0:
-            raise InvalidInput(f"{source}: the store holds no throws; give a throws.csv")
+    table, source = _throws(args)
     table.require_varied(10, "identification")
     if args.max_iter < 1:
         raise InvalidInput(f"--max-iter {args.max_iter} must be ≥ 1")
@@ -110,38 +102,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         plots = [str(p) for p in _plot(table, start, params, args.plot, np.asarray(held_idx))]
     if args.json:
-        print_json(
-            {
-                "source": source,
-                "throws": len(table),
-                "fit_throws": result.n_throws,
-                "heldout_throws": int(len(held)),
-                "evaluated_on": "heldout" if len(held) else "fit",
-                "iterations": result.iterations,
-                "converged": result.converged,
-                "seconds": result.seconds,
-                "rmse_fit_start_m": result.rmse_start_m,
-                "rmse_fit_m": result.rmse_fit_m,
-                "objects": {
-                    b.object_id: {
-                        "n_fit": n_fit.get(b.object_id, result.n_throws),
-                        "n_eval": b.n,
-                        "reach_rmse_before_m": b.reach_rmse_m,
-                        "reach_rmse_after_m": a.reach_rmse_m,
-                        "landing_rmse_before_m": b.landing_rmse_m,
-                        "landing_rmse_after_m": a.landing_rmse_m,
-                    }
-                    for b, a in zip(before, after, strict=True)
-                },
-                "end_effector": params.ee.as_dict(),
-                "object_params": {
-                    k: {"mass_kg": o.mass, "size_m": list(o.size)}
-                    for k, o in params.objects.items()
-                },
-                "output": args.output,
-                "plots": plots,
-            }
-        )
+        print_json(_report(args, source, table, held, result, params, before, after, n_fit, plots))
         return 0
     print(f"{source}: {len(table)} throws of {len(set(table.text('object_id')))} objects")
     print(f"fitted on {result.n_throws} throws; errors below are on {where}")
@@ -159,6 +120,65 @@ def run(args: argparse.Namespace) -> int:
     for p in plots:
         print(f"wrote {p}")
     return 0
+
+
+def _throws(args: argparse.Namespace) -> tuple[Any, str]:
+    """(the throws to identify from, where they came from): --throws' CSV, else the
+    store's throws (InvalidInput when it holds none)."""
+    from cell.log import ThrowStore, read_throws_csv
+
+    if args.throws:
+        return read_throws_csv(args.throws), args.throws
+    with ThrowStore(args.db, read_only=True) as store:
+        table = store.table()
+        source = str(store.path)
+    if len(table) == 0:
+        raise InvalidInput(f"{source}: the store holds no throws; give a throws.csv")
+    return table, source
+
+
+def _report(
+    args: argparse.Namespace,
+    source: str,
+    table: Any,
+    held: Any,
+    result: Any,
+    params: Any,
+    before: list[Any],
+    after: list[Any],
+    n_fit: dict[str, int],
+    plots: list[str],
+) -> dict[str, Any]:
+    """`cell identify --json`'s report (see `run`)."""
+    return {
+        "source": source,
+        "throws": len(table),
+        "fit_throws": result.n_throws,
+        "heldout_throws": int(len(held)),
+        "evaluated_on": "heldout" if len(held) else "fit",
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "seconds": result.seconds,
+        "rmse_fit_start_m": result.rmse_start_m,
+        "rmse_fit_m": result.rmse_fit_m,
+        "objects": {
+            b.object_id: {
+                "n_fit": n_fit.get(b.object_id, result.n_throws),
+                "n_eval": b.n,
+                "reach_rmse_before_m": b.reach_rmse_m,
+                "reach_rmse_after_m": a.reach_rmse_m,
+                "landing_rmse_before_m": b.landing_rmse_m,
+                "landing_rmse_after_m": a.landing_rmse_m,
+            }
+            for b, a in zip(before, after, strict=True)
+        },
+        "end_effector": params.ee.as_dict(),
+        "object_params": {
+            k: {"mass_kg": o.mass, "size_m": list(o.size)} for k, o in params.objects.items()
+        },
+        "output": args.output,
+        "plots": plots,
+    }
 
 
 def _plot(
