@@ -180,6 +180,21 @@ def _tilted(
     return xy
 
 
+def _effect_size(deviation_of: Callable[[float], float], hi: float, target: float) -> float:
+    """The effect's size in [0, hi] whose landings deviate `target` [m] from the nominal
+    model's (`deviation_of(size)` [m], growing with the size), by 18 bisections; hi where
+    even hi deviates no more."""
+    lo_m, hi_m = 0.0, hi
+    if deviation_of(hi) > target:
+        for _ in range(18):
+            mid = 0.5 * (lo_m + hi_m)
+            if deviation_of(mid) > target:
+                hi_m = mid
+            else:
+                lo_m = mid
+    return hi_m
+
+
 def draw_campaign(
     truth: str,
     rng: np.random.Generator,
@@ -235,15 +250,7 @@ def draw_campaign(
             def world(m: float) -> np.ndarray:
                 return predict_with_effects(batch, ee, family(m), rotor_rpm=rpm, step=WORLD_STEP).xy
 
-        lo_m, hi_m = 0.0, hi
-        if deviation(world(hi)) > target:
-            for _ in range(18):
-                mid = 0.5 * (lo_m + hi_m)
-                if deviation(world(mid)) > target:
-                    hi_m = mid
-                else:
-                    lo_m = mid
-        size = hi_m
+        size = _effect_size(lambda m: deviation(world(m)), hi, target)
         xy = world(size)
         if truth == "unknown":
             params = {"slope": size, "azimuth_rad": float(th)}
