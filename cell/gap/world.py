@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from cell.model.effects import (
 )
 from cell.model.effects_apply import predict_with_effects
 from cell.model.params import DEFAULT_EE, EndEffectorParams
-from cell.model.throw import ThrowBatch
+from cell.model.throw import ThrowBatch, throw_axis
 
 __all__ = ["Campaign", "draw_campaign", "TRUTHS", "throw_records"]
 
@@ -178,6 +179,22 @@ def _tilted(
         b = ThrowBatch(**{**batch.__dict__, "land_z": lz})
         xy = predict_with_effects(b, ee, [], rotor_rpm=rpm, step=WORLD_STEP).xy
     return xy
+
+
+def other_launch(
+    batch: Any, recs: list[dict[str, Any]], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Another launcher's launch of the throws (`throw_records` `recs`, as `batch`):
+    (positions [m, W], velocities [m/s, W], times [s]): from the release point along the
+    throw axis at a speed drawn in 3-7 m/s (one draw from `rng` seeds them), the same for
+    each repeat of a configuration, 0.02 s after the command."""
+    n = len(recs)
+    u = throw_axis(batch.elevation, batch.azimuth)
+    speed = 3.0 + 4.0 * np.random.default_rng(int(rng.integers(2**31))).random(n)
+    key: dict[tuple, float] = {}
+    for i, r in enumerate(recs):
+        speed[i] = key.setdefault((r["object_id"], r["x_m"], r["azimuth_rad"]), speed[i])
+    return batch.position.copy(), u * speed[:, None] + batch.base_velocity, np.full(n, 0.02)
 
 
 def _effect_size(deviation_of: Callable[[float], float], hi: float, target: float) -> float:

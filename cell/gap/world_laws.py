@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.world import throw_records
+from cell.gap.world import other_launch, throw_records
 from cell.log.csvio import ThrowTable
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
-from cell.model.throw import ThrowBatch, drag_constant, launch_state, throw_axis
+from cell.model.throw import ThrowBatch, drag_constant, launch_state
 
 __all__ = ["LawCampaign", "draw_law_campaign", "LAW_EFFECT"]
 
@@ -168,14 +168,7 @@ def _law_launch(
     the model's push; turned about the vertical by the `yaw` law."""
     n = len(recs)
     if other_launcher:
-        u = throw_axis(batch.elevation, batch.azimuth)
-        speed = 3.0 + 4.0 * np.random.default_rng(int(rng.integers(2**31))).random(n)
-        key: dict[tuple, float] = {}
-        for i, r in enumerate(recs):
-            speed[i] = key.setdefault((r["object_id"], r["x_m"], r["azimuth_rad"]), speed[i])
-        p1 = batch.position.copy()
-        v1 = u * speed[:, None] + batch.base_velocity
-        t1 = np.full(n, 0.02)
+        p1, v1, t1 = other_launch(batch, recs, rng)
     else:
         p1, v1 = launch_state(batch, ee)
         t1 = np.full(n, ee.dt)
