@@ -19,6 +19,8 @@ integrates them.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -30,6 +32,7 @@ __all__ = [
     "quat_mul_wxyz",
     "quat_wxyz_from_matrix",
     "rot_z",
+    "tcp_for_item_centre",
 ]
 
 
@@ -116,3 +119,20 @@ def quat_exp_wxyz(omega: np.ndarray, h: float) -> np.ndarray:
         return np.array([1.0, *(0.5 * h * omega)])
     axis = omega / np.linalg.norm(omega)
     return np.array([math.cos(angle / 2), *(math.sin(angle / 2) * axis)])
+
+
+def tcp_for_item_centre(
+    centre: Sequence[float] | np.ndarray,
+    elevation: float,
+    azimuth: float,
+    stroke_m: float,
+    obj: Any,
+) -> np.ndarray:
+    """The TCP (`ee_tcp`) position [m, W] that puts the gripped item's centre of mass at
+    `centre` (an `ObjectParams`' centre, gripped at stroke L_s = `stroke_m` [m]) with the
+    throw axis along u(e, a): what the arm's IK aims at. EE_TO_TCP_M, the TCP's height in
+    E, is read from the end-effector's description (`cell.sim.frames`)."""
+    from cell.sim.frames import EE_TO_TCP_M
+
+    u = axis_frame(elevation, azimuth)[:, 2]
+    return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke_m - obj.size[2] / 2)

@@ -145,9 +145,9 @@ def _object_of(entry: dict[str, Any]) -> Any:
 
 def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any) -> list[str]:
     """The ids of the bins the cell can sort this item into (cell.orchestrator.check_sortable)."""
+    from cell.arm.launch import check_sortable
     from cell.errors import CannotGrip, UnreachableTarget
     from cell.jobs import BinSpec
-    from cell.orchestrator import check_sortable
 
     obj = _object_of(entry)
     ok = []
@@ -180,8 +180,7 @@ def random_job(
         params: the model parameters the feasibility check uses.
         refused: appended to with the kinds drawn again.
     """
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     if params is None:
         params = load_params(scene_params_path())

@@ -9,7 +9,7 @@ PyBullet:
 * a `Platform` (arm, drone, moving base, or a fixed release pose for a campaign)
   presents the item to its end-effector, decides what to do with it (place or throw,
   and the plan), grips it, carries the end-effector to the release pose and lets go;
-* a `Plant` (the PyBullet cell now, a hardware cell later) keeps time, reports where
+* a `Plant` (the PyBullet cell, the kinematic plant of tests, a hardware cell later) keeps time, reports where
   an item is and observes its flight until it rests (`Outcome`);
 * the end-effector is the platform's; a hardware one rides in step with the simulated
   one (`cell.endeffector.instep.InStep`).
@@ -21,7 +21,9 @@ next item's pick; `items_per_hour` counts only items at rest in their target bin
 
 A platform that `overlaps` (the arm) starts the next pick while a thrown item flies:
 the plant steps the flying item with everything else and the loop scores it once it
-rests (`land`, which the platform calls between its moves).
+rests (`land`: the loop hands it to the platform as a hook, which the arm's mover calls
+after each move; no platform imports the loop). The seams are in `cell.seams`, the results
+and the throw-log row in `cell.results`; this module re-exports both.
 """
 
 from __future__ import annotations
@@ -30,344 +32,47 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 from dataclasses import replace as dc_replace
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
+from cell.decision import Decision
 from cell.errors import (
-    CannotGrip,
     CellError,
-    GraspLost,
     HardwareError,
-    IKFailed,
     InvalidInput,
-    TrajectoryError,
-    UnreachableTarget,
 )
 from cell.jobs import ItemSpec, Job, check_order
-from cell.log.records import throw_record
 from cell.model.objects import ObjectParams
+from cell.results import (
+    FAILURES,
+    ItemResult,
+    RunSummary,
+    failure_of,
+    landing,
+    missed_bin,
+    rate_per_hour,
+    sorted_throw_record,
+    summarise,
+)
+from cell.seams import Places, Plant, Platform
 
-__all__ = [
-    "FAILURES",
+__all__ = [  # and, for their callers, the seams, the results and the decision it uses
     "Decision",
+    "FAILURES",
     "InFlight",
     "ItemLoop",
     "ItemResult",
+    "Places",
     "Plant",
     "Platform",
     "RunSummary",
-    "failure_of",
-    "landing",
-    "missed_bin",
     "rate_per_hour",
-    "sorted_throw_record",
-    "summarise",
 ]
 
 log = logging.getLogger(__name__)
-
-# Why an item did not end in its bin: one of these, always (ItemResult.failure).
-FAILURES = (
-    "unreachable",  # no release within the cell's bounds lands it in the bin
-    "cannot_grip",  # too wide, too thin or too heavy for the pads, refused before the pick
-    "grasp_failed",  # the fingers did not close on it
-    "dropped_while_carried",  # it left the grip between the pick and the release
-    "ik",  # no arm configuration or move reaches the planned pose
-    "missed_bin",  # released, but it came to rest outside its bin
-)
-
-
-# -- the seams -------------------------------------------------------------------------
-class Plant(Protocol):
-    """What the loop needs of the cell it runs in (`cell.sim.CellScene` is one)."""
-
-    @property
-    def t(self) -> float:
-        """The plant's clock [s]."""
-        ...
-
-    dt_s: float
-
-    def set_timestep(self, dt_s: float) -> None: ...
-    def step(self, n: int = 1) -> None: ...
-    def item_position(self, item: Any) -> np.ndarray:
-        """The item's centre of mass now [m, W]."""
-        ...
-
-    def watch_until_rest(self, item: Any, *, timeout_s: float = 6.0) -> Any:
-        """Observe the released item until it rests: its `Outcome`."""
-        ...
-
-    def outcome_if_settled(self, item: Any, *, timeout_s: float = 6.0) -> Any | None:
-        """The released item's `Outcome` once it rests, else None (non-blocking)."""
-        ...
-
-    def tidy(self, item: Any) -> None:
-        """Keep an item at rest in a bin there; take any other away."""
-        ...
-
-    def remove_item(self, item: Any) -> None:
-        """Take an item away."""
-        ...
-
-    def tracker(self, item: Any) -> Any:
-        """The released item's track so far (`samples`: t, x, y, z)."""
-        ...
-
-    def watch_until_crossing(
-        self, item: Any, land_z: float, *, timeout_s: float = 4.0
-    ) -> tuple[float, float, float]:
-        """Observe the released item until it crosses z = land_z going down: (x, y, t)."""
-        ...
-
-
-@dataclass
-class Decision:
-    """What a platform will do with an item.
-
-    Attributes:
-        action: "throw" or "place".
-        stroke_m: stroke the item is gripped and released at [m].
-        plan: the throw plan (`cell.optimize.ThrowPlan`; None for a place).
-        delta_stroke_m: learned ΔL_s included in `stroke_m` [m].
-        model_obj: the item as the plan modelled it (for an observer).
-        ee_params: the end-effector parameters the plan used (for an observer).
-        moving: the latch opens while the platform moves; the release point is known
-            once it has (`Platform.release` returns it).
-        state: the platform's own data for the later steps (poses, configurations).
-    """
-
-    action: str
-    stroke_m: float
-    plan: Any = None
-    delta_stroke_m: float = 0.0
-    model_obj: Any = None
-    ee_params: Any = None
-    moving: bool = False
-    state: dict[str, Any] = field(default_factory=dict)
-
-
-class Platform(Protocol):
-    """A platform carries the end-effector: the arm, a drone, a moving base, or the fixed
-    release poses of a campaign. Each step may raise a CellError: the item fails with
-    its reason (`failure_of`) and the run goes on; a HardwareError stops the run."""
-
-    name: str  # "arm", "drone" or "mobile": the throw log's `platform`
-    overlaps: bool  # may start the next item while a thrown one flies
-    rotor_rpm: float  # the drone's rotor speed in the throw log (0 for the others)
-
-    def present(self, index: int, obj: ObjectParams) -> Any:
-        """Have the plant present the item for the grasp; the plant's item."""
-        ...
-
-    def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
-        """Place or throw, and the plan."""
-        ...
-
-    def pick(self, decision: Decision, obj: ObjectParams, item: Any) -> None:
-        """Grip the item (the end-effector holds it at `decision.stroke_m`)."""
-        ...
-
-    def carry(self, decision: Decision, obj: ObjectParams, item: Any) -> None:
-        """Take the end-effector to the release pose, the item still held (GraspLost)."""
-        ...
-
-    def release(self, decision: Decision) -> np.ndarray | None:
-        """Open the latch: slowly for a place, at once for a throw. A release on the move
-        returns the item's centre at the latch [m, W]; None: where it was held."""
-        ...
-
-    def after_place(self, decision: Decision) -> None:
-        """After a placed item rests: leave the bin."""
-        ...
-
-    def finish(self, decision: Decision | None) -> None:
-        """The item is done with (scored, or failed): let go of anything of it."""
-        ...
-
-    def landed(self, decision: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """A throw's observed crossing of its target's rim plane (for learning)."""
-        ...
-
-
-# -- results ---------------------------------------------------------------------------
-def failure_of(exc: BaseException) -> str:
-    """The FAILURES entry for an error that stopped an item before its release."""
-    if isinstance(exc, UnreachableTarget):
-        return "unreachable"
-    if isinstance(exc, CannotGrip):
-        return "cannot_grip"
-    if isinstance(exc, GraspLost):
-        return "grasp_failed" if exc.stage == "grasp" else "dropped_while_carried"
-    if isinstance(exc, (IKFailed, TrajectoryError)):
-        return "ik"
-    return "missed_bin"
-
-
-@dataclass(frozen=True)
-class ItemResult:
-    """What became of one item.
-
-    Attributes:
-        index: item number in the job (0-based).
-        object_id: catalogue id (or ad-hoc name).
-        target_bin: where the job wanted it.
-        action: "place", "throw" or "failed".
-        failure: why it is not in its bin, one of FAILURES ("" when it is).
-        reason: the full message of that failure ("" when there is none).
-        bin_id: the bin it came to rest in ("" for none).
-        in_bin: True when that is the target bin.
-        landing_error_m: throws: distance of the crossing of the rim plane from the
-            point the throw was for (the bin's centre, or the point of it clear of
-            what the bin holds: CellScene.throw_spot); places: distance
-            of the rest point from the bin centre [m].
-        stroke_m: commanded stroke at release [m] (NaN for failures before planning).
-        delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
-        cycle_time_s: simulated time for this item [s] (see the module docstring).
-        throw_id: the log id of the throw ("" for places and failures).
-        moving: the latch opened while the platform moved (a release on the move).
-    """
-
-    index: int
-    object_id: str
-    target_bin: str
-    action: str
-    failure: str = ""
-    reason: str = ""
-    bin_id: str = ""
-    in_bin: bool = False
-    landing_error_m: float = math.nan
-    stroke_m: float = math.nan
-    delta_stroke_m: float = 0.0
-    cycle_time_s: float = 0.0
-    throw_id: str = ""
-    moving: bool = False
-
-
-@dataclass(frozen=True)
-class RunSummary:
-    """The closing table of a run (JSON keys as `cell run --json`)."""
-
-    items: int
-    placed: int
-    thrown: int
-    failed: int
-    in_bin: int
-    in_bin_rate: float
-    mean_landing_error_m: float
-    p95_landing_error_m: float
-    mean_cycle_time_s: float
-    items_per_hour: float
-    sim_time_s: float
-    wall_time_s: float
-    results: list[ItemResult] = field(default_factory=list)
-    failures: dict[str, int] = field(default_factory=dict)
-
-    def as_dict(self) -> dict[str, Any]:
-        """Plain values, item results as a list of dicts."""
-        d = asdict(self)
-        d["results"] = [asdict(r) for r in self.results]
-        return d
-
-
-def rate_per_hour(in_bin: int, sim_time_s: float) -> float:
-    """Items at rest in their bin per hour of `sim_time_s` [s] of arm time (0 with none):
-    the `items_per_hour` of a run, a campaign and its floor (`cell.bench.bench_sort`)."""
-    return 3600.0 * in_bin / sim_time_s if sim_time_s > 0 else 0.0
-
-
-def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
-    """The closing figures of a list of item results."""
-    n = len(results)
-    errs = np.array([r.landing_error_m for r in results if np.isfinite(r.landing_error_m)])
-    cyc = np.array([r.cycle_time_s for r in results])
-    sim_time = float(np.sum([r.cycle_time_s for r in results]))
-    in_bin = sum(r.in_bin for r in results)
-    return RunSummary(
-        items=n,
-        placed=sum(r.action == "place" for r in results),
-        thrown=sum(r.action == "throw" for r in results),
-        failed=sum(r.action == "failed" for r in results),
-        in_bin=in_bin,
-        in_bin_rate=in_bin / n if n else 0.0,
-        mean_landing_error_m=float(errs.mean()) if errs.size else math.nan,
-        p95_landing_error_m=float(np.percentile(errs, 95)) if errs.size else math.nan,
-        mean_cycle_time_s=float(cyc.mean()) if cyc.size else math.nan,
-        items_per_hour=rate_per_hour(in_bin, sim_time),
-        sim_time_s=sim_time,
-        wall_time_s=wall_time_s,
-        results=list(results),
-        failures={k: c for k in FAILURES if (c := sum(r.failure == k for r in results))},
-    )
-
-
-def sorted_throw_record(
-    session: str,
-    throw_id: str,
-    obj: ObjectParams,
-    plan: Any,
-    stroke_m: float,
-    released_at: np.ndarray,
-    target: Any,
-    out: Any,
-    cross: Any,
-    *,
-    platform: str = "arm",
-    rotor_rpm: float = 0.0,
-    land_z_m: float | None = None,
-) -> dict[str, Any]:
-    """The throw-log row of a sort throw: the release as planned and observed, the
-    crossing of the landing plane (the target bin's rim plane unless `land_z_m` says
-    otherwise, see `landing`), and which bin it came to rest in."""
-    return throw_record(
-        throw_id,
-        obj,
-        stroke_m=stroke_m,
-        position_m=released_at,
-        elevation_rad=plan.elevation_rad,
-        azimuth_rad=plan.azimuth_rad,
-        roll_rad=plan.roll_rad,
-        base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
-        platform=platform,
-        rotor_rpm=rotor_rpm,
-        land_z_m=target.rim_height if land_z_m is None else land_z_m,
-        landed_xy_m=cross[:2],
-        session=session,
-        time_s=time.time(),
-        t_flight_s=float(cross[2]),
-        target_bin=target.id,
-        bin_id=out.bin_id or "",
-    )
-
-
-def landing(out: Any, rim_z: float) -> tuple[tuple[float, float, float], float]:
-    """Where a thrown item landed: ((x [m], y [m], t [s] since release), plane z [m]).
-
-    The crossing of the target's rim plane going down (MODEL.md's landing); when the
-    track never goes below that plane (it came down on the pile a low-rimmed bin holds,
-    or on something else as high), the touchdown, on the plane of its height.
-    """
-    from cell.errors import NoLanding
-
-    try:
-        return out.crossing(rim_z), rim_z
-    except NoLanding:
-        x, y, z = out.touchdown_xyz
-        return (float(x), float(y), float(out.t_touchdown)), float(z)
-
-
-def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
-    """(failure, reason) of a released item; both empty when it rests in its bin."""
-    if bin_id == target_id:
-        return "", ""
-    where = f"in bin {bin_id!r}" if bin_id else "outside every bin"
-    return (
-        "missed_bin",
-        f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",
-    )
 
 
 def _settling_in(f: InFlight, bin_id: str) -> bool:
@@ -443,6 +148,8 @@ class ItemLoop:
             the next item starts (the arm's flywheel learns from its earlier throw).
         order: the order the job's items are taken in (`cell.jobs.ORDERS`: "job", as
             listed; "bins", bin by bin; `Job.expanded_items`).
+        on_landed: (decision, obj, crossing) → told of each throw's observed crossing of
+            its target's rim plane [m, W] (the arm's flywheel learns from it), or None.
     """
 
     def __init__(
@@ -456,6 +163,7 @@ class ItemLoop:
         observer: Any = None,
         wait_for: Callable[[ObjectParams, ObjectParams], bool] | None = None,
         order: str = "job",
+        on_landed: Callable[[Decision, ObjectParams, Any], None] | None = None,
     ) -> None:
         check_order(order)
         self._job = job
@@ -466,6 +174,7 @@ class ItemLoop:
         self.session = session
         self.observer = observer
         self.wait_for = wait_for
+        self.on_landed = on_landed
         self._flying: list[InFlight] = []  # thrown, not yet at rest
         self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
         self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
@@ -573,6 +282,8 @@ class ItemLoop:
         """Release slowly and leave; the item, settling in the bin, is scored where it
         comes to rest. The arm does not wait for it: a soft item rocks for up to 0.8 s
         (the demo's teddy), while a box rests before the pads are out of the bin."""
+        if not isinstance(self.platform, Places):
+            raise InvalidInput(f"the {self.platform.name} platform does not place items")
         self.platform.release(d)
         t_release = self.plant.t
         self.platform.after_place(d)
@@ -608,14 +319,14 @@ class ItemLoop:
             )
         t_release = self.plant.t
         # the point the throw was for: the bin's centre, or one clear of what it holds
-        bx, by = d.state.get("goal", target.position)[:2]
+        bx, by = target.position[:2] if d.goal_xy is None else d.goal_xy
         pf = self.platform
 
         def score(out: Any) -> tuple[ItemResult, Any]:
             cross, land_z = landing(out, target.rim_height)
             err = math.hypot(cross[0] - bx, cross[1] - by)
-            if land_z == target.rim_height:
-                pf.landed(d, obj, cross)
+            if land_z == target.rim_height and self.on_landed is not None:
+                self.on_landed(d, obj, cross)
             throw_id = f"{self.session}-{base['index']:04d}"
             if self.store is not None:
                 self.store.append(

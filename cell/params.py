@@ -28,7 +28,7 @@ from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.yamlsafe import read_yaml_text, safe_load
 
-__all__ = ["ModelParams", "load_params", "save_params", "WIDTH_REF_M"]
+__all__ = ["ModelParams", "load_params", "save_params", "scene_params_path", "WIDTH_REF_M"]
 
 WIDTH_REF_M = 0.05  # [m] the grip width the mass rule's κ refers to
 
@@ -68,6 +68,14 @@ class ModelParams:
 
 MAX_FILE_MASS_KG = 1000.0  # [kg] an object of a parameter file: beyond is a typo (1e300)
 MAX_FILE_SIZE_M = 10.0  # [m]
+
+
+def scene_params_path() -> str | None:
+    """The scene's calibrated parameter file (robots/cell_scene/ee_params.yaml), if present."""
+    from cell.robot.paths import robots_dir
+
+    p = robots_dir() / "cell_scene" / "ee_params.yaml"
+    return str(p) if p.is_file() else None
 
 
 def load_params(path: str | Path | None) -> ModelParams:

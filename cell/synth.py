@@ -239,6 +239,61 @@ def _draw_poses(rng: np.random.Generator, c: Campaign, ee: EndEffectorParams, n:
     }
 
 
+def _noise(rng: np.random.Generator, world: World, batch: ThrowBatch, xy: np.ndarray) -> np.ndarray:
+    """The observation noise [m] (n, 2) of landings xy [m, W]: along and across each
+    throw's reach from its release (along its azimuth where it has none), drawn from
+    `rng` with the world's noise at that reach."""
+    n = len(batch)
+    d = xy - batch.position[:, :2]
+    reach = np.linalg.norm(d, axis=1)
+    az = np.c_[np.cos(batch.azimuth), np.sin(batch.azimuth)]
+    along = np.where(reach[:, None] > 1e-6, d / np.maximum(reach, 1e-12)[:, None], az)
+    across = np.c_[-along[:, 1], along[:, 0]]
+    s_along, s_across = world.noise.sigma(reach)
+    return (rng.standard_normal(n) * s_along)[:, None] * along + (
+        rng.standard_normal(n) * s_across
+    )[:, None] * across
+
+
+def _record(
+    name: str,
+    i: int,
+    o: ObjectParams,
+    batch: ThrowBatch,
+    observed: np.ndarray,
+    c: Campaign,
+    session: int,
+) -> dict[str, Any]:
+    """Throw i's THROW_LOG.md row of campaign `name`: object `o` as logged, its release
+    from `batch`, its observed landing (x, y) [m, W], in session `session` (from 0)."""
+    return {
+        "throw_id": f"{name}-{i:05d}",
+        "object_id": o.name,
+        "shape": o.shape,
+        "mass_kg": o.mass,
+        "size_x_m": o.size[0],
+        "size_y_m": o.size[1],
+        "size_z_m": o.size[2],
+        "stroke_m": float(batch.stroke[i]),
+        "x_m": float(batch.position[i, 0]),
+        "y_m": float(batch.position[i, 1]),
+        "z_m": float(batch.position[i, 2]),
+        "elevation_rad": float(batch.elevation[i]),
+        "azimuth_rad": float(batch.azimuth[i]),
+        "roll_rad": float(batch.roll[i]),
+        "vx_mps": 0.0,
+        "vy_mps": 0.0,
+        "vz_mps": 0.0,
+        "platform": c.platform,
+        "rotor_rpm": 0.0,
+        "land_z_m": 0.0,
+        "landed_x_m": float(observed[0]),
+        "landed_y_m": float(observed[1]),
+        "session": f"{name}-s{session + 1}",
+        "time_s": i * c.seconds_per_throw,
+    }
+
+
 def draw_campaign(world: World, campaign: Campaign | None = None, *, seed: int = 0) -> ThrowTable:
     """Draw a campaign of throws in a world, as a throw log.
 
@@ -293,47 +348,12 @@ def draw_campaign(world: World, campaign: Campaign | None = None, *, seed: int =
             "raise max_reach_m or narrow the stroke and elevation ranges"
         )
     land = world.landing(batch)
-    p0 = batch.position[:, :2]
-    d = land.xy - p0
-    reach = np.linalg.norm(d, axis=1)
-    az = np.c_[np.cos(batch.azimuth), np.sin(batch.azimuth)]
-    along = np.where(reach[:, None] > 1e-6, d / np.maximum(reach, 1e-12)[:, None], az)
-    across = np.c_[-along[:, 1], along[:, 0]]
-    s_along, s_across = world.noise.sigma(reach)
-    noise = (rng.standard_normal(c.n) * s_along)[:, None] * along + (
-        rng.standard_normal(c.n) * s_across
-    )[:, None] * across
-    observed = land.xy + noise
+    observed = land.xy + _noise(rng, world, batch, land.xy)
     session = np.minimum((np.arange(c.n) * c.sessions) // c.n, c.sessions - 1)
     records: list[dict[str, Any]] = []
     for i, o in enumerate(logged):
-        rec: dict[str, Any] = {
-            "throw_id": f"synth{seed}-{i:05d}",
-            "object_id": o.name,
-            "shape": o.shape,
-            "mass_kg": o.mass,
-            "size_x_m": o.size[0],
-            "size_y_m": o.size[1],
-            "size_z_m": o.size[2],
-            "stroke_m": float(batch.stroke[i]),
-            "x_m": float(batch.position[i, 0]),
-            "y_m": float(batch.position[i, 1]),
-            "z_m": float(batch.position[i, 2]),
-            "elevation_rad": float(batch.elevation[i]),
-            "azimuth_rad": float(batch.azimuth[i]),
-            "roll_rad": float(batch.roll[i]),
-            "vx_mps": 0.0,
-            "vy_mps": 0.0,
-            "vz_mps": 0.0,
-            "platform": c.platform,
-            "rotor_rpm": 0.0,
-            "land_z_m": 0.0,
-            "landed_x_m": float(observed[i, 0]),
-            "landed_y_m": float(observed[i, 1]),
-            "session": f"synth{seed}-s{session[i] + 1}",
-            "time_s": i * c.seconds_per_throw,
-            "t_flight_s": float(land.t_flight[i]),
-        }
+        rec = _record(f"synth{seed}", i, o, batch, observed[i], c, int(session[i]))
+        rec["t_flight_s"] = float(land.t_flight[i])
         if any(x.shape == "mesh" for x in logged):
             rec["mesh"] = o.mesh
         records.append(rec)

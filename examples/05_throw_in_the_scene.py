@@ -9,8 +9,7 @@ import math
 from cell.catalogue import get_object
 from cell.endeffector.pybullet_backend import PyBulletEndEffector
 from cell.model import ThrowBatch, predict_landing
-from cell.orchestrator import scene_params_path
-from cell.params import load_params
+from cell.params import load_params, scene_params_path
 from cell.sim import BinSpec, CellScene
 from cell.workflows.campaign import throw_once
 

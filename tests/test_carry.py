@@ -9,11 +9,13 @@ import math
 import numpy as np
 import pytest
 
+from cell.arm.grip_limits import carry_hold
+from cell.arm.tuning import TUNING
 from cell.errors import TrajectoryError
 from cell.jobs import parse_job
 from cell.model.grip import holding_mass_kg
 from cell.model.params import G
-from cell.orchestrator import LIFT_M, Orchestrator, carry_hold
+from cell.orchestrator import Orchestrator
 from cell.robot.carry import (
     CARRY_MARGIN,
     GripHold,
@@ -197,7 +199,7 @@ def test_the_lift_over_a_pick_stays_on_the_picks_ik_branch():
         p_item = p_tcp - (orc._tcp_for_item_centre(np.zeros(3), *down, stroke, obj))
         q_lift = orc._lift_q(p_item, stroke, obj, q_pick)
         rise = orc.robot.tcp_pose(q_lift)[0] - p_tcp
-        assert rise[2] >= LIFT_M / 4 - 1e-3 and np.hypot(*rise[:2]) < 2e-3
+        assert rise[2] >= TUNING.lift_m / 4 - 1e-3 and np.hypot(*rise[:2]) < 2e-3
         # the move between them (a straight line in joint space) stays near the vertical
         # over the item and never lower than the pick: the arm does not swing round
         for f in np.linspace(0.0, 1.0, 21):
@@ -230,8 +232,7 @@ def _carry(
     to a release pose (TCP [m, W], elevation [rad], azimuth 0) at the grip limit computed
     with `margin` (`plan_carry`, with or without `shape`); (still held, the item's drift
     in the grip [m], the path's peak use of the grip, its duration [s])."""
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     ee = load_params(scene_params_path()).ee
     m_hold = holding_mass_kg(ee, STROKE_M, WIDTH_M)
@@ -251,7 +252,7 @@ def _carry_item(
 ) -> tuple[bool, float, float, float, float]:
     """Grasp the job's item `item_spec` (its YAML fields but the bin) at
     `stroke_m` kinematically, `settle_s` [s] after the arm stops over it (the cell's
-    SETTLE_S was 0.05 s when these were measured; it grasps without one, the approach's
+    TUNING.settle_s was 0.05 s when these were measured; it grasps without one, the approach's
     own), carry it to `release` at the grip limit computed with `margin` (`carry_hold`
     with `probed`); (still held, drift in the grip [m], the path's peak use of the grip,
     its duration [s], the item's turn in the grip [deg])."""
@@ -267,7 +268,7 @@ def _carry_item(
         p = np.asarray(sc.client.getBasePositionAndOrientation(item.body)[0])
         down = (-math.pi / 2, 0.0)
         q_pick = orc._ik(orc._tcp_for_item_centre(p, *down, stroke_m, obj), *down)
-        lift = p + np.array([0, 0, LIFT_M])
+        lift = p + np.array([0, 0, TUNING.lift_m])
         q_lift = orc._ik(orc._tcp_for_item_centre(lift, *down, stroke_m, obj), *down)
         orc._move([q_lift, q_pick], settle_s=settle_s)
         orc.ee.grasp(stroke_m, item)
@@ -388,8 +389,7 @@ def test_the_pads_couple_says_which_hanging_item_turns_in_the_scene():
     for a short box, above 1 for a tall one; the scene's pads hold the first still and
     let the second turn."""
     from cell.model.objects import ObjectParams
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
     stroke = 0.07
@@ -407,9 +407,9 @@ def test_the_pads_couple_of_a_cylinder_is_that_of_a_line_contact():
     """A cylinder standing on the carriage touches each flat pad along a line of its side
     (length L = the pads' overlap with it): the mean arm of the friction against a turn
     about the pads' axis is then L/4, not that of a face as for a box."""
+    from cell.arm.grip_limits import PAD_COUPLE_FACTOR
     from cell.model.objects import ObjectParams
-    from cell.orchestrator import PAD_COUPLE_FACTOR, scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
 
     params = load_params(scene_params_path())

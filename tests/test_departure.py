@@ -1,6 +1,6 @@
 """The carry's departure from the pick (`Orchestrator._departure`): straight from the pick
 when the path lifts the item out of the station, without the stop-free detour through a
-lift LIFT_M over it; the item leaves the station upward and is still held at the release.
+lift TUNING.lift_m over it; the item leaves the station upward and is still held at the release.
 
 Independent checks: the grip centre's path from the arm's forward kinematics over every
 commanded configuration (not the spline the planner checked), the plant's contacts between
@@ -16,15 +16,11 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.grip_limits import carry_hold
+from cell.arm.joints import GRIP_DOWN, joint_gap
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
-from cell.orchestrator import (
-    DEPARTURE_CLEAR_M,
-    GRIP_DOWN,
-    SETTLE_S,
-    Orchestrator,
-    carry_hold,
-    joint_gap,
-)
+from cell.orchestrator import Orchestrator
 from cell.robot.carry import plan_carry
 
 JOB = """\
@@ -80,7 +76,7 @@ def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_h
         d = orch.decide(index, obj, target)
         assert d.action == "throw" and not d.moving
         orch.pick(d, obj, item)
-        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        q_pick, q_lift = orch.q.copy(), d.state.q_lift
         commanded.clear()
         touching.clear()
         t0 = sc.t
@@ -95,14 +91,14 @@ def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_h
             p = orch.robot.tcp_pose(q)[0]
             if np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach):
                 side = float(np.hypot(*(p[:2] - p0[:2])))
-                assert p[2] - p0[2] >= min(DEPARTURE_CLEAR_M, side) - 1e-3
+                assert p[2] - p0[2] >= min(TUNING.departure_clear_m, side) - 1e-3
         assert last_touch_is_early(touching)
         if not any(joint_gap(w, q_lift) < 1e-9 for w in way):
             # the same carry through the lift, with the same grip bound, is not sooner
             through = [q_pick, q_lift, *orch._swung(q_lift, way[-1], d.plan), way[-1]]
             hold = carry_hold(orch.params, obj, d.stroke_m)
             traj, _ = plan_carry(through, orch.robot, hold)
-            through_s = traj.duration + SETTLE_S  # and the settle at the release pose
+            through_s = traj.duration + TUNING.settle_s  # and the settle at the release pose
             assert took <= through_s + 1e-6
             sooner += took <= through_s - 0.05
         orch.release(d)
@@ -225,7 +221,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
             return Rotation.from_matrix(tcp.T @ np.asarray(sc.item_pose(item)[1]))
 
         assert orch._turns_if_rolled()
-        q_pick, q_lift = orch.q.copy(), d.state["q_lift"]
+        q_pick, q_lift = orch.q.copy(), d.state.q_lift
         before, t0 = in_grip(), sc.t
         carry(d, obj, item)
         took, way = sc.t - t0, ways[-1]
@@ -234,7 +230,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
             hold = carry_hold(orch.params, obj, d.stroke_m)
             traj, _ = plan_carry([q_pick, q_lift, *swing, way[-1]], orch.robot, hold)
             turn = float(np.degrees((in_grip() * before.inv()).magnitude()))
-            unswung.append((turn, took, traj.duration + SETTLE_S))
+            unswung.append((turn, took, traj.duration + TUNING.settle_s))
 
     monkeypatch.setattr(orch, "carry", carried)
     summary = orch.run()

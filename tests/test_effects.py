@@ -24,8 +24,8 @@ from cell.model.effects import (
     Wind,
     effects_from_mapping,
     effects_to_mapping,
-    predict_with_effects,
 )
+from cell.model.effects_apply import predict_with_effects
 from cell.model.flight3d import fly
 from cell.model.objects import ObjectParams
 from cell.model.throw import drag_constant, launch_state

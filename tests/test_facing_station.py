@@ -15,15 +15,16 @@ distance from the point `release_radius` out along the azimuth faced to the bin.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-import cell.orchestrator as orchestrator
+from cell.arm.tuning import TUNING, ArmTuning
+from cell.decision import Decision
 from cell.jobs import parse_job
-from cell.loop import Decision
 from cell.optimize.bounds import DEFAULT_BOUNDS
 from cell.orchestrator import Orchestrator
 from cell.robot.model import load_robot
@@ -82,13 +83,16 @@ def test_a_throw_released_turned_toward_the_station_lands_sooner(
     assert t_turned < t_facing, (t_turned, t_facing)
 
 
-def facing(robot: str, bin_xy: tuple[float, float], turn: bool = True) -> float | None:
+def facing(
+    robot: str, bin_xy: tuple[float, float], turn: bool = True, tuning: ArmTuning = TUNING
+) -> float | None:
     """`Orchestrator._facing_toward_station` for a bin, the station at (0.45, -0.4) m."""
     cell = SimpleNamespace(
         scene=SimpleNamespace(pick_station_xy=STATION),
         bounds=DEFAULT_BOUNDS,
         robot=load_robot(robot),
         turn_release=turn,
+        tuning=tuning,
     )
     return Orchestrator._facing_toward_station(cell, SimpleNamespace(position=bin_xy))  # type: ignore[arg-type]
 
@@ -110,18 +114,17 @@ STATION = (0.45, -0.4)
     ],
 )
 def test_the_turn_keeps_the_throw_within_its_stretch(
-    robot: str, bin_xy: tuple[float, float], turn_max_deg: float, monkeypatch: pytest.MonkeyPatch
+    robot: str, bin_xy: tuple[float, float], turn_max_deg: float
 ) -> None:
     """Turned toward the station, the release point (`release_radius` r out along the
     azimuth faced) is at most FACE_THROW_STRETCH × (d − r) from the bin, exactly that where
     the turn is not capped at FACE_TURN_MAX_RAD. It turns the way the first joint goes:
     the Panda's (±166°) not across ±180°, the UR5's (±360°) the shorter way round."""
-    monkeypatch.setattr(orchestrator, "FACE_TURN_MAX_RAD", math.radians(turn_max_deg))
-    f = facing(robot, bin_xy)
+    f = facing(robot, bin_xy, tuning=replace(TUNING, face_turn_max_rad=math.radians(turn_max_deg)))
     assert f is not None
     r, d = DEFAULT_BOUNDS.release_radius, math.hypot(*bin_xy)
     throw = math.hypot(bin_xy[0] - r * math.cos(f), bin_xy[1] - r * math.sin(f))
-    longest = orchestrator.FACE_THROW_STRETCH * (d - r)
+    longest = TUNING.face_throw_stretch * (d - r)
     bin_az, station_az = math.atan2(bin_xy[1], bin_xy[0]), math.atan2(STATION[1], STATION[0])
     way = station_az - bin_az  # the Panda's way: through 0°
     if robot == "ur5":
@@ -138,7 +141,7 @@ def test_the_turn_keeps_the_throw_within_its_stretch(
 def test_a_bin_near_the_station_azimuth_is_faced(bin_xy: tuple[float, float]) -> None:
     """Within FACE_MIN_OFF_RAD (30°) of the station's azimuth (−41.6°) the arm faces the
     bin: these bins are 0°, 21.9° and 12.9° round from it, where a turn would save little."""
-    assert orchestrator.FACE_MIN_OFF_RAD == pytest.approx(math.radians(30.0))
+    assert TUNING.face_min_off_rad == pytest.approx(math.radians(30.0))
     assert facing("panda", bin_xy) is None
 
 

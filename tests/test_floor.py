@@ -18,11 +18,13 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.grip_limits import carry_hold
+from cell.arm.tuning import TUNING
 from cell.bench.bench_sort import floor_figures
 from cell.catalogue import get_object
 from cell.cli import main
 from cell.jobs import parse_job
-from cell.orchestrator import SETTLE_S, Orchestrator, carry_hold
+from cell.orchestrator import Orchestrator
 from cell.robot.carry import CARRY_MARGIN, grip_use
 from cell.robot.motion import plan_move
 
@@ -90,8 +92,8 @@ def test_timing_the_floor_changes_nothing_and_each_floor_keeps_to_the_arm_and_th
     # a carry's floor is no faster than the grip allows: where the direct move at the arm's
     # full limits would ask more of the grip than a carry may (the grip law, `grip_use`),
     # its floor is slower than that move
-    # each item's approach is timed first, then its carry (after it, SETTLE_S)
-    assert [settle for _, _, settle, _ in spy[1::2]] == [SETTLE_S] * 2
+    # each item's approach is timed first, then its carry (after it, TUNING.settle_s)
+    assert [settle for _, _, settle, _ in spy[1::2]] == [TUNING.settle_s] * 2
     carries = [(q0, q1, f) for q0, q1, _, f in spy[1::2]]
     over = 0
     for (q0, q1, floor), r in zip(carries, timed.results, strict=True):
@@ -99,7 +101,7 @@ def test_timing_the_floor_changes_nothing_and_each_floor_keeps_to_the_arm_and_th
         direct = plan_move(q0, None, q1, None, orch.robot)
         if grip_use(direct, orch.robot, hold) > 1.0 / CARRY_MARGIN:
             over += 1
-            assert floor > direct.duration + SETTLE_S + 1e-3
+            assert floor > direct.duration + TUNING.settle_s + 1e-3
     assert over >= 1
     # the routes (the departure upward, the level swing, the stop over the pick) cost time
     assert sum(orch.floors[r.index][0] - orch.floors[r.index][1] for r in timed.results) > 0.0

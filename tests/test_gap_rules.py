@@ -21,8 +21,8 @@ from cell.model.effects import (
     TrackingScale,
     Wind,
     effects_from_mapping,
-    predict_with_effects,
 )
+from cell.model.effects_apply import predict_with_effects
 from cell.model.flight3d import sample_path
 from cell.model.params import DEFAULT_EE, G
 from cell.model.throw import ThrowBatch

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from cell.arm.grip_limits import carry_hold, mesh_grip
 from cell.catalogue import get_object
-from cell.orchestrator import carry_hold, mesh_grip, scene_params_path
-from cell.params import load_params
+from cell.params import load_params, scene_params_path
 from cell.sim.grip_probe import probe_grip, probe_load
 
 
@@ -38,7 +38,7 @@ def test_a_seated_mesh_is_held_as_the_scene_measures_it_when_placed_or_held_as_a
     well before the model's force. Carried to be thrown, only a mesh the probe holds with
     the model's force (MESH_PROBED_MIN_RATIO of it) is: the egg, not the duck. Not seated
     so (a physical pick), none is given a couple."""
-    from cell.orchestrator import MESH_PROBED_MIN_RATIO
+    from cell.arm.grip_limits import MESH_PROBED_MIN_RATIO
 
     duck, egg = get_object("duck"), get_object("o7_egg")
     ratio, arm = mesh_grip(params, duck)
@@ -96,7 +96,7 @@ def test_a_tall_item_is_released_steep_enough_for_the_grip_to_hold_it_there(para
     """At a throw's release the item's weight is on a pad: f = (g cos e, 0, g sin e) in
     the grip's axes. The least elevation whose use is within the carry's bound: the
     bottle needs one, growing with the stroke (the grip weakens); a cube holds flat."""
-    from cell.orchestrator import release_elevation_min, release_grip_use
+    from cell.arm.grip_limits import release_elevation_min, release_grip_use
     from cell.robot.carry import CARRY_MARGIN
 
     bound = 1.0 / CARRY_MARGIN

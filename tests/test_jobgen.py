@@ -7,12 +7,12 @@ import math
 import pytest
 import yaml
 
+from cell.arm.launch import check_sortable
 from cell.catalogue import catalogue
 from cell.cli import main
 from cell.jobgen import CALIBRATION_SET, FACING_HALF_RANGE_RAD, LayoutRanges, random_job
 from cell.jobs import ROBOT_BASE_CLEARANCE_M, load_job, parse_job
-from cell.orchestrator import check_sortable, scene_params_path
-from cell.params import load_params
+from cell.params import load_params, scene_params_path
 
 SEEDS = range(6)
 

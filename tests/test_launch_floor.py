@@ -11,6 +11,15 @@ import math
 import numpy as np
 import pytest
 
+from cell.arm.grip_limits import grip_stroke_limit
+from cell.arm.launch import (
+    LAUNCH_SPEED_MIN_MPS,
+    SLOW_LAUNCH_MAX_ELEVATION_RAD,
+    clean_launch,
+    launch_speed_mps,
+    launch_stroke_limit,
+    plan_clean,
+)
 from cell.endeffector.factory import make_end_effector
 from cell.errors import CellError, UnreachableTarget
 from cell.log.table import ThrowTable
@@ -18,17 +27,7 @@ from cell.model.objects import ObjectParams
 from cell.model.throw import ThrowBatch, launch_state, predict_landing
 from cell.optimize.bounds import ThrowBounds
 from cell.optimize.plan import plan_facing
-from cell.orchestrator import (
-    LAUNCH_SPEED_MIN_MPS,
-    SLOW_LAUNCH_MAX_ELEVATION_RAD,
-    clean_launch,
-    grip_stroke_limit,
-    launch_speed_mps,
-    launch_stroke_limit,
-    plan_clean,
-    scene_params_path,
-)
-from cell.params import ModelParams, load_params
+from cell.params import ModelParams, load_params, scene_params_path
 from cell.sim import CellScene
 from cell.workflows.campaign import throw_once
 

@@ -24,8 +24,7 @@ from cell.log.store import ThrowStore
 from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.throw import ThrowBatch, predict_landing
-from cell.orchestrator import scene_params_path
-from cell.params import load_params, save_params
+from cell.params import load_params, save_params, scene_params_path
 
 ADHOC = ObjectParams(shape="cube", mass=0.05, size=(0.045, 0.045, 0.045), name="item0_cube")
 

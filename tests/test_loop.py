@@ -72,7 +72,8 @@ def test_no_pybullet_call_above_the_plant():
 )
 def test_every_platform_offers_the_loops_steps(platform):
     """The arm, the drone and moving base, and the campaign's release poses each give the
-    loop every step of `cell.loop.Platform`, with its arguments."""
+    loop every step of `cell.loop.Platform`, with its arguments; only the arm places
+    (`cell.loop.Places`) and learns from landings (its own `landed`)."""
     import importlib
     import inspect
 
@@ -84,15 +85,15 @@ def test_every_platform_offers_the_loops_steps(platform):
         "pick",
         "carry",
         "release",
-        "after_place",
         "finish",
-        "landed",
     ):
         want = list(inspect.signature(getattr(Platform, step)).parameters)
         got = list(inspect.signature(getattr(cls, step)).parameters)
         assert len(got) == len(want), (name, step, got, want)
     for attr in ("name", "overlaps", "rotor_rpm"):
         assert hasattr(cls, attr) or attr in cls.__annotations__, (name, attr)
+    assert hasattr(cls, "after_place") == (name == "Orchestrator")  # `Places`
+    assert hasattr(cls, "landed") == (name == "Orchestrator")
 
 
 def test_a_campaign_throw_goes_through_the_loop_and_its_track_gives_its_landing():
@@ -187,7 +188,7 @@ def test_a_landing_on_a_pile_above_the_rim_is_scored_at_its_touchdown():
     """A throw into a low-rimmed bin can come down on the items the bin holds, above its
     rim plane: it is scored where it touched down (on that height's plane), not failed
     for never crossing the rim's plane; a normal descent is scored at the crossing."""
-    from cell.loop import landing
+    from cell.results import landing
     from cell.sim.settle import Outcome
 
     t = np.linspace(0.0, 1.0, 101)

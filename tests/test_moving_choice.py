@@ -20,13 +20,14 @@ at all, the static one being as soon (tests/test_moving_release.py).
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from cell import orchestrator
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot import moving_release
@@ -53,6 +54,7 @@ def _run(tmp_path: Path, release: str, seen: list[bool] | None = None) -> Any:
         release=release,
         cycle_search=False,
         turn_release=False,
+        tuning=replace(TUNING, settle_s=SETTLE_THEN_S),
     )
     try:
         if seen is not None:
@@ -73,7 +75,6 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Any, Any, l
     tmp = tmp_path_factory.mktemp("moving_choice")
     seen: list[bool] = []
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(orchestrator, "SETTLE_S", SETTLE_THEN_S)
         mp.setattr(moving_release, "SETTLE_S", SETTLE_THEN_S)
         out = _run(tmp, "auto", seen), _run(tmp, "static"), seen
     yield out
@@ -101,12 +102,12 @@ def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Pat
             obj, target = spec.obj, o.job.bin(spec.bin)
             item = o.present(index, obj)
             d = o.decide(index, obj, target)
-            o._frame = o._pick_frame(d.plan)  # as the pick grips it
+            o._frame = o._pick_frame(d.plan, d.state.q_release)  # as the pick grips it
             q_pick, q_lift = o._over_item(item, d.stroke_m, obj)
             at = (q_pick, o.scene.item_position(item), obj, d.stroke_m)
-            before, timed = o._static_carry(at, q_lift, d.state["q_release"], d.plan)
+            before, timed = o._static_carry(at, q_lift, d.state.q_release, d.plan)
             o.pick(d, obj, item)
-            after = o._departure(d.state["q_lift"], d.state["q_release"], d.plan)
+            after = o._departure(d.state.q_lift, d.state.q_release, d.plan)
             assert len(before) == len(after)
             for a, b in zip(before, after, strict=True):
                 assert np.allclose(a, b, atol=1e-3), (index, a, b)

@@ -127,8 +127,7 @@ def flown(robot):
     throw the planner chooses with the static release waiting SCENARIO_SETTLE_S."""
     from cell.bench.bench_moving_release import fly, scenario
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.sim import CellScene
 
     params = load_params(scene_params_path())
@@ -184,8 +183,7 @@ def test_with_no_settle_the_static_release_is_taken_unless_a_moving_one_is_soone
     soonest of them; here (cube50 to the mid bin) none is, so the static release is
     taken, and every moving candidate planned is no sooner than it."""
     from cell.bench.bench_moving_release import scenario
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.sim import CellScene
 
     assert moving_release.SETTLE_S == 0.0

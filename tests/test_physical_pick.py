@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.tuning import TUNING
 from cell.catalogue import get_object
 from cell.jobs import parse_job
 from cell.model.objects import ObjectParams
-from cell.orchestrator import LIFT_M, PICK_ATTEMPTS, PICK_SCATTER_M, Orchestrator
+from cell.orchestrator import Orchestrator
 from cell.sim.band import FINGER_LEFT, FINGER_RIGHT
 
 JOB = """\
@@ -96,7 +97,10 @@ def test_items_rest_at_a_seeded_random_spot_and_yaw(orch: Orchestrator, tmp_path
     (p0, yaw0), (p1, yaw1) = poses
     x0, y0 = sc.pick_station_xy
     for p, _ in poses:  # within the scatter, resting on the station's top
-        assert abs(p[0] - x0) <= PICK_SCATTER_M + 1e-3 and abs(p[1] - y0) <= PICK_SCATTER_M + 1e-3
+        assert (
+            abs(p[0] - x0) <= TUNING.pick_scatter_m + 1e-3
+            and abs(p[1] - y0) <= TUNING.pick_scatter_m + 1e-3
+        )
         assert p[2] == pytest.approx(sc.pick_station_height + obj.size[2] / 2, abs=1e-3)
     assert np.linalg.norm(p0[:2] - p1[:2]) > 1e-3 or abs(yaw0 - yaw1) > 1e-2  # items differ
     # the same job (seed) puts item 0 at the same pose in another scene
@@ -131,7 +135,7 @@ def test_pick_lifts_the_item_by_contact_without_teleport(orch: Orchestrator, nam
     assert teleports == []
     links = {c[3] for c in cl.getContactPoints(bodyA=sc.ee_body, bodyB=item.body)}
     assert {FINGER_LEFT, FINGER_RIGHT} <= links
-    assert orch._item_pose(item)[0][2] - z_rest == pytest.approx(LIFT_M, abs=0.01)
+    assert orch._item_pose(item)[0][2] - z_rest == pytest.approx(TUNING.lift_m, abs=0.01)
     # seated: centre on the throw axis, between the pads, top at the carriage's face
     p, rot = item_in_ee(orch, item)
     assert math.hypot(p[0], p[1]) < 1.5e-3
@@ -175,8 +179,11 @@ def test_a_too_slippery_grip_fails_after_one_retry_and_the_run_goes_on(
     specs = orch.job.expanded_items()
     r = orch.run_item(0, specs[0])
     assert r.action == "failed" and r.failure == "grasp_failed"
-    assert len(attempts) == PICK_ATTEMPTS == 2
-    assert f"attempt {PICK_ATTEMPTS} of {PICK_ATTEMPTS}" in r.reason and "slipped" in r.reason
+    assert len(attempts) == TUNING.pick_attempts == 2
+    assert (
+        f"attempt {TUNING.pick_attempts} of {TUNING.pick_attempts}" in r.reason
+        and "slipped" in r.reason
+    )
     assert orch.ee.item is None
     for j in (FINGER_LEFT, FINGER_RIGHT):
         cl.changeDynamics(ee, j, lateralFriction=orch.scene.geometry.pad_friction)

@@ -15,8 +15,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
-from cell.orchestrator import PICK_OVER_CLEARANCE_M, Orchestrator
+from cell.orchestrator import Orchestrator
 
 JOB = """\
 cell: {robot: %s}
@@ -71,7 +72,7 @@ def test_the_approach_comes_straight_down_onto_the_item_and_the_grasp_holds_it(
         # the grip centre: below the point the pads' length and the clearance over the
         # pick, only straight over the pick and only going down
         p = np.array([orch.robot.tcp_pose(q)[0] for q in qs])
-        over = orch.scene.geometry.pad_length_m + PICK_OVER_CLEARANCE_M
+        over = orch.scene.geometry.pad_length_m + TUNING.pick_over_clearance_m
         low = p[:, 2] < p[-1, 2] + over - 1e-3
         assert low[-1] and np.all(low[np.argmax(low) :])  # once below, it stays below
         assert np.max(np.linalg.norm(p[low, :2] - p[-1, :2], axis=1)) < 2e-3

@@ -2,7 +2,7 @@
 
 Random layout 3's bin_3 (UR5): 0.87 m from the base, 0.38 x 0.37 m, a 0.089 m rim. Placed
 pointing down, a 200 mm bottle's TCP is 0.30 m up: the UR5 misses the bin's centre by 40 mm
-there. The eight best place spots (`CellScene.place_spots`: clear, nearest the centre) are
+there. The eight best place spots (`cell.arm.spots.place_spots`: clear, nearest the centre) are
 all beyond its reach; the spots nearest the base, then, are tried as well
 (`Orchestrator._spots_to_try`). Checked in the scene: the bottle at rest in its bin, and a
 spot nearer the base than the centre by more than the reach it was missed by."""
@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from cell.orchestrator import PLACE_SPOTS_TRIED, Orchestrator
+from cell.arm.tuning import TUNING
+from cell.orchestrator import Orchestrator
 from tests.job_rows import job_rows
 
 JOB = """\
@@ -35,14 +36,16 @@ def test_a_bin_beyond_reach_at_its_middle_is_placed_into_on_its_near_side(
     tried_m: list[float] = []  # the spots tried, from the base [m]
     tried = Orchestrator._spots_to_try
 
-    def watch(spots, floor_z):
-        out = tried(spots, floor_z)
-        assert len(out) <= 2 * PLACE_SPOTS_TRIED
-        assert out[:PLACE_SPOTS_TRIED] == spots[:PLACE_SPOTS_TRIED]  # the best ones first
+    def watch(self, spots, floor_z):
+        out = tried(self, spots, floor_z)
+        assert len(out) <= 2 * TUNING.place_spots_tried
+        assert (
+            out[: TUNING.place_spots_tried] == spots[: TUNING.place_spots_tried]
+        )  # the best ones first
         tried_m.extend(math.hypot(x, y) for x, y, _ in out)
         return out
 
-    monkeypatch.setattr(Orchestrator, "_spots_to_try", staticmethod(watch))
+    monkeypatch.setattr(Orchestrator, "_spots_to_try", watch)
     assert job_rows(JOB, tmp_path, "place-reach") == [("place", "", True)]
     centre = math.hypot(0.843, 0.23)
     assert min(tried_m) < centre - 0.04  # nearer the base than the centre was missed by

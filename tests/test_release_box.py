@@ -1,6 +1,6 @@
 """A long throw of a heavy item whose optimised release lies where the arm does not reach
 (the release box's far upper corner, the throw axis tilted): the cell plans it again in a
-smaller release box (`cell.orchestrator.RELEASE_BOX_SHRINKS`) instead of failing the item.
+smaller release box (`cell.arm.tuning.TUNING.release_box_shrinks`) instead of failing the item.
 
 Independent checks: the release configuration's forward kinematics (Pinocchio) against
 the plan's release pose, and the throw's crossing of the rim plane in the scene."""
@@ -47,7 +47,7 @@ def _released_where_planned(orch: Orchestrator, d: Any, obj: Any) -> None:
     plan = d.plan
     centre = np.array([plan.x_m, plan.y_m, plan.z_m])
     tcp = orch._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
-    p, _ = orch.robot.tcp_pose(d.state["q_release"])
+    p, _ = orch.robot.tcp_pose(d.state.q_release)
     assert np.linalg.norm(p - tcp) < 1e-3
 
 
@@ -69,7 +69,7 @@ def test_a_heavy_disc_thrown_far_is_planned_in_a_smaller_release_box_and_lands(
     orch, d, obj = _decided(job, "release-box")
     try:
         # the cell's own release box: the optimiser's release is out of the arm's reach
-        assert orch.bounds_now.position_max[0] < orch.bounds.position_max[0]  # a smaller box
+        assert d.state.choice.bounds.position_max[0] < orch.bounds.position_max[0]  # a smaller box
         _released_where_planned(orch, d, obj)
     finally:
         orch.close()
@@ -85,26 +85,27 @@ def test_a_target_the_smaller_box_puts_out_of_reach_is_planned_in_a_larger_one(
     in the 0.9 box and lands, where it had failed with `ik`."""
     from dataclasses import replace
 
+    from cell.arm.tuning import TUNING
     from cell.errors import IKFailed
-    from cell.orchestrator import RELEASE_BOX_SHRINKS
 
     job = parse_job(JOB.replace("[2.119, -1.268]", "[2.208, -1.306]"), str(tmp_path / "j.yaml"))
     orch, d, obj = _decided(job, "release-box-far")
     try:
         b = orch.bounds
         lo, hi = np.asarray(b.position_min), np.asarray(b.position_max)
-        half = np.asarray(orch.bounds_now.position_max) - np.asarray(orch.bounds_now.position_min)
+        chosen = d.state.choice.bounds
+        half = np.asarray(chosen.position_max) - np.asarray(chosen.position_min)
         assert np.allclose(half, (hi - lo) * 0.9)  # planned in the larger of the two boxes
         # the boxes tried before it: from the cell's own the release is out of the arm's
         # reach, from the smaller one the target
-        k = RELEASE_BOX_SHRINKS[0]
+        k = TUNING.release_box_shrinks[0]
         mid = (lo + hi) / 2
         small = replace(
             b,
             position_min=tuple(mid - k * (hi - lo) / 2),
             position_max=tuple(mid + k * (hi - lo) / 2),
         )
-        gx, gy, gz = (float(v) for v in orch._goal)
+        gx, gy, gz = (float(v) for v in d.state.choice.goal)
         with pytest.raises(IKFailed):
             orch._plan_in(obj, (gx, gy, gz), 0, math.inf, b)
         with pytest.raises(UnreachableTarget):

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cell.loop import Decision
+from cell.decision import Decision
 from cell.orchestrator import Orchestrator
 from tests.job_rows import job_rows
 
@@ -43,7 +43,7 @@ def test_the_carry_goes_to_the_release_branch_the_decision_timed(
 
     def watched(self: Orchestrator, d: Decision) -> np.ndarray | None:
         if d.action == "throw":
-            gap = np.abs(np.asarray(self.q) - np.asarray(d.state["q_release"]))
+            gap = np.abs(np.asarray(self.q) - np.asarray(d.state.q_release))
             at_release.append(float(gap.max()))
         return release(self, d)
 

@@ -8,7 +8,7 @@ Random layout 2's geometry (Panda). Without the search the carry solves the rele
 from the pick, and on this job's second item (a 67 mm cube) that lands 3.13 rad away in a
 wrist joint from the configuration the decision timed: its carry took 2.11 s in the scene
 against the 1.06 s timed. And without it the plan is made in the cell's release bounds,
-the lower ones (RELEASE_FALLBACKS) only where IK finds nothing there.
+the lower ones (TUNING.release_fallbacks) only where IK finds nothing there.
 
 Independent checks: where the arm is when the latch opens, the scene's clock against the
 time `_static_carry` gave the carry before it, and the same job run in the scene with the
@@ -24,9 +24,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from cell.arm.joints import joint_gap
+from cell.decision import Decision
 from cell.jobs import parse_job
-from cell.loop import Decision
-from cell.orchestrator import Orchestrator, joint_gap
+from cell.orchestrator import Orchestrator
 
 JOB = """\
 cell: {robot: panda, ee: pybullet}
@@ -60,13 +61,13 @@ def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(tmp_path: Path)
         if d.action != "throw" or d.moving or o._grip_stroke != d.stroke_m:
             carry(d, obj, item)
             return
-        plan, chosen = d.plan, d.state["q_release"]
+        plan, chosen = d.plan, d.state.q_release
         e, a = plan.elevation_rad, plan.azimuth_rad
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = o._tcp_for_item_centre(centre, e, a, d.stroke_m, obj)
         resolved = o._ik_gripped(tcp, e, a)  # IK from the pick, where the arm is
         at = (o.q, o.scene.item_position(item), obj, d.stroke_m)
-        _, timed = o._static_carry(at, d.state["q_lift"], chosen, plan)
+        _, timed = o._static_carry(at, d.state.q_lift, chosen, plan)
         t0 = o.scene.t
         carry(d, obj, item)
         rows.append((joint_gap(o.q, chosen), joint_gap(resolved, chosen), o.scene.t - t0, timed))

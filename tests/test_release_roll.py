@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import cell.robot.ik as ik
+from cell.arm.kinematics import roll_of
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 
@@ -46,7 +47,7 @@ def _cycle(
         t1 = o.scene.t
         o.carry(d, obj, item)
         assert o.ee.holds_item()
-        roll = o._roll_of(o.q, d.plan.elevation_rad, d.plan.azimuth_rad)
+        roll = roll_of(o.robot, o.q, d.plan.elevation_rad, d.plan.azimuth_rad)
         return roll, t1 - t0, o.scene.t - t1
     finally:
         o.close()
@@ -83,12 +84,12 @@ def test_a_physical_pick_keeps_the_roll_nearer_where_the_arm_is(tmp_path: Path) 
         obj, target = spec.obj, o.job.bin(spec.bin)
         o.present(0, obj)
         d = o.decide(0, obj, target)
-        plan, q_rel = d.plan, d.state["q_release"]
+        plan, q_rel = d.plan, d.state.q_release
         centre = np.array([plan.x_m, plan.y_m, plan.z_m])
         tcp = o._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
         nearer = ik.solve_release_ik(o.robot, tcp, plan.elevation_rad, plan.azimuth_rad, o.q).q
         assert np.allclose(q_rel, nearer, atol=1e-9)
         # and it is the roll the timed choice would not take (the test above: roll 0)
-        assert abs(o._roll_of(q_rel, plan.elevation_rad, plan.azimuth_rad) - math.pi) < 1e-6
+        assert abs(roll_of(o.robot, q_rel, plan.elevation_rad, plan.azimuth_rad) - math.pi) < 1e-6
     finally:
         o.close()

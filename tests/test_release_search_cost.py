@@ -12,14 +12,17 @@ can beat by more than the bound allows), and the bound's closed form for one joi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
 import numpy as np
 import pytest
 
+from cell.arm.planner import ThrowChoice, soonest_of
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
-from cell.orchestrator import IK_OUT_OF_REACH_M, SETTLE_S, Orchestrator, _Release
+from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from cell.robot.motion import move_time
 from cell.robot.moving_release import COAST_S
@@ -70,7 +73,7 @@ def test_the_cheaper_search_chooses_as_the_exhaustive_one(orchestrator: Any, k: 
     assert fast.action == full.action == "throw"
     assert fast.plan == full.plan
     assert fast.stroke_m == full.stroke_m
-    np.testing.assert_allclose(fast.state["q_release"], full.state["q_release"], atol=1e-12)
+    np.testing.assert_allclose(fast.state.q_release, full.state.q_release, atol=1e-12)
     # fewer cycles timed, never more
     assert len(timed_fast) <= len(timed_full), (timed_fast, timed_full)
     for b, t in timed_full:
@@ -83,7 +86,7 @@ def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: A
     rng = np.random.default_rng(3)
     for _ in range(20):
         q0, q1 = o.robot.random_configuration(rng, 2)
-        each_way = (o._cycle_bound_s(q0, q1) - SETTLE_S - COAST_S) / 2
+        each_way = (o._cycle_bound_s(q0, q1) - TUNING.settle_s - COAST_S) / 2
         # ruckig's rest-to-rest move at the full limits, jerk-limited: no quicker
         assert each_way <= move_time(q0, q1, o.robot) + 1e-9
         assert each_way <= move_time(q1, q0, o.robot) + 1e-9
@@ -98,7 +101,7 @@ def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: A
             expected = 2 * math.sqrt(d_rad / a)
         else:
             expected = d_rad / v + v / a
-        assert o._cycle_bound_s(q0, q1) == pytest.approx(2 * expected + SETTLE_S + COAST_S)
+        assert o._cycle_bound_s(q0, q1) == pytest.approx(2 * expected + TUNING.settle_s + COAST_S)
 
 
 def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any) -> None:
@@ -108,7 +111,7 @@ def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any)
     o._ik_memo.clear()
     with pytest.raises(IKNoSolution) as first:
         o._release_ik(o.robot, pose, np.asarray(o.robot.home, float))
-    assert first.value.position_error_m >= IK_OUT_OF_REACH_M
+    assert first.value.position_error_m >= TUNING.ik_out_of_reach_m
     # from another seed: the same verdict, not searched again
     with pytest.raises(IKNoSolution) as again:
         o._release_ik(o.robot, pose, np.asarray(o.q, float) + 0.1)
@@ -124,7 +127,7 @@ def test_a_release_out_of_reach_is_searched_once_per_decision(orchestrator: Any)
 
 def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrator: Any) -> None:
     """`_release_search` with `beat`: every candidate whose bound is not under it is left
-    untimed; where that is all of them, the estimate (False, ∞), which `_soonest_of` never
+    untimed; where that is all of them, the estimate (False, ∞), which `soonest_of` never
     prefers to a plan that has one; with `beat` just over the soonest cycle, that cycle."""
     o = orchestrator
     spec = o.job.expanded_items()[2]
@@ -161,7 +164,7 @@ def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrato
             o._frame = kept
     finally:
         o.scene.remove_item(o._presented)
-    first = _Release(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
-    pruned = first._replace(cost=none[0])
-    assert Orchestrator._soonest_of([first, pruned]) is first
+    first = ThrowChoice(full[0], plan, 0.0, full[1], None, np.zeros(3), spec.obj)
+    pruned = dataclasses.replace(first, cost=none[0])
+    assert soonest_of([first, pruned]) is first
     assert o._beat([first, pruned]) == full[0][1]

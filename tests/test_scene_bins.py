@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from cell.arm.spots import place_spots
 from cell.catalogue import get_object
 from cell.sim import BinSpec, CellScene
 
@@ -54,9 +55,9 @@ def test_a_kept_item_stays_put_until_something_hits_it(scene):
 
 def test_place_spot_is_the_centre_of_an_empty_bin_then_clear_of_what_it_holds(scene):
     obj = get_object("cuboid_c")
-    assert scene.place_spot("b1", obj) == (1.0, 0.5, FLOOR_TOP)
+    assert place_spots(scene, "b1", obj)[0] == (1.0, 0.5, FLOOR_TOP)
     kept, _ = drop_and_keep(scene, "cyl70", (1.0, 0.5))
-    x, y, z = scene.place_spot("b1", obj, margin_m=0.01)
+    x, y, z = place_spots(scene, "b1", obj, margin_m=0.01)[0]
     p = scene.client.getBasePositionAndOrientation(kept.body)[0]
     r_new, r_kept = max(obj.size[:2]) / 2, max(kept.obj.size) / 2
     assert math.hypot(x - p[0], y - p[1]) >= r_new + r_kept + 0.01 - 1e-9
@@ -70,7 +71,7 @@ def test_a_full_bin_stacks_on_top_of_what_it_holds(scene):
     kept += [
         drop_and_keep(scene, "cyl70", xy)[0] for xy in ((0.93, 0.57), (1.07, 0.43), (1.0, 0.5))
     ]
-    x, y, z = scene.place_spot("b1", obj, margin_m=0.03)
+    x, y, z = place_spots(scene, "b1", obj, margin_m=0.03)[0]
     tops = [
         scene.client.getBasePositionAndOrientation(it.body)[0][2] + max(it.obj.size) / 2
         for it in kept
@@ -81,8 +82,7 @@ def test_a_full_bin_stacks_on_top_of_what_it_holds(scene):
 def test_place_spots_are_ranked_clear_ones_nearest_the_centre_first(scene):
     obj = get_object("cuboid_c")
     kept, _ = drop_and_keep(scene, "cyl70", (1.0, 0.5))
-    spots = scene.place_spots("b1", obj, margin_m=0.01)
-    assert spots[0] == scene.place_spot("b1", obj, margin_m=0.01)
+    spots = place_spots(scene, "b1", obj, margin_m=0.01)
     assert len(set(spots)) == len(spots) > 8  # distinct grid points, enough to try others
     p = scene.client.getBasePositionAndOrientation(kept.body)[0]
     r_new, r_kept = max(obj.size[:2]) / 2, max(kept.obj.size) / 2

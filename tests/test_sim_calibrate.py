@@ -61,7 +61,7 @@ def test_small_campaign_logs_valid_throws_and_the_nominal_gap():
 def test_calibrate_refuses_to_overwrite_the_shipped_parameters(tmp_path, capsys) -> None:
     """The shipped scene calibration is replaced only on request, and checked before any throw."""
     from cell.cli import main
-    from cell.orchestrator import scene_params_path
+    from cell.params import scene_params_path
 
     shipped = scene_params_path()
     assert shipped is not None

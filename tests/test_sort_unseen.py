@@ -7,8 +7,8 @@ from dataclasses import replace
 
 from cell.jobs import parse_job
 from cell.model.objects import ObjectParams
-from cell.orchestrator import FAILURES, Orchestrator, scene_params_path
-from cell.params import load_params
+from cell.orchestrator import FAILURES, Orchestrator
+from cell.params import load_params, scene_params_path
 
 JOB = """
 bins:

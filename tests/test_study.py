@@ -10,7 +10,8 @@ from cell.catalogue import get_object
 from cell.cli import main
 from cell.model import DEFAULT_EE, ThrowBatch, predict_landing
 from cell.platforms.downwash import DEFAULT_DRONE_LAW
-from cell.study.repeatability import THESIS_TABLE, plot_study, run_study
+from cell.study.plot import plot_study
+from cell.study.repeatability import THESIS_TABLE, run_study
 
 # Table 5.2 of the thesis (reach mean ± std over 20 throws [m])
 TABLE = {

@@ -20,6 +20,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from cell.arm.joints import twist
+from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from tests.job_rows import job_rows
@@ -56,11 +58,11 @@ def test_twist_is_zero_about_one_axis_and_found_off_it(tmp_path: Path) -> None:
         q0 = np.asarray(rb.home, float)
         q1 = q0.copy()
         q1[-1] += 1.2  # the flange about its own axis
-        assert o._twist([q0, q1]) == pytest.approx(0.0, abs=1e-6)
+        assert twist(o.robot, [q0, q1], TUNING.swing_check_samples) == pytest.approx(0.0, abs=1e-6)
         mid = (q0 + q1) / 2
         mid[-2] += 0.6  # out of that rotation and back
         line = [q0 + f * (q1 - q0) for f in np.linspace(0, 1, 5)]
-        assert math.degrees(o._twist([q0, mid, q1])) > 20.0
+        assert math.degrees(twist(o.robot, [q0, mid, q1], TUNING.swing_check_samples)) > 20.0
         assert twist_deg(rb, np.asarray(line)) == pytest.approx(0.0, abs=1e-4)
     finally:
         o.close()

@@ -36,7 +36,7 @@ def test_tall_bottles_stay_in_the_grip_and_land(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
 ):
     monkeypatch.chdir(tmp_path)
-    with caplog.at_level(logging.INFO, logger="cell.orchestrator"):
+    with caplog.at_level(logging.INFO, logger="cell.arm"):
         rows = job_rows(JOB, tmp_path, "tall")
     assert rows == [("throw", "", True)] * 3, rows
     # each carried at the shortest stroke (`Orchestrator._carry_stroke`): the level swing at
@@ -88,9 +88,9 @@ def test_a_tall_item_wound_to_the_shortest_stroke_stays_in_the_pads_where_it_fel
     over 1 at 75 mm and under 1 at 30 mm (measured in the scene: out at 60 mm as well,
     use 0.96; held at 50 mm, 0.90). Winding carries the bottle with the carriage, the
     stroke's change along the throw axis, and the pads close by the band law's f_g."""
+    from cell.arm.grip_limits import release_grip_use
     from cell.catalogue import catalogue
-    from cell.orchestrator import release_grip_use, scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
     bottle = catalogue()["o6_bottle"].params

@@ -1,5 +1,5 @@
 """A throw aims at its bin's centre unless the bin holds items there: then at the
-nearest point clear of them (CellScene.throw_spot). Checked in the scene: a cylinder
+nearest point clear of them (cell.arm.spots.throw_spot). Checked in the scene: a cylinder
 launched at the centre strikes a bottle lying across it, or lands on a cube resting there
 and bounces out; one launched at the throw spot lands on the bin's floor."""
 
@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from cell.arm.spots import THROW_CLEARANCE_M, THROW_WALL_MARGIN_M, throw_spot
 from cell.catalogue import get_object
 from cell.jobs import parse_job
 from cell.model.objects import ObjectParams
 from cell.orchestrator import Orchestrator
 from cell.sim import BinSpec, CellScene
-from cell.sim.scene import THROW_CLEARANCE_M, THROW_WALL_MARGIN_M
 
 LOW = BinSpec("low", (1.2, 0.0), (0.35, 0.35), 0.055)  # rim 55 mm, under a lying bottle's top
 G = 9.81
@@ -60,18 +60,18 @@ def assert_clear_of(sc, body, xy, obj):
 
 def test_an_empty_bin_keeps_the_aim_at_the_centre_and_any_item_at_rest_moves_it(scene):
     obj = get_object("cyl60")
-    assert scene.throw_spot("low", obj) == LOW.center_xy
+    assert throw_spot(scene, "low", obj) == LOW.center_xy
     # even a 12 mm tile, far under the rim: a throw lands on its edge, not on the floor
     tile = ObjectParams("cuboid", 0.02, (0.05, 0.05, 0.012))
     item = scene.spawn_item(tile, position=(*LOW.center_xy, LOW.wall + 0.007))
     scene.watch_until_rest(item)
     scene.keep(item)
-    x, y = scene.throw_spot("low", obj)
+    x, y = throw_spot(scene, "low", obj)
     assert_clear_of(scene, item.body, (x, y), obj)
     # of the points as near the centre, the one beyond the tile, seen from the arm's base
     # at W's origin (the bin is 1.2 m along x); from the other side, the other one
     assert x > LOW.center_xy[0] and abs(y - LOW.center_xy[1]) < 1e-9
-    x2, y2 = scene.throw_spot("low", obj, source_xy=(2.4, 0.0))
+    x2, y2 = throw_spot(scene, "low", obj, source_xy=(2.4, 0.0))
     assert x2 == pytest.approx(2 * LOW.center_xy[0] - x) and abs(y2 - LOW.center_xy[1]) < 1e-9
 
 
@@ -89,7 +89,7 @@ def test_a_flat_throw_onto_an_item_at_rest_bounces_out_and_the_aim_beside_it_lan
             cube = sc.spawn_item("cube60", position=(*spec.center_xy, spec.wall + 0.031))
             sc.watch_until_rest(cube)
             sc.keep(cube)
-            aim = sc.throw_spot("b", get_object("cyl60")) if aim_xy is None else aim_xy
+            aim = throw_spot(sc, "b", get_object("cyl60")) if aim_xy is None else aim_xy
             _, out = launch_at(sc, "cyl60", aim, 0.4, short_m, 0.6, spec.rim_height)
             return out, cube.body
         finally:
@@ -107,7 +107,7 @@ def test_the_aim_clears_an_item_standing_above_the_rim_and_the_throw_misses_it(s
     bottle = keep_lying(scene, "o6_bottle", LOW.center_xy)
     lo, hi = (np.asarray(v) for v in scene.client.getAABB(bottle.body))
     assert hi[2] > LOW.rim_height  # it stands above the rim: in the way
-    x, y = scene.throw_spot("low", obj)
+    x, y = throw_spot(scene, "low", obj)
     r_new = max(obj.size[:2]) / 2
     # clear of the bottle's footprint circle, and inside the walls by the margin
     assert_clear_of(scene, bottle.body, (x, y), obj)
@@ -145,7 +145,7 @@ def test_the_cell_throws_clear_of_a_bottle_lying_across_a_low_bin(tmp_path, monk
         bottle = sc.spawn_item("o6_bottle", position=(0.02, 1.40, 0.045), orientation=q)
         sc.watch_until_rest(bottle)
         sc.keep(bottle)
-        spot = sc.throw_spot("bin_5", get_object("cyl60"))
+        spot = throw_spot(sc, "bin_5", get_object("cyl60"))
         assert math.dist(spot, (0.023, 1.379)) > 0.05  # moved off the centre
         summary = o.run()
     finally:

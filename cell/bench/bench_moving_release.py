@@ -47,12 +47,12 @@ def scenario(
     scene: Any, robot: Any, params: Any, obj_name: str, bin_id: str, offset_xy: np.ndarray
 ) -> Scenario:
     """The static plan to the bin and the lift pose over the station (+ offset) [m]."""
+    from cell.arm.grip_limits import carry_hold
     from cell.catalogue import get_object
+    from cell.frames import tcp_for_item_centre
     from cell.optimize.bounds import ThrowBounds
     from cell.optimize.plan import plan_facing
-    from cell.orchestrator import carry_hold
     from cell.robot.ik import solve_release_ik
-    from cell.sim.frames import tcp_for_item_centre
 
     obj = get_object(obj_name)
     mo = params.model_object(obj)
@@ -143,13 +143,45 @@ def motion_shift_error(
     return float(np.linalg.norm(meas - pred)), float(np.linalg.norm(meas)), gal
 
 
+def _static_as_planned(
+    scene: Any, ee: Any, robot: Any, sc: Any, q_release: np.ndarray, v: np.ndarray
+) -> float:
+    """How far [mm] the scenario's static plan, flown from rest at q_release [rad] at its
+    own stroke by the same machinery, lands from its prediction."""
+    from cell.robot.moving_release import plan_moving_release
+
+    sp = sc.static_plan
+    static = plan_moving_release(
+        robot, sc.q_start, q_release, 1e-6 * v / np.linalg.norm(v), hold=sc.hold
+    )
+    out_p, _ = fly(scene, ee, sc, sp.stroke_m, static)
+    xy = np.array(out_p.crossing(float(sc.goal[2]))[:2])
+    return 1000 * float(np.linalg.norm(xy - [sp.pred_x_m, sp.pred_y_m]))
+
+
+def _print_summary(rows: list[Any], wall_s: float) -> None:
+    """The summary line over the moving releases' `rows` (see `main`)."""
+    a = np.array(rows, float)
+    if len(a):
+        print(
+            f"{len(a)} moving releases: saved to the release mean {1000 * a[:, 0].mean():.0f} ms "
+            f"(min {1000 * a[:, 0].min():.0f}, max {1000 * a[:, 0].max():.0f}); cycle saved mean "
+            f"{1000 * a[:, 1].mean():.0f} ms; v error max {a[:, 2].max():.3f} %; "
+            f"|moving − pred| mean {a[:, 3].mean():.1f} mm, max {a[:, 3].max():.1f} mm "
+            f"(world-frame pred mean {a[:, 4].mean():.1f} mm); |static − model| mean "
+            f"{a[:, 5].mean():.1f} mm, max {a[:, 5].max():.1f} mm; motion shift error mean "
+            f"{a[:, 6].mean():.1f} mm, max {a[:, 6].max():.1f} mm; static plans' |landing − pred| "
+            f"mean {a[:, 7].mean():.1f} mm, max {a[:, 7].max():.1f} mm; "
+            f"{wall_s:.0f} s"
+        )
+
+
 def main(n: int = 8, seed: int = 1) -> None:
     """Print one line per throw and a summary."""
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.errors import CellError
     from cell.optimize.verify import fly as model_fly
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.robot.model import load_robot
     from cell.robot.moving_release import choose_release, plan_moving_release
     from cell.sim import CellScene
@@ -205,51 +237,16 @@ def main(n: int = 8, seed: int = 1) -> None:
         )
         shift_err, _, _ = motion_shift_error(scene, sc.model_obj, out_m, out_s, v)
         # the static plan as planned (its own stroke), flown by the same machinery
-        sp = sc.static_plan
-        static = plan_moving_release(
-            robot,
-            sc.q_start,
-            by_release.static_q,
-            1e-6 * v / np.linalg.norm(v),
-            hold=sc.hold,
-        )
-        out_p, _ = fly(scene, ee, sc, sp.stroke_m, static)
-        d_p = 1000 * float(
-            np.linalg.norm(
-                np.array(out_p.crossing(float(sc.goal[2]))[:2]) - [sp.pred_x_m, sp.pred_y_m]
-            )
-        )
-        rows.append(
-            (
-                by_release.saved_to_release_s,
-                by_cycle.saved_s,
-                v_err,
-                d_m,
-                d_w,
-                d_s,
-                1000 * shift_err,
-                d_p,
-            )
-        )
+        d_p = _static_as_planned(scene, ee, robot, sc, by_release.static_q, v)
+        saved = (by_release.saved_to_release_s, by_cycle.saved_s)
+        rows.append((*saved, v_err, d_m, d_w, d_s, 1000 * shift_err, d_p))
         print(
             f"{name:9s} {bin_id:4s} {1000 * by_release.saved_to_release_s:17.0f} "
             f"{1000 * by_cycle.saved_s:15.0f} {np.linalg.norm(v):8.2f} {v_err:8.3f} "
             f"{d_m:15.1f} {d_w:22.1f} {d_s:16.1f} {1000 * shift_err:14.1f} {d_p:20.1f} "
             f"{out_m.bin_id == bin_id}"
         )
-    a = np.array(rows, float)
-    if len(a):
-        print(
-            f"{len(a)} moving releases: saved to the release mean {1000 * a[:, 0].mean():.0f} ms "
-            f"(min {1000 * a[:, 0].min():.0f}, max {1000 * a[:, 0].max():.0f}); cycle saved mean "
-            f"{1000 * a[:, 1].mean():.0f} ms; v error max {a[:, 2].max():.3f} %; "
-            f"|moving − pred| mean {a[:, 3].mean():.1f} mm, max {a[:, 3].max():.1f} mm "
-            f"(world-frame pred mean {a[:, 4].mean():.1f} mm); |static − model| mean "
-            f"{a[:, 5].mean():.1f} mm, max {a[:, 5].max():.1f} mm; motion shift error mean "
-            f"{a[:, 6].mean():.1f} mm, max {a[:, 6].max():.1f} mm; static plans' |landing − pred| "
-            f"mean {a[:, 7].mean():.1f} mm, max {a[:, 7].max():.1f} mm; "
-            f"{time.perf_counter() - t_wall:.0f} s"
-        )
+    _print_summary(rows, time.perf_counter() - t_wall)
     scene.close()
 
 

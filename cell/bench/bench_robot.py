@@ -37,9 +37,9 @@ def _carry_hold() -> GripHold:
     """What the scene's pads hold a 110 g, 50 mm cube with at a 70 mm stroke: on every
     path of the benchmark, the grip bounds the carry below the arm's limits and a time
     scaling keeps it within (`plan_carry`'s bisection and the grip-shaped path both run)."""
+    from cell.arm.grip_limits import carry_hold
     from cell.model.objects import ObjectParams
-    from cell.orchestrator import carry_hold, scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
 
     cube = ObjectParams(shape="cuboid", mass=0.11, size=(0.05, 0.05, 0.05), name="")
     return carry_hold(load_params(scene_params_path()), cube, 0.07)  # type: ignore[no-any-return]

@@ -42,14 +42,15 @@ def scene_reach_errors(
             the calibration's ad-hoc campaign, stream 0xCA1, never draws from).
         params_path: the parameter file to predict with (default: the shipped scene file).
     """
+    from cell.arm.grip_limits import grip_stroke_limit
+    from cell.arm.launch import clean_launch
     from cell.endeffector.factory import make_end_effector
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
     from cell.log.table import ThrowTable
     from cell.model.objects import ObjectParams
     from cell.model.throw import launch_state, predict_landing
-    from cell.orchestrator import clean_launch, grip_stroke_limit, scene_params_path
-    from cell.params import load_params
+    from cell.params import load_params, scene_params_path
     from cell.sim import CellScene
     from cell.workflows.campaign import throw_once
 

@@ -102,7 +102,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse unwritable outputs, and overwriting the shipped parameters, before the campaign."""
     from cell.cli.common import check_output_path
     from cell.errors import InvalidInput
-    from cell.orchestrator import scene_params_path
+    from cell.params import scene_params_path
 
     out = check_output_path(args.output, "-o")
     shipped = scene_params_path()

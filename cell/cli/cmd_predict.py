@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
         )
     if mp.effects:
         # a parameter file may switch identified effects on: predictions then include them
-        from cell.model.effects import predict_with_effects
+        from cell.model.effects_apply import predict_with_effects
 
         land = predict_with_effects(
             batch, mp.ee, mp.effects, rotor_rpm=table.num("rotor_rpm"), strict=False

@@ -278,8 +278,7 @@ def _refit(args: argparse.Namespace, job: Any) -> Any:
     from cell.errors import CellError, InvalidInput
     from cell.identify.refit import refit_objects, sort_throws
     from cell.log.store import ThrowStore, default_db_path
-    from cell.orchestrator import scene_params_path
-    from cell.params import load_params, save_params
+    from cell.params import load_params, save_params, scene_params_path
 
     source = job.params or scene_params_path()
     if args.learn_save:

@@ -36,7 +36,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cell.study.repeatability import StudySetup, plot_study, run_study
+    from cell.study.plot import plot_study
+    from cell.study.repeatability import StudySetup, run_study
 
     setup = StudySetup(arm_height_m=args.arm_height, elevation_rad=args.elevation)
     study = run_study(setup)

@@ -110,10 +110,6 @@ class PyBulletEndEffector(EndEffector):
         """The band now: stretch, forces, latch (law at the current configuration)."""
         return self.band.reading()
 
-    def place_travel_m(self) -> float:
-        """How far `place` can lower the item from the current stroke [m]."""
-        return self.scene.geometry.end_stop_m - 0.002 - self.band.position()
-
     def pick_candidate(self) -> Item:
         """The item to grasp: the newest item resting on the pick station.
 

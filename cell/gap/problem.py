@@ -16,7 +16,8 @@ import numpy as np
 
 from cell.errors import InvalidInput
 from cell.log.table import ThrowTable
-from cell.model.effects import Effect, TrackingScale, flight_accel, predict_with_effects
+from cell.model.effects import Effect, TrackingScale
+from cell.model.effects_apply import flight_accel, predict_with_effects
 from cell.model.flight3d import acceleration
 from cell.model.params import EndEffectorParams
 from cell.model.throw import Landing, ThrowBatch, drag_constant

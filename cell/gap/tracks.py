@@ -34,7 +34,7 @@ from cell.gap.track_evidence import evidence, flight_time
 from cell.gap.track_halves import _state, end_state, halves
 from cell.gap.track_launch import whole_track_launch
 from cell.gap.track_sideways import scale_or_wind
-from cell.model.effects import launch_overrides
+from cell.model.effects_apply import launch_overrides
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import G
 from cell.model.throw import drag_constant, launch_state

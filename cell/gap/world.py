@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -34,10 +35,10 @@ from cell.model.effects import (
     StrokeOffset,
     TrackingScale,
     Wind,
-    predict_with_effects,
 )
+from cell.model.effects_apply import predict_with_effects
 from cell.model.params import DEFAULT_EE, EndEffectorParams
-from cell.model.throw import ThrowBatch
+from cell.model.throw import ThrowBatch, throw_axis
 
 __all__ = ["Campaign", "draw_campaign", "TRUTHS", "throw_records"]
 
@@ -180,6 +181,37 @@ def _tilted(
     return xy
 
 
+def other_launch(
+    batch: Any, recs: list[dict[str, Any]], rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Another launcher's launch of the throws (`throw_records` `recs`, as `batch`):
+    (positions [m, W], velocities [m/s, W], times [s]): from the release point along the
+    throw axis at a speed drawn in 3-7 m/s (one draw from `rng` seeds them), the same for
+    each repeat of a configuration, 0.02 s after the command."""
+    n = len(recs)
+    u = throw_axis(batch.elevation, batch.azimuth)
+    speed = 3.0 + 4.0 * np.random.default_rng(int(rng.integers(2**31))).random(n)
+    key: dict[tuple, float] = {}
+    for i, r in enumerate(recs):
+        speed[i] = key.setdefault((r["object_id"], r["x_m"], r["azimuth_rad"]), speed[i])
+    return batch.position.copy(), u * speed[:, None] + batch.base_velocity, np.full(n, 0.02)
+
+
+def _effect_size(deviation_of: Callable[[float], float], hi: float, target: float) -> float:
+    """The effect's size in [0, hi] whose landings deviate `target` [m] from the nominal
+    model's (`deviation_of(size)` [m], growing with the size), by 18 bisections; hi where
+    even hi deviates no more."""
+    lo_m, hi_m = 0.0, hi
+    if deviation_of(hi) > target:
+        for _ in range(18):
+            mid = 0.5 * (lo_m + hi_m)
+            if deviation_of(mid) > target:
+                hi_m = mid
+            else:
+                lo_m = mid
+    return hi_m
+
+
 def draw_campaign(
     truth: str,
     rng: np.random.Generator,
@@ -235,15 +267,7 @@ def draw_campaign(
             def world(m: float) -> np.ndarray:
                 return predict_with_effects(batch, ee, family(m), rotor_rpm=rpm, step=WORLD_STEP).xy
 
-        lo_m, hi_m = 0.0, hi
-        if deviation(world(hi)) > target:
-            for _ in range(18):
-                mid = 0.5 * (lo_m + hi_m)
-                if deviation(world(mid)) > target:
-                    hi_m = mid
-                else:
-                    lo_m = mid
-        size = hi_m
+        size = _effect_size(lambda m: deviation(world(m)), hi, target)
         xy = world(size)
         if truth == "unknown":
             params = {"slope": size, "azimuth_rad": float(th)}

@@ -30,11 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.world import throw_records
+from cell.gap.world import other_launch, throw_records
 from cell.log.csvio import ThrowTable
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
-from cell.model.throw import ThrowBatch, drag_constant, launch_state, throw_axis
+from cell.model.throw import ThrowBatch, drag_constant, launch_state
 
 __all__ = ["LawCampaign", "draw_law_campaign", "LAW_EFFECT"]
 
@@ -146,6 +146,73 @@ def _tilted_landing(
     return res.position, res.velocity, res.t
 
 
+def _drag(batch: Any, laws: list[dict[str, Any]]) -> np.ndarray:
+    """The throws' drag constants [1/m], scaled by the `drag` law where there is one."""
+    k = drag_constant(batch.shape, batch.mass, batch.size)
+    dr = _law(laws, "drag")
+    if dr is not None:
+        k = k * dr["factor"]
+    return k
+
+
+def _law_launch(
+    batch: Any,
+    recs: list[dict[str, Any]],
+    yaw: dict[str, Any] | None,
+    rng: np.random.Generator,
+    other_launcher: bool,
+    ee: EndEffectorParams,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(positions [m], velocities [m/s], times [s]) at the launch of `draw_law_campaign`'s
+    throws: another launcher's (a speed drawn per configuration along the throw axis), or
+    the model's push; turned about the vertical by the `yaw` law."""
+    n = len(recs)
+    if other_launcher:
+        p1, v1, t1 = other_launch(batch, recs, rng)
+    else:
+        p1, v1 = launch_state(batch, ee)
+        t1 = np.full(n, ee.dt)
+    if yaw is not None:
+        c, s_ = np.cos(yaw["delta_rad"]), np.sin(yaw["delta_rad"])
+        rel = v1 - batch.base_velocity
+        rel = np.c_[c * rel[:, 0] - s_ * rel[:, 1], s_ * rel[:, 0] + c * rel[:, 1], rel[:, 2]]
+        v1 = rel + batch.base_velocity
+    return p1, v1, t1
+
+
+def _law_path(
+    p1: np.ndarray,
+    v1: np.ndarray,
+    t1: np.ndarray,
+    k: np.ndarray,
+    accel: Any,
+    landed: tuple[np.ndarray, np.ndarray],
+    s: float,
+    rng: np.random.Generator,
+    disturbed: bool,
+    track_noise_m: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(times since the launch [s] (n, m), the tracked positions [m, W] (n, m, 3)) of each
+    throw's track at TRACK_RATE_HZ up to its landing (`landed`: (landed?, landing time)),
+    on the observed scale `s`, with `track_noise_m` of noise and, `disturbed`, its first
+    samples pulled back."""
+    ok, t_land = landed
+    n = len(p1)
+    t_end = np.where(ok, t_land - t1 - 0.02, 0.0)
+    m = int(np.ceil(np.nanmax(t_end) * TRACK_RATE_HZ)) + 1
+    t_rel = np.arange(m)[None, :] / TRACK_RATE_HZ + np.zeros((n, 1))
+    t_rel = np.where(t_rel <= t_end[:, None], t_rel, np.nan)
+    path = sample_path(p1, v1, k, t_rel, accel=accel, step=WORLD_STEP)
+    if disturbed:
+        # the object still lags its free flight: pulled back along its launch direction
+        lag = rng.uniform(0.02, 0.04, n)[:, None, None]
+        u = v1 / np.linalg.norm(v1, axis=1)[:, None]
+        decay = np.exp(-np.nan_to_num(t_rel, nan=1.0) / 0.012)[:, :, None]
+        path = path - lag * decay * u[:, None, :]
+    path = path * s + rng.normal(0.0, track_noise_m, path.shape)
+    return t_rel, path
+
+
 def draw_law_campaign(
     laws: list[dict[str, Any]] | tuple[dict[str, Any], ...],
     rng: np.random.Generator,
@@ -178,28 +245,8 @@ def draw_law_campaign(
     stub = ThrowTable.from_records([{**r, "landed_x_m": 0.0, "landed_y_m": 0.0} for r in recs])
     batch = stub.to_batch()
     rpm = stub.num("rotor_rpm")
-    yaw = _law(laws, "yaw")
-    if other_launcher:
-        u = throw_axis(batch.elevation, batch.azimuth)
-        speed = 3.0 + 4.0 * np.random.default_rng(int(rng.integers(2**31))).random(n)
-        key: dict[tuple, float] = {}
-        for i, r in enumerate(recs):
-            speed[i] = key.setdefault((r["object_id"], r["x_m"], r["azimuth_rad"]), speed[i])
-        p1 = batch.position.copy()
-        v1 = u * speed[:, None] + batch.base_velocity
-        t1 = np.full(n, 0.02)
-    else:
-        p1, v1 = launch_state(batch, ee)
-        t1 = np.full(n, ee.dt)
-    if yaw is not None:
-        c, s_ = np.cos(yaw["delta_rad"]), np.sin(yaw["delta_rad"])
-        rel = v1 - batch.base_velocity
-        rel = np.c_[c * rel[:, 0] - s_ * rel[:, 1], s_ * rel[:, 0] + c * rel[:, 1], rel[:, 2]]
-        v1 = rel + batch.base_velocity
-    k = drag_constant(batch.shape, batch.mass, batch.size)
-    dr = _law(laws, "drag")
-    if dr is not None:
-        k = k * dr["factor"]
+    p1, v1, t1 = _law_launch(batch, recs, _law(laws, "yaw"), rng, other_launcher, ee)
+    k = _drag(batch, laws)
     accel = _accel(batch, laws, rpm)
     tilt = _law(laws, "tilt")
     if tilt is not None:
@@ -208,26 +255,16 @@ def draw_law_campaign(
         res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=WORLD_STEP)
         pos, vel, t_land = res.position, res.velocity, res.t
     ok = np.isfinite(t_land)
-    xy = _rest(pos[:, :2], vel, laws)
     sc = _law(laws, "scale")
     s = sc["s"] if sc is not None else 1.0
-    xy = xy * s
+    xy = _rest(pos[:, :2], vel, laws) * s
     noise = rng.normal(0.0, landing_noise_m, (n, 2))
     tracks: dict[str, np.ndarray] | None = None
     path = t_rel = None
     if tracked or other_launcher:
-        t_end = np.where(ok, t_land - t1 - 0.02, 0.0)
-        m = int(np.ceil(np.nanmax(t_end) * TRACK_RATE_HZ)) + 1
-        t_rel = np.arange(m)[None, :] / TRACK_RATE_HZ + np.zeros((n, 1))
-        t_rel = np.where(t_rel <= t_end[:, None], t_rel, np.nan)
-        path = sample_path(p1, v1, k, t_rel, accel=accel, step=WORLD_STEP)
-        if disturbed:
-            # the object still lags its free flight: pulled back along its launch direction
-            lag = rng.uniform(0.02, 0.04, n)[:, None, None]
-            u = v1 / np.linalg.norm(v1, axis=1)[:, None]
-            decay = np.exp(-np.nan_to_num(t_rel, nan=1.0) / 0.012)[:, :, None]
-            path = path - lag * decay * u[:, None, :]
-        path = path * s + rng.normal(0.0, track_noise_m, path.shape)
+        t_rel, path = _law_path(
+            p1, v1, t1, k, accel, (ok, t_land), s, rng, disturbed, track_noise_m
+        )
         tracks = {}
     rows = []
     for i, r in enumerate(recs):

@@ -7,15 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cell.gap.world import throw_records
+from cell.gap.world import other_launch, throw_records
 from cell.log.table import ThrowTable
-from cell.model.effects import (
-    Effect,
-    TrackingScale,
-    flight_accel,
-    launch_overrides,
-    predict_with_effects,
-)
+from cell.model.effects import Effect, TrackingScale
+from cell.model.effects_apply import flight_accel, launch_overrides, predict_with_effects
 from cell.model.flight3d import sample_path
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.model.throw import drag_constant, launch_state
@@ -64,24 +59,8 @@ def draw_tracked_campaign(
     rpm = stub.num("rotor_rpm")
     eff = list(effects)
     s = next((e.scale_factor for e in eff if isinstance(e, TrackingScale)), 1.0)
-    if other_launcher:
-        u = np.stack(
-            [
-                np.cos(batch.elevation) * np.cos(batch.azimuth),
-                np.cos(batch.elevation) * np.sin(batch.azimuth),
-                np.sin(batch.elevation),
-            ],
-            axis=1,
-        )
-        # the same config is thrown twice with the same launch (repeats)
-        speed = 3.0 + 4.0 * np.random.default_rng(int(rng.integers(2**31))).random(n)
-        key: dict[tuple, float] = {}
-        for i, r in enumerate(recs):
-            k = (r["object_id"], r["x_m"], r["azimuth_rad"])
-            speed[i] = key.setdefault(k, speed[i])
-        p1 = batch.position.copy()
-        v1 = u * speed[:, None] + batch.base_velocity
-        t1 = np.full(n, 0.02)
+    if other_launcher:  # the same config is thrown twice with the same launch (repeats)
+        p1, v1, t1 = other_launch(batch, recs, rng)
     else:
         push, pm, ax = launch_overrides(batch, ee, eff)
         p1, v1 = launch_state(batch, ee, push=push, push_mass=pm, axis=ax)

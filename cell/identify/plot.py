@@ -4,7 +4,9 @@ of the thesis' Figs. 4.1-4.3), as PNG files (matplotlib, Agg backend)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +37,54 @@ def _curve(
         land_z=pose["land_z"],
     )
     return predict_landing(batch, params.ee, strict=False, check_stroke=False).x
+
+
+def _median_pose(table: ThrowTable, m: np.ndarray) -> dict[str, float]:
+    """The median release height [m], elevation [rad] and landing plane [m] of the throws
+    `m` of `table` (0.6 m, 0.5 rad, 0 m where there are none)."""
+    return {
+        "z": float(np.median(table.num("z_m")[m])) if m.any() else 0.6,
+        "elevation": float(np.median(table.num("elevation_rad")[m])) if m.any() else 0.5,
+        "land_z": float(np.median(table.num("land_z_m")[m])) if m.any() else 0.0,
+    }
+
+
+def _object_figures(
+    plt: Any, panel: Callable[[Any, str], None], objects: list[str], out: Path
+) -> list[Path]:
+    """One reach-vs-stroke figure per object (`panel` draws it), written into `out`."""
+    written = []
+    for oid in objects:
+        fig, ax = plt.subplots(figsize=(5, 3.6))
+        panel(ax, oid)
+        ax.legend(fontsize=7)
+        ax.set_title(
+            f"Stroke length vs reach: {oid} (curves at the median release pose)", fontsize=9
+        )
+        fig.tight_layout()
+        path = out / f"reach_{oid}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def _overview(plt: Any, panel: Callable[[Any, str], None], objects: list[str], out: Path) -> Path:
+    """The objects' panels on one grid, up to four a row, written into `out`."""
+    cols = min(4, len(objects))
+    rows = math.ceil(len(objects) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False)
+    for ax, oid in zip(axes.ravel(), objects, strict=False):
+        panel(ax, oid)
+    for ax in axes.ravel()[len(objects) :]:
+        ax.axis("off")
+    axes[0, 0].legend(fontsize=6)
+    fig.suptitle("Reach against stroke: model before and after identification vs observed")
+    fig.tight_layout()
+    path = out / "reach_overview.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
 
 
 def plot_reach(
@@ -90,11 +140,7 @@ def plot_reach(
         m = (ids == oid) & np.isfinite(stroke) & np.isfinite(obs_reach)
         i0 = int(np.flatnonzero(ids == oid)[0])
         logged = ObjectParams(shape=shape[i0], mass=float(mass[i0]), size=tuple(size[i0]), name=oid)
-        pose = {
-            "z": float(np.median(table.num("z_m")[m])) if m.any() else 0.6,
-            "elevation": float(np.median(table.num("elevation_rad")[m])) if m.any() else 0.5,
-            "land_z": float(np.median(table.num("land_z_m")[m])) if m.any() else 0.0,
-        }
+        pose = _median_pose(table, m)
         lo, hi = (stroke[m].min(), stroke[m].max()) if m.any() else (0.03, 0.11)
         grid = np.linspace(lo, hi, 60)  # the strokes this object was thrown at
         b = _curve(logged, before, grid, pose)
@@ -119,31 +165,4 @@ def plot_reach(
         ax.set_ylabel("reach [m]", fontsize=8)  # type: ignore[attr-defined]
         ax.tick_params(labelsize=7)  # type: ignore[attr-defined]
 
-    written = []
-    for oid in objects:
-        fig, ax = plt.subplots(figsize=(5, 3.6))
-        panel(ax, oid)
-        ax.legend(fontsize=7)
-        ax.set_title(
-            f"Stroke length vs reach: {oid} (curves at the median release pose)", fontsize=9
-        )
-        fig.tight_layout()
-        path = out / f"reach_{oid}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        written.append(path)
-    cols = min(4, len(objects))
-    rows = math.ceil(len(objects) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False)
-    for ax, oid in zip(axes.ravel(), objects, strict=False):
-        panel(ax, oid)
-    for ax in axes.ravel()[len(objects) :]:
-        ax.axis("off")
-    axes[0, 0].legend(fontsize=6)
-    fig.suptitle("Reach against stroke: model before and after identification vs observed")
-    fig.tight_layout()
-    path = out / "reach_overview.png"
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    written.append(path)
-    return written
+    return [*_object_figures(plt, panel, objects, out), _overview(plt, panel, objects, out)]

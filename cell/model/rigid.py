@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,21 @@ class RigidTrajectory:
     t_flight: float
 
 
+def _trajectory(hist: list[Any], landing: np.ndarray, t_flight: float) -> RigidTrajectory:
+    """The trajectory of the steps `hist` ((t, position, quaternion, velocity, spin) each)
+    that crossed the landing plane at `landing` [m, W], `t_flight` [s] after the release."""
+    ts, ps, qs, vs, ws = zip(*hist, strict=True)
+    return RigidTrajectory(
+        t=np.array(ts),
+        position=np.array(ps),
+        quaternion=np.array(qs),
+        velocity=np.array(vs),
+        omega=np.array(ws),
+        landing=landing,
+        t_flight=t_flight,
+    )
+
+
 def simulate_rigid(
     obj: ObjectParams,
     ee: EndEffectorParams,
@@ -123,7 +139,7 @@ def simulate_rigid(
     v = np.asarray(base_velocity, float).copy()
     w = np.asarray(omega0, float).copy()
     q = release_orientation(elevation, azimuth, roll)
-    ts, ps, qs, vs, ws = [0.0], [p], [q], [v], [w]
+    hist = [(0.0, p, q, v, w)]  # (t, position, quaternion, velocity, spin) of each step
     t = 0.0
     i = 0
     while t < t_max:
@@ -138,21 +154,8 @@ def simulate_rigid(
         t_new = t + h
         if not pushing and p[2] > land_z >= p_new[2]:
             sa, pos, _ = plane_crossing(p[None], p_new[None], v[None], v_new[None], h, land_z)
-            s, landing = float(sa[0]), pos[0]
-            ts.append(t_new)
-            ps.append(p_new)
-            qs.append(q_new)
-            vs.append(v_new)
-            ws.append(w_new)
-            return RigidTrajectory(
-                t=np.array(ts),
-                position=np.array(ps),
-                quaternion=np.array(qs),
-                velocity=np.array(vs),
-                omega=np.array(ws),
-                landing=landing,
-                t_flight=t + s * h,
-            )
+            hist.append((t_new, p_new, q_new, v_new, w_new))
+            return _trajectory(hist, pos[0], t + float(sa[0]) * h)
         if not pushing and p_new[2] <= land_z and v_new[2] < 0:
             break
         p, v, w, q, t = p_new, v_new, w_new, q_new, t_new
@@ -160,11 +163,7 @@ def simulate_rigid(
         if i == n_push and ee.L_e > 0:  # the ride on the carriage to L_e, as launch_state
             travel = float((p - np.asarray(position, float)) @ u)
             (p,), (v,) = ride(p[None], v[None], u[None], np.array([stroke + travel]), ee.L_e)
-        ts.append(t)
-        ps.append(p)
-        qs.append(q)
-        vs.append(v)
-        ws.append(w)
+        hist.append((t, p, q, v, w))
     raise NoLanding(
         f"the throw never crosses its landing plane z = {land_z:.3f} m while descending "
         f"(released at z = {float(np.asarray(position)[2]):.3f} m)"

@@ -161,6 +161,32 @@ def air_velocity(
     return out
 
 
+def _drone_inputs(
+    n: int,
+    rotor_rpm: np.ndarray | float,
+    drone_pose: Sequence[float] | np.ndarray,
+    exit_distance_m: float | np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rotor speeds [rpm] (n,), rotor-plane centres [m, W] (n, 3), exit distances [m]
+    (n,)) of n throws from `predict_drone_landing`'s arguments; InvalidParameter naming
+    the one that is not finite, negative or of the wrong shape."""
+    rpm = np.broadcast_to(np.asarray(rotor_rpm, float), (n,)).copy()
+    if not np.all(np.isfinite(rpm)) or np.any(rpm < 0):
+        raise InvalidParameter(f"rotor_rpm: {rotor_rpm!r} must be finite and ≥ 0 rpm")
+    try:
+        centre = np.broadcast_to(np.asarray(drone_pose, float), (n, 3)).copy()
+    except ValueError:
+        raise InvalidParameter(
+            f"drone_pose: shape {np.shape(drone_pose)} must be (3,) or ({n}, 3) [m]"
+        ) from None
+    if not np.all(np.isfinite(centre)):
+        raise InvalidParameter("drone_pose: must be finite numbers [m]")
+    exit_m = np.broadcast_to(np.asarray(exit_distance_m, float), (n,)).copy()
+    if not np.all(np.isfinite(exit_m)) or np.any(exit_m < 0):
+        raise InvalidParameter(f"exit_distance_m: {exit_distance_m!r} must be finite and ≥ 0 m")
+    return rpm, centre, exit_m
+
+
 def predict_drone_landing(
     batch: ThrowBatch,
     ee: EndEffectorParams,
@@ -203,23 +229,9 @@ def predict_drone_landing(
             malformed drone pose.
         NoLanding: with strict, a throw that never crosses its landing plane.
     """
-    n = len(batch)
-    rpm = np.broadcast_to(np.asarray(rotor_rpm, float), (n,)).copy()
-    if not np.all(np.isfinite(rpm)) or np.any(rpm < 0):
-        raise InvalidParameter(f"rotor_rpm: {rotor_rpm!r} must be finite and ≥ 0 rpm")
-    try:
-        centre = np.broadcast_to(np.asarray(drone_pose, float), (n, 3)).copy()
-    except ValueError:
-        raise InvalidParameter(
-            f"drone_pose: shape {np.shape(drone_pose)} must be (3,) or ({n}, 3) [m]"
-        ) from None
-    if not np.all(np.isfinite(centre)):
-        raise InvalidParameter("drone_pose: must be finite numbers [m]")
+    rpm, centre, exit_m = _drone_inputs(len(batch), rotor_rpm, drone_pose, exit_distance_m)
     if check_stroke:
         batch.check_stroke(ee)
-    exit_m = np.broadcast_to(np.asarray(exit_distance_m, float), (n,)).copy()
-    if not np.all(np.isfinite(exit_m)) or np.any(exit_m < 0):
-        raise InvalidParameter(f"exit_distance_m: {exit_distance_m!r} must be finite and ≥ 0 m")
     p1, v1 = launch_state(batch, ee)
     k = drag_constant(batch.shape, batch.mass, batch.size)
     p0 = batch.position

@@ -65,10 +65,6 @@ class MovingBaseScene(CellScene):
         self.hold_ee((p0 + self._offset).tolist(), self._orn, teleport=True)
         self._pending = drive
 
-    def drive_time(self) -> float:
-        """Time since the drive started [s]."""
-        return self.t - self._t_start
-
     def drive_to_release(self) -> None:
         """Drive from the start (at rest) and step until the base reaches the release state.
 

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput
-from cell.jobs import ItemSpec, Job
+from cell.jobs import Job
 from cell.loop import Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params
@@ -81,7 +81,7 @@ class PlatformRunner:
         end_effector: Any = None,
     ) -> None:
         from cell.endeffector.factory import make_in_step
-        from cell.orchestrator import scene_params_path
+        from cell.params import scene_params_path
         from cell.sim import BinSpec
 
         if job.platform not in ("drone", "mobile"):
@@ -206,23 +206,13 @@ class PlatformRunner:
         """Open the latch at once."""
         self.effector.throw()
 
-    def after_place(self, d: Decision) -> None:
-        """Neither platform places."""
-
     def finish(self, d: Decision | None) -> None:
         """The base stops; nothing is held any more."""
         if self.mobile is not None:
             self.scene.stop_drive()
         self.ee.item = None
 
-    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """No learning on these platforms."""
-
     # -- the run -------------------------------------------------------------------
-    def run_item(self, index: int, spec: ItemSpec) -> ItemResult:
-        """Load, plan, release, observe and record one item (`cell.loop.ItemLoop`);
-        its cycle time runs to the moment the next item can be loaded."""
-        return self.loop.run_item(index, spec)
 
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
         """Throw every item of the job; `on_item` is called after each (progress)."""

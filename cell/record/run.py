@@ -136,16 +136,6 @@ class RunRecording:
         self.rec.at(sim_time_s, index)
         self.rec.text("log", f"item {index}: {object_id} -> bin {target_bin}", "DEBUG")
 
-    def item_shape_box(self, index: int, object_id: str, half_extents: Sequence[float]) -> None:
-        """Draw an item as a box of its extents [m] (static, in the item's frame)."""
-        self.rec.boxes(
-            f"{item_entity(index, object_id)}/shape",
-            [0, 0, 0],
-            half_extents,
-            colors=[(240, 200, 60)],
-            static=True,
-        )
-
     def item_pose(
         self,
         index: int,

@@ -85,10 +85,6 @@ class Recording:
         if item is not None:
             self.stream.set_time(ITEM, sequence=int(item))
 
-    def clear_item_time(self) -> None:
-        """Log what follows without an item number (scene-wide data)."""
-        self.stream.disable_timeline(ITEM)
-
     # -- archetypes from plain data --------------------------------------------
     def boxes(
         self,

@@ -161,6 +161,22 @@ def world_thrower(world: Any, seed: int = 0) -> Thrower:
     return throw
 
 
+def _random_poses(
+    rng: np.random.Generator, n: int, height_m: tuple[float, float], land_z_m: float
+) -> dict[str, np.ndarray]:
+    """n release poses drawn from `rng` (`targeted_throws`): grip centres within ±0.1 m of
+    the origin in x and y at heights in `height_m` [m, W], the throw axis 15-50° up and
+    ±30° round, landing on the plane z = land_z_m [m]."""
+    return {
+        "position": np.c_[
+            rng.uniform(-0.1, 0.1, n), rng.uniform(-0.1, 0.1, n), rng.uniform(*height_m, n)
+        ],
+        "elevation": rng.uniform(np.radians(15), np.radians(50), n),
+        "azimuth": rng.uniform(np.radians(-30), np.radians(30), n),
+        "land_z": np.full(n, float(land_z_m)),
+    }
+
+
 def targeted_throws(
     world: Any,
     residual: Any,
@@ -208,14 +224,7 @@ def targeted_throws(
     ids = [o for o in object_ids for _ in range(throws_per_object)]
     objs: list[ObjectParams] = [cat[o].params for o in ids]
     n = len(ids)
-    pose = {
-        "position": np.c_[
-            rng.uniform(-0.1, 0.1, n), rng.uniform(-0.1, 0.1, n), rng.uniform(*height_m, n)
-        ],
-        "elevation": rng.uniform(np.radians(15), np.radians(50), n),
-        "azimuth": rng.uniform(np.radians(-30), np.radians(30), n),
-        "land_z": np.full(n, float(land_z_m)),
-    }
+    pose = _random_poses(rng, n, height_m, land_z_m)
     model_batch = ThrowBatch.build(
         stroke=rng.uniform(*stroke_range_m, n),
         shape=[o.code for o in objs],

@@ -229,6 +229,32 @@ def fit_fold(unit: FitUnit) -> tuple[np.ndarray, np.ndarray, np.ndarray, Residua
     return test, pred, after_xy, model
 
 
+def _summary(name: str, results: list[FoldResult]) -> LearnerSummary:
+    """Learner `name`'s summary over its folds, logged: the ΔL_s MSE's mean and spread
+    [mm²], the held-out landing RMSE before and after [m]."""
+    mses = np.array([r.dls_mse_mm2 for r in results])
+    out = LearnerSummary(
+        dls_mse_mean=float(mses.mean()),
+        dls_mse_std=float(mses.std()),
+        heldout_rmse_before_m=float(
+            np.sqrt(np.mean(np.concatenate([r.sq_err_before_m2 for r in results])))
+        ),
+        heldout_rmse_after_m=float(
+            np.sqrt(np.mean(np.concatenate([r.sq_err_after_m2 for r in results])))
+        ),
+        folds=results,
+    )
+    log.info(
+        "%s: ΔL_s MSE %.4f ± %.4f mm², held-out landing RMSE %.4f -> %.4f m",
+        name,
+        out.dls_mse_mean,
+        out.dls_mse_std,
+        out.heldout_rmse_before_m,
+        out.heldout_rmse_after_m,
+    )
+    return out
+
+
 def round_robin(
     data: TrainingData,
     *,
@@ -300,24 +326,5 @@ def round_robin(
                     model=model,
                 )
             )
-        mses = np.array([r.dls_mse_mm2 for r in results])
-        out[name] = LearnerSummary(
-            dls_mse_mean=float(mses.mean()),
-            dls_mse_std=float(mses.std()),
-            heldout_rmse_before_m=float(
-                np.sqrt(np.mean(np.concatenate([r.sq_err_before_m2 for r in results])))
-            ),
-            heldout_rmse_after_m=float(
-                np.sqrt(np.mean(np.concatenate([r.sq_err_after_m2 for r in results])))
-            ),
-            folds=results,
-        )
-        log.info(
-            "%s: ΔL_s MSE %.4f ± %.4f mm², held-out landing RMSE %.4f -> %.4f m",
-            name,
-            out[name].dls_mse_mean,
-            out[name].dls_mse_std,
-            out[name].heldout_rmse_before_m,
-            out[name].heldout_rmse_after_m,
-        )
+        out[name] = _summary(name, results)
     return out

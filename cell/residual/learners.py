@@ -150,6 +150,16 @@ class FittedLearner:
         return np.asarray(self.pipeline.predict(np.asarray(x, float)), float) / 1000.0
 
 
+def _null_mse(splits: list[Any], y_mm: np.ndarray) -> dict[str, float]:
+    """The inner CV's mean squared error [mm²] of the null candidates over `splits`
+    ((train, test) index pairs): "zero" (no residual) and "mean" (a constant offset)."""
+    null_mse = {"zero": 0.0, "mean": 0.0}
+    for train, test in splits:
+        null_mse["zero"] += float(np.mean(y_mm[test] ** 2)) / len(splits)
+        null_mse["mean"] += float(np.mean((y_mm[test] - y_mm[train].mean()) ** 2)) / len(splits)
+    return null_mse
+
+
 def fit_learner(
     name: str,
     x: np.ndarray,
@@ -207,11 +217,7 @@ def fit_learner(
     best_mse = float(-search.best_score_)
     # The null candidates: no residual at all, and a constant offset. A learner that
     # cannot beat them in the inner CV would only add its noise to the plan.
-    null_mse = {"zero": 0.0, "mean": 0.0}
-    splits = list(cv.split(x, y_mm, groups))
-    for train, test in splits:
-        null_mse["zero"] += float(np.mean(y_mm[test] ** 2)) / len(splits)
-        null_mse["mean"] += float(np.mean((y_mm[test] - y_mm[train].mean()) ** 2)) / len(splits)
+    null_mse = _null_mse(list(cv.split(x, y_mm, groups)), y_mm)
     null = min(null_mse, key=lambda k: null_mse[k])
     if null_mse[null] <= best_mse:
         from sklearn.dummy import DummyRegressor

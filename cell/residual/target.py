@@ -95,6 +95,28 @@ def _with_stroke(batch: ThrowBatch, stroke: np.ndarray) -> ThrowBatch:
     )
 
 
+def _illinois(
+    a: np.ndarray,
+    b: np.ndarray,
+    fa: np.ndarray,
+    fb: np.ndarray,
+    c: np.ndarray,
+    fc: np.ndarray,
+    side: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """One bracket update of the Illinois method at c (value fc), f(a) >= 0 >= f(b): the
+    new (a, b, f(a), f(b), side kept), the stale end's value halved when the same end is
+    kept twice (`side`: 1 the left one moved last, -1 the right one)."""
+    left = fc > 0  # the root lies beyond c, between c and b
+    a_new = np.where(left, c, a)
+    fa_new = np.where(left, fc, fa)
+    b_new = np.where(left, b, c)
+    fb_new = np.where(left, fb, fc)
+    fb_new = np.where(left & (side == 1), 0.5 * fb_new, fb_new)
+    fa_new = np.where(~left & (side == -1), 0.5 * fa_new, fa_new)
+    return a_new, b_new, fa_new, fb_new, np.where(left, 1, -1)
+
+
 def stroke_for_reach(
     batch: ThrowBatch,
     reach_m: np.ndarray,
@@ -158,17 +180,7 @@ def stroke_for_reach(
         c = np.where(bad, mid, c)
         fc = f(c, act)
         fc = np.where(np.isfinite(fc), fc, 0.0)
-        # f(lo) >= 0 >= f(hi): keep the sign change between a and b
-        left = fc > 0  # the root lies beyond c, between c and b
-        a_new = np.where(left, c, a)
-        fa_new = np.where(left, fc, fa)
-        b_new = np.where(left, b, c)
-        fb_new = np.where(left, fb, fc)
-        # Illinois: halve the stale end's value when the same end is kept twice
-        fb_new = np.where(left & (side == 1), 0.5 * fb_new, fb_new)
-        fa_new = np.where(~left & (side == -1), 0.5 * fa_new, fa_new)
-        side = np.where(left, 1, -1)
-        a, b, fa, fb = a_new, b_new, fa_new, fb_new
+        a, b, fa, fb, side = _illinois(a, b, fa, fb, c, fc, side)
         done = (np.abs(b - a) < tol_m) | (fc == 0)
         stroke[act] = c
         miss[act] = fc

@@ -135,10 +135,6 @@ class Robot:
             )
         )
 
-    def tcp_velocity(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
-        """Linear velocity of the grip centre in W [m/s], shape (3,)."""
-        return self.tcp_jacobian(q)[:3] @ np.asarray(dq, dtype=float)
-
     def random_configuration(self, rng: np.random.Generator, n: int = 1) -> np.ndarray:
         """Uniform random configurations within the joint limits (±π for wider ranges).
 

@@ -50,14 +50,13 @@ from typing import Any
 import numpy as np
 
 from cell.errors import IKFailed, InvalidInput, TrajectoryError, UnreachableTarget
-from cell.frames import axis_frame
+from cell.frames import axis_frame, tcp_for_item_centre
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.robot.carry import GripHold
 from cell.robot.model import Robot
 from cell.robot.motion import move_time, plan_move, plan_stop, release_joint_velocity
 from cell.robot.trajectory import Trajectory, as_robot, joint_vector
-from cell.sim.frames import tcp_for_item_centre
 
 __all__ = [
     "COAST_S",

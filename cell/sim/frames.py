@@ -33,7 +33,6 @@ __all__ = [
     "ee_pose_for_item_centre",
     "item_behind_ee_m",
     "release_orientation",
-    "tcp_for_item_centre",
     "quat_from_matrix",
 ]
 
@@ -125,16 +124,3 @@ def ee_pose_for_item_centre(
     r = release_orientation(elevation, azimuth, roll)
     pos = np.asarray(centre, float) - r[:, 2] * item_behind_ee_m(stroke_m, obj)
     return [float(v) for v in pos], quat_from_matrix(r)
-
-
-def tcp_for_item_centre(
-    centre: Sequence[float] | np.ndarray,
-    elevation: float,
-    azimuth: float,
-    stroke_m: float,
-    obj: Any,
-) -> np.ndarray:
-    """The TCP (`ee_tcp`) position [m, W] that puts the gripped item's centre of mass at
-    `centre` with the throw axis along u(e, a): what the arm's IK aims at."""
-    u = release_orientation(elevation, azimuth)[:, 2]
-    return np.asarray(centre, float) + u * (EE_TO_TCP_M - stroke_m - obj.size[2] / 2)

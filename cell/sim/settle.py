@@ -84,11 +84,6 @@ class Outcome:
         """Touchdown point (x, y) [m, W]."""
         return (self.touchdown_xyz[0], self.touchdown_xyz[1])
 
-    @property
-    def rest_xy(self) -> tuple[float, float]:
-        """Rest point (x, y) [m, W]."""
-        return (self.rest_xyz[0], self.rest_xyz[1])
-
     def crossing(self, land_z: float) -> tuple[float, float, float]:
         """Where and when the centre of mass first crosses z = land_z going down.
 

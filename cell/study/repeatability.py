@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -49,7 +48,6 @@ __all__ = [
     "StudyRow",
     "RepeatabilityStudy",
     "run_study",
-    "plot_study",
 ]
 
 THESIS_TRIALS = 20  # throws per row of Table 5.2
@@ -282,6 +280,76 @@ def _fit(
     )
 
 
+def _anchored(
+    obj: ObjectParams, ee: EndEffectorParams, setup: StudySetup, arm: ThesisRow, zero: ThesisRow
+) -> tuple[float, float]:
+    """(the stroke [m] at which the arm's release reaches the arm row's reach, the drone's
+    release height [m] at which that stroke reaches the 0 rpm row's); InvalidParameter
+    where none in range does."""
+    from scipy.optimize import brentq
+
+    e = setup.elevation_rad
+    try:
+        stroke = float(
+            brentq(
+                lambda s: _reach(obj, ee, s, setup.arm_height_m, e) - arm.reach_m,
+                ee.stroke_min,
+                ee.stroke_max,
+                xtol=1e-7,
+            )
+        )
+    except ValueError:
+        raise InvalidParameter(
+            f"no stroke in [{ee.stroke_min}, {ee.stroke_max}] m reaches the arm's "
+            f"{arm.reach_m} m from {setup.arm_height_m} m"
+        ) from None
+    try:
+        release_z = float(
+            brentq(lambda z: _reach(obj, ee, stroke, z, e) - zero.reach_m, 0.2, 10.0, xtol=1e-6)
+        )
+    except ValueError:
+        raise InvalidParameter(
+            f"no drone height up to 10 m reaches {zero.reach_m} m at stroke {stroke:.4f} m"
+        ) from None
+    return stroke, release_z
+
+
+def _study_rows(
+    arm: ThesisRow,
+    arm_reach: float,
+    drone_rows: list[ThesisRow],
+    r_mom: np.ndarray,
+    r_thr: np.ndarray,
+) -> list[StudyRow]:
+    """The study's rows: the arm's, then each drone row's with both laws' reaches [m]."""
+    rows = [
+        StudyRow(
+            "arm",
+            None,
+            arm_reach,
+            arm.reach_m,
+            arm.std_m,
+            arm_reach,
+            arm_reach - arm.reach_m,
+            abs(arm_reach - arm.reach_m) <= arm.std_m,
+        )
+    ]
+    for r, a, b in zip(drone_rows, r_mom, r_thr, strict=True):
+        rows.append(
+            StudyRow(
+                "drone",
+                float(r.rotor_rpm or 0.0),
+                float(a),
+                r.reach_m,
+                r.std_m,
+                float(b),
+                float(a - r.reach_m),
+                bool(abs(a - r.reach_m) <= r.std_m),
+            )
+        )
+    return rows
+
+
 def run_study(
     setup: StudySetup = StudySetup(),
     ee: EndEffectorParams = DEFAULT_EE,
@@ -302,8 +370,6 @@ def run_study(
             at least one drone row at nonzero rpm; no stroke or height in range
             reproduces the anchors.
     """
-    from scipy.optimize import brentq
-
     arm = [r for r in table if r.platform == "arm"]
     zero = [r for r in table if r.platform == "drone" and not r.rotor_rpm]
     spun = [r for r in table if r.platform == "drone" and r.rotor_rpm]
@@ -313,28 +379,7 @@ def run_study(
         )
     obj = _cube(setup)
     e = setup.elevation_rad
-    try:
-        stroke = float(
-            brentq(
-                lambda s: _reach(obj, ee, s, setup.arm_height_m, e) - arm[0].reach_m,
-                ee.stroke_min,
-                ee.stroke_max,
-                xtol=1e-7,
-            )
-        )
-    except ValueError:
-        raise InvalidParameter(
-            f"no stroke in [{ee.stroke_min}, {ee.stroke_max}] m reaches the arm's "
-            f"{arm[0].reach_m} m from {setup.arm_height_m} m"
-        ) from None
-    try:
-        release_z = float(
-            brentq(lambda z: _reach(obj, ee, stroke, z, e) - zero[0].reach_m, 0.2, 10.0, xtol=1e-6)
-        )
-    except ValueError:
-        raise InvalidParameter(
-            f"no drone height up to 10 m reaches {zero[0].reach_m} m at stroke {stroke:.4f} m"
-        ) from None
+    stroke, release_z = _anchored(obj, ee, setup, arm[0], zero[0])
 
     def reach_of(rpm: Sequence[float], law: DownwashLaw) -> np.ndarray:
         return _drone_reach(obj, ee, setup, stroke, release_z, rpm, law)
@@ -366,31 +411,7 @@ def run_study(
     r_mom = reach_of(rpm_all, momentum.law)
     r_thr = reach_of(rpm_all, threshold.law)
     arm_reach = _reach(obj, ee, stroke, setup.arm_height_m, e)
-    rows = [
-        StudyRow(
-            "arm",
-            None,
-            arm_reach,
-            arm[0].reach_m,
-            arm[0].std_m,
-            arm_reach,
-            arm_reach - arm[0].reach_m,
-            abs(arm_reach - arm[0].reach_m) <= arm[0].std_m,
-        )
-    ]
-    for r, a, b in zip(drone_rows, r_mom, r_thr, strict=True):
-        rows.append(
-            StudyRow(
-                "drone",
-                float(r.rotor_rpm or 0.0),
-                float(a),
-                r.reach_m,
-                r.std_m,
-                float(b),
-                float(a - r.reach_m),
-                bool(abs(a - r.reach_m) <= r.std_m),
-            )
-        )
+    rows = _study_rows(arm[0], arm_reach, drone_rows, r_mom, r_thr)
     study = RepeatabilityStudy(
         stroke_m=stroke,
         arm_release_m=(0.0, 0.0, setup.arm_height_m),
@@ -433,75 +454,3 @@ def _verdict(study: RepeatabilityStudy, spun: Sequence[ThesisRow]) -> str:
         + "; its threshold is phenomenological, not momentum theory.",
     ]
     return " ".join(parts)
-
-
-def plot_study(
-    study: RepeatabilityStudy, path: str | Path, ee: EndEffectorParams = DEFAULT_EE
-) -> Path:
-    """Write the study's plot (PNG): thesis means ± std and the fitted laws against rpm.
-
-    Args:
-        study: the study.
-        path: output PNG file.
-        ee: the end-effector parameters the study used.
-
-    Returns:
-        The written path.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    setup = study.setup
-    obj = _cube(setup)
-    rpm = np.linspace(0.0, 16000.0, 33)
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [3, 1]})
-    drone = [r for r in study.rows if r.platform == "drone"]
-    ax.errorbar(
-        [r.rotor_rpm for r in drone],
-        [r.thesis_reach_m for r in drone],
-        yerr=[r.thesis_std_m for r in drone],
-        fmt="ko",
-        capsize=4,
-        label="thesis, mean ± std (20 throws)",
-    )
-    ax.errorbar(
-        [r.rotor_rpm for r in drone],
-        [r.thesis_reach_m for r in drone],
-        yerr=[r.thesis_std_m / math.sqrt(THESIS_TRIALS) for r in drone],
-        fmt="none",
-        ecolor="0.3",
-        elinewidth=3,
-        capsize=0,
-        label="thesis, ± SEM",
-    )
-    for fit, style in zip(study.fits, ("C0-", "C1--"), strict=True):
-        curve = _drone_reach(
-            obj, ee, setup, study.stroke_m, study.drone_release_m[2], list(rpm), fit.law
-        )
-        label = f"{fit.name}: c={fit.law.induced_mps_per_krpm:.3f} m/s/krpm" + (
-            f", rpm0={fit.law.threshold_rpm:.0f}" if fit.name == "threshold" else ""
-        )
-        ax.plot(rpm, curve, style, label=label)
-    ax.set_xlabel("rotor speed [rpm]")
-    ax.set_ylabel("reach [m]")
-    ax.set_title(
-        f"Drone: cube thrown at L_s = {study.stroke_m * 1000:.1f} mm from "
-        f"{study.drone_release_m[2]:.2f} m"
-    )
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    arm = study.rows[0]
-    ax2.errorbar([0], [arm.thesis_reach_m], yerr=[arm.thesis_std_m], fmt="ko", capsize=4)
-    ax2.plot([0], [arm.reach_m], "C0s", label="model")
-    ax2.set_xticks([0], ["arm"])
-    ax2.set_title(f"Arm, from {study.arm_release_m[2]:.2f} m")
-    ax2.set_ylabel("reach [m]")
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=8)
-    fig.tight_layout()
-    out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out

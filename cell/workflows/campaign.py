@@ -81,14 +81,8 @@ class ReleasePose:
     def release(self, d: Decision) -> None:
         self.ee.throw()
 
-    def after_place(self, d: Decision) -> None:
-        """A campaign only throws."""
-
     def finish(self, d: Decision | None) -> None:
         self.ee.item = None
-
-    def landed(self, d: Decision, obj: ObjectParams, crossing: Any) -> None:
-        """A campaign does not learn as it throws (its landings are identified after)."""
 
 
 def throw_once(
@@ -194,9 +188,9 @@ def adhoc_plan(n: int, *, seed: int = 0) -> list[dict[str, Any]]:
     Raises:
         InvalidParameter: n < 1.
     """
+    from cell.arm.grip_limits import grip_stroke_limit
     from cell.errors import CellError
     from cell.jobgen import _adhoc_item
-    from cell.orchestrator import grip_stroke_limit
     from cell.params import ModelParams
 
     if n < 1:

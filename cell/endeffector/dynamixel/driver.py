@@ -26,7 +26,6 @@ from cell.endeffector.dynamixel.registers import (
     TICKS_PER_REV,
     VELOCITY_UNIT_RPM,
     ControlTable,
-    rad_to_ticks,
 )
 from cell.errors import HardwareError, InvalidParameter, SafetyRefusal
 
@@ -360,7 +359,3 @@ class DynamixelEndEffector(EndEffector):
             f"torque {torque}, {blk[table['present_temperature']]} °C, "
             f"{blk[table['present_input_voltage']] / 10:.1f} V"
         )
-
-    def stroke_resolution_m(self) -> float:
-        """Stroke per encoder tick [m]."""
-        return self.config.spool.radius_m / rad_to_ticks(1.0)

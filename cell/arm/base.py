@@ -1,0 +1,69 @@
+"""What every part of the arm shares: the state of one arm in one scene.
+
+The parts (`cell.arm.kinematics`, `routes`, `mover`, `pick`, `place`, `planner`, `release`,
+`grip_limits`, `flywheel`) are put together by the facade `cell.orchestrator.Orchestrator`,
+which sets this state up; each part reads it and calls the others through it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from cell.arm.tuning import ArmTuning
+from cell.model.objects import ObjectParams
+from cell.params import ModelParams
+
+__all__ = ["ArmBase"]
+
+
+class ArmBase:
+    """The arm's shared state (set up by `Orchestrator.__init__`).
+
+    Attributes:
+        tuning: the arm's constants (`cell.arm.tuning.ArmTuning`).
+        params: the model parameters plans are made with.
+        robot: the arm's kinematic model (`cell.robot.model.Robot`).
+        scene: the plant (`cell.sim.CellScene`).
+        ee: the plant's end-effector; `effector` commands it (and any hardware in step).
+        q: where the arm is [rad].
+        speed_scale: fraction of the joint limits the arm's moves use.
+        pick_mode, release_mode: "kinematic" or "physical"; "auto" or "static".
+        turn_release, cycle_search, learn, floor: the run's options (`Orchestrator`).
+        on_moved: called after every move the mover makes (the loop's landing hook).
+    """
+
+    tuning: ArmTuning
+    params: ModelParams
+    robot: Any
+    scene: Any
+    ee: Any
+    effector: Any
+    q: np.ndarray
+    speed_scale: float
+    pick_mode: str
+    release_mode: str
+    turn_release: bool
+    cycle_search: bool
+    learn: bool
+    floor: bool
+    bounds: Any
+    residual: Any
+    on_moved: Callable[[], None]
+    job: Any
+    floors: dict[int, tuple[float, float]]
+    corrections: dict[str, Any]
+    _carried: tuple[ObjectParams, float]
+    _grip_stroke: float
+    _frame: tuple[float, float] | None
+    _presented: Any
+    _index: int
+    _placing: bool
+    _ik_memo: dict[tuple[bytes, ...], Any]
+    _approach_memo: dict[tuple[Any, ...], float]
+
+    if TYPE_CHECKING:  # the parts call each other through the facade that joins them
+
+        def __getattr__(self, name: str) -> Any: ...

@@ -1,0 +1,247 @@
+"""The arm's kinematics: IK to grips and releases, the pick's and the lift's configurations."""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any
+
+import numpy as np
+
+from cell.arm.base import ArmBase
+from cell.arm.joints import GRIP_DOWN, joint_gap
+from cell.errors import (
+    IKFailed,
+)
+from cell.model.objects import ObjectParams
+
+log = logging.getLogger(__name__)
+
+
+def roll_of(robot: Any, q: np.ndarray, elevation: float, azimuth: float) -> float:
+    """The roll (0 or π) of `robot`'s release configuration q [rad] for a throw axis at
+    (elevation, azimuth) [rad]: its pads' axis against roll 0's."""
+    from cell.robot.ik import ReleasePose
+
+    x0 = ReleasePose.from_angles(np.zeros(3), elevation, azimuth, 0.0).rotation()[:, 0]
+    return 0.0 if float(robot.tcp_pose(q)[1][:, 0] @ x0) >= 0.0 else math.pi
+
+
+class Kinematics(ArmBase):
+    """The arm's kinematics (a part of the arm; `cell.orchestrator.Orchestrator`)."""
+
+    def _tcp_for_item_centre(
+        self, centre: np.ndarray, elevation: float, azimuth: float, stroke: float, obj: ObjectParams
+    ) -> np.ndarray:
+        """TCP position [m, W] that puts the gripped item's centre at `centre`."""
+        from cell.frames import tcp_for_item_centre
+
+        return tcp_for_item_centre(centre, elevation, azimuth, stroke, obj)
+
+    def _ik(self, tcp: np.ndarray, elevation: float, azimuth: float) -> np.ndarray:
+        from cell.robot.ik import solve_release_ik
+
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, self.q, self._release_ik).q
+
+    def _release_ik(self, robot: Any, pose: Any, seed: np.ndarray | None = None) -> Any:
+        """`solve_ik(robot, pose, seed)` for a release pose, remembered while one decision
+        is made (`decide` clears it): a plan is made in up to three release bounds, each
+        steep and not, both rolls, from up to three seeds, and the lower bounds often come
+        to the same release pose. The same pose from the same seed is the same solution
+        (the search is deterministic), so by default nothing changes but the time. With
+        `cycle_search`, a pose the search (the seed, home, 30 random seeds, the polish)
+        missed by IK_OUT_OF_REACH_M or more is out of the arm's reach and is not searched
+        again from another seed. On the demo, a release 0.42 m out and 0.61 m up (the
+        lowest release bounds) was missed by 12.4 mm from every seed, again and again:
+        207 searches failed in its 18 throws, 81 now, and nothing chosen changed."""
+        from cell.robot.ik import solve_ik
+
+        if robot is not self.robot:
+            return solve_ik(robot, pose, seed)
+        return self._solve_ik(pose, seed, reach=self.cycle_search)
+
+    def _solve_ik(self, pose: Any, seed: np.ndarray | None = None, reach: bool = False) -> Any:
+        """`solve_ik(self.robot, pose, seed)`, remembered until the next decision
+        (`decide` clears it): the same pose from the same seed is the same solution, or
+        the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
+        writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
+        more is not searched again from another seed either (`_release_ik`)."""
+        from cell.robot.ik import IKNoSolution, solve_ik
+
+        where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
+        key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
+        found = self._ik_memo.get(key)
+        if found is None and reach:
+            found = self._ik_memo.get(where)
+        if found is None:
+            try:
+                found = solve_ik(self.robot, pose, seed)
+            except IKNoSolution as exc:
+                found = exc
+                if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:
+                    self._ik_memo[where] = exc
+            self._ik_memo[key] = found
+        if isinstance(found, Exception):
+            raise found
+        return found
+
+    def _ik_frame(self, tcp: np.ndarray, seed: np.ndarray | None = None) -> np.ndarray:
+        """IK for the grip pointing down at `tcp` [m, W], in the item's frame
+        (`self._frame`: (azimuth, roll), else the roll is free), from `seed` (default:
+        where the arm is)."""
+        az = 0.0 if self._frame is None else self._frame[0]
+        return self._ik_gripped(tcp, -math.pi / 2, az, seed)
+
+    def _ik_gripped(
+        self, tcp: np.ndarray, elevation: float, azimuth: float, seed: np.ndarray | None = None
+    ) -> np.ndarray:
+        """IK at the roll the item was gripped for (`self._frame`); without one, or when that
+        roll has no solution, the roll `solve_release_ik` chooses. From `seed` (default:
+        where the arm is)."""
+        from cell.robot.ik import ReleasePose, solve_release_ik
+
+        q0 = self.q if seed is None else seed
+        if self._frame is not None:
+            pose = ReleasePose.from_angles(tcp, elevation, azimuth, self._frame[1])
+            try:
+                return self._solve_ik(pose, q0).q
+            except IKFailed:
+                log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
+
+    def _pick_frame(self, plan: Any, q_release: Any) -> tuple[float, float] | None:
+        """(azimuth, roll) [rad] of the grip pointing down that the release's frame (at the
+        release configuration q_release [rad]) swings up from without a twist about the
+        throw axis, or None (a place: any roll).
+
+        axis_frame(e, a, roll) = Rz(a) Ry(π/2 − e) Rz(roll): with the same a and roll, the
+        down frame (e = −π/2) turns into the release frame about one horizontal axis. A
+        twist about the axis while the pads hold the item shifts its contacts and spoils
+        the launch (measured in the scene: a cylinder carried through a half turn about
+        the axis left at 0.25 m/s sideways and downward instead of 2.5 m/s forward).
+
+        The grip pointing down is solved from `ReleasePose.from_angles`, which keeps the
+        throw axis and the roll but not the azimuth of a vertical axis: it is gripped as
+        at azimuth 0, and the swing's waypoints (at the release's azimuth) turn it about
+        the axis on the way up, by as much as the release's azimuth. Measured on random
+        layout 4: up to 80° off the one rotation between the swing's ends, to a bin
+        behind the arm; solving the pick at the release's azimuth made that layout slower
+        (81.5 → 92.2 s simulated), so it is kept as it is (README, Limits, Throughput).
+        """
+        if plan is None:
+            return None
+        roll = roll_of(self.robot, q_release, plan.elevation_rad, plan.azimuth_rad)
+        return (float(plan.azimuth_rad), roll)
+
+    def _over_item(
+        self, item: Any, stroke: float, obj: ObjectParams
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(pick, lift) configurations of the grip pointing down over the item where the
+        plant has it, the pick putting the item's centre where the gripped item's will be."""
+        p_item = self.scene.item_position(item)
+        q_pick = self._ik_frame(self._tcp_for_item_centre(p_item, *GRIP_DOWN, stroke, obj))
+        return q_pick, self._lift_q(p_item, stroke, obj, q_pick)
+
+    def _lift_q(
+        self, p_item: np.ndarray, stroke: float, obj: ObjectParams, q_pick: np.ndarray
+    ) -> np.ndarray:
+        """The configuration LIFT_M over the pick (IK from the pick's), or as high as the
+        arm reaches on the pick's own IK branch (within LIFT_MAX_DQ_RAD of it in every
+        joint): a tall item gripped at a long stroke puts the flange up to 0.3 m over the
+        item, and 0.15 m more can be out of the arm's reach, or only reached on another
+        branch, a swing of the whole arm away."""
+        err: IKFailed | None = None
+        far: list[tuple[float, np.ndarray]] = []  # (joint gap from the pick, lift)
+        for up in (self.tuning.lift_m, self.tuning.lift_m / 2, self.tuning.lift_m / 4):
+            lift = p_item + np.array([0, 0, up])
+            try:
+                q = self._ik_frame(self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj), q_pick)
+            except IKFailed as exc:
+                err = err or exc
+                continue
+            gap = joint_gap(q_pick, q)
+            if gap <= self.tuning.lift_max_dq_rad:
+                return q
+            far.append((gap, q))
+        if far:  # no lift on the pick's own branch: the nearest other (a long way round)
+            log.info(
+                "no lift over the pick within %.1f rad of its joints", self.tuning.lift_max_dq_rad
+            )
+            return min(far, key=lambda gq: gq[0])[1]
+        assert err is not None
+        raise err
+
+    def _ik_grip(
+        self, centre: np.ndarray, stroke: float, obj: ObjectParams, axes: tuple[float, float, float]
+    ) -> np.ndarray:
+        """IK of the grip with the item's centre at `centre` [m, W], seated on the carriage
+        at `stroke`, the approach axis and roll `axes` (elevation, azimuth, roll [rad]).
+
+        Solved to GRIP_IK_TOL (far tighter than a release's): pads a fraction of a degree
+        off the item's sides close on its edges, whose contacts can hook it when the
+        carriage hits its end stop; the release's tolerance if that does not converge."""
+        from cell.robot.ik import ReleasePose, solve_ik
+
+        tcp = self._tcp_for_item_centre(centre, axes[0], axes[1], stroke, obj)
+        pose = ReleasePose.from_angles(tcp, *axes)
+        try:
+            return solve_ik(
+                self.robot,
+                pose,
+                self.q,
+                tol_position_m=self.tuning.grip_ik_tol[0],
+                tol_axis_rad=self.tuning.grip_ik_tol[1],
+            ).q
+        except IKFailed:
+            return solve_ik(self.robot, pose, self.q).q
+
+    def _ik_grip_any(
+        self,
+        centre: np.ndarray,
+        stroke: float,
+        obj: ObjectParams,
+        elevation: float,
+        azimuth: float,
+        rolls: list[float],
+    ) -> tuple[np.ndarray, float]:
+        """`_ik_grip` at whichever of the rolls gives the configuration nearest the current
+        one, and that roll."""
+        found: list[tuple[np.ndarray, float]] = []
+        err: IKFailed | None = None
+        for roll in rolls:
+            try:
+                found.append((self._ik_grip(centre, stroke, obj, (elevation, azimuth, roll)), roll))
+            except IKFailed as exc:
+                err = err or exc
+        if not found:
+            assert err is not None
+            raise err
+        return min(found, key=lambda f: float(np.linalg.norm(f[0] - self.q)))
+
+    def _down_vertical(
+        self, q_top: np.ndarray, p_bottom: np.ndarray, step_m: float = 0.04
+    ) -> list[np.ndarray]:
+        """Configurations, grip pointing down, on the vertical line from q_top's TCP
+        [rad] down to p_bottom [m, W] (which shares its x and y), every `step_m` [m] or
+        less, each solved from the one above: q_top's end excluded, p_bottom's the last.
+        IKFailed where IK fails on the way."""
+        p0 = self.robot.tcp_pose(q_top)[0]
+        k = max(1, math.ceil(float(np.linalg.norm(p_bottom - p0)) / step_m))
+        out: list[np.ndarray] = []
+        seed = q_top
+        for i in range(1, k + 1):
+            seed = self._ik_frame(p0 + (p_bottom - p0) * i / k, seed)
+            out.append(seed)
+        return out
+
+    def _vertical(
+        self, q_top: np.ndarray, q_bottom: np.ndarray, step_m: float = 0.04
+    ) -> list[np.ndarray]:
+        """Configurations, grip pointing down, on the vertical line between the TCPs of
+        q_top and q_bottom [rad] (which share x and y), every `step_m` [m] or less, ends
+        excluded, each solved from the one above (`_down_vertical`); none where IK fails
+        on the way (the line between the ends is then used)."""
+        try:
+            return self._down_vertical(q_top, self.robot.tcp_pose(q_bottom)[0], step_m)[:-1]
+        except IKFailed:
+            return []

@@ -1,0 +1,229 @@
+"""The mover: the only part of the arm that steps the plant. It times and follows the arm's
+moves; after each it calls the hook the loop handed it (`on_moved`), which scores the
+flights that have come to rest.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from cell.arm.base import ArmBase
+from cell.arm.grip_limits import (
+    carry_hold,
+)
+from cell.arm.joints import plan_time, spline_within_limits
+from cell.errors import (
+    TrajectoryError,
+)
+from cell.model.objects import ObjectParams
+
+log = logging.getLogger(__name__)
+
+
+class Mover(ArmBase):
+    """The mover (a part of the arm; `cell.orchestrator.Orchestrator`)."""
+
+    def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
+        """Follow a toppra path through joint waypoints in the scene; returns its duration [s].
+
+        Empty, the path uses `speed_scale` of the joint limits; carrying, the
+        fastest time-scaling of it whose item acceleration the grip holds
+        (`cell.robot.carry`).
+
+        Where the cubic spline through the waypoints would leave the joint limits, the path
+        keeps to the shape-preserving one (`cell.robot.motion.spline_path`) and is timed
+        as a whole; stopping at each waypoint is timed too, each stretch at its own pace,
+        and the sooner of the two is taken (a carry is slowed to its hardest stretch all
+        along: on random layout 2, one path took 0.6-0.7 s longer than the stops for two
+        of the three such carries). When no path through them is found, the arm stops at
+        each.
+        """
+        settle_s = self.tuning.settle_s if settle_s is None else settle_s
+        trajs = self._move_plan(self.q, waypoints, settle_s)
+        ends = waypoints if len(trajs) > 1 else waypoints[-1:]
+        return sum(self._follow(t, w, settle_s) for t, w in zip(trajs, ends, strict=True))
+
+    def _move_plan(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        settle_s: float,
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[Any]:
+        """The trajectories `_move` follows from q_from through the waypoints [rad]: the
+        one path, or one per waypoint when it stops at each (`_move`'s choice, a settle of
+        `settle_s` [s] at each stop). `carried`: the item and its stroke [m] carried
+        (default: what the grip holds)."""
+        path: Any = None
+        try:
+            path = self._path(q_from, waypoints, carried)
+        except TrajectoryError:
+            if len(waypoints) < 2:
+                raise
+        if len(waypoints) >= 2 and (
+            path is None or spline_within_limits(self.robot, [q_from, *waypoints], 400) is None
+        ):
+            stops = self._stops(q_from, waypoints, carried)
+            t_stops = plan_time(stops, settle_s)
+            if path is None or t_stops < path.duration:
+                return stops
+        return [path]
+
+    def _path(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> Any:
+        """The trajectory of a move from q_from through the waypoints [rad]: empty, at
+        `speed_scale` of the joint limits; carrying (`carried`, else what the grip
+        holds), the fastest the grip holds the item along (`_carry_path`).
+        TrajectoryError when there is none."""
+        from cell.robot.motion import plan_path
+
+        if carried is None and self.ee.item is None:
+            return plan_path(
+                [q_from, *waypoints],
+                self.robot,
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+        return self._carry_path([q_from, *waypoints], carried)
+
+    def _stops(
+        self,
+        q_from: np.ndarray,
+        waypoints: list[np.ndarray],
+        carried: tuple[ObjectParams, float] | None = None,
+    ) -> list[Any]:
+        """The trajectories of a move that stops at each waypoint: a straight joint-space
+        stretch each, which stays inside the joint limits' box."""
+        out, q = [], q_from
+        for w in waypoints:
+            out.append(self._path(q, [w], carried))
+            q = w
+        return out
+
+    def _follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
+        """Step the scene along a joint trajectory ending at rest at q_end [rad], then
+        `settle_s` [s] more; returns the time taken [s]."""
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
+        qs, _, _ = traj.sample_many(ts)
+        for q in qs:
+            sc.set_arm(q)
+            sc.step()
+        if settle_s > 0:
+            sc.run_for(settle_s)
+        self.q = np.asarray(q_end, float)
+        self.on_moved()
+        return float(traj.duration) + settle_s
+
+    def _carry_path(
+        self, waypoints: list[np.ndarray], carried: tuple[ObjectParams, float] | None = None
+    ) -> Any:
+        """The fastest path through the waypoints (the first: where the arm starts) that
+        the grip holds the item along (`carried`: the item and its stroke [m]; default:
+        the one in the grip).
+
+        A mesh thrown at the probe's couple (`carry_hold`) is never carried slower than at
+        GENTLE_SCALE, as it was without that couple: where its path at rest asks nearly
+        all the bound allows, the fastest uniform carry within it crawls (three eggs on
+        random layout 11, UR5: 29 s a cycle without this floor, 8.6 s with it, 6.1-6.9 s
+        before the probe's couple)."""
+        from cell.robot.carry import plan_carry
+
+        obj, stroke = carried or (self._carried[0], self._grip_stroke)
+        hold = carry_hold(
+            self.params, obj, stroke, probed=self._seated_as_probed(), placing=self._placing
+        )
+        traj, _ = plan_carry(
+            waypoints,
+            self.robot,
+            hold,
+            velocity_scale=self.speed_scale,
+            acceleration_scale=self.speed_scale,
+            tie=self._over_bound(obj),
+            gentle_floor=obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing,
+        )
+        return traj
+
+    def _straight(
+        self,
+        q_to: np.ndarray,
+        duration_s: float,
+        stop: Callable[[], bool] | None = None,
+        *,
+        smooth: bool = False,
+    ) -> float:
+        """A short move along the joint-space segment to q_to in `duration_s` [s] (nearby
+        configurations: the grip moves on a near-straight line), at constant speed or with
+        a smooth start and stop (3τ² − 2τ³); it ends early when `stop()` says so (a guarded
+        move). Returns the fraction of the segment done (1.0: all of it)."""
+        sc = self.scene
+        sc.set_timestep(sc.dt_s)
+        q0 = self.q.copy()
+        n = max(1, math.ceil(duration_s / sc.dt_s))
+        done = 1.0
+        for k in range(1, n + 1):
+            tau = k / n
+            done = tau * tau * (3 - 2 * tau) if smooth else tau
+            self.q = q0 + (q_to - q0) * done
+            sc.set_arm(self.q.tolist())
+            sc.step()
+            if stop is not None and stop():
+                break
+        return done
+
+    def _wait_at_rest(self, item: Any, timeout_s: float = 1.0) -> None:
+        """Step until the item rests (below 2 mm/s and 0.05 rad/s) or `timeout_s` [s]."""
+        sc = self.scene
+        t_end = sc.t + timeout_s
+        while sc.t < t_end:
+            v, w = sc.item_velocity(item)
+            if np.linalg.norm(v) < 2e-3 and np.linalg.norm(w) < 0.05:
+                return
+            sc.step()
+
+    def _time_floor(self, q_from: np.ndarray, t_from: float, settle_s: float = 0.0) -> None:
+        """With `floor`, add to `floors` the move just made, from q_from [rad] at scene time
+        t_from [s] to where the arm is: the time it took, and what one direct move would
+        take (a jerk-limited rest-to-rest move at the arm's full limits, `move_time`;
+        carrying, no faster than the grip holds the item along that joint-space line,
+        as `_carry_path` times a carry; plus `settle_s` [s] after it). The direct move
+        ignores what the routes are for (the clearance over the station, the level
+        swing, the stop over the pick): a floor for these poses, not a plan."""
+        if not self.floor:
+            return
+        from cell.robot.motion import move_time
+
+        took = self.scene.t - t_from
+        try:
+            direct = move_time(q_from, self.q, self.robot)
+            if self.ee.item is not None:
+                direct = max(direct, float(self._carry_path([q_from, self.q]).duration))
+        except TrajectoryError:
+            direct = took - settle_s  # no direct move found: the one made
+        spent, floor = self.floors.get(self._index, (0.0, 0.0))
+        self.floors[self._index] = (spent + took, floor + min(took, direct + settle_s))
+
+    def _run_for(self, seconds: float) -> None:
+        """Let the plant run `seconds` [s] with the arm where it is (a settle, a wait)."""
+        self.scene.run_for(seconds)
+
+    def _release_on_the_move(self, motion: Any) -> np.ndarray:
+        """Follow a release on the move's `motion` in the plant, the latch opening at its
+        planned instant (`cell.sim.release.release_in_scene`); the item's centre at the
+        latch [m, W]."""
+        from cell.sim.release import release_in_scene
+
+        rel = release_in_scene(self.scene, self.ee, motion)
+        self.q = np.asarray(motion.q_end, float)
+        self.on_moved()
+        return np.asarray(rel.released_at, float)

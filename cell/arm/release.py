@@ -1,0 +1,385 @@
+"""The release's configuration and cycle: which IK branch and roll a throw is released at,
+timed as the cell makes the cycle, and the release on the move.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any
+
+import numpy as np
+
+from cell.arm.base import ArmBase
+from cell.arm.grip_limits import (
+    carry_hold,
+    grip_bounds,
+)
+from cell.arm.joints import PickState, joint_gap, plan_time
+from cell.decision import Decision
+from cell.errors import (
+    IKFailed,
+    TrajectoryError,
+)
+from cell.model.objects import ObjectParams
+
+log = logging.getLogger(__name__)
+
+
+class ReleaseChoice(ArmBase):
+    """The release's configuration and cycle (a part of the arm; `cell.orchestrator.Orchestrator`)."""
+
+    def _release_q(
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        stroke: float,
+        obj: ObjectParams,
+        beat: float | None = None,
+    ) -> tuple[np.ndarray, tuple[bool, float] | None]:
+        """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
+        estimate (None where none was made; `_plan` compares facings by it): of the two rolls
+        that put the item's weight on a pad (0 and π, `solve_release_ik`), the one whose
+        cycle estimate is the shorter (`_release_costs`). The pick is
+        gripped at the release's roll (`_pick_frame`), so the roll chooses the pick's,
+        the lift's and the swing's configurations too. Each roll's release is solved from
+        the lift and from where the arm is (IK keeps the solution nearest its seed: two
+        branches, the second the one `solve_release_ik` gives; with `cycle_search` from
+        the pick too). Where no item is
+        presented, or no candidate's moves are found, the roll nearer where the arm is
+        (`solve_release_ik`); so too with the physical pick, which grips the item as it
+        lies, headed by the release's roll (`_carry_heading`), not in the frame timed
+        here: on the UR5 copy of the demo the roll chosen so cost four grasps (19/24 in
+        bin against 23/24). A release whose route would ask more of the grip than it must
+        (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
+        With `cycle_search`, the candidates are timed as the cell makes the cycle, soonest
+        bound first, and `beat` [s] is a cycle estimate another release bounds' plan has
+        (`_release_search`). IKFailed when the pose has no configuration."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD
+
+        e, a = plan.elevation_rad, plan.azimuth_rad
+        best: tuple[tuple[bool, float], np.ndarray] | None = None
+        if self._presented is not None and self.pick_mode != "physical" and abs(math.cos(e)) > 1e-6:
+            kept = self._frame
+            try:
+                if self.cycle_search:
+                    best = self._release_search(tcp, plan, stroke, obj, beat)
+                else:
+                    for roll in WEIGHT_ROLLS_RAD:
+                        self._frame = (float(a), roll)  # the pick is gripped at this roll
+                        for cost, q_rel in self._release_costs(tcp, plan, roll, stroke, obj):
+                            log.debug("release roll %.2f rad: (slips, estimate) %s", roll, cost)
+                            if best is None or cost < best[0]:
+                                best = (cost, q_rel)
+            finally:
+                self._frame = kept
+        if best is not None:
+            return best[1], best[0]
+        return self._ik(tcp, e, a), None
+
+    def _release_search(
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams, beat: float | None
+    ) -> tuple[tuple[bool, float], np.ndarray] | None:
+        """`_release_q` with `cycle_search`: ((asks more of the grip than it holds, cycle
+        estimate [s]), release configuration) of the soonest release at either roll, or
+        None where none is found. IK is seeded from the lift, from where the arm is and
+        from the pick (the configuration a carry solved again from the pick would go to);
+        the estimate is the item's pick-to-pick cycle as the cell makes it
+        (`_static_cycle_s`) plus APPROACH_WEIGHT of the approach from where the arm is;
+        a release whose route would ask more of the grip than it holds (`_swing_holds`)
+        ranks after every one that does not, as in `_release_costs`.
+
+        Every candidate (both rolls, each seed's IK) is bounded first (`_cycle_bound_s`
+        plus APPROACH_WEIGHT of the approach) and timed in ascending order of that bound:
+        the soonest found early, a candidate whose bound cannot beat it (nor `beat` [s], a
+        cycle another release bounds' plan already has, `_plan_facing`) is not timed, nor
+        is any after it. Where candidates were left out so and none timed is found, the
+        first one's configuration with the estimate (False, ∞): it cannot be chosen
+        (`_soonest_release`). Ties go to the candidate first in the rolls' order
+        (WEIGHT_ROLLS_RAD) and then the seeds', so the choice is the one the search timing
+        every candidate makes (tests/test_release_search_cost.py)."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
+
+        level = self._turns_if_rolled(obj, stroke)
+        a = float(plan.azimuth_rad)
+        # (lower bound on the estimate [s], order, roll, release, (pick, lift), approach [s])
+        found: list[tuple[float, int, float, np.ndarray, Any, float]] = []
+        for roll in WEIGHT_ROLLS_RAD:
+            self._frame = (a, roll)  # the pick is gripped at this roll
+            try:
+                over = self._over_item(self._presented, stroke, obj)
+                t_approach = self._approach_s(self.q, over, stroke, obj)
+            except (IKFailed, TrajectoryError):
+                continue
+            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
+            mine: list[np.ndarray] = []
+            for seed in (over[1], self.q, over[0]):
+                try:
+                    q_rel = self._release_ik(self.robot, pose, seed).q
+                except IKFailed:
+                    continue
+                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
+                    continue
+                mine.append(q_rel)
+                low = self._cycle_bound_s(over[0], q_rel) + self.tuning.approach_weight * t_approach
+                found.append((low, len(found), roll, q_rel, over, t_approach))
+        best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
+        soonest = math.inf if beat is None else beat
+        pruned = False
+        for low, order, roll, q_rel, over, t_approach in sorted(found, key=lambda c: c[:2]):
+            if low >= soonest:
+                pruned = True
+                break  # nor can any after it
+            self._frame = (a, roll)
+            try:
+                way = self._swing(over[1], q_rel, plan, (obj, stroke)) if level else []
+                t_cycle = self._static_cycle_s(obj, plan, stroke, q_rel, over)
+            except (IKFailed, TrajectoryError):
+                continue
+            t = t_cycle + self.tuning.approach_weight * t_approach
+            slips = level and not self._swing_holds(
+                [over[1], *way, q_rel], (obj, stroke), plan.elevation_rad
+            )
+            log.debug("release roll %.2f rad: (slips, cycle estimate) (%s, %.3f)", roll, slips, t)
+            if best is None or ((slips, t), order) < best[0]:
+                best = (((slips, t), order), q_rel)
+            if not slips:
+                soonest = min(soonest, t)
+        if best is not None:
+            return best[0][0], best[1]
+        if pruned:
+            return (False, math.inf), found[0][3]
+        return None
+
+    def _release_costs(
+        self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
+    ) -> list[tuple[tuple[bool, float], np.ndarray]]:
+        """((asks more of the grip than it holds, cycle estimate [s]), release
+        configuration) of each release at `roll` [rad] (`_release_q` without
+        `cycle_search`; with it, `_release_search`), with the pick in the frame
+        `self._frame`; none when the pick, the approach, the release or the carry is not
+        found. A carry whose route, held still anywhere, would ask more of the grip than
+        the carry's bound (`_swing_holds`: a tall item on a swing that rolls the grip)
+        ranks after every one that does not. IK is seeded from the lift and from where the
+        arm is, and keeps the solution nearest its seed.
+
+        The estimate: the empty arm to the pick of the presented item (as `_approach_s`
+        times it), plus twice the carry from its lift along the twist-free swing to the
+        release, timed as `_move_plan` times a carry of this item (the next approach
+        comes back about as far; with `turn_release`, the empty arm's way back from the
+        release to the same pick instead: a release turned toward the station winds the
+        wrist round, and the way back unwinds it)."""
+        from cell.robot.ik import ReleasePose
+
+        try:
+            q_pick, q_lift = self._over_item(self._presented, stroke, obj)
+            t_approach = self._approach_s(self.q, (q_pick, q_lift), stroke, obj)
+        except (IKFailed, TrajectoryError):
+            return []
+        pose = ReleasePose.from_angles(tcp, plan.elevation_rad, plan.azimuth_rad, roll)
+        out: list[tuple[tuple[bool, float], np.ndarray]] = []
+        level = self._turns_if_rolled(obj, stroke)
+        for seed in (q_lift, self.q):
+            try:
+                q_rel = self._release_ik(self.robot, pose, seed).q
+                if any(joint_gap(q_rel, q) < 1e-3 for _, q in out):
+                    continue
+                way = self._swing(q_lift, q_rel, plan, (obj, stroke))
+                carry = self._move_plan(q_lift, [*way, q_rel], self.tuning.settle_s, (obj, stroke))
+                t_carry = plan_time(carry, self.tuning.settle_s)
+                t_back = t_carry
+                if self.turn_release:
+                    t_back = self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
+                t = t_approach + t_carry + t_back
+            except (IKFailed, TrajectoryError):
+                continue
+            slips = level and not self._swing_holds(
+                [q_lift, *way, q_rel], (obj, stroke), plan.elevation_rad
+            )
+            out.append(((slips, t), q_rel))
+        return out
+
+    def _cycle_bound_s(self, q_pick: np.ndarray, q_rel: np.ndarray) -> float:
+        """A lower bound [s] on `_static_cycle_s` for the release q_rel [rad] of the item
+        picked at q_pick [rad]: each way, from rest to rest, no joint can be quicker than
+        at its full velocity and acceleration limits along the straight line (the
+        bang-bang time; the carry's and the approach's limits are these or a fraction of
+        them, their routes no shorter), plus the settle at the release and the push."""
+        from cell.robot.moving_release import COAST_S
+
+        lim = self.robot.limits
+        v, a = lim.velocity * (1 + 1e-3), lim.acceleration * (1 + 1e-3)
+        d = np.abs(np.asarray(q_rel, float) - np.asarray(q_pick, float))
+        t = np.where(d <= v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
+        return 2.0 * float(np.max(t)) + self.tuning.settle_s + COAST_S
+
+    def _static_carry(
+        self,
+        at: PickState,
+        q_lift: np.ndarray,
+        q_rel: np.ndarray,
+        plan: Any,
+    ) -> tuple[list[np.ndarray], float]:
+        """(the waypoints, how long [s] `_move` takes along them) of a static throw's carry
+        from the pick `at` (as `_departure` takes it) to the release q_rel [rad]: the
+        route `_departure` plans and `_move_plan`'s trajectories along it, with a settle
+        at each stop and at the release (tests/test_moving_choice.py: the scene's clock
+        agrees within 20 ms)."""
+        way = self._departure(q_lift, q_rel, plan, at)
+        trajs = self._move_plan(at[0], way, self.tuning.settle_s, (at[2], at[3]))
+        return way, plan_time(trajs, self.tuning.settle_s) + self.tuning.settle_s
+
+    def _static_cycle_s(
+        self,
+        obj: ObjectParams,
+        plan: Any,
+        stroke: float,
+        q_rel: np.ndarray,
+        over: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> float:
+        """How long [s] the cell takes from the pick of the presented item, gripped at
+        `stroke` [m] in the frame `self._frame`, to its static release at q_rel [rad] for
+        `plan` and back to that pick: the carry along `_departure`'s route
+        (`_static_carry`), the push (COAST_S) and the empty arm's way back
+        (`_approach_s`). The next item of the same kind is picked where this one was, so
+        this is its pick-to-pick cycle; on random layout 3, 11 of 15 such cycles were
+        within 0.03 s of the scene's. `over`: the pick's and the lift's configurations
+        (`_over_item`), where known. IKFailed or TrajectoryError where a move is not
+        found."""
+        from cell.robot.moving_release import COAST_S
+
+        q_pick, q_lift = over or self._over_item(self._presented, stroke, obj)
+        at = (q_pick, self.scene.item_position(self._presented), obj, stroke)
+        _, t_carry = self._static_carry(at, q_lift, q_rel, plan)
+        return t_carry + COAST_S + self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
+
+    def _may_release_moving(self, obj: ObjectParams, d: Decision) -> bool:
+        """A release on the move is considered (`release="auto"`) unless a hardware
+        end-effector rides along (its latch's timing is not modelled), a residual model
+        corrects the stroke (it learned on static releases), or the item would turn in
+        the pads on the way (the moving approach has no level swing)."""
+        return (
+            self.release_mode == "auto"
+            and self.effector.hardware is None
+            and self.residual is None
+            and not self._turns_if_rolled(obj, d.stroke_m)
+        )
+
+    def _moving_choice(self, obj: ObjectParams, throw: Any, stroke_max_m: float) -> Any:
+        """The release on the move that the planner prefers to the static one by cycle
+        time, landing in the bin by the model (`cell.robot.moving_release.choose_release`,
+        from where the lift over the presented item will be, its stroke at most
+        `stroke_max_m`: what the grip holds), and that is sooner than the static one as
+        the cell makes them from the pick (`_moving_sooner`); or None. `throw`: the static
+        throw the planner chose (`cell.arm.planner.ThrowChoice`)."""
+        from cell.robot.moving_release import choose_release
+
+        plan, delta = throw.plan, throw.delta
+        stroke = plan.stroke_m + delta
+        self._frame = self._pick_frame(plan, throw.q_release)
+        try:
+            _, q_lift = self._over_item(self._presented, stroke, obj)
+            choice = choose_release(
+                self.robot,
+                throw.model_obj,
+                plan,
+                q_lift,
+                self.params.ee,
+                bounds=grip_bounds(throw.bounds, self.params, stroke_max_m),
+                ik=lambda t, e, a: self._ik_gripped(t, e, a, q_lift),
+                hold=carry_hold(self.params, obj, stroke),
+                criterion="cycle",
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+            if choice.moving is not None and not self._moving_sooner(
+                obj, plan, stroke, choice.moving, delta, throw.q_release
+            ):
+                return None
+        except (IKFailed, TrajectoryError) as exc:
+            log.info("no release on the move for %s: %s", obj.name or obj.shape, exc)
+            return None
+        finally:
+            self._frame = None
+        if choice.moving is not None:
+            log.info("%s: release on the move saves %.2f s", obj.name or obj.shape, choice.saved_s)
+        return choice.moving
+
+    def _moving_sooner(
+        self,
+        obj: ObjectParams,
+        plan: Any,
+        stroke: float,
+        mt: Any,
+        delta: float,
+        q_release: np.ndarray,
+    ) -> bool:
+        """Is the release on the move `mt` sooner than the static release of `plan` at
+        `stroke` [m], each from the pick of the presented item to the release and back
+        to that pick, as the cell makes them? The static: `_static_cycle_s`; the
+        moving: its motion from the pick, or the move up to the lift, its settle and its
+        motion from there (`_moving_route`), and the way back from where it stops. The
+        moving plan's stroke is its own plus `delta`; the static one's release is at
+        q_release [rad].
+
+        `choose_release` times both from rest at the lift and back to it; the cell's
+        static carry leaves the pick without stopping, and a moving release whose move
+        from the pick does not rise from the station stops at the lift first. On random
+        layouts 6 and 11, 13 of the 17 releases on the move it had chosen took 0.36-1.45 s
+        longer a cycle than the static release of the same item (layout 11's three 51 mm
+        cubes stopped at the lift); four 50 mm cubes' were 0.28-0.45 s sooner
+        (tests/test_moving_choice.py). Where the static route is not found, the moving
+        one is kept; where the moving one is not, IKFailed or TrajectoryError (then
+        `_moving_choice` takes none)."""
+        item = self._presented
+        if item is None or self.pick_mode == "physical":
+            return True  # no pick to time from (`choose_release`'s choice stands)
+        s_moving = mt.plan.stroke_m + delta
+        q_pick, q_lift = self._over_item(item, s_moving, obj)
+        lifted, motion = self._moving_route(mt, obj, s_moving, q_pick, q_lift)
+        t_moving = motion.duration_s + self._approach_s(
+            motion.q_end, (q_pick, q_lift), s_moving, obj
+        )
+        if lifted:  # `_move` to the lift, its settle there
+            held = (obj, s_moving)
+            lift = self._move_plan(q_pick, [q_lift], self.tuning.settle_s, held)
+            t_moving += plan_time(lift, self.tuning.settle_s) + self.tuning.settle_s
+        try:
+            t_static = self._static_cycle_s(obj, plan, stroke, q_release)
+        except (IKFailed, TrajectoryError):
+            return True
+        log.info(
+            "%s: release on the move %.2f s, static %.2f s, pick to pick",
+            obj.name or obj.shape,
+            t_moving,
+            t_static,
+        )
+        return t_moving < t_static
+
+    def _moving_route(
+        self, mt: Any, obj: ObjectParams, stroke: float, q_pick: np.ndarray, q_lift: np.ndarray
+    ) -> tuple[bool, Any]:
+        """(up to the lift first?, the motion) of the release on the move `mt` carrying
+        `obj` at `stroke` [m] (`carry`): the release's own move from the pick q_pick
+        [rad] where it leaves the station upward (`_moving_leaves_station`), else from
+        rest at the lift q_lift. TrajectoryError when there is none from the lift."""
+        from cell.robot.moving_release import plan_moving_release
+
+        def motion_from(q: np.ndarray) -> Any:
+            return plan_moving_release(
+                self.robot,
+                q,
+                mt.motion.q_release,
+                mt.motion.v_release,
+                hold=carry_hold(self.params, obj, stroke),
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+            )
+
+        try:
+            motion = motion_from(q_pick)
+            if self._moving_leaves_station(motion):
+                return False, motion
+        except TrajectoryError:
+            pass
+        return True, motion_from(q_lift)

@@ -1,0 +1,149 @@
+"""The arm's constants, in one typed and documented object: what was chosen, and where.
+
+Every value here is a choice the arm's parts make with (`Orchestrator(tuning=...)`), not a
+fact of the scene's physics (those stay with the model: `cell.arm.grip_limits`). Each says
+where it was measured. "Random layouts" are the jobs `cell job random --seed N` draws;
+the constants were chosen on random layouts 0-19 (`cell bench sort --layouts 20 --seed 0`),
+the `tune` set: a figure measured on those layouts is in-sample, one on other seeds is not.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["ArmTuning", "TUNING"]
+
+
+@dataclass(frozen=True)
+class ArmTuning:
+    """The arm's constants (SI units; angles in radians). Frozen: a run that wants other
+    values makes its own with `dataclasses.replace(TUNING, ...)`.
+
+    The carry and its routes:
+        settle_s: [s] wait after a move so the end-effector and item come to rest: none
+            (0.05 s before; on random layouts 0-5 with the release search and the turn,
+            190 -> 189 of 198 in their bins and 1,420 -> 1,430 items per hour).
+        pick_stroke_m: [m] stroke a placed item is carried at: grip force enough to hold
+            items through arm moves.
+        lift_m: [m] lift above the pick pose before moving to the release.
+        lift_max_dq_rad: [rad] a lift's configuration farther than this from the pick's, in
+            any joint, is on another IK branch: the straight lift would swing the arm round
+            (a UR5 grip folded back over the station took 3.4 s to come up 0.15 m, 1.2 s to
+            come up 0.075 m on its own branch).
+        departure_lifts_m: [m] the carry from the pick leaves through the lowest of these
+            lifts (0: straight from the pick) whose path keeps the item rising out of the
+            station, at least as far as it moves sideways, up to departure_clear_m; else
+            through lift_m. 1-2 cm lifts dropped nothing on random layout 3 (README, Limits).
+        departure_clear_m: [m] how far the item rises out of the station before it may move
+            sideways as far (the rise to 2 cm: random layouts 0-19, 1,474 -> 1,507 items/h).
+        pick_over_clearance_m: [m] the empty arm's approach to a kinematic pick passes,
+            without stopping, the point where the open pads' tips are this far over the
+            item's top, and goes straight down from there (random layout 3, README).
+        place_clearance_m: [m] the item's lowest point above the bin floor when a place
+            starts.
+        place_spots_tried: place spots tried, best first, for one the arm reaches (IK):
+            random layouts 3 (UR5) and 18 (Panda), tests/test_place_reach.py.
+        swing_waypoints: waypoints that keep the carry's swing free of twist.
+        swing_waypoints_max: doubled up to this while the spline between them rolls the grip.
+        swing_check_samples: configurations along the swing's spline its grip use is
+            checked at.
+        grip_use_tie: grip uses this close are taken as equal, and a route or a carry that
+            asks this little over the carry's bound (0.741) is taken as within it (the pads
+            held 0.74-0.78 of their static limit accelerated, slid at 0.80; in the scene,
+            tests/test_carry.py).
+        swing_max_detour: a level swing whose joints travel farther than this x the ends'
+            gap goes round (the demo's swings travel 1.5-1.8 x the gap; a UR5's that flung
+            its items, 3.4 x; random layout 5).
+        ik_out_of_reach_m: [m] a release pose IK's whole search misses by this much is out
+            of reach from any seed: 5 x POSITION_TOL_M (the demo: 207 -> 81 failed searches,
+            nothing chosen changed).
+
+    The release:
+        release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
+            the arm cannot reach a plan's release pose (the demo and random layouts 0-19).
+        release_box_shrinks: then each of those with the release box shrunk to these
+            fractions about its centre: a 174 g disc to a bin 2.5 m out was 15 mm short in
+            the full box; the 0.75 box left random layout 0's disc aimed 0.1 m farther out
+            of reach; the 0.9 box reaches both (tests/test_release_box.py).
+        approach_weight: with the release search, how much of the empty arm's approach from
+            where it is a release's cycle estimate counts (random layouts 0 and 3: counted
+            in full, layout 0 kept a branch 0.8 s slower a cycle; left out, layout 3's UR5
+            alternated wrist rolls, 0.4-0.6 s a pick).
+        face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
+            at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
+            bounced out of a 55 mm rim bin),
+        face_min_off_rad: [rad] for a bin at least this far round from the station (70°
+            before; from 30° with the release search: random layouts 0-19, 1,474 -> 1,507
+            items per hour with the 2 cm rise),
+        face_throw_stretch: lengthening the throw at most this much (random layout 16).
+
+    The flywheel (`learn`): an object's correction stays within x1/1.5 … x1.5 of reach and
+    ±10° of turn; a class's (shape's, for objects never thrown before) within ±15 % and ±3°.
+
+    The physical pick (`pick="physical"`), measured on the demo's objects in the scene
+    (tests/test_physical_pick.py):
+        pick_scatter_m: [m] items come to rest within ± this of the station's centre.
+        approach_m: [m] the carriage's face this far above the item's top ends the approach.
+        descent_mps: [m/s] speed of the guarded descent onto the item.
+        finger_clearance_m: [m] each open pad this far outside the item's gripping width.
+        press_m: [m] the guarded descent ends this far into the item's box (it stops at
+            contact; a mesh whose top lies lower is gripped there).
+        grip_ik_tol: ([m], [rad]) the grip's pose over the item (pads a fraction of a degree
+            off the item's sides close on its edges).
+        replan_m, replan_rad: an item found this far from where the approach aimed gets a
+            new approach before the descent.
+        max_tilt_rad: [rad] the grip's approach leans at most this far from vertical.
+        grip_leans: fractions of an item's tilt the approach follows, tried in turn.
+        touch_gap_m: [m] the pads close with the carriage's face this far above the top.
+        pad_tip_clearance_m: [m] … or with the pads' tips this far above the station.
+        lift_check_m, lift_check_s: the first lift, [m] in [s], shows whether the pads hold.
+        pick_attempts: a failed grasp is tried again while the item is on the station.
+    """
+
+    settle_s: float = 0.0
+    pick_stroke_m: float = 0.045
+    lift_m: float = 0.15
+    lift_max_dq_rad: float = 1.0
+    departure_lifts_m: tuple[float, ...] = (0.0, 0.01, 0.02, 0.04)
+    departure_clear_m: float = 0.02
+    pick_over_clearance_m: float = 0.01
+    place_clearance_m: float = 0.02
+    place_spots_tried: int = 8
+    swing_waypoints: int = 2
+    swing_waypoints_max: int = 8
+    swing_check_samples: int = 60
+    grip_use_tie: float = 0.02
+    swing_max_detour: float = 2.5
+    ik_out_of_reach_m: float = 5e-3
+    release_fallbacks: tuple[tuple[float, float], ...] = (
+        (math.radians(45.0), 0.7),
+        (math.radians(30.0), 0.6),
+    )
+    release_box_shrinks: tuple[float, ...] = (0.75, 0.9)
+    approach_weight: float = 0.25
+    face_turn_max_rad: float = math.radians(90.0)
+    face_min_off_rad: float = math.radians(30.0)
+    face_throw_stretch: float = 1.10
+    learn_max_log_ratio: float = math.log(1.5)
+    learn_max_turn_rad: float = math.radians(10.0)
+    learn_class_max_log_ratio: float = math.log(1.15)
+    learn_class_max_turn_rad: float = math.radians(3.0)
+    pick_scatter_m: float = 0.03
+    approach_m: float = 0.02
+    descent_mps: float = 0.1
+    finger_clearance_m: float = 0.01
+    press_m: float = 0.003
+    grip_ik_tol: tuple[float, float] = (1e-4, math.radians(0.02))
+    replan_m: float = 1e-3
+    replan_rad: float = math.radians(1.0)
+    max_tilt_rad: float = math.radians(25.0)
+    grip_leans: tuple[float, ...] = (1.0, 0.8, 0.6, 0.4, 0.2, 0.0)
+    touch_gap_m: float = 5e-4
+    pad_tip_clearance_m: float = 5e-4
+    lift_check_m: float = 0.03
+    lift_check_s: float = 0.2
+    pick_attempts: int = 2
+
+
+TUNING = ArmTuning()  # the defaults: `cell run` and `cell bench sort` use these

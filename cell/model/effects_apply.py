@@ -1,0 +1,296 @@
+"""The effects applied: the launch under the launch effects, the flight's extra
+accelerations, and the landing points as observed (`predict_with_effects`). The effects
+themselves, their parameters and families, are in `cell.model.effects`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.effects import (
+    _CURVED,
+    DOWNWASH_EDGE_M,
+    DOWNWASH_REF_RPM,
+    BandDamping,
+    BandMass,
+    Bounce,
+    BounceRolling,
+    Downwash,
+    DownwashDecay,
+    DragScale,
+    Effect,
+    ReleasePitch,
+    ShapeStretch,
+    Spin,
+    StrokeOffset,
+    TrackingScale,
+    Wind,
+    _find,
+    effects_from_mapping,
+)
+from cell.model.flight3d import column_fraction, fly
+from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
+from cell.model.throw import (
+    Landing,
+    ThrowBatch,
+    drag_constant,
+    launch_state,
+    no_landing_error,
+    predict_landing,
+    throw_axis,
+)
+
+__all__ = ["flight_accel", "launch_overrides", "predict_with_effects"]
+
+
+def _permuted(values: np.ndarray, permutation: np.ndarray | None) -> np.ndarray:
+    return values if permutation is None else values[permutation]
+
+
+def launch_overrides(
+    batch: ThrowBatch,
+    ee: EndEffectorParams,
+    effects: Sequence[Effect],
+    *,
+    permutation: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The push f_o [N], the pushed mass [kg] and the throw axis (n, 3) under the launch effects.
+
+    Args:
+        batch: the throws.
+        ee: end-effector parameters.
+        effects: the effects (non-launch ones are ignored).
+        permutation: when given, each effect's own term reads the quantity it hangs
+            on from the throws in this order (the permutation control).
+    """
+    so = _find(effects, StrokeOffset)
+    bm = _find(effects, BandMass)
+    bd = _find(effects, BandDamping)
+    ss = _find(effects, ShapeStretch)
+    rp = _find(effects, ReleasePitch)
+    stroke = batch.stroke + (so.delta_m if so else 0.0)
+    width = batch.size[:, 0]
+    stretch = band_stretch(stroke, width, ee)
+    if ss is not None:
+        curved = _permuted(_CURVED[batch.shape], permutation)
+        stretch = stretch + ss.k * curved * _permuted(width, permutation)
+    push = 2 * band_force(stretch, ee) * np.cos(band_angle(stroke, width, ee))
+    if bd is not None:
+        push = push * np.clip(1.0 - bd.per_m * _permuted(stretch, permutation), 0.0, None)
+    m = batch.mass
+    if bm is not None:
+        mp = _permuted(m, permutation)
+        push_mass = m * (mp + bm.mass_kg) / mp  # = m + m_b without permutation
+    else:
+        push_mass = m
+    elevation = batch.elevation + (rp.delta_rad if rp else 0.0)
+    return push, push_mass, throw_axis(elevation, batch.azimuth)
+
+
+def _flight_accel(
+    batch: ThrowBatch,
+    effects: Sequence[Effect],
+    rotor_rpm: np.ndarray,
+    permutation: np.ndarray | None,
+) -> Any:
+    wind = _find(effects, Wind)
+    dw = _find(effects, Downwash) or _find(effects, DownwashDecay)
+    sp = _find(effects, Spin)
+    ds = _find(effects, DragScale)
+    if wind is None and dw is None and sp is None and ds is None:
+        return None
+    decay = isinstance(dw, DownwashDecay)
+    w_const = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float) if wind else np.zeros(3)
+    centre = batch.position[:, :2]
+    release_z = batch.position[:, 2]
+    if dw is not None:
+        rpm = _permuted(rotor_rpm, permutation)
+        w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
+    if sp is not None:
+        kl = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m], per unit C_L
+        radius = batch.size.max(axis=1) / 2
+    if ds is not None:
+        # the drag the nominal law does not have: (factor - 1) of it
+        k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
+
+    def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
+        w = np.empty_like(p)
+        w[:] = w_const
+        if dw is not None:
+            rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
+            inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
+            if decay:
+                depth = np.clip(release_z[idx] - p[:, 2], 0.0, None)
+                inside = inside * np.exp(-depth / dw.depth_m)
+            w[:, 2] -= w_dw[idx] * inside
+        extra = None
+        if sp is not None:
+            rel = v - w
+            speed = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
+            # normal to v in its vertical plane, pointing up for backspin
+            nz = 1.0 - (rel[:, 2] / speed) ** 2
+            n = -rel * (rel[:, 2] / speed**2)[:, None]
+            n[:, 2] += 1.0
+            n /= np.sqrt(np.maximum(nz, 1e-12))[:, None]
+            s_ratio = sp.spin_rad_s * radius[idx] / speed
+            c_l = sp.lift_max * np.tanh(s_ratio / sp.lift_max)
+            extra = (kl[idx] * c_l * speed**2)[:, None] * n
+        if ds is not None:
+            rel = v - w
+            drag = -(k_extra[idx] * np.linalg.norm(rel, axis=1))[:, None] * rel
+            extra = drag if extra is None else extra + drag
+        return w, extra
+
+    return accel
+
+
+def flight_accel(
+    batch: ThrowBatch,
+    effects: Sequence[Effect],
+    rotor_rpm: np.ndarray | None = None,
+    *,
+    permutation: np.ndarray | None = None,
+) -> Any:
+    """The flight effects' air velocity and extra acceleration as `flight3d.Accel`
+    (None when no flight effect is present)."""
+    rpm = np.zeros(len(batch)) if rotor_rpm is None else np.asarray(rotor_rpm, float)
+    return _flight_accel(batch, effects, rpm, permutation)
+
+
+def _area(batch: ThrowBatch) -> np.ndarray:
+    from cell.model.objects import drag_area
+
+    return np.asarray(drag_area(batch.shape, batch.size))
+
+
+def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) -> np.ndarray:
+    """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
+    from the impact velocities v_imp [m/s] (n, 3)."""
+    bo = _find(effs, Bounce)
+    if bo is not None and bo.inv_mu > 0:
+        vh = v_imp[:, :2]
+        xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
+    br = _find(effs, BounceRolling)
+    if br is not None and br.tau_s > 0:
+        xy = xy + v_imp[:, :2] * br.tau_s
+    return xy
+
+
+def _given_launch(
+    launch: tuple[np.ndarray, np.ndarray, np.ndarray] | None, n: int
+) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    """(which of n throws have an observed launch state, (positions, velocities, times))
+    of `predict_with_effects`' `launch` (NaN where none is given)."""
+    if launch is None:
+        return np.zeros(n, bool), (
+            np.full((n, 3), np.nan),
+            np.full((n, 3), np.nan),
+            np.full(n, np.nan),
+        )
+    lp, lv, lt = (np.asarray(a, float) for a in launch)
+    given = np.isfinite(lt) & np.all(np.isfinite(lp), axis=1) & np.all(np.isfinite(lv), axis=1)
+    return given, (lp, lv, lt)
+
+
+def _launched(
+    batch: ThrowBatch,
+    ee: EndEffectorParams,
+    modelled: tuple[np.ndarray, np.ndarray, np.ndarray],
+    given: np.ndarray,
+    observed: tuple[np.ndarray, ...],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(positions [m], velocities [m/s], times [s] since the release command) at the
+    launch: the `observed` ones where `given`, else the push under the launch effects
+    (`modelled`: push [N], pushed mass [kg], throw axis) from `launch_state`."""
+    n, mod = len(batch), ~given
+    push, push_mass, axis = modelled
+    p1, v1, t1 = np.full((n, 3), np.nan), np.full((n, 3), np.nan), np.full(n, ee.dt)
+    if mod.any():
+        sub = batch.take(mod)
+        p1[mod], v1[mod] = launch_state(
+            sub, ee, push=push[mod], push_mass=push_mass[mod], axis=axis[mod]
+        )
+    if given.any():
+        p1[given], v1[given], t1[given] = (o[given] for o in observed)
+    return p1, v1, t1
+
+
+def predict_with_effects(
+    batch: ThrowBatch,
+    ee: EndEffectorParams,
+    effects: Sequence[Effect] | Mapping[str, Mapping[str, Any]] | None = None,
+    *,
+    rotor_rpm: np.ndarray | None = None,
+    launch: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    permutation: np.ndarray | None = None,
+    strict: bool = False,
+    check_stroke: bool = False,
+    step: float = 0.01,
+) -> Landing:
+    """Observed landing points of a batch with the model plus effects.
+
+    Args:
+        batch: the throws.
+        ee: end-effector parameters.
+        effects: a list of effects, or a parameter file's mapping {name: {param: value}}.
+        rotor_rpm: rotor speed per throw [rpm] (downwash); zeros when None.
+        launch: observed launch states (position (n, 3) [m], velocity (n, 3) [m/s],
+            time since the release command (n,) [s]) that replace the modelled push
+            where finite (throws from another launcher, diagnosed from tracks).
+        permutation: the permutation control: effects read the logged quantity they
+            hang on in this order.
+        strict: raise NoLanding when a throw never reaches its plane.
+        check_stroke: reject strokes outside the end-effector's range.
+        step: RK4 step of the 3-D flight integrator [s] (flight effects only).
+
+    Returns:
+        The landings as observed (with a measurement effect, on the observed scale).
+
+    Raises:
+        InvalidParameter: an unknown effect or bad parameter; a stroke out of range
+            with check_stroke.
+        NoLanding: with strict, when a throw never reaches its plane.
+    """
+    if effects is None:
+        effs: list[Effect] = []
+    elif isinstance(effects, Mapping):
+        effs = effects_from_mapping(effects)
+    else:
+        effs = list(effects)
+    n = len(batch)
+    rpm = np.zeros(n) if rotor_rpm is None else np.asarray(rotor_rpm, float)
+    ts = _find(effs, TrackingScale)
+    s = ts.scale_factor if ts else 1.0
+    if check_stroke:
+        batch.check_stroke(ee)
+    push, push_mass, axis = launch_overrides(batch, ee, effs, permutation=permutation)
+    accel = _flight_accel(batch, effs, rpm, permutation)
+    given, (lp, lv, lt) = _given_launch(launch, n)
+    if accel is None and not given.any():
+        land = predict_landing(
+            batch, ee, strict=False, check_stroke=False, push=push, push_mass=push_mass, axis=axis
+        )
+        xyz_t = np.c_[land.x, land.y, batch.land_z]
+        v_imp, t_fl, landed = land.impact_velocity, land.t_flight, land.landed
+        p1, v1 = land.launch_position, land.launch_velocity
+    else:
+        p1, v1, t1 = _launched(batch, ee, (push, push_mass, axis), given, (lp / s, lv / s, lt))
+        k = drag_constant(batch.shape, batch.mass, batch.size)
+        res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
+        xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
+    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs) * s
+    if strict and not np.all(landed):
+        raise no_landing_error(np.flatnonzero(~landed), batch)
+    return Landing(
+        x=xy[:, 0],
+        y=xy[:, 1],
+        t_flight=t_fl,
+        launch_position=p1,
+        launch_velocity=v1,
+        landed=landed,
+        impact_velocity=v_imp,
+    )

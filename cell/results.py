@@ -1,0 +1,221 @@
+"""What became of the items of a run: each item's result and failure reason, the run's
+summary (items per hour counts only items at rest in their bin), and the throw-log row of
+a sort throw. The item loop (`cell.loop`) scores with these; `cell.loop` re-exports them.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from cell.errors import (
+    CannotGrip,
+    GraspLost,
+    IKFailed,
+    TrajectoryError,
+    UnreachableTarget,
+)
+from cell.log.records import throw_record
+from cell.model.objects import ObjectParams
+
+__all__ = [
+    "FAILURES",
+    "ItemResult",
+    "RunSummary",
+    "failure_of",
+    "landing",
+    "missed_bin",
+    "rate_per_hour",
+    "sorted_throw_record",
+    "summarise",
+]
+
+# Why an item did not end in its bin: one of these, always (ItemResult.failure).
+FAILURES = (
+    "unreachable",  # no release within the cell's bounds lands it in the bin
+    "cannot_grip",  # too wide, too thin or too heavy for the pads, refused before the pick
+    "grasp_failed",  # the fingers did not close on it
+    "dropped_while_carried",  # it left the grip between the pick and the release
+    "ik",  # no arm configuration or move reaches the planned pose
+    "missed_bin",  # released, but it came to rest outside its bin
+)
+
+
+def failure_of(exc: BaseException) -> str:
+    """The FAILURES entry for an error that stopped an item before its release."""
+    if isinstance(exc, UnreachableTarget):
+        return "unreachable"
+    if isinstance(exc, CannotGrip):
+        return "cannot_grip"
+    if isinstance(exc, GraspLost):
+        return "grasp_failed" if exc.stage == "grasp" else "dropped_while_carried"
+    if isinstance(exc, (IKFailed, TrajectoryError)):
+        return "ik"
+    return "missed_bin"
+
+
+@dataclass(frozen=True)
+class ItemResult:
+    """What became of one item.
+
+    Attributes:
+        index: item number in the job (0-based).
+        object_id: catalogue id (or ad-hoc name).
+        target_bin: where the job wanted it.
+        action: "place", "throw" or "failed".
+        failure: why it is not in its bin, one of FAILURES ("" when it is).
+        reason: the full message of that failure ("" when there is none).
+        bin_id: the bin it came to rest in ("" for none).
+        in_bin: True when that is the target bin.
+        landing_error_m: throws: distance of the crossing of the rim plane from the
+            point the throw was for (the bin's centre, or the point of it clear of
+            what the bin holds: cell.arm.spots.throw_spot); places: distance
+            of the rest point from the bin centre [m].
+        stroke_m: commanded stroke at release [m] (NaN for failures before planning).
+        delta_stroke_m: learned correction ΔL_s included in stroke_m [m].
+        cycle_time_s: simulated time for this item [s] (see the module docstring).
+        throw_id: the log id of the throw ("" for places and failures).
+        moving: the latch opened while the platform moved (a release on the move).
+    """
+
+    index: int
+    object_id: str
+    target_bin: str
+    action: str
+    failure: str = ""
+    reason: str = ""
+    bin_id: str = ""
+    in_bin: bool = False
+    landing_error_m: float = math.nan
+    stroke_m: float = math.nan
+    delta_stroke_m: float = 0.0
+    cycle_time_s: float = 0.0
+    throw_id: str = ""
+    moving: bool = False
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """The closing table of a run (JSON keys as `cell run --json`)."""
+
+    items: int
+    placed: int
+    thrown: int
+    failed: int
+    in_bin: int
+    in_bin_rate: float
+    mean_landing_error_m: float
+    p95_landing_error_m: float
+    mean_cycle_time_s: float
+    items_per_hour: float
+    sim_time_s: float
+    wall_time_s: float
+    results: list[ItemResult] = field(default_factory=list)
+    failures: dict[str, int] = field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values, item results as a list of dicts."""
+        d = asdict(self)
+        d["results"] = [asdict(r) for r in self.results]
+        return d
+
+
+def rate_per_hour(in_bin: int, sim_time_s: float) -> float:
+    """Items at rest in their bin per hour of `sim_time_s` [s] of arm time (0 with none):
+    the `items_per_hour` of a run, a campaign and its floor (`cell.bench.bench_sort`)."""
+    return 3600.0 * in_bin / sim_time_s if sim_time_s > 0 else 0.0
+
+
+def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
+    """The closing figures of a list of item results."""
+    n = len(results)
+    errs = np.array([r.landing_error_m for r in results if np.isfinite(r.landing_error_m)])
+    cyc = np.array([r.cycle_time_s for r in results])
+    sim_time = float(np.sum([r.cycle_time_s for r in results]))
+    in_bin = sum(r.in_bin for r in results)
+    return RunSummary(
+        items=n,
+        placed=sum(r.action == "place" for r in results),
+        thrown=sum(r.action == "throw" for r in results),
+        failed=sum(r.action == "failed" for r in results),
+        in_bin=in_bin,
+        in_bin_rate=in_bin / n if n else 0.0,
+        mean_landing_error_m=float(errs.mean()) if errs.size else math.nan,
+        p95_landing_error_m=float(np.percentile(errs, 95)) if errs.size else math.nan,
+        mean_cycle_time_s=float(cyc.mean()) if cyc.size else math.nan,
+        items_per_hour=rate_per_hour(in_bin, sim_time),
+        sim_time_s=sim_time,
+        wall_time_s=wall_time_s,
+        results=list(results),
+        failures={k: c for k in FAILURES if (c := sum(r.failure == k for r in results))},
+    )
+
+
+def sorted_throw_record(
+    session: str,
+    throw_id: str,
+    obj: ObjectParams,
+    plan: Any,
+    stroke_m: float,
+    released_at: np.ndarray,
+    target: Any,
+    out: Any,
+    cross: Any,
+    *,
+    platform: str = "arm",
+    rotor_rpm: float = 0.0,
+    land_z_m: float | None = None,
+) -> dict[str, Any]:
+    """The throw-log row of a sort throw: the release as planned and observed, the
+    crossing of the landing plane (the target bin's rim plane unless `land_z_m` says
+    otherwise, see `landing`), and which bin it came to rest in."""
+    return throw_record(
+        throw_id,
+        obj,
+        stroke_m=stroke_m,
+        position_m=released_at,
+        elevation_rad=plan.elevation_rad,
+        azimuth_rad=plan.azimuth_rad,
+        roll_rad=plan.roll_rad,
+        base_velocity_mps=(plan.vx_mps, plan.vy_mps, plan.vz_mps),
+        platform=platform,
+        rotor_rpm=rotor_rpm,
+        land_z_m=target.rim_height if land_z_m is None else land_z_m,
+        landed_xy_m=cross[:2],
+        session=session,
+        time_s=time.time(),
+        t_flight_s=float(cross[2]),
+        target_bin=target.id,
+        bin_id=out.bin_id or "",
+    )
+
+
+def landing(out: Any, rim_z: float) -> tuple[tuple[float, float, float], float]:
+    """Where a thrown item landed: ((x [m], y [m], t [s] since release), plane z [m]).
+
+    The crossing of the target's rim plane going down (MODEL.md's landing); when the
+    track never goes below that plane (it came down on the pile a low-rimmed bin holds,
+    or on something else as high), the touchdown, on the plane of its height.
+    """
+    from cell.errors import NoLanding
+
+    try:
+        return out.crossing(rim_z), rim_z
+    except NoLanding:
+        x, y, z = out.touchdown_xyz
+        return (float(x), float(y), float(out.t_touchdown)), float(z)
+
+
+def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
+    """(failure, reason) of a released item; both empty when it rests in its bin."""
+    if bin_id == target_id:
+        return "", ""
+    where = f"in bin {bin_id!r}" if bin_id else "outside every bin"
+    return (
+        "missed_bin",
+        f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",
+    )
