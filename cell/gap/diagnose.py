@@ -233,6 +233,7 @@ def _verdict_report(
         "shrink_ci_pct": [slo, shi],
         "params": ({e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}),
         "laws": ({e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}),
+        "phases": ({e.name: e.phase for e in public_effects} if verdict[0] != "none" else {}),
         "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
         "partial_effects": ([e.name for e in public_effects] if verdict[0] == "unknown" else []),
     }
@@ -311,6 +312,7 @@ def diagnose(
         "verdict": _verdict_report(verdict, chosen, B, base_sq, v_sq, prob.seed),
         "noise": _noise_report(nf),
         "tests": sel.tests,
+        "laws_tried_heldout_rmse_m": sel.law_tries,
         "identified": (
             {"band_stiffness_factor": identified.full.effects[0].params()["factor"]}
             if identified is not None

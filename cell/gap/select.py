@@ -162,6 +162,19 @@ class Selection:
         self.ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
         self.perm_cache: dict[tuple[str, ...], Score] = {}
         self.tests: dict[str, dict[str, Any]] = {}
+        self.law_tries: dict[str, dict[str, float]] = {}
+
+    def learn_law(self, cand: Score) -> Score:
+        """The set with each effect's law chosen among its forms (`cell.gap.laws`); the
+        chosen forms stand for their effects in the pairs tried after."""
+        from cell.gap.laws import choose_law
+
+        out, tried = choose_law(self.prob, cand, self.tick)
+        self.law_tries.update(tried)
+        for e in out.full.effects:
+            if e.name in self.members:
+                self.members[e.name] = type(e)
+        return out
 
     def refuse(self, cand: Score) -> str | None:
         """Why one of a candidate set's effects may not join (`refusal`), or None."""
@@ -232,6 +245,7 @@ class Selection:
         cur_sq = base_sq
         for s in self.ranked:
             if self.passes(cur_sq, s):
+                s = self.learn_law(s)
                 chosen.append(s)
                 cur_sq = s.heldout
                 break
@@ -242,6 +256,7 @@ class Selection:
             best = self._partner(chosen[-1], cur_sq)
             if best is None:
                 break
+            best = self.learn_law(best)
             chosen.append(best)
             cur_sq = best.heldout
         return chosen, cur_sq

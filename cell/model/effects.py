@@ -117,6 +117,11 @@ class Effect:
         """The effect at the size where it does nothing."""
         return cls()
 
+    def per_throw(self, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
+        """The effect as evaluated on a batch (a learned law gives one value per throw,
+        `cell.gap.laws`); a plain effect is itself."""
+        return self
+
     def params(self) -> dict[str, float]:
         """The parameters as a plain dict."""
         return {f.name: float(getattr(self, f.name)) for f in fields(self)}
@@ -512,7 +517,8 @@ def flight_accel(
     """The flight effects' air velocity and extra acceleration as `flight3d.Accel`
     (None when no flight effect is present)."""
     rpm = np.zeros(len(batch)) if rotor_rpm is None else np.asarray(rotor_rpm, float)
-    return _flight_accel(batch, effects, rpm, permutation)
+    effs = [e.per_throw(batch, permutation) for e in effects]
+    return _flight_accel(batch, effs, rpm, permutation)
 
 
 def _area(batch: ThrowBatch) -> np.ndarray:
@@ -563,6 +569,7 @@ def predict_with_effects(
         effs = effects_from_mapping(effects)
     else:
         effs = list(effects)
+    effs = [e.per_throw(batch, permutation) for e in effs]
     n = len(batch)
     rpm = np.zeros(n) if rotor_rpm is None else np.asarray(rotor_rpm, float)
     ts = _find(effs, TrackingScale)
@@ -604,7 +611,7 @@ def predict_with_effects(
         xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
     br = _find(effs, BounceRolling)
     if br is not None and br.tau_s > 0:
-        xy = xy + v_imp[:, :2] * br.tau_s
+        xy = xy + v_imp[:, :2] * np.reshape(br.tau_s, (-1, 1))
     xy = xy * s
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)

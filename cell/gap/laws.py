@@ -1,0 +1,181 @@
+"""The law of an effect learned from the data: its parameter as a function of the throw.
+
+An effect of one parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
+drag_scale's `factor`, ...) may follow one of these forms, c a logged covariate of the
+throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
+
+| form | law | terms |
+|---|---|---|
+| constant | p = a | 1 |
+| proportional | p = k · c | 1 |
+| linear | p = a + k · c | 2 |
+
+`law_class(base, covariate, intercept)` makes the form as an `Effect` class whose fields
+are the form's coefficients; `Effect.per_throw` turns it into the base effect with one
+value per throw (an array), which the model's effect code evaluates unchanged. The
+diagnosis picks the form by held-out evidence with a penalty for each extra term
+(`choose_law`): a form replaces the constant only when its held-out RMSE, raised by
+TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
+interval above zero.
+"""
+
+from __future__ import annotations
+
+from dataclasses import make_dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from cell.gap.fit import Score
+from cell.gap.problem import GapProblem
+from cell.model.effects import Effect
+from cell.model.throw import ThrowBatch
+
+__all__ = ["COVARIATES", "LAW_BASES", "law_class", "law_text", "TERM_PENALTY", "choose_law"]
+
+TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
+# covariate name -> (how to read it off a batch, its typical largest value)
+COVARIATES: dict[str, tuple[Any, float]] = {
+    "stroke_m": (lambda b: b.stroke, 0.11),
+    "mass_kg": (lambda b: b.mass, 0.12),
+    "size_x_m": (lambda b: b.size[:, 0], 0.07),
+}
+LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping")
+_CACHE: dict[tuple[type[Effect], str, bool], type[Effect]] = {}
+
+
+def law_text(base: type[Effect], covariate: str | None, intercept: bool) -> str:
+    """The law as text: `mass_kg = k · stroke_m`, `delta_rad = a + k · mass_kg`."""
+    p = base.param_names()[0]
+    if covariate is None:
+        return f"{p} = a"
+    return f"{p} = a + k · {covariate}" if intercept else f"{p} = k · {covariate}"
+
+
+def _per_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
+    base: type[Effect] = self.law_base
+    read, _ = COVARIATES[self.covariate]
+    c = np.asarray(read(batch), float)
+    if permutation is not None:
+        c = c[permutation]
+    lo, hi = base.bounds[0]
+    a = self.a if self.intercept else 0.0
+    vals = np.clip(a + self.k * c, lo, hi)
+    out = object.__new__(base)
+    object.__setattr__(out, base.param_names()[0], vals)
+    return out
+
+
+def law_class(base: type[Effect], covariate: str, intercept: bool) -> type[Effect]:
+    """The effect class of `base` (one parameter) whose parameter follows
+    a + k · covariate (intercept) or k · covariate.
+
+    Its fields: `a` (in the base's units, with intercept) and `k` (base units per
+    covariate unit); its law text is `law_text`. Its phase and name are the base's, and
+    it hangs on the covariate (the permutation control shuffles the covariate)."""
+    key = (base, covariate, intercept)
+    if key in _CACHE:
+        return _CACHE[key]
+    (lo, hi), sc = base.bounds[0], base.scale[0]
+    cmax = COVARIATES[covariate][1]
+    neutral = float(base.neutral().vector()[0])
+    span = (hi - lo) / cmax
+    k_bounds = (lo / cmax, hi / cmax) if not intercept else (-span, span)
+    if not intercept and lo >= 0 and neutral > 0:
+        k_bounds = (0.0, hi / cmax * 3)
+    flds: list[tuple[str, type, Any]] = []
+    bounds: list[tuple[float, float]] = []
+    scale: list[float] = []
+    if intercept:
+        flds.append(("a", float, neutral))
+        bounds.append((lo, hi))
+        scale.append(sc)
+    k0 = 0.0 if intercept else float(np.clip(neutral / (cmax / 2), *k_bounds))
+    flds.append(("k", float, k0))
+    bounds.append(k_bounds)
+    scale.append(sc / cmax)
+    ns = {
+        "name": base.name,
+        "phase": base.phase,
+        "bounds": tuple(bounds),
+        "scale": tuple(scale),
+        "hangs_on": covariate,
+        "law": law_text(base, covariate, intercept),
+        "plausible": None,
+        "law_base": base,
+        "covariate": covariate,
+        "intercept": intercept,
+        "per_throw": _per_throw,
+    }
+    cls_name = f"{base.__name__}_{'lin' if intercept else 'prop'}_{covariate}"
+    cls = make_dataclass(cls_name, flds, bases=(Effect,), frozen=True, namespace=ns)
+    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
+        cls.__annotations__[nm] = ClassVar
+    cls.__module__ = __name__
+    _CACHE[key] = cls
+    return cls
+
+
+def law_forms(base: type[Effect]) -> list[type[Effect]]:
+    """Every covariate form of a one-parameter effect (proportional and linear)."""
+    return [law_class(base, c, i) for c in COVARIATES for i in (False, True)]
+
+
+def _warm(cls: type[Effect], p: float, cov_mean: float) -> np.ndarray:
+    """A form's scaled start from the constant's fitted value p."""
+    sc = np.asarray(cls.scale, float)
+    if getattr(cls, "intercept", False):
+        return np.array([p, 0.0]) / sc
+    return np.array([p / max(cov_mean, 1e-9)]) / sc
+
+
+def choose_law(
+    prob: GapProblem,
+    score: Score,
+    tick: Any = None,
+) -> tuple[Score, dict[str, dict[str, float]]]:
+    """The law of each effect of a scored set chosen among its forms.
+
+    Every one-parameter effect of LAW_BASES in the set (at its constant form) is refitted
+    with each covariate form (the others kept at their form, warm-started from the set's
+    solution) and scored held-out; a form replaces the constant when its held-out RMSE,
+    raised by TERM_PENALTY per extra term, is the lowest and its cut over the constant
+    has a bootstrap interval above zero.
+
+    Returns:
+        (the set's score with the chosen forms; per effect, each form's held-out RMSE [m]).
+    """
+    from cell.gap.fit import score_set
+    from cell.gap.stats import bootstrap_cut
+    from cell.model.effects import EFFECTS
+
+    tick = tick or (lambda s: None)
+    best = score
+    tried: dict[str, dict[str, float]] = {}
+    for j, eff in enumerate(score.full.effects):
+        base = EFFECTS.get(eff.name)
+        if eff.name not in LAW_BASES or base is None or type(eff) is not base:
+            continue
+        classes = [type(e) for e in best.full.effects]
+        sizes = [len(c.bounds) for c in classes]
+        at = int(np.sum(sizes[:j]))
+        p = float(eff.vector()[0])
+        rows = {"constant": best.heldout_rmse_m}
+        pick, pick_val = best, best.heldout_rmse_m
+        for form in law_forms(base):
+            read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
+            cm = float(np.mean(read(prob.batch)))
+            warm = np.r_[best.full.x[:at], _warm(form, p, cm), best.full.x[at + 1 :]]
+            tick(f"{eff.name} ({form.law})")
+            cls_j = classes[:j] + [form] + classes[j + 1 :]
+            sc = score_set(prob, cls_j, warm=warm)
+            rows[form.law] = sc.heldout_rmse_m
+            val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - 1))
+            if val >= pick_val:
+                continue
+            _, lo, _ = bootstrap_cut(best.heldout, sc.heldout, seed=prob.seed + 3)
+            if lo > 0:
+                pick, pick_val = sc, val
+        best = pick
+        tried[eff.name] = rows
+    return best, tried
