@@ -68,6 +68,7 @@ class Diagnosis:
     verdict_residual: np.ndarray  # (n, 2) [m] with the verdict's effects fitted on all
     scores: dict[str, Score] = field(default_factory=dict)
     noise: NoiseFloor | None = None
+    verdict_effects: tuple[Effect, ...] = ()  # the verdict's effects fitted on all throws
 
 
 def applicable_families(prob: GapProblem) -> list[tuple[type[Effect], ...]]:
@@ -326,6 +327,7 @@ def diagnose(
         baseline_sq=base_sq,
         verdict_sq=v_sq,
         verdict_residual=v_res,
+        verdict_effects=(tuple(chosen[-1].full.effects) if chosen and verdict[0] != "none" else ()),
         scores=scores,
         noise=nf,
     )

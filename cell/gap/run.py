@@ -9,7 +9,8 @@ import numpy as np
 
 from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
-from cell.gap.problem import build_problem
+from cell.gap.outliers import flag, screen, threshold_sq
+from cell.gap.problem import GapProblem, build_problem
 from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
 from cell.log.table import ThrowTable
 from cell.model.effects import EFFECTS, Effect
@@ -100,6 +101,52 @@ def _where_from_tracks(d: Diagnosis, tp: dict[str, Any]) -> dict[str, Any]:
     return {"phase": top, "evidence": text}
 
 
+def _robust_report(table: ThrowTable, full: GapProblem, pre: np.ndarray, d: Diagnosis) -> None:
+    """The outliers by row (`cell.gap.outliers`), and the held-out errors plain and robust.
+
+    The diagnosis ran on the throws the screen kept (pre: the screened-out ones); the
+    verdict's effects predict every throw, and a throw whose miss the robust scatter calls
+    impossible is flagged. Plain: every throw (a screened-out throw's miss is held out by
+    construction); robust: the flagged throws left out."""
+    rep = d.report
+    all_idx = np.arange(len(full))
+    miss = full.residual(all_idx, d.verdict_effects)
+    flagged = flag(miss)
+    base_sq = np.empty(len(full))
+    v_sq = np.empty(len(full))
+    base_sq[~pre], v_sq[~pre] = d.baseline_sq, d.verdict_sq
+    base_sq[pre] = np.sum(full.residual(all_idx[pre]) ** 2, axis=1)
+    v_sq[pre] = np.sum(miss[pre] ** 2, axis=1)
+    keep = ~flagged
+    row_of = {t: i + 1 for i, t in enumerate(table.text("throw_id"))}
+    tids = full.table.text("throw_id")
+    rep["outliers"] = {
+        "rows": [row_of[tids[i]] for i in np.flatnonzero(flagged)],
+        "throw_ids": [str(tids[i]) for i in np.flatnonzero(flagged)],
+        "screened_before_fit": int(pre.sum()),
+        "threshold_sigma": float(np.sqrt(threshold_sq(len(full)))),
+    }
+    rep["baseline"]["heldout_rmse_m"] = float(np.sqrt(base_sq.mean()))
+    rep["baseline"]["heldout_rmse_robust_m"] = float(np.sqrt(base_sq[keep].mean()))
+    rep["verdict"]["heldout_rmse_m"] = float(np.sqrt(v_sq.mean()))
+    rep["verdict"]["heldout_rmse_robust_m"] = float(np.sqrt(v_sq[keep].mean()))
+    rep["throws"] = len(full)
+
+
+def _proposal(prob: GapProblem, d: Diagnosis) -> dict[str, Any]:
+    """The law proposed for an `unknown` verdict (`cell.gap.propose`): on the baseline's
+    misses and on what the partial effects leave, whichever the law explains better."""
+    from cell.gap.propose import propose
+
+    floor = d.report["noise_floor_m"]
+    out = {**propose(prob, (), floor), "on_top_of": []}
+    if d.verdict_effects:
+        part = propose(prob, d.verdict_effects, floor)
+        if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
+            out = {**part, "on_top_of": [e.name for e in d.verdict_effects]}
+    return out
+
+
 MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
 
 
@@ -137,9 +184,14 @@ def diagnose_log(
     if tracks:
         fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))
         launch = launch_arrays(fit_all)
-    prob = build_problem(
+    full = build_problem(
         table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
     )
+    all_idx = np.arange(len(full))
+    pre = screen(full.residual(all_idx), full.landing(all_idx))
+    prob = full.subset(~pre) if pre.any() and (~pre).sum() >= MIN_THROWS else full
+    if prob is full:
+        pre = np.zeros(len(full), bool)
     tp: dict[str, Any] | None = None
     if tracks:
         tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
@@ -158,6 +210,9 @@ def diagnose_log(
         where = {"phase": "none", "evidence": evidence}
     if not where:
         where = _phase_from_verdict(d)
+    _robust_report(table, full, pre, d)
+    if rep["verdict"]["effects"] == ["unknown"]:
+        rep["proposal"] = _proposal(prob, d)
     rows = conditions(prob, d.baseline_sq, d.verdict_sq)
     where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
     rep["where"] = where

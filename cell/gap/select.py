@@ -21,7 +21,7 @@ from cell.gap.fit import Score, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
 from cell.gap.tracks import phase_evidence
-from cell.model.effects import EFFECTS, Effect, TrackingScale
+from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
 
 __all__ = ["Selection", "refusal", "at_bound", "public", "effect_class"]
 
@@ -190,10 +190,10 @@ class Selection:
         """The permutation control of a candidate whose newest effect hangs on a logged
         quantity: shuffling it between throws must take away PERM_SHARE of the cut [m],
         with an interval above zero. Records the control in t."""
-        newest = effect_class(cand.names[-1], self.members)
+        newest = type(cand.full.effects[-1])
         self.tick(f"permutation {newest.name}")
-        classes = [effect_class(nm, self.members) for nm in cand.names]
-        key = cand.names
+        classes = [type(e) for e in cand.full.effects]
+        key = tuple(c.__name__ for c in classes)
         if key not in self.perm_cache:
             self.perm_cache[key] = score_set(self.prob, classes, permute=True, warm=None)
         ps = self.perm_cache[key]
@@ -223,7 +223,7 @@ class Selection:
         if why:
             t["refused"] = why
             ok = False
-        newest = effect_class(cand.names[-1], self.members)
+        newest = type(cand.full.effects[-1])
         if ok and newest.hangs_on is not None:
             ok = ok and self._survives_permutation(cand, cut, t)
         t["passes"] = bool(ok)
@@ -277,14 +277,22 @@ class Selection:
         )
         pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
         for sc in [sc for sc in rest if sc.names[-1] in pick]:
-            classes = [effect_class(nm, self.members) for nm in have] + [
-                effect_class(sc.names[-1], self.members)
-            ]
-            warm = np.concatenate([last.full.x, sc.full.x[len(self.prefix) :]])
-            self.tick("+".join(public(classes_names(classes))))
-            combo = score_set(self.prob, classes, warm=warm)
-            self.scores["+".join(public(combo.names))] = combo
-            combos.append(combo)
+            # every law of the partner's family: the member that stood for it alone was
+            # chosen on misses the chosen effects no longer leave
+            best: Score | None = None
+            for member in FAMILIES.get(sc.names[-1], (effect_class(sc.names[-1]),)):
+                classes = [effect_class(nm, self.members) for nm in have] + [member]
+                own = sc.full.x[len(self.prefix) :]
+                if member is not self.members.get(sc.names[-1]):
+                    own = member.neutral().vector() / np.asarray(member.scale, float)
+                warm = np.concatenate([last.full.x, own])
+                self.tick("+".join(public(classes_names(classes))))
+                combo = score_set(self.prob, classes, warm=warm)
+                if best is None or combo.heldout_rmse_m < best.heldout_rmse_m:
+                    best = combo
+            assert best is not None
+            self.scores["+".join(public(best.names))] = best
+            combos.append(best)
         combos.sort(key=lambda c: c.heldout_rmse_m)
         return combos
 
