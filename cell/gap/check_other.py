@@ -326,7 +326,7 @@ def check_other_case(case: dict[str, Any]) -> dict[str, Any]:
     diag = verdict == case["truth"]
     floor_ok = case["truth"] in ("none", "unknown") or after <= FLOOR_RATIO * camp.floor_m
     flagged = set(rep.get("outliers", {}).get("rows", []))
-    true_out = set(camp.outliers)
+    true_out = {i + 1 for i in camp.outliers}  # rows: 1 = first data row
     return {
         "case": case["name"], "truth": case["truth"], "verdict": verdict,
         "diagonal": bool(diag), "phases": phases, "phase_ok": bool(phase_ok),

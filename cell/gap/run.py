@@ -101,17 +101,41 @@ def _where_from_tracks(d: Diagnosis, tp: dict[str, Any]) -> dict[str, Any]:
     return {"phase": top, "evidence": text}
 
 
-def _robust_report(table: ThrowTable, full: GapProblem, pre: np.ndarray, d: Diagnosis) -> None:
+def _one_pass(
+    full: GapProblem,
+    pre: np.ndarray,
+    tracks: dict[str, np.ndarray] | None,
+    identify: bool,
+    progress: Callable[[str], None] | None,
+) -> tuple[GapProblem, dict[str, Any] | None, Diagnosis]:
+    """The diagnosis of the throws not in `pre` (the problem, the tracks' evidence, the
+    diagnosis)."""
+    prob = full.subset(~pre) if pre.any() and (~pre).sum() >= MIN_THROWS else full
+    tp: dict[str, Any] | None = None
+    if tracks:
+        tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
+        tp = track_phase(prob, tf)
+    return prob, tp, diagnose(prob, identify=identify, tracks=tp, progress=progress)
+
+
+def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
+    """The throws whose miss under the verdict's effects is impossible (`outliers.flag`);
+    an unknown verdict leaves a structured miss, so its rows are the screen's (pre)."""
+    if d.report["verdict"]["effects"] == ["unknown"]:
+        return pre.copy()
+    return flag(full.residual(np.arange(len(full)), d.verdict_effects))
+
+
+def _robust_report(
+    table: ThrowTable, full: GapProblem, pre: np.ndarray, flagged: np.ndarray, d: Diagnosis
+) -> None:
     """The outliers by row (`cell.gap.outliers`), and the held-out errors plain and robust.
 
-    The diagnosis ran on the throws the screen kept (pre: the screened-out ones); the
-    verdict's effects predict every throw, and a throw whose miss the robust scatter calls
-    impossible is flagged. Plain: every throw (a screened-out throw's miss is held out by
+    The diagnosis ran on the throws not in `pre`; `flagged` are the rows reported. Plain: every throw (a screened-out throw's miss is held out by
     construction); robust: the flagged throws left out."""
     rep = d.report
     all_idx = np.arange(len(full))
     miss = full.residual(all_idx, d.verdict_effects)
-    flagged = flag(miss)
     base_sq = np.empty(len(full))
     v_sq = np.empty(len(full))
     base_sq[~pre], v_sq[~pre] = d.baseline_sq, d.verdict_sq
@@ -189,14 +213,13 @@ def diagnose_log(
     )
     all_idx = np.arange(len(full))
     pre = screen(full.residual(all_idx), full.landing(all_idx))
-    prob = full.subset(~pre) if pre.any() and (~pre).sum() >= MIN_THROWS else full
-    if prob is full:
-        pre = np.zeros(len(full), bool)
-    tp: dict[str, Any] | None = None
-    if tracks:
-        tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
-        tp = track_phase(prob, tf)
-    d = diagnose(prob, identify=identify, tracks=tp, progress=progress)
+    prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
+    pre = pre if len(prob) < len(full) else np.zeros(len(full), bool)
+    post = _flags(full, pre, d)
+    if not np.array_equal(post, pre):
+        # the rows the verdict's effects call impossible, not the screen's, stay out
+        prob, tp, d = _one_pass(full, post, tracks, identify, progress)
+        pre = post if len(prob) < len(full) else np.zeros(len(full), bool)
     rep = d.report
     where: dict[str, Any] = {}
     if tp is not None:
@@ -210,7 +233,7 @@ def diagnose_log(
         where = {"phase": "none", "evidence": evidence}
     if not where:
         where = _phase_from_verdict(d)
-    _robust_report(table, full, pre, d)
+    _robust_report(table, full, pre, _flags(full, pre, d), d)
     if rep["verdict"]["effects"] == ["unknown"]:
         rep["proposal"] = _proposal(prob, d)
     rows = conditions(prob, d.baseline_sq, d.verdict_sq)
