@@ -225,6 +225,7 @@ def _verdict_report(
     public_effects = (
         [e for e in chosen[-1].full.effects if e.name != BandStiffness.name] if chosen else []
     )
+    ci = _verdict_ci(chosen[-1]) if chosen else {}
     A_v = float(np.sqrt(v_sq.mean()))
     _, slo, shi = _shrink_ci(base_sq, v_sq, seed)
     return {
@@ -232,10 +233,14 @@ def _verdict_report(
         "heldout_rmse_m": A_v,
         "shrink_pct": _shrink(B, A_v),
         "shrink_ci_pct": [slo, shi],
-        "params": ({e.name: e.params() for e in public_effects} if verdict[0] != "none" else {}),
+        "params": (
+            {e.name: _law_params(e, ci.get(e.name)) for e in public_effects}
+            if verdict[0] != "none"
+            else {}
+        ),
         "laws": ({e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}),
         "phases": ({e.name: e.phase for e in public_effects} if verdict[0] != "none" else {}),
-        "params_ci95": (_verdict_ci(chosen[-1]) if chosen and verdict[0] != "none" else {}),
+        "params_ci95": (ci if verdict[0] != "none" else {}),
         "partial_effects": ([e.name for e in public_effects] if verdict[0] == "unknown" else []),
     }
 
@@ -331,6 +336,23 @@ def diagnose(
         scores=scores,
         noise=nf,
     )
+
+
+def _law_params(e: Effect, ci: dict[str, list[float]] | None) -> dict[str, Any]:
+    """An effect's reported parameters: its fields, or for a per-object law each object's
+    value shrunk toward the common one (`cell.gap.laws.shrunk`) by object id."""
+    ids = getattr(type(e), "object_ids", None)
+    if ids is None:
+        return e.params()
+    from cell.gap.laws import shrunk
+
+    arr = np.array([ci[k] for k in e.params()]) if ci else None
+    vals, common, tau = shrunk(e.vector(), arr)
+    return {
+        "common": common,
+        "spread": tau,
+        "per_object": {o: float(v) for o, v in zip(ids, vals, strict=True)},
+    }
 
 
 def _verdict_ci(score: Score) -> dict[str, dict[str, list[float]]]:

@@ -33,7 +33,8 @@ from cell.model.throw import ThrowBatch
 
 __all__ = ["COVARIATES", "LAW_BASES", "law_class", "law_text", "TERM_PENALTY", "choose_law"]
 
-TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
+TERM_PENALTY = 0.01  # a form's held-out RMSE is raised by this share per extra term
+MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
 # covariate name -> (how to read it off a batch, its typical largest value)
 COVARIATES: dict[str, tuple[Any, float]] = {
     "stroke_m": (lambda b: b.stroke, 0.11),
@@ -116,6 +117,69 @@ def law_class(base: type[Effect], covariate: str, intercept: bool) -> type[Effec
     return cls
 
 
+def _object_keys(batch: ThrowBatch) -> list[tuple[float, ...]]:
+    """An object's key from its logged shape, mass and extents (a batch has no ids)."""
+    a = np.c_[batch.shape, batch.mass * 1e6, batch.size * 1e6]
+    r = np.round(np.asarray(a, float))
+    return [tuple(float(x) for x in r[i]) for i in range(r.shape[0])]
+
+
+def _per_object_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None
+                      ) -> Effect:  # fmt: skip
+    base: type[Effect] = self.law_base
+    vals = self.vector()
+    j = np.array([self.object_index.get(k, -1) for k in _object_keys(batch)])
+    if permutation is not None:
+        j = j[permutation]
+    v = np.where(j >= 0, vals[np.clip(j, 0, None)], vals.mean())
+    out = object.__new__(base)
+    object.__setattr__(out, base.param_names()[0], v)
+    return out
+
+
+def per_object_class(base: type[Effect], prob: GapProblem) -> type[Effect]:
+    """The form of `base` with one value per object of the log (fields `o0`, `o1`, ...
+    in the order of `object_ids`); its law text is `p = a_object`."""
+    keys = _object_keys(prob.batch)
+    oid = prob.table.text("object_id")
+    index: dict[tuple[float, ...], int] = {}
+    ids: list[str] = []
+    for k, o in zip(keys, oid, strict=True):
+        if k not in index:
+            index[k] = len(ids)
+            ids.append(str(o))
+    neutral = float(base.neutral().vector()[0])
+    flds = [(f"o{j}", float, neutral) for j in range(len(ids))]
+    p = base.param_names()[0]
+    ns = {
+        "name": base.name, "phase": base.phase, "bounds": base.bounds * len(ids),
+        "scale": base.scale * len(ids), "hangs_on": "object_id",
+        "law": f"{p} = a_object", "plausible": None, "law_base": base,
+        "covariate": "object_id", "intercept": False, "object_index": index,
+        "object_ids": tuple(ids), "per_throw": _per_object_throw,
+    }  # fmt: skip
+    cls = make_dataclass(f"{base.__name__}_per_object", flds, bases=(Effect,), frozen=True,
+                         namespace=ns)  # fmt: skip
+    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
+        cls.__annotations__[nm] = ClassVar
+    cls.__module__ = __name__
+    return cls
+
+
+def shrunk(values: np.ndarray, ci: np.ndarray | None) -> tuple[np.ndarray, float, float]:
+    """Per-object values shrunk toward their common value (empirical Bayes: each moves
+    toward the precision-weighted mean by se² / (se² + τ²), τ² the spread the values
+    have beyond their standard errors). Returns (shrunk values, common value, τ)."""
+    v = np.asarray(values, float)
+    se = (np.abs(ci[:, 1] - ci[:, 0]) / (2 * 1.96)) if ci is not None else np.zeros_like(v)
+    se = np.maximum(se, 1e-12)
+    w = 1 / se**2
+    mean = float(np.sum(w * v) / np.sum(w))
+    tau2 = max(float(np.var(v, ddof=1) - np.mean(se**2)) if v.size > 1 else 0.0, 0.0)
+    b = tau2 / (tau2 + se**2)
+    return mean + b * (v - mean), mean, float(np.sqrt(tau2))
+
+
 def law_forms(base: type[Effect]) -> list[type[Effect]]:
     """Every covariate form of a one-parameter effect (proportional and linear)."""
     return [law_class(base, c, i) for c in COVARIATES for i in (False, True)]
@@ -162,10 +226,17 @@ def choose_law(
         p = float(eff.vector()[0])
         rows = {"constant": best.heldout_rmse_m}
         pick, pick_val = best, best.heldout_rmse_m
-        for form in law_forms(base):
-            read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
-            cm = float(np.mean(read(prob.batch)))
-            warm = np.r_[best.full.x[:at], _warm(form, p, cm), best.full.x[at + 1 :]]
+        forms = law_forms(base)
+        n_obj = len(set(_object_keys(prob.batch)))
+        if 2 <= n_obj <= MAX_OBJECTS:
+            forms.append(per_object_class(base, prob))
+        for form in forms:
+            if form.covariate == "object_id":  # type: ignore[attr-defined]
+                own = np.full(len(form.bounds), p) / np.asarray(form.scale, float)
+            else:
+                read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
+                own = _warm(form, p, float(np.mean(read(prob.batch))))
+            warm = np.r_[best.full.x[:at], own, best.full.x[at + 1 :]]
             tick(f"{eff.name} ({form.law})")
             cls_j = classes[:j] + [form] + classes[j + 1 :]
             sc = score_set(prob, cls_j, warm=warm)
