@@ -115,3 +115,48 @@ def test_sideways_launch_error_growing_with_stroke_is_proposed_as_such():
     assert top["k"] == pytest.approx(1.0, rel=0.15)
     assert prop["heldout_rmse_after_m"] < 1.3 * camp.floor_m
     assert prop["shrink_pct"] > 50
+
+
+def test_per_object_law_is_learned_and_shrunk():
+    from cell.gap.check_other import _PER_OBJ_BM
+    from cell.gap.diagnose import _law_params
+
+    prob, _, _ = _problem(
+        [{"kind": "band_mass", "form": "object", "value": 0.015, "per_object": _PER_OBJ_BM}]
+    )
+    best, tried = choose_law(prob, score_set(prob, [BandMass]))
+    e = best.full.effects[-1]
+    assert e.law == "mass_kg = a_object", tried
+    rep = _law_params(e, {k: list(v) for k, v in zip(e.params(), best.full.ci, strict=True)})
+    for obj, v in rep["per_object"].items():
+        assert v == pytest.approx(_PER_OBJ_BM[obj], rel=0.15), rep
+
+
+def test_launch_effect_and_landing_slide_are_found_as_a_pair():
+    _, camp, table = _problem(
+        [{"kind": "band_mass", "form": "const", "value": 0.02},
+         {"kind": "slide", "form": "const", "tau_s": 0.05}],
+        n=300,
+    )  # fmt: skip
+    d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
+    v = d.report["verdict"]
+    assert sorted(v["effects"]) == ["band_mass", "bounce"], v
+    assert v["phases"] == {"band_mass": "launch", "bounce": "landing"}
+    assert v["params"]["band_mass"]["mass_kg"] == pytest.approx(0.02, rel=0.1)
+    assert v["params"]["bounce"]["tau_s"] == pytest.approx(0.05, rel=0.3)
+    assert v["heldout_rmse_robust_m"] <= 1.3 * camp.floor_m
+
+
+def test_other_world_cases_cover_the_issue():
+    from cell.cli import main
+    from cell.gap.check_other import OTHER_CASES, other_cases
+
+    cases = other_cases()
+    assert len(cases) >= 40
+    forms = {e["form"] for c in cases for e in c["effects"]}
+    assert forms >= {"const", "stroke", "mass", "object", "throw", "friction"}
+    assert sum("+" in c["truth"] for c in cases) >= 5
+    assert sum(c["options"].get("outliers", 0) > 0 for c in cases) >= 5
+    assert sum(c["truth"] == "unknown" for c in cases) >= 3
+    assert "o:downwash+wind" in OTHER_CASES
+    assert main(["gap", "check", "--worlds", "other", "--truths", "o:gremlins"]) == 2

@@ -216,13 +216,23 @@ def choose_law(
     tick = tick or (lambda s: None)
     best = score
     tried: dict[str, dict[str, float]] = {}
-    for j, eff in enumerate(score.full.effects):
+    for j in range(len(score.full.effects)):
+        eff = best.full.effects[j]
         base = EFFECTS.get(eff.name)
-        if eff.name not in LAW_BASES or base is None or type(eff) is not base:
+        if eff.name not in LAW_BASES or base is None:
             continue
         classes = [type(e) for e in best.full.effects]
         sizes = [len(c.bounds) for c in classes]
         at = int(np.sum(sizes[:j]))
+        if type(eff) is not base:
+            # a form chosen before a partner joined: start again from the constant
+            p = float(np.mean(getattr(eff.per_throw(prob.batch), base.param_names()[0])))
+            own = np.array([p]) / np.asarray(base.scale, float)
+            warm = np.r_[best.full.x[:at], own, best.full.x[at + sizes[j] :]]
+            tick(f"{eff.name} (constant)")
+            best = score_set(prob, classes[:j] + [base] + classes[j + 1 :], warm=warm)
+            eff = best.full.effects[j]
+            classes = [type(e) for e in best.full.effects]
         p = float(eff.vector()[0])
         rows = {"constant": best.heldout_rmse_m}
         pick, pick_val = best, best.heldout_rmse_m
