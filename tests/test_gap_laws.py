@@ -108,7 +108,8 @@ def test_outliers_are_flagged_by_row_and_robust_error_is_reported():
 
 def test_sideways_launch_error_growing_with_stroke_is_proposed_as_such():
     prob, camp, _ = _problem([{"kind": "release_yaw", "form": "stroke", "k": 1.0}])
-    prop = propose(prob, (), camp.floor_m)
+    prop, miss = propose(prob, (), camp.floor_m)
+    assert not flag(miss).any()
     top = prop["terms"][0]
     assert top["phase"] == "launch"
     assert top["term"] == "azimuth error [rad] = k · stroke_m", prop["law"]

@@ -155,16 +155,32 @@ def _stlsq(a: np.ndarray, y: np.ndarray, lam: float, iters: int = 8) -> np.ndarr
     return th
 
 
-def propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float) -> dict[str, Any]:
-    """The law proposed for what the effects leave (see the module docstring)."""
+def propose(
+    prob: GapProblem,
+    effects: tuple[Effect, ...],
+    floor_m: float,
+    keep: np.ndarray | None = None,
+) -> tuple[dict[str, Any], np.ndarray]:
+    """The law proposed for what the effects leave (see the module docstring), fitted and
+    scored on the throws in `keep` (all when None: outliers left out).
+
+    Returns:
+        (the proposal, every throw's miss with the proposed law added (n, 2) [m]).
+    """
     idx = np.arange(len(prob))
+    n = len(prob)
+    keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
     r = np.nan_to_num(prob.residual(idx, effects))
     terms, jac = library(prob, effects)
-    n = len(prob)
-    a = jac.transpose(0, 1, 2).reshape(2 * n, -1)  # rows: throw-major (x, y)
-    y = r.reshape(-1)
+    a_all = jac.reshape(2 * n, -1)  # rows: throw-major (x, y)
+    y_all = r.reshape(-1)
+    rows_keep = np.repeat(keep, 2)
+    a, y = a_all[rows_keep], y_all[rows_keep]
     base_rmse = float(np.sqrt(np.mean(y * y) * 2))
-    folds = prob.folds["random"]
+    # the folds renumbered onto the kept throws
+    new = np.cumsum(keep) - 1
+    folds = [(new[tr[keep[tr]]], new[te[keep[te]]]) for tr, te in prob.folds["random"]]
+    n = int(keep.sum())
     lams = base_rmse * np.geomspace(0.02, 1.0, 14)
     best: tuple[float, float, np.ndarray] | None = None
     for lam in lams:
@@ -183,9 +199,10 @@ def propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float) -> di
     assert best is not None
     _, ho, th = best
     on = np.flatnonzero(th)
+    miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
         return {"law": None, "terms": [], "heldout_rmse_before_m": base_rmse,
-                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0}  # fmt: skip
+                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0}, miss  # fmt: skip
     e = y - a @ th
     s2 = float(e @ e) / max(y.size - on.size, 1)
     cov = s2 * np.linalg.pinv(a[:, on].T @ a[:, on])
@@ -210,4 +227,4 @@ def propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float) -> di
         "heldout_rmse_after_m": ho,
         "shrink_pct": 100.0 * (1.0 - ho / base_rmse) if base_rmse > 0 else 0.0,
         "within_floor": bool(ho <= 1.3 * floor_m),
-    }
+    }, miss

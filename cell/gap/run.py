@@ -157,18 +157,20 @@ def _robust_report(
     rep["throws"] = len(full)
 
 
-def _proposal(prob: GapProblem, d: Diagnosis) -> dict[str, Any]:
-    """The law proposed for an `unknown` verdict (`cell.gap.propose`): on the baseline's
-    misses and on what the partial effects leave, whichever the law explains better."""
+def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> tuple[dict[str, Any], np.ndarray]:
+    """The law proposed for an `unknown` verdict (`cell.gap.propose`), fitted on the
+    throws not screened out (pre): on the baseline's misses and on what the partial
+    effects leave, whichever the law explains better; and every throw's miss under it."""
     from cell.gap.propose import propose
 
     floor = d.report["noise_floor_m"]
-    out = {**propose(prob, (), floor), "on_top_of": []}
+    prop, miss = propose(full, (), floor, keep=~pre)
+    out = {**prop, "on_top_of": []}
     if d.verdict_effects:
-        part = propose(prob, d.verdict_effects, floor)
+        part, miss_p = propose(full, d.verdict_effects, floor, keep=~pre)
         if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
-            out = {**part, "on_top_of": [e.name for e in d.verdict_effects]}
-    return out
+            out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
+    return out, miss
 
 
 MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
@@ -233,9 +235,13 @@ def diagnose_log(
         where = {"phase": "none", "evidence": evidence}
     if not where:
         where = _phase_from_verdict(d)
-    _robust_report(table, full, pre, _flags(full, pre, d), d)
+    flagged = _flags(full, pre, d)
     if rep["verdict"]["effects"] == ["unknown"]:
-        rep["proposal"] = _proposal(prob, d)
+        rep["proposal"], miss = _proposal(full, pre, d)
+        if rep["proposal"]["law"]:
+            # the misses the proposed law leaves carry the scatter alone: test them
+            flagged = flag(miss)
+    _robust_report(table, full, pre, flagged, d)
     rows = conditions(prob, d.baseline_sq, d.verdict_sq)
     where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
     rep["where"] = where
