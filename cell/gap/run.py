@@ -1,4 +1,9 @@
-"""The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions."""
+"""The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions.
+
+Outliers (`cell.gap.outliers`) are the throws whose miss under the verdict's effects (or an
+`unknown` verdict's proposed law) is impossible: the diagnosis runs again without them,
+they are reported by row, and the held-out errors are reported plain and robust. An `unknown` verdict carries the law
+proposed for what is left (`cell.gap.propose`)."""
 
 from __future__ import annotations
 
@@ -9,7 +14,7 @@ import numpy as np
 
 from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
-from cell.gap.outliers import flag, screen, threshold_sq
+from cell.gap.outliers import flag, threshold_sq
 from cell.gap.problem import GapProblem, build_problem
 from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
 from cell.log.table import ThrowTable
@@ -101,6 +106,24 @@ def _where_from_tracks(d: Diagnosis, tp: dict[str, Any]) -> dict[str, Any]:
     return {"phase": top, "evidence": text}
 
 
+def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
+    """Where the gap lies: from the tracks where they place it, else from the verdict."""
+    rep = d.report
+    where: dict[str, Any] = {}
+    if tp is not None:
+        rep["tracks"] = tp
+        if tp.get("phase"):
+            where = _where_from_tracks(d, tp)
+    if rep["verdict"]["effects"] == ["none"]:
+        evidence = _phase_from_verdict(d)["evidence"]
+        if where:
+            evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
+        where = {"phase": "none", "evidence": evidence}
+    if not where:
+        where = _phase_from_verdict(d)
+    return where
+
+
 def _one_pass(
     full: GapProblem,
     pre: np.ndarray,
@@ -120,7 +143,7 @@ def _one_pass(
 
 def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
     """The throws whose miss under the verdict's effects is impossible (`outliers.flag`);
-    an unknown verdict leaves a structured miss, so its rows are the screen's (pre)."""
+    an unknown verdict leaves a structured miss, so its rows are those already out (pre)."""
     if d.report["verdict"]["effects"] == ["unknown"]:
         return pre.copy()
     return flag(full.residual(np.arange(len(full)), d.verdict_effects))
@@ -131,8 +154,9 @@ def _robust_report(
 ) -> None:
     """The outliers by row (`cell.gap.outliers`), and the held-out errors plain and robust.
 
-    The diagnosis ran on the throws not in `pre`; `flagged` are the rows reported. Plain: every throw (a screened-out throw's miss is held out by
-    construction); robust: the flagged throws left out."""
+    The diagnosis ran on the throws not in `pre`; `flagged` are the rows reported.
+    Plain: every throw (a left-out throw's miss is held out by construction); robust: the
+    flagged throws left out."""
     rep = d.report
     all_idx = np.arange(len(full))
     miss = full.residual(all_idx, d.verdict_effects)
@@ -147,7 +171,7 @@ def _robust_report(
     rep["outliers"] = {
         "rows": [row_of[tids[i]] for i in np.flatnonzero(flagged)],
         "throw_ids": [str(tids[i]) for i in np.flatnonzero(flagged)],
-        "screened_before_fit": int(pre.sum()),
+        "left_out_of_fit": int(pre.sum()),
         "threshold_sigma": float(np.sqrt(threshold_sq(len(full)))),
     }
     rep["baseline"]["heldout_rmse_m"] = float(np.sqrt(base_sq.mean()))
@@ -159,7 +183,7 @@ def _robust_report(
 
 def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> tuple[dict[str, Any], np.ndarray]:
     """The law proposed for an `unknown` verdict (`cell.gap.propose`), fitted on the
-    throws not screened out (pre): on the baseline's misses and on what the partial
+    throws not left out (pre): on the baseline's misses and on what the partial
     effects leave, whichever the law explains better; and every throw's miss under it."""
     from cell.gap.propose import propose
 
@@ -213,34 +237,31 @@ def diagnose_log(
     full = build_problem(
         table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
     )
-    all_idx = np.arange(len(full))
-    pre = screen(full.residual(all_idx), full.landing(all_idx))
+    pre = np.zeros(len(full), bool)
     prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
-    pre = pre if len(prob) < len(full) else np.zeros(len(full), bool)
     post = _flags(full, pre, d)
     if not np.array_equal(post, pre):
-        # the rows the verdict's effects call impossible, not the screen's, stay out
+        # the rows the verdict's effects call impossible stay out of a second pass
         prob, tp, d = _one_pass(full, post, tracks, identify, progress)
         pre = post if len(prob) < len(full) else np.zeros(len(full), bool)
-    rep = d.report
-    where: dict[str, Any] = {}
-    if tp is not None:
-        rep["tracks"] = tp
-        if tp.get("phase"):
-            where = _where_from_tracks(d, tp)
-    if rep["verdict"]["effects"] == ["none"]:
-        evidence = _phase_from_verdict(d)["evidence"]
-        if where:
-            evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
-        where = {"phase": "none", "evidence": evidence}
-    if not where:
-        where = _phase_from_verdict(d)
     flagged = _flags(full, pre, d)
-    if rep["verdict"]["effects"] == ["unknown"]:
-        rep["proposal"], miss = _proposal(full, pre, d)
-        if rep["proposal"]["law"]:
+    proposal: dict[str, Any] | None = None
+    if d.report["verdict"]["effects"] == ["unknown"]:
+        proposal, miss = _proposal(full, pre, d)
+        if proposal["law"]:
             # the misses the proposed law leaves carry the scatter alone: test them
             flagged = flag(miss)
+        if not np.array_equal(flagged, pre) and (~flagged).sum() >= MIN_THROWS:
+            prob, tp, d = _one_pass(full, flagged, tracks, identify, progress)
+            pre = flagged if len(prob) < len(full) else np.zeros(len(full), bool)
+            if d.report["verdict"]["effects"] == ["unknown"]:
+                proposal, _ = _proposal(full, pre, d)
+            else:
+                proposal, flagged = None, _flags(full, pre, d)
+    rep = d.report
+    if proposal is not None:
+        rep["proposal"] = proposal
+    where = _where(d, tp)
     _robust_report(table, full, pre, flagged, d)
     rows = conditions(prob, d.baseline_sq, d.verdict_sq)
     where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
