@@ -33,7 +33,7 @@ from cell.model.throw import ThrowBatch
 
 __all__ = ["COVARIATES", "LAW_BASES", "law_class", "law_text", "TERM_PENALTY", "choose_law"]
 
-TERM_PENALTY = 0.01  # a form's held-out RMSE is raised by this share per extra term
+TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
 # covariate name -> (how to read it off a batch, its typical largest value)
 COVARIATES: dict[str, tuple[Any, float]] = {

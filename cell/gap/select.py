@@ -176,6 +176,25 @@ class Selection:
                 self.members[e.name] = type(e)
         return out
 
+    def prune(self, cand: Score) -> Score:
+        """The set without any earlier effect that, once the laws are chosen, no longer
+        cuts MIN_CUT of what the others leave with a bootstrap interval above zero
+        (backward elimination: an effect that joined to stand in for another's law)."""
+        effs = list(cand.full.effects)
+        sizes = [len(type(e).bounds) for e in effs]
+        starts = np.cumsum([0, *sizes])
+        for j in range(len(self.prefix), len(effs) - 1):
+            keep = [i for i in range(len(effs)) if i != j]
+            warm = np.concatenate([cand.full.x[starts[i] : starts[i + 1]] for i in keep])
+            self.tick(f"without {effs[j].name}")
+            without = score_set(self.prob, [type(effs[i]) for i in keep], warm=warm)
+            cut, lo, _ = bootstrap_cut(without.heldout, cand.heldout, seed=self.prob.seed + 5)
+            if cut < MIN_CUT * without.heldout_rmse_m or lo <= 0:
+                self.tests.setdefault("pruned", {})[effs[j].name] = {  # type: ignore[index]
+                    "cut_m": cut, "cut_ci_low_m": lo}  # fmt: skip
+                return without
+        return cand
+
     def refuse(self, cand: Score) -> str | None:
         """Why one of a candidate set's effects may not join (`refusal`), or None."""
         for e in cand.full.effects:
@@ -256,7 +275,7 @@ class Selection:
             best = self._partner(chosen[-1], cur_sq)
             if best is None:
                 break
-            best = self.learn_law(best)
+            best = self.prune(self.learn_law(best))
             chosen.append(best)
             cur_sq = best.heldout
         return chosen, cur_sq
