@@ -54,6 +54,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="times each configuration is thrown (2; 1 = no repeats to estimate noise from)",
     )
     g.add_argument("--truths", nargs="+", metavar="NAME", help="only these cases")
+    g.add_argument(
+        "--worlds",
+        choices=("own", "other"),
+        default="own",
+        help="own: worlds drawn with the tool's formulas (default); other: worlds from "
+        "another implementation (cell.gap.world_other), judged on verdict, phase, "
+        "parameters within 30 %% and A within 1.3 x the world's own floor",
+    )
     from cell.parallel import add_campaign_args
 
     add_campaign_args(g)
@@ -119,6 +127,9 @@ def run(args: argparse.Namespace) -> int:
 def _check(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
+    if args.worlds == "other":
+        return _check_other(args)
+
     from cell.gap.check import CASES, check_json, format_check, run_check
     from cell.gap.report import jsonable
 
@@ -157,3 +168,31 @@ def _check(args: argparse.Namespace) -> int:
             json.dump(jsonable(check_json(rows)), fh, indent=2, allow_nan=False)
         print(f"check -> {args.json}")
     return 0 if all(r.correct for r in rows) else 1
+
+
+def _check_other(args: argparse.Namespace) -> int:
+    from cell.gap.check_other import (
+        FAST_OTHER,
+        OTHER_CASES,
+        format_other,
+        other_json,
+        run_other_check,
+    )
+    from cell.gap.report import jsonable
+
+    names = tuple(args.truths) if args.truths else (FAST_OTHER if args.quick else None)
+    bad = [t for t in names or () if t not in OTHER_CASES]
+    if bad:
+        raise InvalidInput(f"--truths: unknown {bad}; valid: {', '.join(OTHER_CASES)}")
+    n = args.n or (240 if args.quick else 400)
+    if n < 60:
+        raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
+    rows = run_other_check(
+        names, n=n, seed=args.seed, workers=args.workers, address=args.ray_address
+    )
+    print(format_other(rows))
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(jsonable(other_json(rows)), fh, indent=2, allow_nan=False)
+        print(f"check -> {args.json}")
+    return 0 if all(r["passes"] for r in rows) else 1

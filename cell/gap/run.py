@@ -1,4 +1,9 @@
-"""The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions."""
+"""The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions.
+
+Outliers (`cell.gap.outliers`) are the throws whose miss under the verdict's effects (or an
+`unknown` verdict's proposed law) is impossible: the diagnosis runs again without them,
+they are reported by row, and the held-out errors are reported plain and robust. An `unknown` verdict carries the law
+proposed for what is left (`cell.gap.propose`)."""
 
 from __future__ import annotations
 
@@ -9,7 +14,8 @@ import numpy as np
 
 from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
-from cell.gap.problem import build_problem
+from cell.gap.outliers import flag, threshold_sq
+from cell.gap.problem import GapProblem, build_problem
 from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
 from cell.log.table import ThrowTable
 from cell.model.effects import EFFECTS, Effect
@@ -100,6 +106,97 @@ def _where_from_tracks(d: Diagnosis, tp: dict[str, Any]) -> dict[str, Any]:
     return {"phase": top, "evidence": text}
 
 
+def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
+    """Where the gap lies: from the tracks where they place it, else from the verdict."""
+    rep = d.report
+    where: dict[str, Any] = {}
+    if tp is not None:
+        rep["tracks"] = tp
+        if tp.get("phase"):
+            where = _where_from_tracks(d, tp)
+    if rep["verdict"]["effects"] == ["none"]:
+        evidence = _phase_from_verdict(d)["evidence"]
+        if where:
+            evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
+        where = {"phase": "none", "evidence": evidence}
+    if not where:
+        where = _phase_from_verdict(d)
+    return where
+
+
+def _one_pass(
+    full: GapProblem,
+    pre: np.ndarray,
+    tracks: dict[str, np.ndarray] | None,
+    identify: bool,
+    progress: Callable[[str], None] | None,
+) -> tuple[GapProblem, dict[str, Any] | None, Diagnosis]:
+    """The diagnosis of the throws not in `pre` (the problem, the tracks' evidence, the
+    diagnosis)."""
+    prob = full.subset(~pre) if pre.any() and (~pre).sum() >= MIN_THROWS else full
+    tp: dict[str, Any] | None = None
+    if tracks:
+        tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
+        tp = track_phase(prob, tf)
+    return prob, tp, diagnose(prob, identify=identify, tracks=tp, progress=progress)
+
+
+def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
+    """The throws whose miss under the verdict's effects is impossible (`outliers.flag`);
+    an unknown verdict leaves a structured miss, so its rows are those already out (pre)."""
+    if d.report["verdict"]["effects"] == ["unknown"]:
+        return pre.copy()
+    return flag(full.residual(np.arange(len(full)), d.verdict_effects))
+
+
+def _robust_report(
+    table: ThrowTable, full: GapProblem, pre: np.ndarray, flagged: np.ndarray, d: Diagnosis
+) -> None:
+    """The outliers by row (`cell.gap.outliers`), and the held-out errors plain and robust.
+
+    The diagnosis ran on the throws not in `pre`; `flagged` are the rows reported.
+    Plain: every throw (a left-out throw's miss is held out by construction); robust: the
+    flagged throws left out."""
+    rep = d.report
+    all_idx = np.arange(len(full))
+    miss = full.residual(all_idx, d.verdict_effects)
+    base_sq = np.empty(len(full))
+    v_sq = np.empty(len(full))
+    base_sq[~pre], v_sq[~pre] = d.baseline_sq, d.verdict_sq
+    base_sq[pre] = np.sum(full.residual(all_idx[pre]) ** 2, axis=1)
+    v_sq[pre] = np.sum(miss[pre] ** 2, axis=1)
+    keep = ~flagged
+    row_of = {t: i + 1 for i, t in enumerate(table.text("throw_id"))}
+    tids = full.table.text("throw_id")
+    rep["outliers"] = {
+        "rows": [row_of[tids[i]] for i in np.flatnonzero(flagged)],
+        "throw_ids": [str(tids[i]) for i in np.flatnonzero(flagged)],
+        "left_out_of_fit": int(pre.sum()),
+        "threshold_sigma": float(np.sqrt(threshold_sq(len(full)))),
+    }
+    rep["baseline"]["heldout_rmse_m"] = float(np.sqrt(base_sq.mean()))
+    rep["baseline"]["heldout_rmse_robust_m"] = float(np.sqrt(base_sq[keep].mean()))
+    rep["verdict"]["heldout_rmse_m"] = float(np.sqrt(v_sq.mean()))
+    rep["verdict"]["heldout_rmse_robust_m"] = float(np.sqrt(v_sq[keep].mean()))
+    rep["throws"] = len(full)
+
+
+def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> tuple[dict[str, Any], np.ndarray]:
+    """The law proposed for an `unknown` verdict (`cell.gap.propose`), fitted on the
+    throws not left out (pre): on the baseline's misses and on what the partial
+    effects leave, whichever the law explains better; and every throw's miss under it."""
+    from cell.gap.propose import propose
+
+    floor = d.report["noise_floor_m"]
+    prop, miss = propose(full, (), floor, keep=~pre)
+    out = {**prop, "on_top_of": []}
+    if d.verdict_effects:
+        part, miss_p = propose(full, d.verdict_effects, floor, keep=~pre)
+        if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
+            out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
+    return out, miss
+
+
 MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
 
 
@@ -137,29 +234,38 @@ def diagnose_log(
     if tracks:
         fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))
         launch = launch_arrays(fit_all)
-    prob = build_problem(
+    full = build_problem(
         table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
     )
-    tp: dict[str, Any] | None = None
-    if tracks:
-        tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
-        tp = track_phase(prob, tf)
+    pre = np.zeros(len(full), bool)
+    prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
+    post = _flags(full, pre, d)
+    if not np.array_equal(post, pre):
+        # the rows the verdict's effects call impossible stay out of a second pass
+        prob, tp, d = _one_pass(full, post, tracks, identify, progress)
+        pre = post if len(prob) < len(full) else np.zeros(len(full), bool)
+    flagged = _flags(full, pre, d)
+    proposal: dict[str, Any] | None = None
+    if d.report["verdict"]["effects"] == ["unknown"]:
+        proposal, miss = _proposal(full, pre, d)
+        if proposal["law"]:
+            # the misses the proposed law leaves carry the scatter alone: test them
+            flagged = flag(miss)
+        if not np.array_equal(flagged, pre) and (~flagged).sum() >= MIN_THROWS:
+            prob, tp, d = _one_pass(full, flagged, tracks, identify, progress)
+            pre = flagged if len(prob) < len(full) else np.zeros(len(full), bool)
+            if d.report["verdict"]["effects"] == ["unknown"]:
+                proposal, _ = _proposal(full, pre, d)
+            else:
+                proposal, flagged = None, _flags(full, pre, d)
+    rep = d.report
+    if proposal is not None:
+        rep["proposal"] = proposal
+    if tp is not None:
         # every track given is accounted for, also those of throws the problem dropped
         tp["unusable"], tp["mended"] = list(fit_all.unusable), list(fit_all.mended)
-    d = diagnose(prob, identify=identify, tracks=tp, progress=progress)
-    rep = d.report
-    where: dict[str, Any] = {}
-    if tp is not None:
-        rep["tracks"] = tp
-        if tp.get("phase"):
-            where = _where_from_tracks(d, tp)
-    if rep["verdict"]["effects"] == ["none"]:
-        evidence = _phase_from_verdict(d)["evidence"]
-        if where:
-            evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
-        where = {"phase": "none", "evidence": evidence}
-    if not where:
-        where = _phase_from_verdict(d)
+    where = _where(d, tp)
+    _robust_report(table, full, pre, flagged, d)
     rows = conditions(prob, d.baseline_sq, d.verdict_sq)
     where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
     rep["where"] = where

@@ -36,12 +36,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import astuple, dataclass, fields
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from cell.errors import InvalidParameter
 from cell.model.objects import SHAPES
+
+if TYPE_CHECKING:
+    from cell.model.throw import ThrowBatch
 
 __all__ = [
     "Effect",
@@ -102,6 +105,11 @@ class Effect:
     def neutral(cls) -> Effect:
         """The effect at the size where it does nothing."""
         return cls()
+
+    def per_throw(self, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
+        """The effect as evaluated on a batch (a learned law gives one value per throw,
+        `cell.gap.laws`); a plain effect is itself."""
+        return self
 
     def params(self) -> dict[str, float]:
         """The parameters as a plain dict."""

@@ -158,7 +158,8 @@ def flight_accel(
     """The flight effects' air velocity and extra acceleration as `flight3d.Accel`
     (None when no flight effect is present)."""
     rpm = np.zeros(len(batch)) if rotor_rpm is None else np.asarray(rotor_rpm, float)
-    return _flight_accel(batch, effects, rpm, permutation)
+    effs = [e.per_throw(batch, permutation) for e in effects]
+    return _flight_accel(batch, effs, rpm, permutation)
 
 
 def _area(batch: ThrowBatch) -> np.ndarray:
@@ -176,7 +177,7 @@ def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) ->
         xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
     br = _find(effs, BounceRolling)
     if br is not None and br.tau_s > 0:
-        xy = xy + v_imp[:, :2] * br.tau_s
+        xy = xy + v_imp[:, :2] * np.reshape(br.tau_s, (-1, 1))
     return xy
 
 
@@ -261,6 +262,7 @@ def predict_with_effects(
         effs = effects_from_mapping(effects)
     else:
         effs = list(effects)
+    effs = [e.per_throw(batch, permutation) for e in effs]
     n = len(batch)
     rpm = np.zeros(n) if rotor_rpm is None else np.asarray(rotor_rpm, float)
     ts = _find(effs, TrackingScale)

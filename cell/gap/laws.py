@@ -1,0 +1,262 @@
+"""The law of an effect learned from the data: its parameter as a function of the throw.
+
+An effect of one parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
+drag_scale's `factor`, ...) may follow one of these forms, c a logged covariate of the
+throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
+
+| form | law | terms |
+|---|---|---|
+| constant | p = a | 1 |
+| proportional | p = k · c | 1 |
+| linear | p = a + k · c | 2 |
+
+`law_class(base, covariate, intercept)` makes the form as an `Effect` class whose fields
+are the form's coefficients; `Effect.per_throw` turns it into the base effect with one
+value per throw (an array), which the model's effect code evaluates unchanged. The
+diagnosis picks the form by held-out evidence with a penalty for each extra term
+(`choose_law`): a form replaces the constant only when its held-out RMSE, raised by
+TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
+interval above zero.
+"""
+
+from __future__ import annotations
+
+from dataclasses import make_dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from cell.gap.fit import Score
+from cell.gap.problem import GapProblem
+from cell.model.effects import Effect
+from cell.model.throw import ThrowBatch
+
+__all__ = ["COVARIATES", "LAW_BASES", "law_class", "law_text", "TERM_PENALTY", "choose_law"]
+
+TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
+MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
+# covariate name -> (how to read it off a batch, its typical largest value)
+COVARIATES: dict[str, tuple[Any, float]] = {
+    "stroke_m": (lambda b: b.stroke, 0.11),
+    "mass_kg": (lambda b: b.mass, 0.12),
+    "size_x_m": (lambda b: b.size[:, 0], 0.07),
+}
+LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping")
+_CACHE: dict[tuple[type[Effect], str, bool], type[Effect]] = {}
+
+
+def law_text(base: type[Effect], covariate: str | None, intercept: bool) -> str:
+    """The law as text: `mass_kg = k · stroke_m`, `delta_rad = a + k · mass_kg`."""
+    p = base.param_names()[0]
+    if covariate is None:
+        return f"{p} = a"
+    return f"{p} = a + k · {covariate}" if intercept else f"{p} = k · {covariate}"
+
+
+def _per_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
+    base: type[Effect] = self.law_base
+    read, _ = COVARIATES[self.covariate]
+    c = np.asarray(read(batch), float)
+    if permutation is not None:
+        c = c[permutation]
+    lo, hi = base.bounds[0]
+    a = self.a if self.intercept else 0.0
+    vals = np.clip(a + self.k * c, lo, hi)
+    out = object.__new__(base)
+    object.__setattr__(out, base.param_names()[0], vals)
+    return out
+
+
+def law_class(base: type[Effect], covariate: str, intercept: bool) -> type[Effect]:
+    """The effect class of `base` (one parameter) whose parameter follows
+    a + k · covariate (intercept) or k · covariate.
+
+    Its fields: `a` (in the base's units, with intercept) and `k` (base units per
+    covariate unit); its law text is `law_text`. Its phase and name are the base's, and
+    it hangs on the covariate (the permutation control shuffles the covariate)."""
+    key = (base, covariate, intercept)
+    if key in _CACHE:
+        return _CACHE[key]
+    (lo, hi), sc = base.bounds[0], base.scale[0]
+    cmax = COVARIATES[covariate][1]
+    neutral = float(base.neutral().vector()[0])
+    span = (hi - lo) / cmax
+    k_bounds = (lo / cmax, hi / cmax) if not intercept else (-span, span)
+    if not intercept and lo >= 0 and neutral > 0:
+        k_bounds = (0.0, hi / cmax * 3)
+    flds: list[tuple[str, type, Any]] = []
+    bounds: list[tuple[float, float]] = []
+    scale: list[float] = []
+    if intercept:
+        flds.append(("a", float, neutral))
+        bounds.append((lo, hi))
+        scale.append(sc)
+    k0 = 0.0 if intercept else float(np.clip(neutral / (cmax / 2), *k_bounds))
+    flds.append(("k", float, k0))
+    bounds.append(k_bounds)
+    scale.append(sc / cmax)
+    ns = {
+        "name": base.name,
+        "phase": base.phase,
+        "bounds": tuple(bounds),
+        "scale": tuple(scale),
+        "hangs_on": covariate,
+        "law": law_text(base, covariate, intercept),
+        "plausible": None,
+        "law_base": base,
+        "covariate": covariate,
+        "intercept": intercept,
+        "per_throw": _per_throw,
+    }
+    cls_name = f"{base.__name__}_{'lin' if intercept else 'prop'}_{covariate}"
+    cls = make_dataclass(cls_name, flds, bases=(Effect,), frozen=True, namespace=ns)
+    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
+        cls.__annotations__[nm] = ClassVar
+    cls.__module__ = __name__
+    _CACHE[key] = cls
+    return cls
+
+
+def _object_keys(batch: ThrowBatch) -> list[tuple[float, ...]]:
+    """An object's key from its logged shape, mass and extents (a batch has no ids)."""
+    a = np.c_[batch.shape, batch.mass * 1e6, batch.size * 1e6]
+    r = np.round(np.asarray(a, float))
+    return [tuple(float(x) for x in r[i]) for i in range(r.shape[0])]
+
+
+def _per_object_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None
+                      ) -> Effect:  # fmt: skip
+    base: type[Effect] = self.law_base
+    vals = self.vector()
+    j = np.array([self.object_index.get(k, -1) for k in _object_keys(batch)])
+    if permutation is not None:
+        j = j[permutation]
+    v = np.where(j >= 0, vals[np.clip(j, 0, None)], vals.mean())
+    out = object.__new__(base)
+    object.__setattr__(out, base.param_names()[0], v)
+    return out
+
+
+def per_object_class(base: type[Effect], prob: GapProblem) -> type[Effect]:
+    """The form of `base` with one value per object of the log (fields `o0`, `o1`, ...
+    in the order of `object_ids`); its law text is `p = a_object`."""
+    keys = _object_keys(prob.batch)
+    oid = prob.table.text("object_id")
+    index: dict[tuple[float, ...], int] = {}
+    ids: list[str] = []
+    for k, o in zip(keys, oid, strict=True):
+        if k not in index:
+            index[k] = len(ids)
+            ids.append(str(o))
+    neutral = float(base.neutral().vector()[0])
+    flds = [(f"o{j}", float, neutral) for j in range(len(ids))]
+    p = base.param_names()[0]
+    ns = {
+        "name": base.name, "phase": base.phase, "bounds": base.bounds * len(ids),
+        "scale": base.scale * len(ids), "hangs_on": "object_id",
+        "law": f"{p} = a_object", "plausible": None, "law_base": base,
+        "covariate": "object_id", "intercept": False, "object_index": index,
+        "object_ids": tuple(ids), "per_throw": _per_object_throw,
+    }  # fmt: skip
+    cls = make_dataclass(f"{base.__name__}_per_object", flds, bases=(Effect,), frozen=True,
+                         namespace=ns)  # fmt: skip
+    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
+        cls.__annotations__[nm] = ClassVar
+    cls.__module__ = __name__
+    return cls
+
+
+def shrunk(values: np.ndarray, ci: np.ndarray | None) -> tuple[np.ndarray, float, float]:
+    """Per-object values shrunk toward their common value (empirical Bayes: each moves
+    toward the precision-weighted mean by se² / (se² + τ²), τ² the spread the values
+    have beyond their standard errors). Returns (shrunk values, common value, τ)."""
+    v = np.asarray(values, float)
+    se = (np.abs(ci[:, 1] - ci[:, 0]) / (2 * 1.96)) if ci is not None else np.zeros_like(v)
+    se = np.maximum(se, 1e-12)
+    w = 1 / se**2
+    mean = float(np.sum(w * v) / np.sum(w))
+    tau2 = max(float(np.var(v, ddof=1) - np.mean(se**2)) if v.size > 1 else 0.0, 0.0)
+    b = tau2 / (tau2 + se**2)
+    return mean + b * (v - mean), mean, float(np.sqrt(tau2))
+
+
+def law_forms(base: type[Effect]) -> list[type[Effect]]:
+    """Every covariate form of a one-parameter effect (proportional and linear)."""
+    return [law_class(base, c, i) for c in COVARIATES for i in (False, True)]
+
+
+def _warm(cls: type[Effect], p: float, cov_mean: float) -> np.ndarray:
+    """A form's scaled start from the constant's fitted value p."""
+    sc = np.asarray(cls.scale, float)
+    if getattr(cls, "intercept", False):
+        return np.array([p, 0.0]) / sc
+    return np.array([p / max(cov_mean, 1e-9)]) / sc
+
+
+def choose_law(
+    prob: GapProblem,
+    score: Score,
+    tick: Any = None,
+) -> tuple[Score, dict[str, dict[str, float]]]:
+    """The law of each effect of a scored set chosen among its forms.
+
+    Every one-parameter effect of LAW_BASES in the set (at its constant form) is refitted
+    with each covariate form (the others kept at their form, warm-started from the set's
+    solution) and scored held-out; a form replaces the constant when its held-out RMSE,
+    raised by TERM_PENALTY per extra term, is the lowest and its cut over the constant
+    has a bootstrap interval above zero.
+
+    Returns:
+        (the set's score with the chosen forms; per effect, each form's held-out RMSE [m]).
+    """
+    from cell.gap.fit import score_set
+    from cell.gap.stats import bootstrap_cut
+    from cell.model.effects import EFFECTS
+
+    tick = tick or (lambda s: None)
+    best = score
+    tried: dict[str, dict[str, float]] = {}
+    for j in range(len(score.full.effects)):
+        eff = best.full.effects[j]
+        base = EFFECTS.get(eff.name)
+        if eff.name not in LAW_BASES or base is None:
+            continue
+        classes = [type(e) for e in best.full.effects]
+        sizes = [len(c.bounds) for c in classes]
+        at = int(np.sum(sizes[:j]))
+        if type(eff) is not base:
+            # a form chosen before a partner joined: start again from the constant
+            p = float(np.mean(getattr(eff.per_throw(prob.batch), base.param_names()[0])))
+            own = np.array([p]) / np.asarray(base.scale, float)
+            warm = np.r_[best.full.x[:at], own, best.full.x[at + sizes[j] :]]
+            tick(f"{eff.name} (constant)")
+            best = score_set(prob, classes[:j] + [base] + classes[j + 1 :], warm=warm)
+            eff = best.full.effects[j]
+            classes = [type(e) for e in best.full.effects]
+        p = float(eff.vector()[0])
+        rows = {"constant": best.heldout_rmse_m}
+        pick, pick_val = best, best.heldout_rmse_m
+        forms = law_forms(base)
+        n_obj = len(set(_object_keys(prob.batch)))
+        if 2 <= n_obj <= MAX_OBJECTS:
+            forms.append(per_object_class(base, prob))
+        for form in forms:
+            if form.covariate == "object_id":  # type: ignore[attr-defined]
+                own = np.full(len(form.bounds), p) / np.asarray(form.scale, float)
+            else:
+                read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
+                own = _warm(form, p, float(np.mean(read(prob.batch))))
+            warm = np.r_[best.full.x[:at], own, best.full.x[at + 1 :]]
+            tick(f"{eff.name} ({form.law})")
+            cls_j = classes[:j] + [form] + classes[j + 1 :]
+            sc = score_set(prob, cls_j, warm=warm)
+            rows[form.law] = sc.heldout_rmse_m
+            val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - 1))
+            if val >= pick_val:
+                continue
+            _, lo, _ = bootstrap_cut(best.heldout, sc.heldout, seed=prob.seed + 3)
+            if lo > 0:
+                pick, pick_val = sc, val
+        best = pick
+        tried[eff.name] = rows
+    return best, tried

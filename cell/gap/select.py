@@ -1,0 +1,344 @@
+"""Effects joining the verdict one at a time (GAP.md "How a verdict is reached"): the
+tests a candidate set takes (its cut with a bootstrap interval, the refusals, the
+permutation control) and the pairs tried when one effect leaves a real gap.
+
+An effect is refused (does not join, and the report says why) when a parameter sits at a
+bound, when its value is one no real cell has (outside the effect's plausible range), or
+when the tracks contradict it: its phase carries less than AGREE_SHARE of the largest
+phase share of the landing miss the tracks show, a measurement effect without an apparent
+gravity off g, or a tracking scale off the tracks' apparent gravity ratio by more than
+SCALE_AGREE.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from cell.gap.fit import Score, score_set
+from cell.gap.problem import BandStiffness, GapProblem
+from cell.gap.stats import bootstrap_cut
+from cell.gap.tracks import phase_evidence
+from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
+
+__all__ = ["Selection", "refusal", "at_bound", "public", "effect_class"]
+
+VERDICT_RATIO = 1.30  # A ≤ this × F: explained
+MIN_CUT = 0.10  # an effect must cut this share of what is left
+PERM_SHARE = 0.25  # the permuted quantity must take away this share of the cut
+MAX_EFFECTS = 3
+# partners tried with one, with two chosen effects: this many of the best single effects,
+# and as many of those that best fit what the chosen ones leave
+PAIR_TRIES = (2, 1)
+AGREE_SHARE = 0.35  # a phase the tracks give less than this share of the largest is clean
+SCALE_AGREE = 0.005  # a tracking scale within this of the tracks' apparent gravity ratio
+BOUND_TOL = 2e-3  # a parameter within this share of its range from a bound sits at it
+
+
+def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) -> str | None:
+    """Why a fitted effect may not join the verdict (None: it may).
+
+    Args:
+        eff: the fitted effect.
+        tracks: the tracks' evidence (`cell.gap.tracks.track_phase`) or None.
+        floor_m: the noise floor [m] (the landing share's significance).
+    """
+    bound = at_bound(eff)
+    if bound:
+        return f"at a bound: {', '.join(bound)}"
+    bad = eff.implausible()
+    if bad:
+        p = eff.params()
+        return "implausible: " + ", ".join(f"{k}={p[k]:.4g}" for k in bad)
+    side = (tracks or {}).get("sideways") or {}
+    if eff.name == "wind" and side.get("prefers") == "scale":
+        return "the tracks bend nothing sideways: a tracker scale explains them, a wind does not"
+    if isinstance(eff, TrackingScale) and side.get("prefers") == "wind":
+        return "the tracks bend sideways: a wind explains them, a tracker scale does not"
+    if not tracks or not tracks.get("phase"):
+        return None
+    if eff.phase == "measurement":
+        if not tracks.get("measurement"):
+            return f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g: no measurement gap"
+        if isinstance(eff, TrackingScale):
+            g = tracks["g_ratio"]
+            tol = max(SCALE_AGREE, 3 * tracks.get("g_ratio_se", 0.0))
+            if abs(eff.scale_factor - g) > tol:
+                return (
+                    f"scale {eff.scale_factor:.4f} disagrees with the tracks' apparent "
+                    f"gravity ratio {g:.4f}"
+                )
+        return None
+    ev = phase_evidence(tracks, floor_m)
+    top = ev["phase"]
+    if top is None or top == "measurement" or top == eff.phase:
+        return None
+    own = ev["shares"].get(eff.phase, float("nan"))
+    if not np.isfinite(own) or ev["significant"].get(eff.phase):
+        return None
+    if own < AGREE_SHARE * ev["shares"][top]:
+        return (
+            f"the tracks place the gap in the {top} ({ev['shares'][top]:.3f} m), not the "
+            f"{eff.phase} ({own:.3f} m)"
+        )
+    return None
+
+
+def _partners(prob: GapProblem, first: Score, rest: list[type[Effect]]) -> list[str]:
+    """Effects ranked by how well each alone fits what the chosen ones leave (fitted on all
+    throws on top of the chosen effects held at their sizes): a quick ranking of partners,
+    whose joint fit and held-out score come after."""
+    from dataclasses import replace
+
+    from cell.gap.fit import fit_set
+
+    held = tuple(e for e in first.full.effects if not isinstance(e, BandStiffness))
+    fixed = replace(prob, base_effects=prob.base_effects + held)
+    all_idx = np.arange(len(prob))
+    fits = {c.name: fit_set(fixed, [c], all_idx, max_nfev=15 * len(c.bounds))[0] for c in rest}
+    return sorted(fits, key=lambda nm: fits[nm].train_rmse_m)
+
+
+def at_bound(eff: Effect) -> list[str]:
+    """Parameters fitted onto a bound that is not their neutral value (a sign that the
+    effect is stretched to mimic something else)."""
+    out = []
+    neutral = eff.neutral().params()
+    for (name, v), (lo, hi) in zip(eff.params().items(), eff.bounds, strict=True):
+        span = hi - lo
+        if (v <= lo + BOUND_TOL * span or v >= hi - BOUND_TOL * span) and abs(
+            v - neutral[name]
+        ) > BOUND_TOL * span:
+            out.append(name)
+    return out
+
+
+def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
+    """The names of effect classes."""
+    return tuple(c.name for c in classes)
+
+
+def effect_class(name: str, chosen: dict[str, type[Effect]] | None = None) -> type[Effect]:
+    if name == BandStiffness.name:
+        return BandStiffness
+    if chosen and name in chosen:
+        return chosen[name]
+    return EFFECTS[name]
+
+
+class Selection:
+    """Effects joining the verdict one at a time, best first, and the tests they took.
+
+    Args:
+        prob: the problem.
+        prefix: the effect classes under every fit (the band law when identifying).
+        scores: each effect's score alone (`_score_members`); the sets tried as pairs are
+            added as they are scored.
+        members: the family member standing for each effect.
+        tracks: the tracks' evidence or None.
+        floor_m: the noise floor F [m].
+        tick: the progress callback.
+
+    Attributes:
+        ranked: the effects' scores alone, best held-out RMSE first.
+        tests: per candidate set ("a+b"), its cut [m] with interval, refusal, permutation
+            control, whether it passes and (after `mark_joined`) whether it joined.
+    """
+
+    def __init__(
+        self,
+        prob: GapProblem,
+        prefix: list[type[Effect]],
+        scores: dict[str, Score],
+        members: dict[str, type[Effect]],
+        tracks: dict[str, Any] | None,
+        floor_m: float,
+        tick: Callable[[str], None],
+    ) -> None:
+        self.prob = prob
+        self.prefix = prefix
+        self.scores = scores
+        self.members = members
+        self.tracks = tracks
+        self.floor_m = floor_m
+        self.tick = tick
+        self.ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
+        self.perm_cache: dict[tuple[str, ...], Score] = {}
+        self.tests: dict[str, dict[str, Any]] = {}
+        self.law_tries: dict[str, dict[str, float]] = {}
+
+    def learn_law(self, cand: Score) -> Score:
+        """The set with each effect's law chosen among its forms (`cell.gap.laws`); the
+        chosen forms stand for their effects in the pairs tried after."""
+        from cell.gap.laws import choose_law
+
+        out, tried = choose_law(self.prob, cand, self.tick)
+        self.law_tries.update(tried)
+        for e in out.full.effects:
+            if e.name in self.members:
+                self.members[e.name] = type(e)
+        return out
+
+    def prune(self, cand: Score) -> Score:
+        """The set without any earlier effect that, once the laws are chosen, no longer
+        cuts MIN_CUT of what the others leave with a bootstrap interval above zero
+        (backward elimination: an effect that joined to stand in for another's law)."""
+        effs = list(cand.full.effects)
+        sizes = [len(type(e).bounds) for e in effs]
+        starts = np.cumsum([0, *sizes])
+        for j in range(len(self.prefix), len(effs) - 1):
+            keep = [i for i in range(len(effs)) if i != j]
+            warm = np.concatenate([cand.full.x[starts[i] : starts[i + 1]] for i in keep])
+            self.tick(f"without {effs[j].name}")
+            without = score_set(self.prob, [type(effs[i]) for i in keep], warm=warm)
+            cut, lo, _ = bootstrap_cut(without.heldout, cand.heldout, seed=self.prob.seed + 5)
+            if cut < MIN_CUT * without.heldout_rmse_m or lo <= 0:
+                self.tests.setdefault("pruned", {})[effs[j].name] = {  # type: ignore[index]
+                    "cut_m": cut, "cut_ci_low_m": lo}  # fmt: skip
+                return without
+        return cand
+
+    def refuse(self, cand: Score) -> str | None:
+        """Why one of a candidate set's effects may not join (`refusal`), or None."""
+        for e in cand.full.effects:
+            if isinstance(e, BandStiffness):
+                continue
+            why = refusal(e, self.tracks, self.floor_m)
+            if why:
+                return f"{e.name}: {why}"
+        return None
+
+    def _survives_permutation(self, cand: Score, cut: float, t: dict[str, Any]) -> bool:
+        """The permutation control of a candidate whose newest effect hangs on a logged
+        quantity: shuffling it between throws must take away PERM_SHARE of the cut [m],
+        with an interval above zero. Records the control in t."""
+        newest = type(cand.full.effects[-1])
+        self.tick(f"permutation {newest.name}")
+        classes = [type(e) for e in cand.full.effects]
+        key = tuple(c.__name__ for c in classes)
+        if key not in self.perm_cache:
+            self.perm_cache[key] = score_set(self.prob, classes, permute=True, warm=None)
+        ps = self.perm_cache[key]
+        gain, plo, _ = bootstrap_cut(ps.heldout, cand.heldout, seed=self.prob.seed + 1)
+        survive = gain >= PERM_SHARE * cut and plo > 0
+        t["permutation"] = {
+            "quantity": newest.hangs_on,
+            "heldout_rmse_m": ps.heldout_rmse_m,
+            "gain_over_shuffled_m": gain,
+            "survives": bool(survive),
+        }
+        return survive
+
+    def passes(self, prev_sq: np.ndarray, cand: Score) -> bool:
+        """Whether a candidate set joins over the misses before it (prev_sq [m²] per
+        throw): it cuts MIN_CUT of the held-out RMSE left with a bootstrap interval above
+        zero, is not refused and survives the permutation control. Records the tests."""
+        prev = float(np.sqrt(prev_sq.mean()))
+        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=self.prob.seed)
+        t: dict[str, Any] = {
+            "cut_m": cut,
+            "cut_ci_m": [lo, hi],
+            "cut_share": cut / prev if prev > 0 else 0.0,
+        }
+        ok = cut >= MIN_CUT * prev and lo > 0
+        why = self.refuse(cand)
+        if why:
+            t["refused"] = why
+            ok = False
+        newest = type(cand.full.effects[-1])
+        if ok and newest.hangs_on is not None:
+            ok = ok and self._survives_permutation(cand, cut, t)
+        t["passes"] = bool(ok)
+        self.tests["+".join(public(cand.names))] = t
+        return ok
+
+    def join(self, base_sq: np.ndarray) -> tuple[list[Score], np.ndarray]:
+        """Join the best single effect that passes, then partners while a real gap is left
+        (held-out RMSE above VERDICT_RATIO F) and fewer than MAX_EFFECTS have joined.
+
+        Args:
+            base_sq: the baseline's per-throw held-out squared miss [m²].
+
+        Returns:
+            (the joined sets in order, each holding the ones before it; the per-throw
+            held-out squared miss after the last [m²]).
+        """
+        chosen: list[Score] = []
+        cur_sq = base_sq
+        for s in self.ranked:
+            if self.passes(cur_sq, s):
+                s = self.learn_law(s)
+                chosen.append(s)
+                cur_sq = s.heldout
+                break
+        while chosen and len(chosen[-1].names) < MAX_EFFECTS:
+            A = float(np.sqrt(cur_sq.mean()))
+            if A <= VERDICT_RATIO * self.floor_m:
+                break
+            best = self._partner(chosen[-1], cur_sq)
+            if best is None:
+                break
+            best = self.prune(self.learn_law(best))
+            chosen.append(best)
+            cur_sq = best.heldout
+        return chosen, cur_sq
+
+    def _pairs(self, last: Score) -> list[Score]:
+        """The chosen effects scored together with each likely partner, best first.
+
+        Partners: PAIR_TRIES of the best single effects and as many of those that best fit
+        what the chosen ones leave (`_partners`), each warm-started from the chosen
+        effects' and its own solution.
+        """
+        have = last.names
+        tries = PAIR_TRIES[min(len(public(have)), len(PAIR_TRIES)) - 1]
+        combos: list[Score] = []
+        rest = [sc for sc in self.ranked if sc.names[-1] not in have]
+        quick = _partners(
+            self.prob, last, [effect_class(sc.names[-1], self.members) for sc in rest]
+        )
+        pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
+        for sc in [sc for sc in rest if sc.names[-1] in pick]:
+            # every law of the partner's family: the member that stood for it alone was
+            # chosen on misses the chosen effects no longer leave
+            best: Score | None = None
+            for member in FAMILIES.get(sc.names[-1], (effect_class(sc.names[-1]),)):
+                classes = [effect_class(nm, self.members) for nm in have] + [member]
+                own = sc.full.x[len(self.prefix) :]
+                if member is not self.members.get(sc.names[-1]):
+                    own = member.neutral().vector() / np.asarray(member.scale, float)
+                warm = np.concatenate([last.full.x, own])
+                self.tick("+".join(public(classes_names(classes))))
+                combo = score_set(self.prob, classes, warm=warm)
+                if best is None or combo.heldout_rmse_m < best.heldout_rmse_m:
+                    best = combo
+            assert best is not None
+            self.scores["+".join(public(best.names))] = best
+            combos.append(best)
+        combos.sort(key=lambda c: c.heldout_rmse_m)
+        return combos
+
+    def _partner(self, last: Score, cur_sq: np.ndarray) -> Score | None:
+        """The best of the two best pairs that passes (or None), each tested against the
+        chosen effects alone refitted from where the pair put them (drop-one), so that a
+        partner only joins for what it adds itself."""
+        n_have = len(last.full.x)
+        for combo in self._pairs(last)[:2]:
+            prev = [effect_class(nm, self.members) for nm in last.names]
+            drop = score_set(self.prob, prev, warm=combo.full.x[:n_have])
+            prev_sq = drop.heldout if drop.heldout.mean() < cur_sq.mean() else cur_sq
+            if self.passes(prev_sq, combo):
+                return combo
+        return None
+
+    def mark_joined(self, chosen: list[Score]) -> None:
+        """Record in every test whether its set joined."""
+        joined = {"+".join(public(c.names)) for c in chosen}
+        for key, t in self.tests.items():
+            t["joins"] = key in joined
+
+
+def public(names: tuple[str, ...] | list[str]) -> list[str]:
+    return [nm for nm in names if nm != BandStiffness.name]

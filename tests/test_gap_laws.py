@@ -1,0 +1,161 @@
+"""Issue 57 (fit side): learned laws, outliers, proposals beyond the vocabulary and
+compound pairs, on worlds from another implementation (`cell.gap.world_other`, which
+imports nothing of the model or the fit)."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cell.gap.fit import score_set
+from cell.gap.laws import choose_law
+from cell.gap.outliers import flag
+from cell.gap.problem import build_problem
+from cell.gap.propose import propose
+from cell.gap.run import diagnose_log
+from cell.gap.world_other import OBJECTS, Throws, draw_other_campaign, landings
+from cell.log.table import ThrowTable
+from cell.model.effects import BandMass, ReleasePitch
+from cell.model.params import DEFAULT_EE
+
+# MODEL.md golden values: object, stroke, release, elevation/azimuth [deg], base velocity,
+# land_z, landed x, y [m], flight time [s]
+GOLDEN = [
+    ("cube50", 0.0625, (0, 0, 0.6), 30, 0, (0, 0, 0), 0.0, 1.2902, 0.0, 0.5290),
+    ("cube50", 0.04, (0.1, -0.2, 0.5), 45, 20, (0, 0, 0), 0.0, 2.0345, 0.5041, 0.7339),
+    ("cube30", 0.08, (0, 0, 0.7), 10, -15, (0, 0, 0), 0.0, 2.6318, -0.7052, 0.5008),
+    ("cuboid_c", 0.035, (0, 0, 0.8), 35, 0, (0, 0, 0), 0.25, 0.9837, 0.0, 0.5063),
+    ("cyl50", 0.06, (0, 0, 0.6), 20, 5, (0.5, 0, 0), 0.0, 1.2128, 0.0869, 0.4457),
+    ("sphere40", 0.05, (0.2, 0.1, 0.9), 0, 0, (0, 0, 0), 0.0, 3.2117, 0.1000, 0.4311),
+    ("sphere70", 0.03, (0, 0, 2.0), 8, 0, (0, 0, 0), 0.0, 2.1426, 0.0, 0.6892),
+    ("cyl70", 0.1, (0, 0, 0.5), 60, -30, (0, 0.3, 0.2), 0.1, 0.0870, 0.0585, 0.3636),
+]
+
+
+def _problem(effects, *, n=240, seed=3, **kw):
+    camp = draw_other_campaign(effects, np.random.default_rng(seed), n=n, **kw)
+    table = ThrowTable.from_records(camp.records)
+    return build_problem(table, DEFAULT_EE, seed=0), camp, table
+
+
+def test_other_world_shares_no_code_and_meets_the_golden_values():
+    src = Path(__file__).parents[1] / "cell" / "gap" / "world_other.py"
+    imports = [
+        a.name if isinstance(node, ast.Import) else node.module
+        for node in ast.walk(ast.parse(src.read_text()))
+        if isinstance(node, ast.Import | ast.ImportFrom)
+        for a in (node.names if isinstance(node, ast.Import) else [node])
+    ]
+    assert all(not str(m).startswith("cell") for m in imports), imports
+    g = GOLDEN
+    th = Throws(
+        obj=np.array([r[0] for r in g]),
+        shape=np.array([OBJECTS[r[0]][0] for r in g]),
+        mass=np.array([OBJECTS[r[0]][1] for r in g]),
+        size=np.array([OBJECTS[r[0]][2] for r in g]),
+        stroke=np.array([r[1] for r in g]),
+        p0=np.array([r[2] for r in g], float),
+        elev=np.radians([r[3] for r in g]),
+        azim=np.radians([r[4] for r in g]),
+        vb=np.array([r[5] for r in g], float),
+        platform=np.array(["arm"] * len(g)),
+        rpm=np.zeros(len(g)),
+        land_z=np.array([r[6] for r in g]),
+    )
+    xy, t, _ = landings(th, [])
+    assert np.max(np.abs(xy - np.array([r[7:9] for r in g]))) < 1e-3
+    assert np.max(np.abs(t - np.array([r[9] for r in g]))) < 1e-3
+
+
+def test_stroke_proportional_band_mass_is_learned_as_such():
+    prob, _, _ = _problem([{"kind": "band_mass", "form": "stroke", "k": 0.15}])
+    const = score_set(prob, [BandMass])
+    best, tried = choose_law(prob, const)
+    eff = best.full.effects[-1]
+    assert eff.law == "mass_kg = k · stroke_m", tried
+    assert eff.params()["k"] == pytest.approx(0.15, rel=0.05)
+    assert best.heldout_rmse_m < 0.8 * const.heldout_rmse_m
+
+
+def test_constant_world_gets_no_extra_terms():
+    prob, _, _ = _problem([{"kind": "release_pitch", "form": "const", "value": 0.08}])
+    const = score_set(prob, [ReleasePitch])
+    best, tried = choose_law(prob, const)
+    assert type(best.full.effects[-1]) is ReleasePitch, tried
+    assert best.full.effects[-1].params()["delta_rad"] == pytest.approx(0.08, rel=0.05)
+
+
+def test_outliers_are_flagged_by_row_and_robust_error_is_reported():
+    prob, camp, table = _problem([], outliers=0.05)
+    pre = flag(prob.residual(np.arange(len(prob))))
+    true = np.zeros(len(prob), bool)
+    true[list(camp.outliers)] = True
+    assert np.array_equal(pre, true)
+    # an in-noise log flags (almost) nothing
+    assert flag(np.random.default_rng(1).normal(0, 0.01, (800, 2))).sum() <= 1
+    d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
+    rep = d.report
+    assert rep["verdict"]["effects"] == ["none"]
+    assert set(rep["outliers"]["rows"]) == {i + 1 for i in camp.outliers}
+    v = rep["verdict"]
+    assert v["heldout_rmse_robust_m"] < 1.3 * camp.floor_m < v["heldout_rmse_m"]
+
+
+def test_sideways_launch_error_growing_with_stroke_is_proposed_as_such():
+    prob, camp, _ = _problem([{"kind": "release_yaw", "form": "stroke", "k": 1.0}])
+    prop, miss = propose(prob, (), camp.floor_m)
+    assert not flag(miss).any()
+    top = prop["terms"][0]
+    assert top["phase"] == "launch"
+    assert top["term"] == "azimuth error [rad] = k · stroke_m", prop["law"]
+    assert top["k"] == pytest.approx(1.0, rel=0.15)
+    assert prop["heldout_rmse_after_m"] < 1.3 * camp.floor_m
+    assert prop["shrink_pct"] > 50
+
+
+def test_per_object_law_is_learned_and_shrunk():
+    from cell.gap.check_other import _PER_OBJ_BM
+    from cell.gap.diagnose import _law_params
+
+    prob, _, _ = _problem(
+        [{"kind": "band_mass", "form": "object", "value": 0.015, "per_object": _PER_OBJ_BM}]
+    )
+    best, tried = choose_law(prob, score_set(prob, [BandMass]))
+    e = best.full.effects[-1]
+    assert e.law == "mass_kg = a_object", tried
+    rep = _law_params(e, {k: list(v) for k, v in zip(e.params(), best.full.ci, strict=True)})
+    for obj, v in rep["per_object"].items():
+        assert v == pytest.approx(_PER_OBJ_BM[obj], rel=0.15), rep
+
+
+def test_launch_effect_and_landing_slide_are_found_as_a_pair():
+    _, camp, table = _problem(
+        [{"kind": "band_mass", "form": "const", "value": 0.02},
+         {"kind": "slide", "form": "const", "tau_s": 0.05}],
+        n=300,
+    )  # fmt: skip
+    d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
+    v = d.report["verdict"]
+    assert sorted(v["effects"]) == ["band_mass", "bounce"], v
+    assert v["phases"] == {"band_mass": "launch", "bounce": "landing"}
+    assert v["params"]["band_mass"]["mass_kg"] == pytest.approx(0.02, rel=0.1)
+    assert v["params"]["bounce"]["tau_s"] == pytest.approx(0.05, rel=0.3)
+    assert v["heldout_rmse_robust_m"] <= 1.3 * camp.floor_m
+
+
+def test_other_world_cases_cover_the_issue():
+    from cell.cli import main
+    from cell.gap.check_other import OTHER_CASES, other_cases
+
+    cases = other_cases()
+    assert len(cases) >= 40
+    forms = {e["form"] for c in cases for e in c["effects"]}
+    assert forms >= {"const", "stroke", "mass", "object", "throw", "friction"}
+    assert sum("+" in c["truth"] for c in cases) >= 5
+    assert sum(c["options"].get("outliers", 0) > 0 for c in cases) >= 5
+    assert sum(c["truth"] == "unknown" for c in cases) >= 3
+    assert "o:downwash+wind" in OTHER_CASES
+    assert main(["gap", "check", "--worlds", "other", "--truths", "o:gremlins"]) == 2
