@@ -264,7 +264,7 @@ def _record(
     c: Campaign,
     session: int,
 ) -> dict[str, Any]:
-    """Throw i's THROW_LOG.md row of campaign `name`: object `o` as logged, its release
+    """Throw i's docs/throw_log.md row of campaign `name`: object `o` as logged, its release
     from `batch`, its observed landing (x, y) [m, W], in session `session` (from 0)."""
     return {
         "throw_id": f"{name}-{i:05d}",

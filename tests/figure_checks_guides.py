@@ -241,3 +241,68 @@ def check_the_cli_limits() -> None:
         page, r"A path longer than (\d+) bytes, or with a name longer than (\d+) bytes"
     )
     assert (int(path), int(name)) == (MAX_PATH_BYTES, MAX_NAME_BYTES)
+
+
+# -- docs/gap_laws.md ------------------------------------------------------------------------
+def check_the_gap_laws() -> None:
+    import math
+
+    from cell.gap.check_other import OTHER_CASES
+    from cell.gap.laws import TERM_PENALTY
+    from cell.gap.outliers import OUTLIER_P
+    from cell.gap.propose import TERM_PENALTY as PROPOSAL_PENALTY
+    from cell.gap.select import MIN_CUT
+
+    page, doc = "docs/gap_laws.md", load_json("docs/figures/gap_check_other.json")
+    (pen,) = quoted(page, r"raised by (\d+) % per extra term")
+    close(pen, 100 * TERM_PENALTY, 0)
+    (cut,) = quoted(page, r"no\s+longer cuts (\d+) % of what the others leave")
+    close(cut, 100 * MIN_CUT, 0)
+    two, p, sigma, n = quoted(
+        page, r"c² = (\d) ln\(n / ([\d.]+)\), about ([\d.]+) σ for (\d+) throws"
+    )
+    assert (int(two), float(p)) == (2, OUTLIER_P)
+    close(sigma, math.sqrt(2 * math.log(int(n) / OUTLIER_P)), 1)
+    (pen,) = quoted(page, r"held-out folds with a (\d+) % penalty per term")
+    close(pen, 100 * PROPOSAL_PENALTY, 0)
+    (share,) = quoted(page, r"varying throw to throw; (\d+) % outliers")
+    shares = {o["outliers"] for *_, o in OTHER_CASES.values() if "outliers" in o}
+    assert shares == {int(share) / 100}
+    crit = doc["criteria"]
+    total, tol, scale, ratio = quoted(
+        page,
+        r"judges each of its (\d+) cases on: .*? parameters within (\d+) % \(a tracking scale "
+        r"within ([\d.]+)\), and the robust held-out RMSE\s+within ([\d.]+) ×",
+    )
+    assert int(total) == doc["total"] == len(OTHER_CASES)
+    close(tol, 100 * crit["param_tol"], 0)
+    assert (float(scale), float(ratio)) == (crit["scale_tol"], crit["floor_ratio"])
+    passes, total, diag, phase, tol, params, ratio, floor = quoted(
+        page,
+        r"(\d+) of (\d+) cases pass;\s+verdict right (\d+), phase right (\d+), parameters within "
+        r"(\d+) % (\d+), robust held-out RMSE within\s+([\d.]+) × the world's floor (\d+)\.",
+    )
+    assert (int(passes), int(total)) == (doc["passes"], doc["total"])
+    assert (int(diag), int(phase), int(params), int(floor)) == (
+        doc["diagonal"],
+        doc["phase_ok"],
+        doc["params_ok"],
+        doc["floor_ok"],
+    )
+    close(tol, 100 * crit["param_tol"], 0)
+    assert float(ratio) == crit["floor_ratio"]
+    (miss,) = [c for c in doc["campaigns"] if not c["passes"]]
+    assert miss["truth"] == "drag_scale" and miss["verdict"] == "unknown"
+    tool, best = quoted(page, r"repeated throws, ([\d.]+) m, is below what the\s+best constant "
+                        r"factor leaves, ([\d.]+) m")  # fmt: skip
+    close(tool, miss["tool_floor_m"], 3)
+    close(best, miss["after_m"], 3)
+    varying = [c for c in doc["campaigns"] if c["case"].endswith("-throw") and c["passes"]]
+    lo, hi, n = quoted(page, r"flagged as outliers \((\d+)–(\d+) rows of (\d+)\)")
+    assert (int(lo), int(hi)) == (
+        min(c["outliers_false"] for c in varying),
+        max(c["outliers_false"] for c in varying),
+    )
+    assert all(c["after_over_floor"] < 1 for c in varying)
+    n_cli, workers = quoted(page, r"`cell gap check --worlds other --n (\d+) --workers (\d)")
+    assert int(n) == int(n_cli) and int(workers) >= 1

@@ -154,6 +154,12 @@ def check_the_gap_check() -> None:
         close(base, c["baseline_m"], 4)
         close(ratio, c["after_m"] / c["noise_floor_m"], 2)
     right, total = quoted("README.md", r"\| (\d+) of (\d+) verdicts right \|")
+    other = load_json("docs/figures/gap_check_other.json")
+    passes, cases, n = quoted(
+        "README.md", r"\| (\d+) of (\d+) cases pass \| `cell gap check --worlds other --n (\d+)"
+    )
+    assert (int(passes), int(cases)) == (other["passes"], other["total"])
+    assert int(n) == int(quoted("docs/gap_laws.md", r"--worlds other --n (\d+) --workers")[0])
     assert (int(right), int(total)) == (check["correct"], check["total"])
 
 

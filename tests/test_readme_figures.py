@@ -16,6 +16,7 @@ import pytest
 
 from tests.figure_checks_guides import (
     check_the_cli_limits,
+    check_the_gap_laws,
     check_the_gap_tracks_rules,
     check_the_identify_evidence,
     check_the_real_table_tennis,
@@ -208,6 +209,11 @@ def check_the_layout_sets() -> None:
     assert [int(chosen_lo), int(chosen_hi)] == tune["seeds"]
     (seed,) = quoted("docs/figures.md", r"`cell bench sort --set tune --layouts 20 --seed (\d+)")
     assert int(seed) == tune["seeds"][0]
+    lo, hi, seed = quoted(
+        "docs/arm.md",
+        r"the `tune` layouts, seeds (\d+)–(\d+)\s+\(`cell bench sort --set tune --seed (\d+)`",
+    )
+    assert [int(lo), int(hi)] == tune["seeds"] and int(seed) == tune["seeds"][0]
 
 
 def check_the_floor() -> None:
@@ -357,6 +363,7 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_identify_evidence,
     check_the_cli_limits,
     check_the_layout_sets,
+    check_the_gap_laws,
 )
 
 

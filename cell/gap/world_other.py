@@ -308,7 +308,7 @@ class OtherCampaign:
     """A campaign of this world: log records, the world's own floor and the outlier rows.
 
     Attributes:
-        records: one dict per logged throw (THROW_LOG.md columns).
+        records: one dict per logged throw (docs/throw_log.md columns).
         floor_m: RMS distance [m] of the logged inlier landings from the deterministic
             world (the same world with no scatter and no throw-to-throw variation).
         outliers: row numbers (0-based, in records) of the moved landings.
