@@ -50,6 +50,10 @@ grip stays under that bound, evaluating a_c exactly from the joint state with Pi
   constraint (`grip_constraint`, a polytope inside the bound), which slows the path only
   where the grip asks it. A tall box hung from the pads and carried sideways: 1.11 s
   against 1.36 s uniformly slowed (tests/test_carry.py).
+
+The grip's laws are in `cell.robot.grip_hold`, the toppra constraint in
+`cell.robot.grip_constraint`, `plan_carry` in `cell.robot.carry_plan`; this module
+re-exports their names.
 """
 
 from __future__ import annotations

@@ -5,6 +5,9 @@ A release pose is a grip-centre position p [m, W] and a throw axis u (the +z axi
 damped least squares, joint limits clamped at every step and a null-space pull towards the
 current configuration (redundant arms). The converged solution nearest the current
 configuration wins; if none converges the call raises IKFailed with the best residual.
+
+The pose, result and tolerances are in `cell.robot.ik_pose`, one seed's descent in
+`cell.robot.ik_descent`; this module searches the seeds and re-exports their names.
 """
 
 from __future__ import annotations

@@ -13,7 +13,6 @@ from cell.robot.model import Robot, axis_frame
 POSITION_TOL_M = 1e-3
 """Success tolerance on the grip-centre position [m]."""
 
-
 AXIS_TOL_RAD = math.radians(0.5)
 """Success tolerance on the throw axis (and the roll, when fixed) [rad]."""
 

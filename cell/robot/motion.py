@@ -17,6 +17,9 @@ acceleration and jerk limits from robots/<mount>/mount.yaml). Both planners chec
 against the position limits and raise TrajectoryError rather than return something unsafe:
 a spline may overshoot between waypoints, and ruckig 0.19.4 ignores position limits (its
 own `position_extrema` is unreliable too, so the extrema are searched on samples).
+
+`plan_path` is in `cell.robot.path_plan`, the spline it follows in `cell.robot.spline`;
+both are re-exported here.
 """
 
 from __future__ import annotations

@@ -37,6 +37,11 @@ static plan's release point, the stroke and azimuth polished to land on the goal
 to the release) or the static release when none is sooner, and `cell.sim.release.release_in_scene` runs
 a motion in the PyBullet cell and opens the latch at the planned instant while the arm
 moves.
+
+The parts: `cell.robot.moving_coast` (the coast and `grip_move`), `cell.robot.moving_motion`
+(`plan_moving_release`), `cell.robot.moving_throw` (`plan_moving_throw`) and
+`cell.robot.moving_landing` (`predict_moving_landing`); this module chooses between the
+releases and re-exports their names.
 """
 
 from __future__ import annotations

@@ -13,6 +13,10 @@ happens to the items.
 
 Time stepping: `dt_s` (default 1 ms) in general, `launch_dt_s` (0.25 ms)
 while the band pushes, so the ~10-30 ms push is resolved by 40+ sub-steps.
+
+`CellScene` delegates its parts to modules of functions: its construction
+(`cell.sim.scene_build`), the end-effector's moves (`cell.sim.scene_arm`), the station and
+the kept items (`cell.sim.station`) and watching a released item (`cell.sim.watch`).
 """
 
 from __future__ import annotations
