@@ -11,6 +11,44 @@ from cell.cli.common import add_json_arg, human, json_to_stdout, print_json, wri
 from cell.jobs import ORDERS
 
 
+def _add_sort_run_args(p: argparse.ArgumentParser) -> None:
+    """`cell bench sort`'s options for how each layout is run (as `cell run`'s)."""
+    p.add_argument(
+        "--speed-scale",
+        type=float,
+        default=1.0,
+        help="sort: fraction of the arm's joint limits its moves use, in (0, 1] (1)",
+    )
+    p.add_argument(
+        "--turn-release",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="sort: release throws turned toward the pick station (cell run --turn-release; on "
+        "by default)",
+    )
+    p.add_argument(
+        "--cycle-search",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="sort: each throw's release chosen by its cycle (cell run --cycle-search; on by "
+        "default)",
+    )
+    p.add_argument(
+        "--order",
+        choices=ORDERS,
+        default="job",
+        help="sort: the order the items are taken in (cell run --order; job, the default)",
+    )
+    p.add_argument(
+        "--floor",
+        action="store_true",
+        help=(
+            "sort: also time each approach and throw's carry as one direct move at the arm's "
+            "full limits (the carry as the grip allows): floor_items_per_hour"
+        ),
+    )
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "bench",
@@ -57,40 +95,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--max-items", type=int, default=0, help="sort: only the first N items of each layout"
     )
-    p.add_argument(
-        "--speed-scale",
-        type=float,
-        default=1.0,
-        help="sort: fraction of the arm's joint limits its moves use, in (0, 1] (1)",
-    )
-    p.add_argument(
-        "--turn-release",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="sort: release throws turned toward the pick station (cell run --turn-release; on "
-        "by default)",
-    )
-    p.add_argument(
-        "--cycle-search",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="sort: each throw's release chosen by its cycle (cell run --cycle-search; on by "
-        "default)",
-    )
-    p.add_argument(
-        "--order",
-        choices=ORDERS,
-        default="job",
-        help="sort: the order the items are taken in (cell run --order; job, the default)",
-    )
-    p.add_argument(
-        "--floor",
-        action="store_true",
-        help=(
-            "sort: also time each approach and throw's carry as one direct move at the arm's "
-            "full limits (the carry as the grip allows): floor_items_per_hour"
-        ),
-    )
+    _add_sort_run_args(p)
     p.add_argument(
         "--scales",
         default="0.4,0.6,0.8,1.0",

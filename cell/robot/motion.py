@@ -17,23 +17,25 @@ acceleration and jerk limits from robots/<mount>/mount.yaml). Both planners chec
 against the position limits and raise TrajectoryError rather than return something unsafe:
 a spline may overshoot between waypoints, and ruckig 0.19.4 ignores position limits (its
 own `position_extrema` is unreliable too, so the extrema are searched on samples).
+
+`plan_path` is in `cell.robot.path_plan`, the spline it follows in `cell.robot.spline`;
+both are re-exported here.
 """
 
 from __future__ import annotations
 
-import logging
 import math
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from cell.errors import InvalidInput, TrajectoryError
 from cell.robot.model import Robot
+from cell.robot.path_plan import _check_scales, plan_path
+from cell.robot.spline import monotone_samples, spline_path
 from cell.robot.trajectory import (
     POSITION_TOL_RAD,
     RuckigTrajectory,
-    ToppraTrajectory,
     Trajectory,
     as_robot,
     check_limits,
@@ -44,179 +46,15 @@ __all__ = [
     "ChainTrajectory",
     "Trajectory",
     "check_limits",
+    "monotone_samples",
     "move_time",
     "plan_approach",
     "plan_move",
     "plan_path",
     "plan_stop",
     "release_joint_velocity",
+    "spline_path",
 ]
-
-log = logging.getLogger(__name__)
-
-
-def _check_scales(**scales: float) -> None:
-    """InvalidInput naming the first limit scale outside (0, 1]."""
-    for name, s in scales.items():
-        if not (0.0 < s <= 1.0):
-            raise InvalidInput(f"{name} must be in (0, 1], got {s}")
-
-
-def spline_path(
-    waypoints_q: Sequence[np.ndarray],
-    lower: np.ndarray | None = None,
-    upper: np.ndarray | None = None,
-) -> Any:
-    """The geometric path through distinct joint waypoints [rad] that a move follows: a
-    cubic spline (toppra's `SplineInterpolator`, C²), its parameter s ∈ [0, 1] at each
-    waypoint proportional to the cumulative joint-space distance. Callable: path(s) gives
-    configurations, path(s, 1) and path(s, 2) their derivatives in s.
-
-    Through the waypoints themselves. Given joint limits `lower`/`upper` [rad] that this
-    spline leaves between waypoints (it overshoots where a joint turns back near a limit),
-    through 8 (else 16, 32: SHAPE_SAMPLES) points of each segment of the shape-preserving
-    cubic instead (`monotone_samples`), which never leaves the range of two neighbouring
-    waypoints: the spline keeps close to it, so within the limits unless a waypoint lies
-    on one. Without limits, or when none stays within them, the spline through the
-    waypoints."""
-    import toppra as ta
-
-    way = np.array(waypoints_q, float)
-    seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
-    ss = np.concatenate([[0.0], np.cumsum(seg)])
-    ss /= ss[-1]
-    cubic = ta.SplineInterpolator(ss, way)
-    if lower is None or upper is None or _within(cubic, lower, upper):
-        return cubic
-    for per_segment in SHAPE_SAMPLES:
-        shaped = ta.SplineInterpolator(*monotone_samples(ss, way, per_segment))
-        if _within(shaped, lower, upper):
-            return shaped
-    return cubic
-
-
-# points per segment of the shape-preserving cubic that `spline_path` fits a spline
-# through, fewest first: the spline's overshoot shrinks as the points close in
-SHAPE_SAMPLES = (8, 16, 32)
-
-
-def monotone_samples(
-    ss: np.ndarray, way: np.ndarray, per_segment: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """(parameters, configurations [rad]) of `per_segment` evenly spaced points of each
-    segment of the shape-preserving piecewise cubic through the waypoints (Fritsch and
-    Carlson's, scipy's `PchipInterpolator`, per joint), the waypoints among them: between
-    two waypoints no joint leaves the range of their values."""
-    from scipy.interpolate import PchipInterpolator
-
-    s = np.concatenate(
-        [
-            np.linspace(a, b, per_segment, endpoint=False)
-            for a, b in zip(ss[:-1], ss[1:], strict=True)
-        ]
-        + [ss[-1:]]
-    )
-    return s, np.asarray(PchipInterpolator(ss, way, axis=0)(s))
-
-
-def _within(path: Any, lower: np.ndarray, upper: np.ndarray, n: int = 400) -> bool:
-    """Does the path stay within [lower, upper] (POSITION_TOL_RAD) on n samples?"""
-    qs = path(np.linspace(0.0, 1.0, n))
-    return bool(np.all(qs >= lower - POSITION_TOL_RAD) and np.all(qs <= upper + POSITION_TOL_RAD))
-
-
-def plan_path(
-    waypoints_q: Sequence[np.ndarray] | np.ndarray,
-    robot: Robot | str,
-    *,
-    velocity_scale: float = 1.0,
-    acceleration_scale: float = 1.0,
-    constraints: Sequence[Any] = (),
-) -> Trajectory:
-    """Time-optimal trajectory along a spline through joint waypoints, at rest at both ends.
-
-    The path is a cubic spline through the waypoints, with the path parameter at each
-    waypoint proportional to the cumulative joint-space distance; where that spline
-    overshoots a joint limit, the spline that keeps to the shape-preserving cubic through
-    them (`spline_path`). Limits are scaled by
-    `*_scale`, then tightened by 2 % (toppra's constant-acceleration parameterisation
-    overshoots slightly); the result is sampled and, if it still exceeds a limit, planned
-    again with tighter margins.
-
-    Args:
-        waypoints_q: k ≥ 2 configurations [rad], each shape (dof,).
-        robot: the robot (or its name).
-        velocity_scale: fraction of the velocity limits to use, in (0, 1].
-        acceleration_scale: fraction of the acceleration limits to use, in (0, 1].
-        constraints: more toppra path constraints, besides the joint limits (the grip's
-            on a carry, `cell.robot.carry.grip_constraint`).
-
-    Returns:
-        A Trajectory starting at the first waypoint and stopping at the last.
-
-    Raises:
-        InvalidInput: fewer than two waypoints, a bad shape, a waypoint outside the joint
-            limits, or a scale outside (0, 1].
-        TrajectoryError: toppra found no parameterisation, or the spline leaves the joint
-            limits between waypoints.
-    """
-    import toppra.algorithm as algo
-    import toppra.constraint as constraint
-
-    rb = as_robot(robot)
-    _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
-    wps = [joint_vector(rb, w, f"waypoint {i}") for i, w in enumerate(waypoints_q)]
-    if len(wps) < 2:
-        raise InvalidInput(f"plan_path needs at least 2 waypoints, got {len(wps)}")
-    for i, w in enumerate(wps):
-        rb.limits.check_position(w, name=f"waypoint {i}", tol=POSITION_TOL_RAD)
-    # Drop repeated waypoints: a zero-length segment has no path parameter.
-    keep = [wps[0]] + [
-        w for a, w in zip(wps, wps[1:], strict=False) if np.linalg.norm(w - a) > 1e-9
-    ]
-    q_start = wps[0]
-    if len(keep) < 2:
-        raise InvalidInput("plan_path waypoints are all the same configuration: nothing to do")
-    path = spline_path(keep, rb.limits.lower, rb.limits.upper)
-    # Sample the geometric path itself: where no spline keeps within the limits (a waypoint
-    # on a limit, the path turning back there), it leaves them.
-    qs = path(np.linspace(0.0, 1.0, 400))
-    lo = np.min(qs - rb.limits.lower)
-    hi = np.min(rb.limits.upper - qs)
-    if min(lo, hi) < -POSITION_TOL_RAD:
-        raise TrajectoryError(
-            f"the spline through the {len(keep)} waypoints leaves the joint limits by "
-            f"{-min(lo, hi):.4f} rad between waypoints; add intermediate waypoints"
-        )
-    vmax = rb.limits.velocity * velocity_scale
-    amax = rb.limits.acceleration * acceleration_scale
-    for margin in (0.98, 0.95, 0.9, 0.8):
-        pc_vel = constraint.JointVelocityConstraint(np.c_[-vmax * margin, vmax * margin])
-        pc_acc = constraint.JointAccelerationConstraint(
-            np.c_[-amax * margin, amax * margin],
-            discretization_scheme=constraint.DiscretizationType.Interpolation,
-        )
-        inst = algo.TOPPRA(
-            [pc_vel, pc_acc, *constraints],
-            path,
-            parametrizer="ParametrizeConstAccel",
-            gridpt_min_nb_points=100,
-        )
-        raw = inst.compute_trajectory(0.0, 0.0)
-        if raw is None:
-            raise TrajectoryError(
-                f"toppra found no time parameterisation through {len(keep)} waypoints "
-                f"(from {np.round(q_start, 3).tolist()} rad); the path may pass a point where "
-                "the limits admit no motion"
-            )
-        traj = ToppraTrajectory(raw, rb.dof)
-        use = check_limits(traj, rb, n=501)
-        if use["velocity"] <= velocity_scale * (1 + 1e-6) and use[
-            "acceleration"
-        ] <= acceleration_scale * (1 + 1e-6):
-            return traj
-        log.debug("toppra margin %.2f exceeded the limits (%s); retrying", margin, use)
-    raise TrajectoryError(f"toppra's trajectory exceeded the limits even at 80 % of them: {use}")
 
 
 def plan_move(
@@ -366,6 +204,19 @@ class ChainTrajectory(Trajectory):
         return out[0], out[1], out[2]
 
 
+def _approach_points(
+    rb: Robot, *qs: np.ndarray | Sequence[float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """q0, q_over and q_to [rad] as joint vectors, each checked against the position limits."""
+    p0 = joint_vector(rb, qs[0], "q0")
+    pm = joint_vector(rb, qs[1], "q_over")
+    p1 = joint_vector(rb, qs[2], "q_to")
+    lim = rb.limits
+    for name, q in (("q0", p0), ("q_over", pm), ("q_to", p1)):
+        lim.check_position(q, name, tol=POSITION_TOL_RAD)
+    return p0, pm, p1
+
+
 APPROACH_SPEED_FRACTIONS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5)
 """Joint speeds over the approach point tried by `plan_approach`, as fractions of the
 fastest the descent's joint-space direction allows (0: at rest there)."""
@@ -410,12 +261,8 @@ def plan_approach(
     """
     rb = as_robot(robot)
     _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
-    p0 = joint_vector(rb, q0, "q0")
-    pm = joint_vector(rb, q_over, "q_over")
-    p1 = joint_vector(rb, q_to, "q_to")
+    p0, pm, p1 = _approach_points(rb, q0, q_over, q_to)
     lim = rb.limits
-    for name, q in (("q0", p0), ("q_over", pm), ("q_to", p1)):
-        lim.check_position(q, name, tol=POSITION_TOL_RAD)
     seg = p1 - pm
     length = float(np.linalg.norm(seg))
     if length < 1e-9:

@@ -242,6 +242,34 @@ class _Description:
         return _origin_xyz(j, f"joint {name!r}", self.path)
 
 
+def _pads(d: _Description, path: Path) -> list[tuple[float, tuple[float, ...], float, float]]:
+    """Each pad's (mass [kg], box [m], friction, opening [m]), left then right, checked
+    to be alike and to sit on their joints as the scene assumes."""
+    pads = []
+    for side, axis in (("left", (-1.0, 0.0, 0.0)), ("right", (1.0, 0.0, 0.0))):
+        link = f"ee_finger_{side}"
+        origin, lo, hi = d.prismatic(f"{link}_joint", "ee_band", link, axis)
+        if origin != (0.0, 0.0, 0.0) or lo != 0.0:
+            raise InvalidParameter(
+                f"{path}: joint {link + '_joint'!r} must start at the carriage's frame "
+                f"(origin 0 0 0) with its lower limit 0 (a pad closed on the axis)"
+            )
+        size, centre = d.box(link)
+        if centre != (axis[0] * size[0] / 2, 0.0, size[2] / 2):
+            raise InvalidParameter(
+                f"{path}: link {link!r}: the pad's box must have its inner face on the joint "
+                f"(x = 0) and start at the carriage face (z = 0): centre "
+                f"{(axis[0] * size[0] / 2, 0.0, size[2] / 2)}, got {centre}"
+            )
+        pads.append((d.mass(link), size, d.friction(link), hi))
+    if pads[0] != pads[1]:
+        raise InvalidParameter(
+            f"{path}: the two pads must have the same mass, box, friction and opening; "
+            f"got (left) {pads[0]} and (right) {pads[1]}"
+        )
+    return pads
+
+
 def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
     """The simulated end-effector's numbers, read from its description.
 
@@ -271,28 +299,7 @@ def load_ee_geometry(path: str | Path | None = None) -> EEGeometry:
             f"{path}: ee_base's inertial origin {d.inertial_origin('ee_base')} must be "
             f"ee_band_joint's origin {seat} (E, where the scene holds the end-effector)"
         )
-    pads = []
-    for side, axis in (("left", (-1.0, 0.0, 0.0)), ("right", (1.0, 0.0, 0.0))):
-        link = f"ee_finger_{side}"
-        origin, lo, hi = d.prismatic(f"{link}_joint", "ee_band", link, axis)
-        if origin != (0.0, 0.0, 0.0) or lo != 0.0:
-            raise InvalidParameter(
-                f"{path}: joint {link + '_joint'!r} must start at the carriage's frame "
-                f"(origin 0 0 0) with its lower limit 0 (a pad closed on the axis)"
-            )
-        size, centre = d.box(link)
-        if centre != (axis[0] * size[0] / 2, 0.0, size[2] / 2):
-            raise InvalidParameter(
-                f"{path}: link {link!r}: the pad's box must have its inner face on the joint "
-                f"(x = 0) and start at the carriage face (z = 0): centre "
-                f"{(axis[0] * size[0] / 2, 0.0, size[2] / 2)}, got {centre}"
-            )
-        pads.append((d.mass(link), size, d.friction(link), hi))
-    if pads[0] != pads[1]:
-        raise InvalidParameter(
-            f"{path}: the two pads must have the same mass, box, friction and opening; "
-            f"got (left) {pads[0]} and (right) {pads[1]}"
-        )
+    pads = _pads(d, path)
     for link in ("ee_band", "ee_finger_left", "ee_finger_right"):
         if d.inertial_origin(link) != (0.0, 0.0, 0.0):
             raise InvalidParameter(f"{path}: link {link!r}: its mass must sit at its frame")

@@ -13,24 +13,26 @@ happens to the items.
 
 Time stepping: `dt_s` (default 1 ms) in general, `launch_dt_s` (0.25 ms)
 while the band pushes, so the ~10-30 ms push is resolved by 40+ sub-steps.
+
+`CellScene` delegates its parts to modules of functions: its construction
+(`cell.sim.scene_build`), the end-effector's moves (`cell.sim.scene_arm`), the station and
+the kept items (`cell.sim.station`) and watching a released item (`cell.sim.watch`).
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
-import os
-import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput, InvalidParameter, MissingDependency, NoLanding
+from cell.errors import InvalidInput
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
-from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT, BandDrive
+from cell.sim import scene_arm, station, watch
+from cell.sim.band import BandDrive
 from cell.sim.bins import BinSpec, build_bin, which_bin
 from cell.sim.drag import apply_drag
 from cell.sim.frames import (
@@ -42,12 +44,17 @@ from cell.sim.frames import (
     PANDA_READY,
     ee_pose_for_item_centre,
     panda_urdf,
-    quat_from_matrix,
     release_orientation,
 )
 from cell.sim.items import Item, spawn_item
-from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
-from cell.sim.settle import Outcome, Tracker, crossing
+from cell.sim.scene_build import (
+    check_settings,
+    connect,
+    load_arm,
+    load_end_effector,
+    pick_station_body,
+)
+from cell.sim.settle import Outcome, Tracker
 
 # the frame constants and helpers are re-exported for callers that import them from here
 __all__ = [
@@ -62,37 +69,6 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
-
-
-@contextlib.contextmanager
-def _quiet_c_output(keep_stderr: bool = False) -> Iterator[None]:
-    """Silence what C code writes to file descriptors 1 and 2 (2 kept if `keep_stderr`).
-
-    PyBullet prints a banner on import ("pybullet build time") and on every connect
-    ("argv[0]="), once per scene: 13 times in a sort job, 34 in a calibration. They are
-    not the command's output (`cell calibrate --json` prints JSON on stdout) and say
-    nothing to its user, so they go to /dev/null at the file-descriptor level, which is
-    where C code writes. A GUI connect keeps stderr: its X server errors are worth seeing.
-    """
-    import ctypes
-
-    libc = ctypes.CDLL(None)
-    fds = (1,) if keep_stderr else (1, 2)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    libc.fflush(None)
-    saved = [os.dup(fd) for fd in fds]
-    null = os.open(os.devnull, os.O_WRONLY)
-    try:
-        for fd in fds:
-            os.dup2(null, fd)
-        yield
-    finally:
-        libc.fflush(None)  # C stdio buffers what PyBullet printed: out before the fds are back
-        for fd, old in zip(fds, saved, strict=True):
-            os.dup2(old, fd)
-            os.close(old)
-        os.close(null)
 
 
 class CellScene:
@@ -127,32 +103,15 @@ class CellScene:
         pick_station_height: float = 0.2,
         robot_base_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
     ) -> None:
-        if not (0 < launch_dt_s <= dt_s <= 0.01):
-            raise InvalidParameter(
-                f"time steps dt_s={dt_s}, launch_dt_s={launch_dt_s} s: need 0 < launch ≤ dt ≤ 0.01"
-            )
-        from cell.robot.composite import MOUNTS
-
-        if robot is not None and robot not in MOUNTS:
-            raise InvalidParameter(f"robot {robot!r}: valid are {sorted(MOUNTS)} or None")
-        ids = [b.id for b in bins]
-        if len(set(ids)) != len(ids):
-            raise InvalidParameter(f"bin ids must be unique, got {ids}")
-        with _quiet_c_output(keep_stderr=gui):  # PyBullet's banners (import, connect)
-            try:
-                import pybullet
-                import pybullet_data
-                from pybullet_utils.bullet_client import BulletClient
-            except ImportError:
-                raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
-            self.client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        check_settings(robot, bins, dt_s, launch_dt_s)
+        self.client, data_path = connect(gui)
         cl = self.client
         self.dt_s = dt_s
         self.launch_dt_s = launch_dt_s
         self._dt_now = dt_s
         cl.setGravity(0, 0, -G)
         cl.setPhysicsEngineParameter(fixedTimeStep=dt_s, numSolverIterations=60)
-        cl.setAdditionalSearchPath(pybullet_data.getDataPath())
+        cl.setAdditionalSearchPath(data_path)
         self.floor = int(cl.loadURDF("plane.urdf"))
         cl.changeDynamics(self.floor, -1, lateralFriction=0.6, restitution=0.1)
         self.t = 0.0
@@ -160,16 +119,8 @@ class CellScene:
         self.bin_bodies = {b.id: build_bin(cl, b) for b in self.bins}
         self.pick_station_xy = pick_station_xy
         self.pick_station_height = pick_station_height
-        half = [0.12, 0.12, pick_station_height / 2]
-        self.pick_station = int(
-            cl.createMultiBody(
-                0,
-                cl.createCollisionShape(cl.GEOM_BOX, halfExtents=half),
-                cl.createVisualShape(cl.GEOM_BOX, halfExtents=half, rgbaColor=[0.5, 0.4, 0.3, 1]),
-                [pick_station_xy[0], pick_station_xy[1], pick_station_height / 2],
-            )
-        )
-        self.ee_body, self.geometry = self._load_end_effector()
+        self.pick_station = pick_station_body(cl, pick_station_xy, pick_station_height)
+        self.ee_body, self.geometry = load_end_effector(cl)
         self.band = BandDrive(cl, self.ee_body, band, self.geometry)
         self._mount = cl.createConstraint(
             self.ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0]
@@ -187,57 +138,10 @@ class CellScene:
         self.robot_base_xyz = tuple(float(v) for v in robot_base_xyz)  # [m, W]
         self.ready_q: tuple[float, ...] = ()
         if robot is not None:
-            self._load_arm(robot, robot_base_xyz)
-
-    # -- construction ----------------------------------------------------------
-    def _load_end_effector(self) -> tuple[int, EEGeometry]:
-        """The end-effector's body from its description, E at (0, 0, 1) m until mounted,
-        and the geometry read from the same file.
-
-        PyBullet puts the body's base frame at `ee_base`'s inertial frame, which the
-        description puts at E (the plate face); loadURDF places the link frame, so the
-        base is then set to E's pose.
-        """
-        from cell.robot.composite import end_effector_urdf
-
-        cl = self.client
-        path = end_effector_urdf()
-        geometry = load_ee_geometry(path)
-        body = int(cl.loadURDF(str(path), [0, 0, 1.0]))
-        cl.resetBasePositionAndOrientation(body, [0, 0, 1.0], [0, 0, 0, 1])
-        names = [
-            cl.getJointInfo(body, j)[1].decode() for j in (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)
-        ]
-        if names != list(DRIVEN_JOINTS):
-            raise InvalidParameter(
-                f"{path}: PyBullet numbers its joints {names} where the scene drives "
-                f"{list(DRIVEN_JOINTS)}: keep the joints in that order in the file"
+            self.arm, self.arm_joints, self._flange, self.ready_q = load_arm(
+                cl, robot, robot_base_xyz
             )
-        return body, geometry
-
-    def _load_arm(self, robot: str, base_xyz: tuple[float, float, float]) -> None:
-        """The arm from the composite URDF Pinocchio plans with (robots/<arm>_throwing):
-        kinematic and collision-free; its end-effector links are hidden, and the
-        physically driven end-effector body follows its `ee_base` link, so the mount
-        (flange offset and yaw) is the mount file's, as in the planner's model."""
-        from cell.robot.composite import composite_urdf, load_mount
-
-        spec = load_mount(robot)
-        cl = self.client
-        with _quiet_c_output(keep_stderr=True):
-            arm = int(cl.loadURDF(str(composite_urdf(robot)), list(base_xyz), useFixedBase=True))
-        joints = {cl.getJointInfo(arm, j)[1].decode(): j for j in range(cl.getNumJoints(arm))}
-        links = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
-        self.arm = arm
-        self.arm_joints = [joints[n] for n in spec.arm_joints]
-        self._flange = links["ee_base"]
-        for j in range(-1, cl.getNumJoints(arm)):
-            cl.setCollisionFilterGroupMask(arm, j, 0, 0)  # kinematic, collision-free
-        for name, j in links.items():
-            if name.startswith("ee_"):  # drawn by the driven end-effector body instead
-                cl.changeVisualShape(arm, j, rgbaColor=[0, 0, 0, 0])
-        self.ready_q = tuple(float(v) for v in spec.home)
-        self.set_arm(self.ready_q, teleport=True)
+            self.set_arm(self.ready_q, teleport=True)
 
     # -- the arm and the end-effector's mount ----------------------------------
     def set_arm(self, q: Sequence[float], *, teleport: bool = False) -> None:
@@ -279,33 +183,9 @@ class CellScene:
         self._arm_motion = q_of_t
 
     def follow(self, q_samples: Sequence[Sequence[float]], dt_s: float) -> None:
-        """Move the arm through joint samples [rad] taken every dt_s [s], stepping the physics.
-
-        Between samples the joints are interpolated linearly at every physics
-        step, so the mount constraint drags the end-effector (and the item it
-        grips) smoothly, with the arm's real velocity. Stops any `set_arm_motion`.
-
-        Raises:
-            InvalidInput: no arm, or a sample of the wrong size.
-            InvalidParameter: dt_s shorter than the physics step.
-        """
-        if dt_s < self.dt_s:
-            raise InvalidParameter(
-                f"sample period {dt_s} s is below the physics step {self.dt_s} s"
-            )
-        if self.arm is None:
-            raise InvalidInput("this scene has no arm (robot=None): use hold_ee")
-        self._arm_motion = None
-        self.set_timestep(self.dt_s)
-        n = max(1, int(round(dt_s / self.dt_s)))
-        cl = self.client
-        q_prev = np.asarray([cl.getJointState(self.arm, j)[0] for j in self.arm_joints])
-        for q in q_samples:
-            q_next = np.asarray(q, float)
-            for k in range(1, n + 1):
-                self.set_arm(q_prev + (q_next - q_prev) * k / n)
-                self.step()
-            q_prev = q_next
+        """Move the arm through joint samples [rad] taken every dt_s [s], stepping the
+        physics; `cell.sim.scene_arm.follow`."""
+        scene_arm.follow(self, q_samples, dt_s)
 
     def hold_ee(
         self, position: Sequence[float], orientation: Sequence[float], *, teleport: bool = False
@@ -318,17 +198,7 @@ class CellScene:
         cl = self.client
         pos, orn = [float(v) for v in position], [float(v) for v in orientation]
         if teleport:
-            old_p, old_o = cl.getBasePositionAndOrientation(self.ee_body)
-            inv_p, inv_o = cl.invertTransform(old_p, old_o)
-            held = self.held_bodies()
-            moved = [it.body for it in self.items if it.body in held]
-            rel = {
-                b: cl.multiplyTransforms(inv_p, inv_o, *cl.getBasePositionAndOrientation(b))
-                for b in moved
-            }
-            cl.resetBasePositionAndOrientation(self.ee_body, pos, orn)
-            for b, (rp, ro) in rel.items():
-                cl.resetBasePositionAndOrientation(b, *cl.multiplyTransforms(pos, orn, rp, ro))
+            scene_arm.teleport_ee(self, pos, orn)
         self._mount_pose = (pos, orn)
         cl.changeConstraint(
             self._mount,
@@ -371,13 +241,8 @@ class CellScene:
         obj: ObjectParams,
         roll: float = 0.0,
     ) -> tuple[list[float], list[float]]:
-        """The pose of E that puts the gripped item's centre of mass at p0 [m, W].
-
-        The item's centre sits at z = L_s + size_z/2 in E, on the throw axis.
-
-        Returns:
-            (position [m], quaternion x y z w) of E in W.
-        """
+        """The pose of E (position [m], quaternion x y z w, W) that puts the gripped item's
+        centre of mass at p0 [m, W], on the throw axis at z = L_s + size_z/2 in E."""
         return ee_pose_for_item_centre(p0, elevation, azimuth, stroke_m, obj, roll)
 
     def ee_pose_for_place(
@@ -390,28 +255,11 @@ class CellScene:
         clearance_m: float = 0.02,
         yaw: float = 0.0,
     ) -> tuple[list[float], list[float]]:
-        """The pose of E pointing down that holds the grip's lowest point `clearance_m` above a surface.
-
-        With E's +z down, the item's bottom is at L_s + size_z along it and the
-        pad ends at L_s + pad length; the lower of the two is put at the
-        clearance (the TCP is EE_TO_TCP_M along +z from E). `place` then lowers
-        the item by up to (end stop − L_s), so keep clearance_m small.
-
-        Args:
-            point_xy: where to set the item down [m, W].
-            surface_z: height of the surface (a bin's floor plate top) [m].
-            obj: the held item.
-            stroke_m: the stroke it is held at [m].
-            clearance_m: gap between the item's bottom and the surface [m].
-            yaw: rotation of the grip about the vertical [rad].
-
-        Returns:
-            (position [m], quaternion x y z w) of E in W.
-        """
-        r = release_orientation(-np.pi / 2, 0.0, yaw)
-        lowest = max(obj.size[2], self.geometry.pad_length_m)  # item bottom or pad ends
-        z = surface_z + clearance_m + stroke_m + lowest
-        return [float(point_xy[0]), float(point_xy[1]), float(z)], quat_from_matrix(r)
+        """The pose of E pointing down that holds the grip's lowest point `clearance_m`
+        above a surface; `cell.sim.scene_arm.ee_pose_for_place`."""
+        return scene_arm.ee_pose_for_place(
+            point_xy, surface_z, obj, stroke_m, self.geometry, clearance_m=clearance_m, yaw=yaw
+        )
 
     # -- items -----------------------------------------------------------------
     def spawn_item(
@@ -443,12 +291,7 @@ class CellScene:
         if position is None:
             if not at_pick_station:
                 raise InvalidInput("spawn_item: give a position or at_pick_station=True")
-            position = (
-                self.pick_station_xy[0] + float(offset_xy[0]),
-                self.pick_station_xy[1] + float(offset_xy[1]),
-                self._station_top() + obj.size[2] / 2 + gap_m,
-            )
-            orientation = (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2)))
+            position, orientation = station.drop_pose(self, obj, offset_xy, yaw, gap_m)
         item = spawn_item(self.client, what, position, orientation)
         self.items.append(item)
         return item
@@ -503,19 +346,6 @@ class CellScene:
         else:
             self.remove_item(item)
 
-    def _station_top(self) -> float:
-        """Height above which a new item fits on the pick station (over any item resting
-        there; not over one flying past, which is still being tracked) [m]."""
-        top = self.pick_station_height
-        x0, y0 = self.pick_station_xy
-        for it in self.items:
-            if it.body in self._trackers or it.body in self._kept:
-                continue
-            p, _ = self.client.getBasePositionAndOrientation(it.body)
-            if abs(p[0] - x0) < 0.15 and abs(p[1] - y0) < 0.15 and p[2] > top - 0.05:
-                top = max(top, p[2] + float(np.linalg.norm(it.obj.size)) / 2)
-        return top
-
     def remove_item(self, item: Item) -> None:
         """Take an item out of the scene."""
         self.client.removeBody(item.body)
@@ -531,20 +361,9 @@ class CellScene:
         return which_bin(pos, self.bins, above_rim_m=max(item.obj.size) / 2)
 
     def keep(self, item: Item) -> None:
-        """Leave an item resting where it is: a bin keeps what lands in it.
-
-        It stays a body of the scene (later items land on it and may knock it about),
-        but is no longer tracked nor given the drag law (a resting or nudged item moves
-        at well under 1 m/s, where drag is below 0.1 % of its weight), and Bullet puts it
-        to sleep until something touches it: piles of items awake in the bins would
-        make every physics step several times slower (their contacts are solved at
-        every step with 60 solver iterations).
-        """
-        cl = self.client
-        self._trackers.pop(item.body, None)
-        self._kept.add(item.body)
-        cl.changeDynamics(item.body, -1, activationState=cl.ACTIVATION_STATE_ENABLE_SLEEPING)
-        cl.changeDynamics(item.body, -1, activationState=cl.ACTIVATION_STATE_SLEEP)
+        """Leave an item resting where it is: a bin keeps what lands in it (untracked,
+        asleep until touched); `cell.sim.station.keep`."""
+        station.keep(self, item)
 
     def kept_items(self, bin_id: str | None = None) -> list[Item]:
         """Items left in the scene by `keep` (those whose centre lies in `bin_id`, if given)."""
@@ -586,32 +405,12 @@ class CellScene:
                     apply_drag(cl, it.body, it.drag_c)
             cl.stepSimulation()
             self.t += self._dt_now
-            for body, tr in self._trackers.items():
-                pos, _ = cl.getBasePositionAndOrientation(body)
-                vel, spin = cl.getBaseVelocity(body)
-                tr.sample(
-                    self.t, pos, np.asarray(vel), np.asarray(spin), cl.getContactPoints(bodyA=body)
-                )
+            watch.sample_trackers(self)
 
     def refresh_contacts(self, item: Item) -> None:
-        """Drop the cached contacts between the end-effector and `item`, then step once at
-        the current step: Bullet makes them anew, with the normals the bodies have now.
-
-        Why: for a cylinder or a mesh (GJK pairs) Bullet keeps each contact point with
-        the normal it was made with, in world axes. While the pads hold an item and the
-        arm turns the end-effector, the points stay (nothing slides) but their normals
-        do not turn: after a carry they were measured 30-40° off the pads' faces, and at
-        the launch they wedged a cylinder against one pad (it left at 0.2 m/s instead of
-        3.2 m/s). Filtering the pair out for one step empties the cache; the item is
-        unsupported for that one step (it falls g·dt²/2, under a micrometre).
-        """
-        cl = self.client
-        links = range(-1, cl.getNumJoints(self.ee_body))
-        for link in links:
-            cl.setCollisionFilterPair(self.ee_body, item.body, link, -1, 0)
-        self.step()
-        for link in links:
-            cl.setCollisionFilterPair(self.ee_body, item.body, link, -1, 1)
+        """Drop the cached contacts between the end-effector and `item`, then step once;
+        `cell.sim.scene_arm.refresh_contacts`."""
+        scene_arm.refresh_contacts(self, item)
 
     def run_for(self, seconds: float) -> None:
         """Step for a duration [s] at the current step."""
@@ -637,84 +436,19 @@ class CellScene:
     def watch_until_crossing(
         self, item: Item, land_z: float, *, timeout_s: float = 4.0
     ) -> tuple[float, float, float]:
-        """Step until the item's centre of mass crosses z = land_z going down.
-
-        Returns:
-            (x [m], y [m], t [s] since release) of the crossing (see Outcome.crossing).
-
-        Raises:
-            NoLanding: it touched down first, or the timeout passed.
-        """
-        self.set_timestep(self.dt_s)
-        tr = self._trackers.get(item.body) or self.track(item)
-        t_end = self.t + timeout_s
-        try:
-            while self.t < t_end:
-                self.step()
-                z = tr.samples[-1][3]
-                if z <= land_z and tr.samples[-2][3] > z:
-                    return crossing(np.asarray(tr.samples), land_z)
-                if tr.touchdown is not None:
-                    break
-        finally:
-            self._trackers.pop(item.body, None)
-        raise NoLanding(
-            f"item {item.obj.name or item.body} did not cross z = {land_z:.3f} m in free flight"
-        )
+        """Step until the item's centre of mass crosses z = land_z going down: (x [m],
+        y [m], t [s] since release); `cell.sim.watch.watch_until_crossing`."""
+        return watch.watch_until_crossing(self, item, land_z, timeout_s=timeout_s)
 
     def watch_until_rest(self, item: Item, *, timeout_s: float = 6.0) -> Outcome:
-        """Step until the item rests (or the timeout) and report where it went.
-
-        Tracking starts at the last `track` call (the end-effector's throw and
-        place start it at release), else now.
-
-        Raises:
-            NoLanding: the item never touched anything but the end-effector.
-        """
-        self.set_timestep(self.dt_s)
-        tr = self._trackers.get(item.body) or self.track(item)
-        t_end = self.t + timeout_s
-        while not tr.at_rest and self.t < t_end and not self._fell_out(tr):
-            self.step()
-        return self._end_watch(item, tr, timeout_s)
+        """Step until the item rests (or the timeout) and report where it went;
+        `cell.sim.watch.watch_until_rest`."""
+        return watch.watch_until_rest(self, item, timeout_s=timeout_s)
 
     def outcome_if_settled(self, item: Item, *, timeout_s: float = 6.0) -> Outcome | None:
-        """Where a tracked item went, once it rests or `timeout_s` after its release; None
-        while it is still moving. Lets the loop go on with the next item while this one
-        flies (the physics steps it with everything else); its track is the same as
-        `watch_until_rest` would have recorded.
-
-        Raises:
-            InvalidInput: the item is not being tracked.
-            NoLanding: it never touched anything but the end-effector.
-        """
-        tr = self.tracker(item)
-        if tr.at_rest or self.t >= tr.t0 + timeout_s or self._fell_out(tr):
-            return self._end_watch(item, tr, timeout_s)
-        return None
-
-    @staticmethod
-    def _fell_out(tr: Tracker) -> bool:
-        return bool(tr.samples) and tr.samples[-1][3] < -1.0  # fell out of the world
-
-    def _end_watch(self, item: Item, tr: Tracker, timeout_s: float) -> Outcome:
-        self._trackers.pop(item.body, None)
-        if tr.touchdown is None:
-            raise NoLanding(
-                f"item {item.obj.name or item.body} never touched down in {timeout_s} s"
-            )
-        out = tr.outcome(None)
-        return Outcome(
-            touchdown_xyz=out.touchdown_xyz,
-            touchdown_speed=out.touchdown_speed,
-            touchdown_body=out.touchdown_body,
-            rest_xyz=out.rest_xyz,
-            bin_id=which_bin(out.rest_xyz, self.bins, above_rim_m=max(item.obj.size) / 2),
-            rested=out.rested,
-            t_touchdown=out.t_touchdown,
-            t_rest=out.t_rest,
-            track=out.track,
-        )
+        """Where a tracked item went once it rests or `timeout_s` after its release, None
+        while it still moves; `cell.sim.watch.outcome_if_settled`."""
+        return watch.outcome_if_settled(self, item, timeout_s=timeout_s)
 
     # -- output ----------------------------------------------------------------
     def snapshot(self, path: str | Path, **camera: Any) -> Path:

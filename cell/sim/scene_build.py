@@ -1,0 +1,113 @@
+"""Building the PyBullet cell: connecting, the pick station, the end-effector's body and
+the arm's (see `cell.sim.scene`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from cell.errors import InvalidParameter, MissingDependency
+from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT
+from cell.sim.bins import BinSpec
+from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
+from cell.sim.quiet import quiet_c_output
+
+
+def check_settings(
+    robot: str | None, bins: Sequence[BinSpec], dt_s: float, launch_dt_s: float
+) -> None:
+    """InvalidParameter for a bad time step, an unknown robot or repeated bin ids."""
+    if not (0 < launch_dt_s <= dt_s <= 0.01):
+        raise InvalidParameter(
+            f"time steps dt_s={dt_s}, launch_dt_s={launch_dt_s} s: need 0 < launch ≤ dt ≤ 0.01"
+        )
+    from cell.robot.composite import MOUNTS
+
+    if robot is not None and robot not in MOUNTS:
+        raise InvalidParameter(f"robot {robot!r}: valid are {sorted(MOUNTS)} or None")
+    ids = [b.id for b in bins]
+    if len(set(ids)) != len(ids):
+        raise InvalidParameter(f"bin ids must be unique, got {ids}")
+
+
+def connect(gui: bool) -> tuple[Any, str]:
+    """A PyBullet client (GUI or DIRECT) with its banners silenced, and pybullet_data's
+    path; MissingDependency without pybullet."""
+    with quiet_c_output(keep_stderr=gui):  # PyBullet's banners (import, connect)
+        try:
+            import pybullet
+            import pybullet_data
+            from pybullet_utils.bullet_client import BulletClient
+        except ImportError:
+            raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
+        client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+    return client, pybullet_data.getDataPath()
+
+
+def pick_station_body(cl: Any, xy: tuple[float, float], height: float) -> int:
+    """The pick station: a fixed 0.24 m square block centred at xy [m, W], its top at
+    `height` [m]."""
+    half = [0.12, 0.12, height / 2]
+    return int(
+        cl.createMultiBody(
+            0,
+            cl.createCollisionShape(cl.GEOM_BOX, halfExtents=half),
+            cl.createVisualShape(cl.GEOM_BOX, halfExtents=half, rgbaColor=[0.5, 0.4, 0.3, 1]),
+            [xy[0], xy[1], height / 2],
+        )
+    )
+
+
+def load_end_effector(cl: Any) -> tuple[int, EEGeometry]:
+    """The end-effector's body from its description, E at (0, 0, 1) m until mounted,
+    and the geometry read from the same file.
+
+    PyBullet puts the body's base frame at `ee_base`'s inertial frame, which the
+    description puts at E (the plate face); loadURDF places the link frame, so the
+    base is then set to E's pose.
+    """
+    from cell.robot.composite import end_effector_urdf
+
+    path = end_effector_urdf()
+    geometry = load_ee_geometry(path)
+    body = int(cl.loadURDF(str(path), [0, 0, 1.0]))
+    cl.resetBasePositionAndOrientation(body, [0, 0, 1.0], [0, 0, 0, 1])
+    names = [cl.getJointInfo(body, j)[1].decode() for j in (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)]
+    if names != list(DRIVEN_JOINTS):
+        raise InvalidParameter(
+            f"{path}: PyBullet numbers its joints {names} where the scene drives "
+            f"{list(DRIVEN_JOINTS)}: keep the joints in that order in the file"
+        )
+    return body, geometry
+
+
+def load_arm(
+    cl: Any, robot: str, base_xyz: tuple[float, float, float]
+) -> tuple[int, list[int], int, tuple[float, ...]]:
+    """The arm from the composite URDF Pinocchio plans with (robots/<arm>_throwing):
+    kinematic and collision-free; its end-effector links are hidden, and the
+    physically driven end-effector body follows its `ee_base` link, so the mount
+    (flange offset and yaw) is the mount file's, as in the planner's model.
+
+    Returns:
+        (the arm's body, its joints' indices, `ee_base`'s link index, the ready
+        configuration [rad]).
+    """
+    from cell.robot.composite import composite_urdf, load_mount
+
+    spec = load_mount(robot)
+    with quiet_c_output(keep_stderr=True):
+        arm = int(cl.loadURDF(str(composite_urdf(robot)), list(base_xyz), useFixedBase=True))
+    joints = {cl.getJointInfo(arm, j)[1].decode(): j for j in range(cl.getNumJoints(arm))}
+    links = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
+    for j in range(-1, cl.getNumJoints(arm)):
+        cl.setCollisionFilterGroupMask(arm, j, 0, 0)  # kinematic, collision-free
+    for name, j in links.items():
+        if name.startswith("ee_"):  # drawn by the driven end-effector body instead
+            cl.changeVisualShape(arm, j, rgbaColor=[0, 0, 0, 0])
+    return (
+        arm,
+        [joints[n] for n in spec.arm_joints],
+        links["ee_base"],
+        tuple(float(v) for v in spec.home),
+    )
