@@ -235,9 +235,7 @@ def run(args: argparse.Namespace) -> int:
             )
             return EXIT_HARDWARE_FAULT
         if args.snapshot:  # rendered now, written after the results are printed
-            from cell.sim.snapshot import render
-
-            image = render(orch.scene.client)
+            image = orch.scene.render()
         if rec is not None:
             rec.finish(summary)
     finally:

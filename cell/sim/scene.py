@@ -32,6 +32,7 @@ from cell.errors import InvalidInput
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
 from cell.sim import scene_arm, station, watch
+from cell.sim import snapshot as snapshot_png
 from cell.sim.band import BandDrive
 from cell.sim.bins import BinSpec, build_bin, which_bin
 from cell.sim.drag import apply_drag
@@ -451,11 +452,13 @@ class CellScene:
         return watch.outcome_if_settled(self, item, timeout_s=timeout_s)
 
     # -- output ----------------------------------------------------------------
-    def snapshot(self, path: str | Path, **camera: Any) -> Path:
-        """Render the scene headless (TinyRenderer) to a PNG; camera keywords as cell.sim.snapshot.render."""
-        from cell.sim.snapshot import render, save_png
+    def render(self, **camera: Any) -> np.ndarray:
+        """The scene as an RGB image (h, w, 3), headless; camera keywords as `snapshot.render`."""
+        return snapshot_png.render(self.client, **camera)
 
-        return save_png(render(self.client, **camera), path)
+    def snapshot(self, path: str | Path, **camera: Any) -> Path:
+        """The scene rendered (`render`) to a PNG at `path`."""
+        return snapshot_png.save_png(self.render(**camera), path)
 
     def close(self) -> None:
         """Disconnect from the physics server."""
