@@ -301,6 +301,9 @@ def check_the_tradeoff() -> None:
         assert int(n) == p["failures"].get("dropped_while_carried", 0), s
     (items,) = quoted(page, r"joint limits, (\d+) items a point")
     assert {int(items)} == {p["items"] for p in tradeoff["points"]}
+    layout_set, seed = quoted(page, r"`cell bench tradeoff --set (\w+) --layouts 4 --seed (\d+)")
+    # a figure made before `--set` was there holds no "set": it ran seeds 0-3, the tune set
+    assert (layout_set, int(seed)) == (tradeoff.get("set", "tune"), tradeoff.get("seeds", [0])[0])
 
 
 def check_the_flywheel() -> None:

@@ -391,7 +391,9 @@ def _select(
         # warm start at the all-throw fit (the prior, centred at 1, decides the optimum)
         return _stage2(sub, ee_cv, x_cv, opt, p)
 
-    choices = choose_object_priors(data, st.ee, opt.object_priors, opt.cv_folds, solve)
+    choices = choose_object_priors(
+        data, st.ee, opt.object_priors, opt.cv_folds, solve, opt.prior_rel
+    )
     std = column_priors(data, choices)
     st.factors = np.where(std > 0, st.factors, 1.0)
     _alternate(data, st, anchor, bounds, opt, std, progress)
