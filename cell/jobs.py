@@ -10,7 +10,7 @@ line and the field path and says what would be valid.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -188,22 +188,42 @@ def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, flo
         and the mobile base's settings keep their defaults on other platforms.
     """
     platform = c.text(cell["platform"], "cell.platform", PLATFORMS) if "platform" in cell else "arm"
-    hover, rpm, speed = 2.0, 0.0, 0.0
-    if "drone" in cell:
-        if platform != "drone":
-            raise c.fail(cell["drone"], "cell.drone", "only for platform: drone")
-        dr = c.mapping(cell["drone"], "cell.drone", dict.fromkeys(DRONE_KEYS, ""))
-        if "hover_height_m" in dr:
-            hover = c.number(dr["hover_height_m"], "cell.drone.hover_height_m", lo=0.5, hi=10.0)
-        if "rotor_rpm" in dr:
-            rpm = c.number(dr["rotor_rpm"], "cell.drone.rotor_rpm", lo=0.0, hi=30000.0)
-    if "mobile" in cell:
-        if platform != "mobile":
-            raise c.fail(cell["mobile"], "cell.mobile", "only for platform: mobile")
-        mb = c.mapping(cell["mobile"], "cell.mobile", dict.fromkeys(MOBILE_KEYS, ""))
-        if "speed_mps" in mb:
-            speed = c.number(mb["speed_mps"], "cell.mobile.speed_mps", lo=0.0, hi=2.0)
+    drone = _platform_section(c, cell, platform, "drone", DRONE_KEYS)
+    hover = _setting(c, drone, "cell.drone", "hover_height_m", 2.0, (0.5, 10.0))
+    rpm = _setting(c, drone, "cell.drone", "rotor_rpm", 0.0, (0.0, 30000.0))
+    mobile = _platform_section(c, cell, platform, "mobile", MOBILE_KEYS)
+    speed = _setting(c, mobile, "cell.mobile", "speed_mps", 0.0, (0.0, 2.0))
     return platform, hover, rpm, speed
+
+
+def _platform_section(
+    c: Checker, cell: dict[str, Node], platform: str, name: str, keys: Any
+) -> dict[str, Node]:
+    """The section `cell.<name>` of a platform's settings (known keys only; empty when
+    absent).
+
+    Raises:
+        JobError: the section is given for another platform, or has an unknown key.
+    """
+    if name not in cell:
+        return {}
+    if platform != name:
+        raise c.fail(cell[name], f"cell.{name}", f"only for platform: {name}")
+    return c.mapping(cell[name], f"cell.{name}", dict.fromkeys(keys, ""))
+
+
+def _setting(
+    c: Checker,
+    section: dict[str, Node],
+    where: str,
+    key: str,
+    default: float,
+    bounds: tuple[float, float],
+) -> float:
+    """A number of a platform's section, within [lo, hi] (`default` when absent)."""
+    if key not in section:
+        return default
+    return c.number(section[key], f"{where}.{key}", lo=bounds[0], hi=bounds[1])
 
 
 def _cell_file(c: Checker, cell: dict[str, Node], key: str, base: Path) -> str:
@@ -453,11 +473,6 @@ def parse_job(text: str, path: str = "<job>") -> Job:
     reach, max_items, tlim = _limits(c, top)
     return Job(
         path=path,
-        robot=cell.robot,
-        ee=cell.ee,
-        ee_config=cell.ee_config,
-        params=cell.params,
-        residual=cell.residual,
         pick_position=pick,
         bins=tuple(bins),
         items=tuple(items),
@@ -466,10 +481,7 @@ def parse_job(text: str, path: str = "<job>") -> Job:
         place_reach_m=reach,
         max_items=max_items,
         item_time_limit_s=tlim,
-        platform=cell.platform,
-        hover_height_m=cell.hover_height_m,
-        rotor_rpm=cell.rotor_rpm,
-        base_speed_mps=cell.base_speed_mps,
+        **{f.name: getattr(cell, f.name) for f in fields(cell)},  # the `cell` section's
     )
 
 

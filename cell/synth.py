@@ -49,6 +49,7 @@ import numpy as np
 
 from cell.catalogue import catalogue
 from cell.errors import InvalidInput, InvalidParameter
+from cell.log.records import object_columns
 from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams
@@ -268,12 +269,7 @@ def _record(
     from `batch`, its observed landing (x, y) [m, W], in session `session` (from 0)."""
     return {
         "throw_id": f"{name}-{i:05d}",
-        "object_id": o.name,
-        "shape": o.shape,
-        "mass_kg": o.mass,
-        "size_x_m": o.size[0],
-        "size_y_m": o.size[1],
-        "size_z_m": o.size[2],
+        **object_columns(o),
         "stroke_m": float(batch.stroke[i]),
         "x_m": float(batch.position[i, 0]),
         "y_m": float(batch.position[i, 1]),

@@ -12,6 +12,7 @@ import pytest
 
 from cell.loop import Decision, ItemLoop, Platform
 from cell.sim import CellScene
+from cell.sim.frames import ee_pose_for_item_centre
 from cell.sim.settle import crossing
 
 CELL = Path(__file__).resolve().parents[1] / "cell"
@@ -160,7 +161,7 @@ def test_the_in_step_end_effector_drives_the_hardware_and_the_plant_in_order():
                 sim_place()
 
             eff.sim.throw, eff.sim.place = throw, place  # type: ignore[method-assign]
-            pose = sc.ee_pose_for_release((0, 0, 0.7), 0.6, 0.0, 0.07, _obj("cube50"))
+            pose = ee_pose_for_item_centre((0, 0, 0.7), 0.6, 0.0, 0.07, _obj("cube50"))
             sc.hold_ee(*pose, teleport=True)
             item = sc.spawn_item("cube50")
             eff.grasp(0.07, item)

@@ -14,6 +14,8 @@ from cell.model import DEFAULT_EE, ThrowBatch, band_state, predict_landing
 from cell.model.params import G
 from cell.params import load_params
 from cell.sim import BinSpec, CellScene
+from cell.sim.frames import ee_pose_for_item_centre
+from cell.sim.scene_arm import ee_pose_for_place
 from cell.workflows.campaign import throw_once
 
 SCENE_PARAMS = Path(__file__).resolve().parents[1] / "robots" / "cell_scene" / "ee_params.yaml"
@@ -36,7 +38,7 @@ def ee(scene):
 
 
 def _hold(scene, obj, stroke, p0, elevation, azimuth=0.0, roll=0.0):
-    pos, orn = scene.ee_pose_for_release(p0, elevation, azimuth, stroke, obj, roll)
+    pos, orn = ee_pose_for_item_centre(p0, elevation, azimuth, stroke, obj, roll)
     scene.hold_ee(pos, orn, teleport=True)
 
 
@@ -101,7 +103,7 @@ def test_grasp_raises_if_stroke_is_out_of_range(scene, ee):
 def test_place_sets_the_item_down_in_the_target_bin_gently(scene, ee):
     obj = get_object("cube50")
     # pointing down, the item's bottom 2 cm above the bin's floor plate (0.01 m thick)
-    pos, orn = scene.ee_pose_for_place((0.0, 0.0), 0.01, obj, 0.06, clearance_m=0.02)
+    pos, orn = ee_pose_for_place((0.0, 0.0), 0.01, obj, 0.06, scene.geometry, clearance_m=0.02)
     scene.hold_ee(pos, orn, teleport=True)
     item = scene.spawn_item("cube50")
     ee.grasp(0.06, item)
@@ -121,7 +123,7 @@ def test_a_place_touches_down_no_harder_than_a_drop_of_a_few_millimetres(scene, 
     # the place unwinds at the speed of a free fall from PLACE_DROP_M: the item touches
     # down at that speed (v² = 2 g h), and comes to rest where it was held, on the floor
     obj = get_object(obj_id)
-    pos, orn = scene.ee_pose_for_place((0.0, 0.0), 0.01, obj, 0.045, clearance_m=0.02)
+    pos, orn = ee_pose_for_place((0.0, 0.0), 0.01, obj, 0.045, scene.geometry, clearance_m=0.02)
     scene.hold_ee(pos, orn, teleport=True)
     item = scene.spawn_item(obj)
     ee.grasp(0.045, item)

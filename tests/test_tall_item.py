@@ -59,6 +59,7 @@ def _bottle_held_horizontal(carry_stroke_m: float) -> tuple[bool, float, float, 
 
     from cell.catalogue import catalogue
     from cell.model.grip import holding_mass_kg
+    from cell.sim.frames import ee_pose_for_item_centre
     from cell.sim.grip_probe import grasped_in_scene, turn_rad
 
     bottle = catalogue()["o6_bottle"].params
@@ -73,7 +74,7 @@ def _bottle_held_horizontal(carry_stroke_m: float) -> tuple[bool, float, float, 
         law = holding_mass_kg(plant, carry_stroke_m, width) / holding_mass_kg(
             plant, THROW_STROKE_M, width
         )
-        level = sc.ee_pose_for_release((0.0, 0.0, 0.7), 0.0, 0.0, carry_stroke_m, bottle, 0.0)
+        level = ee_pose_for_item_centre((0.0, 0.0, 0.7), 0.0, 0.0, carry_stroke_m, bottle, 0.0)
         sc.hold_ee(*level, teleport=True)
         sc.run_for(1.0)
         turn = math.degrees(turn_rad(sc.client, q1, in_grip()[1]))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import platform
 import time
+from typing import Any
 
 from cell.bench import available
 from cell.cli.common import add_json_arg, human, json_to_stdout, print_json, write_json
@@ -114,9 +115,8 @@ def run_sort(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from cell.bench.bench_sort import first_seed, layout_units, run_layout, summarise_layouts
+    from cell.bench.bench_sort import first_seed, layout_units, summarise_layouts
     from cell.errors import InvalidInput
-    from cell.parallel import run_campaign
 
     robots = _robots(args.robots)
     if not 1 <= args.layouts <= 10_000:
@@ -144,14 +144,7 @@ def run_sort(args: argparse.Namespace) -> int:
         if out is not None:  # written by the driver as each layout arrives
             (out / f"layout_{units[i].seed}.json").write_text(json.dumps(res, indent=1))
 
-    layouts = run_campaign(
-        run_layout,
-        units,
-        workers=args.workers,
-        address=args.ray_address,
-        desc="random layouts",
-        on_result=keep,
-    )
+    layouts = _campaign(args, units, "random layouts", on_result=keep)
     figures = {**_set_figures(args.set, first, args.layouts), **summarise_layouts(layouts)}
     if json_to_stdout(args):
         print_json(figures)
@@ -177,6 +170,23 @@ def run_sort(args: argparse.Namespace) -> int:
     return 0
 
 
+def _campaign(
+    args: argparse.Namespace, units: list[Any], desc: str, on_result: Any = None
+) -> list[Any]:
+    """`run_layout` over the units, on --workers processes or the Ray cluster --ray-address."""
+    from cell.bench.bench_sort import run_layout
+    from cell.parallel import run_campaign
+
+    return run_campaign(
+        run_layout,
+        units,
+        workers=args.workers,
+        address=args.ray_address,
+        desc=desc,
+        on_result=on_result,
+    )
+
+
 def _set_figures(layout_set: str, first: int, layouts: int) -> dict[str, object]:
     """Which layouts a campaign ran: {"set": tune|test, "seeds": [first, last]}."""
     return {"set": layout_set, "seeds": [first, first + layouts - 1]}
@@ -196,10 +206,9 @@ def _robots(text: str) -> tuple[str, ...]:
 def run_tradeoff(args: argparse.Namespace) -> int:
     import json
 
-    from cell.bench.bench_sort import first_seed, run_layout
+    from cell.bench.bench_sort import first_seed
     from cell.bench.bench_tradeoff import plot_tradeoff, tradeoff_rows, tradeoff_units
     from cell.errors import InvalidInput
-    from cell.parallel import run_campaign
 
     try:
         scales = tuple(sorted({float(v) for v in args.scales.split(",") if v.strip()}))
@@ -213,13 +222,7 @@ def run_tradeoff(args: argparse.Namespace) -> int:
     units = tradeoff_units(
         scales, args.layouts, first, _robots(args.robots), max(0, args.max_items)
     )
-    results = run_campaign(
-        run_layout,
-        units,
-        workers=args.workers,
-        address=args.ray_address,
-        desc="layouts x speed scales",
-    )
+    results = _campaign(args, units, "layouts x speed scales")
     rows = tradeoff_rows(results)
     doc = {**_set_figures(args.set, first, args.layouts), "points": rows}
     if json_to_stdout(args):

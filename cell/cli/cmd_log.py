@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
 
 from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
+
+T = TypeVar("T")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -68,16 +73,26 @@ def run_import(args: argparse.Namespace) -> int:
     return 0
 
 
+def _read_store(db: str | None, read: Callable[[Any], T]) -> tuple[T, Path]:
+    """What `read` takes from the store `db`, opened read-only (it must exist), and the
+    store's path."""
+    _require_store(db)
+    from cell.log import ThrowStore
+
+    with ThrowStore(db, read_only=True) as store:
+        return read(store), store.path
+
+
 def run_export(args: argparse.Namespace) -> int:
-    _require_store(args.db)
     import csv
 
-    from cell.log import ThrowStore, write_throws_csv
+    from cell.log import write_throws_csv
 
-    with ThrowStore(args.db, read_only=True) as store:
+    def read(store: Any) -> tuple[Any, dict[str, Any]]:
         table = store.table(object_id=args.object, session=args.session)
-        tracks = store.tracks(table.text("throw_id")) if args.tracks else {}
-        path = store.path
+        return table, (store.tracks(table.text("throw_id")) if args.tracks else {})
+
+    (table, tracks), path = _read_store(args.db, read)
     write_throws_csv(table, args.output)
     if args.tracks:
         with open(args.tracks, "w", newline="") as fh:
@@ -94,12 +109,7 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
-    _require_store(args.db)
-    from cell.log import ThrowStore
-
-    with ThrowStore(args.db, read_only=True) as store:
-        counts = store.counts()
-        path = store.path
+    counts, path = _read_store(args.db, lambda store: store.counts())
     doc = {"store": str(path), **counts}
     if json_to_stdout(args):
         print_json(doc)

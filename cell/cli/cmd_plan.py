@@ -8,6 +8,7 @@ import math
 from cell.cli.common import (
     add_json_arg,
     add_object_args,
+    add_vector_arg,
     json_to_stdout,
     object_from_args,
     print_json,
@@ -27,13 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
             "stored band energy. Target z is the landing plane (a bin's rim height)."
         ),
     )
-    p.add_argument(
-        "--target",
-        type=float,
-        nargs=3,
-        required=True,
-        metavar=("X", "Y", "Z"),
-        help="goal in the world frame [m]; Z is the landing plane's height",
+    add_vector_arg(
+        p, "--target", "goal in the world frame [m]; Z is the landing plane's height", required=True
     )
     add_object_args(p)
     p.add_argument(
@@ -42,19 +38,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="auto",
         help="fast inverse, full NLP, or fast with the NLP as fallback (auto)",
     )
-    p.add_argument(
-        "--current",
-        type=float,
-        nargs=3,
-        metavar=("X", "Y", "Z"),
-        help="current grip centre [m]: the fast path releases there",
-    )
-    p.add_argument(
+    add_vector_arg(p, "--current", "current grip centre [m]: the fast path releases there")
+    add_vector_arg(
+        p,
         "--base-velocity",
-        type=float,
-        nargs=3,
+        "a known base velocity at release [m/s] (default: fixed base)",
         metavar=("VX", "VY", "VZ"),
-        help="a known base velocity at release [m/s] (default: fixed base)",
     )
     p.add_argument(
         "--moving-base",

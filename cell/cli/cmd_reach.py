@@ -7,7 +7,14 @@ import math
 
 import numpy as np
 
-from cell.cli.common import add_axis_args, add_json_arg, json_to_stdout, print_json, write_json
+from cell.cli.common import (
+    add_axis_args,
+    add_json_arg,
+    add_vector_arg,
+    json_to_stdout,
+    print_json,
+    write_json,
+)
 from cell.kinds import ROBOTS
 
 
@@ -16,14 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "reach", help="inverse kinematics to a release pose, and the move time from home"
     )
     p.add_argument("--robot", default="panda", choices=ROBOTS, help="arm (panda)")
-    p.add_argument(
-        "--at",
-        type=float,
-        nargs=3,
-        required=True,
-        metavar=("X", "Y", "Z"),
-        help="grip centre in the arm's base frame [m]",
-    )
+    add_vector_arg(p, "--at", "grip centre in the arm's base frame [m]", required=True)
     add_axis_args(p)
     p.add_argument(
         "--roll",

@@ -11,6 +11,7 @@ from cell.cli.common import (
     add_axis_args,
     add_json_arg,
     add_object_args,
+    add_vector_arg,
     json_to_stdout,
     object_from_args,
     print_json,
@@ -27,22 +28,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_object_args(p)
     p.add_argument("--list", action="store_true", help="list the catalogue objects and exit")
     p.add_argument("--stroke", type=float, default=0.06, metavar="M", help="stroke L_s [m] (0.06)")
-    p.add_argument(
-        "--at",
-        type=float,
-        nargs=3,
-        default=(0.0, 0.0, 0.6),
-        metavar=("X", "Y", "Z"),
-        help="release grip centre in the world frame [m] (0 0 0.6)",
+    add_vector_arg(
+        p, "--at", "release grip centre in the world frame [m] (0 0 0.6)", default=(0.0, 0.0, 0.6)
     )
     add_axis_args(p)
-    p.add_argument(
+    add_vector_arg(
+        p,
         "--base-velocity",
-        type=float,
-        nargs=3,
+        "end-effector velocity at release [m/s]",
         default=(0.0, 0.0, 0.0),
         metavar=("VX", "VY", "VZ"),
-        help="end-effector velocity at release [m/s]",
     )
     p.add_argument(
         "--land-z", type=float, default=0.0, metavar="M", help="landing plane height [m]"

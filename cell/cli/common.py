@@ -22,6 +22,7 @@ __all__ = [
     "add_json_arg",
     "add_campaign_args",
     "add_object_args",
+    "add_vector_arg",
     "check_output_path",
     "human",
     "json_to_stdout",
@@ -39,12 +40,30 @@ def add_object_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--object", metavar="ID", help="catalogue object id (see `cell throw --list`)")
     g.add_argument("--shape", choices=SHAPES, help="shape class")
     g.add_argument("--mass", type=float, metavar="KG", help="mass [kg]")
-    g.add_argument(
-        "--size",
-        type=float,
-        nargs=3,
-        metavar=("X", "Y", "Z"),
-        help="box extents [m], x = grip width",
+    add_vector_arg(g, "--size", "box extents [m], x = grip width")
+
+
+def add_vector_arg(
+    p: Any,
+    flag: str,
+    help: str,
+    *,
+    required: bool = False,
+    default: tuple[float, float, float] | None = None,
+    metavar: tuple[str, str, str] = ("X", "Y", "Z"),
+) -> None:
+    """A flag that takes three numbers (a point [m] or a velocity [m/s]): `flag X Y Z`.
+
+    Args:
+        p: the parser or argument group.
+        flag: e.g. "--at".
+        help: the help text, with the unit.
+        required: the flag must be given.
+        default: the value when it is not given (None: not given).
+        metavar: the names of the three numbers in the help.
+    """
+    p.add_argument(
+        flag, type=float, nargs=3, required=required, default=default, metavar=metavar, help=help
     )
 
 

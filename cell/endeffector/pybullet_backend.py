@@ -13,7 +13,7 @@
   the item (sub-stepped at the scene's launch step) until the carriage hits its
   end stop; the item flies on. Its launch velocity is never set.
 * `place()`: the spool unwinds at `place_speed_mps`; the carriage lowers the item
-  until it touches something, then the fingers open (`CellScene.ee_pose_for_place`
+  until it touches something, then the fingers open (`cell.sim.scene_arm.ee_pose_for_place`
   gives a pose for it). Items shorter than the finger pads (cube30, the flat
   rocks) are let go when the pads meet the surface and drop the difference.
 """
@@ -139,8 +139,7 @@ class PyBulletEndEffector(EndEffector):
         widest = self.scene.geometry.finger_open_m
         if opening_m is not None and not 0 < opening_m <= widest:
             raise InvalidParameter(f"finger opening {opening_m} m outside 0 … {widest} m")
-        if self.item is not None:
-            raise InvalidInput("already holding an item: place or throw it first")
+        self._check_empty()
         self.band.fingers_closing = False
         self.band.open_to_m = opening_m
         self.band.wind(stroke_m, self.spool_speed_mps)
@@ -173,8 +172,7 @@ class PyBulletEndEffector(EndEffector):
             GraspLost: (stage "grasp") the pads did not both close on the item, or its
                 centre is not between them.
         """
-        if self.item is not None:
-            raise InvalidInput("already holding an item: place or throw it first")
+        self._check_empty()
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         stroke_m = self.band.position()
@@ -190,8 +188,27 @@ class PyBulletEndEffector(EndEffector):
                 f"touching it: {sorted(touching) or 'none'})",
                 "grasp",
             )
+        self._hold(item, stroke_m)
+
+    def _check_empty(self) -> None:
+        """InvalidInput when an item is held already (a grasp takes one at a time)."""
+        if self.item is not None:
+            raise InvalidInput("already holding an item: place or throw it first")
+
+    def _hold(self, item: Item, stroke_m: float) -> None:
+        """From now on `item` is held, gripped at stroke L_s [m] (`holds_item`)."""
         self.item = item
         self._grasp_stroke_m = stroke_m
+
+    def _held(self, action: str) -> Item:
+        """The item in the grip, which `action` ("throw", "place") lets go of.
+
+        Raises:
+            InvalidInput: no item in the grip.
+        """
+        if self.item is None:
+            raise InvalidInput(f"{action}: no item in the grip")
+        return self.item
 
     def _close_fingers(self) -> None:
         """Step while the closing fingers move (close_time_s at most: they stop on the item,
@@ -220,8 +237,7 @@ class PyBulletEndEffector(EndEffector):
             SimulationError: the fingers did not close on the item.
         """
         self._check_stroke(stroke_m)
-        if self.item is not None:
-            raise InvalidInput("already holding an item: place or throw it first")
+        self._check_empty()
         it = item if item is not None else self.pick_candidate()
         sc, cl = self.scene, self.scene.client
         sc.set_timestep(sc.dt_s)
@@ -256,8 +272,7 @@ class PyBulletEndEffector(EndEffector):
                 f"(width {it.obj.width:.3f} m)",
                 "grasp",
             )
-        self.item = it
-        self._grasp_stroke_m = stroke_m
+        self._hold(it, stroke_m)
 
     def holds_item(self) -> bool:
         """The item taken by `grasp` is still held: between the closed pads, or (if it
@@ -316,12 +331,11 @@ class PyBulletEndEffector(EndEffector):
         Raises:
             InvalidInput: no item in the grip.
         """
-        if self.item is None:
-            raise InvalidInput("throw: no item in the grip")
+        item = self._held("throw")
         sc = self.scene
         sc.set_timestep(sc.launch_dt_s)
-        sc.refresh_contacts(self.item)  # the pads' contacts as they are now (see there)
-        sc.track(self.item)
+        sc.refresh_contacts(item)  # the pads' contacts as they are now (see there)
+        sc.track(item)
         self.band.wind_target_m = None
         self.band.latched = False
         stop = sc.geometry.end_stop_m - 1e-3
@@ -342,11 +356,10 @@ class PyBulletEndEffector(EndEffector):
         Raises:
             InvalidInput: no item in the grip.
         """
-        if self.item is None:
-            raise InvalidInput("place: no item in the grip")
+        item = self._held("place")
         sc = self.scene
         sc.set_timestep(sc.dt_s)
-        tr = sc.track(self.item)
+        tr = sc.track(item)
         self.band.wind_target_m = None
         end = sc.geometry.end_stop_m - 0.002
         step_m = self.place_speed_mps * sc.dt_s

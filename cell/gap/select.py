@@ -13,6 +13,7 @@ SCALE_AGREE.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -128,6 +129,7 @@ def effect_class(name: str, chosen: dict[str, type[Effect]] | None = None) -> ty
     return EFFECTS[name]
 
 
+@dataclass(eq=False)
 class Selection:
     """Effects joining the verdict one at a time, best first, and the tests they took.
 
@@ -147,27 +149,20 @@ class Selection:
             control, whether it passes and (after `mark_joined`) whether it joined.
     """
 
-    def __init__(
-        self,
-        prob: GapProblem,
-        prefix: list[type[Effect]],
-        scores: dict[str, Score],
-        members: dict[str, type[Effect]],
-        tracks: dict[str, Any] | None,
-        floor_m: float,
-        tick: Callable[[str], None],
-    ) -> None:
-        self.prob = prob
-        self.prefix = prefix
-        self.scores = scores
-        self.members = members
-        self.tracks = tracks
-        self.floor_m = floor_m
-        self.tick = tick
-        self.ranked = sorted(scores.values(), key=lambda s: s.heldout_rmse_m)
-        self.perm_cache: dict[tuple[str, ...], Score] = {}
-        self.tests: dict[str, dict[str, Any]] = {}
-        self.law_tries: dict[str, dict[str, float]] = {}
+    prob: GapProblem
+    prefix: list[type[Effect]]
+    scores: dict[str, Score]
+    members: dict[str, type[Effect]]
+    tracks: dict[str, Any] | None
+    floor_m: float
+    tick: Callable[[str], None]
+    ranked: list[Score] = field(init=False)
+    perm_cache: dict[tuple[str, ...], Score] = field(init=False, default_factory=dict)
+    tests: dict[str, dict[str, Any]] = field(init=False, default_factory=dict)
+    law_tries: dict[str, dict[str, float]] = field(init=False, default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.ranked = sorted(self.scores.values(), key=lambda s: s.heldout_rmse_m)
 
     def learn_law(self, cand: Score) -> Score:
         """The set with each effect's law chosen among its forms (`cell.gap.laws`); the

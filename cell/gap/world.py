@@ -20,7 +20,9 @@ from typing import Any
 import numpy as np
 
 from cell.catalogue import catalogue
+from cell.gap.world_other import draw_release_start
 from cell.kinds import PLATFORMS
+from cell.log.records import object_columns
 from cell.log.table import ThrowTable
 from cell.model.effects import (
     BandDamping,
@@ -124,23 +126,9 @@ def throw_records(n: int, rng: np.random.Generator, *, repeats: int = 2) -> list
     for _ in range(-(-n // repeats)):
         obj = cat[int(rng.integers(len(cat)))].params
         plat = str(rng.choice(list(PLATFORMS), p=[0.5, 0.2, 0.3]))
-        vb = np.zeros(3)
-        rpm = 0.0
-        if plat == "drone":
-            pos = [rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(1.0, 2.5)]
-            rpm = float(np.round(rng.uniform(3000, 9000), -2))
-        else:
-            pos = [rng.uniform(-0.2, 0.4), rng.uniform(-0.3, 0.3), rng.uniform(0.4, 0.9)]
-            if plat == "mobile":
-                th = rng.uniform(-np.pi, np.pi)
-                vb = rng.uniform(0.2, 0.6) * np.array([np.cos(th), np.sin(th), 0.0])
+        pos, vb, rpm = draw_release_start(plat, rng)
         rec = {
-            "object_id": obj.name,
-            "shape": obj.shape,
-            "mass_kg": obj.mass,
-            "size_x_m": obj.size[0],
-            "size_y_m": obj.size[1],
-            "size_z_m": obj.size[2],
+            **object_columns(obj),
             "stroke_m": float(rng.choice(strokes)),
             "x_m": float(pos[0]),
             "y_m": float(pos[1]),

@@ -35,7 +35,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["OBJECTS", "OtherCampaign", "draw_other_campaign", "landings", "band_push"]
+__all__ = [
+    "OBJECTS",
+    "OtherCampaign",
+    "draw_other_campaign",
+    "draw_release_start",
+    "landings",
+    "band_push",
+]
 
 G = 9.81  # [m/s²]
 RHO = 1.225  # [kg/m³]
@@ -101,6 +108,26 @@ class Throws:
         return int(self.mass.size)
 
 
+def draw_release_start(
+    plat: str, rng: np.random.Generator
+) -> tuple[list[float], np.ndarray, float]:
+    """A random release for a platform: the grip centre [m, W] (under a drone at 1-2.5 m,
+    else over the arm's table at 0.4-0.9 m), the base velocity [m/s, W] (a moving base's
+    0.2-0.6 m/s in a random direction, else zero) and the drone's rotor speed [rpm]
+    (3,000-9,000, else 0). The draws are made in this order, from `rng`."""
+    vb = np.zeros(3)
+    rpm = 0.0
+    if plat == "drone":
+        p0 = [rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(1.0, 2.5)]
+        rpm = float(np.round(rng.uniform(3000, 9000), -2))
+    else:
+        p0 = [rng.uniform(-0.2, 0.4), rng.uniform(-0.3, 0.3), rng.uniform(0.4, 0.9)]
+        if plat == "mobile":
+            th = rng.uniform(-np.pi, np.pi)
+            vb = rng.uniform(0.2, 0.6) * np.array([np.cos(th), np.sin(th), 0.0])
+    return p0, vb, rpm
+
+
 def draw_throws(n: int, rng: np.random.Generator, *, repeats: int = 2,
                 drone_share: float = 0.3) -> Throws:  # fmt: skip
     """n throws (configurations thrown `repeats` times each, shuffled)."""
@@ -110,16 +137,7 @@ def draw_throws(n: int, rng: np.random.Generator, *, repeats: int = 2,
     for _ in range(-(-n // repeats)):
         o = names[int(rng.integers(len(names)))]
         plat = str(rng.choice(["arm", "mobile", "drone"], p=plat_p / plat_p.sum()))
-        vb = np.zeros(3)
-        rpm = 0.0
-        if plat == "drone":
-            p0 = [rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(1.0, 2.5)]
-            rpm = float(np.round(rng.uniform(3000, 9000), -2))
-        else:
-            p0 = [rng.uniform(-0.2, 0.4), rng.uniform(-0.3, 0.3), rng.uniform(0.4, 0.9)]
-            if plat == "mobile":
-                th = rng.uniform(-np.pi, np.pi)
-                vb = rng.uniform(0.2, 0.6) * np.array([np.cos(th), np.sin(th), 0.0])
+        p0, vb, rpm = draw_release_start(plat, rng)
         c = (o, float(rng.choice(STROKES)), p0, float(np.radians(rng.choice([5, 20, 35, 50]))),
              float(rng.uniform(-np.pi, np.pi)), vb, plat, rpm,
              float(rng.choice([0.0, 0.25], p=[0.75, 0.25])))  # fmt: skip

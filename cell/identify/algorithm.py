@@ -181,9 +181,22 @@ def _stage1(
     """η_ee given η_o: bounded least squares with the chained push Jacobian."""
     fun, jac = stage1_problem(data, batch, ee, anchor, 1.0 / opt.prior_rel)
     z0 = np.clip(ee_to_vector(ee), bounds[0], bounds[1])
+    return ee_from_vector(_solve_stage(1, fun, jac, z0, bounds, opt), ee)
+
+
+def _solve_stage(
+    stage: int,
+    fun: Callable[[np.ndarray], np.ndarray],
+    jac: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+    opt: IdentifyOptions,
+) -> np.ndarray:
+    """The bounded least-squares solution of one stage (trust-region reflective, the
+    stage's evaluation budget and tolerances from `opt`), logged at debug level."""
     sol = least_squares(
         fun,
-        z0,
+        x0,
         jac=jac,
         bounds=bounds,
         method="trf",
@@ -192,8 +205,8 @@ def _stage1(
         ftol=opt.stage_tol,
         xtol=opt.stage_tol,
     )
-    log.debug("stage 1: %d evaluations, %d Jacobians, %s", sol.nfev, sol.njev, sol.message)
-    return ee_from_vector(sol.x, ee)
+    log.debug("stage %d: %d evaluations, %d Jacobians, %s", stage, sol.nfev, sol.njev, sol.message)
+    return np.asarray(sol.x)
 
 
 def _stage2(
@@ -230,19 +243,7 @@ def _stage2(
 
     nf = int(free.sum())
     lo, hi = np.full(nf, 1 - opt.object_bound), np.full(nf, 1 + opt.object_bound)
-    sol = least_squares(
-        f,
-        np.clip(x[free], lo, hi),
-        jac=j,
-        bounds=(lo, hi),
-        method="trf",
-        max_nfev=opt.stage_nfev,
-        x_scale=1.0,
-        ftol=opt.stage_tol,
-        xtol=opt.stage_tol,
-    )
-    log.debug("stage 2: %d evaluations, %d Jacobians, %s", sol.nfev, sol.njev, sol.message)
-    x[free] = sol.x
+    x[free] = _solve_stage(2, f, j, np.clip(x[free], lo, hi), (lo, hi), opt)
     return x
 
 

@@ -9,7 +9,20 @@ import numpy as np
 
 from cell.model.objects import ObjectParams
 
-__all__ = ["throw_record"]
+__all__ = ["object_columns", "throw_record"]
+
+
+def object_columns(obj: ObjectParams) -> dict[str, Any]:
+    """A throw-log row's object columns, as the object gives them: object_id (its catalogue
+    id), shape, mass_kg [kg] and size_x_m, size_y_m, size_z_m [m]."""
+    return {
+        "object_id": obj.name,
+        "shape": obj.shape,
+        "mass_kg": obj.mass,
+        "size_x_m": obj.size[0],
+        "size_y_m": obj.size[1],
+        "size_z_m": obj.size[2],
+    }
 
 
 def throw_record(

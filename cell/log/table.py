@@ -33,6 +33,8 @@ __all__ = [
     "parse_cells",
 ]
 
+# the release's stroke [m], grip centre [m, W] and throw axis [rad]
+_RELEASE_COLUMNS = ("stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad")
 REQUIRED_COLUMNS = (
     "throw_id",
     "object_id",
@@ -41,12 +43,7 @@ REQUIRED_COLUMNS = (
     "size_x_m",
     "size_y_m",
     "size_z_m",
-    "stroke_m",
-    "x_m",
-    "y_m",
-    "z_m",
-    "elevation_rad",
-    "azimuth_rad",
+    *_RELEASE_COLUMNS,
     "roll_rad",
     "vx_mps",
     "vy_mps",
@@ -125,21 +122,8 @@ class ThrowTable:
         Raises:
             InvalidInput: too few distinct throws (identical rows count once).
         """
-        cols = [
-            c
-            for c in (
-                "mass_kg",
-                "stroke_m",
-                "x_m",
-                "y_m",
-                "z_m",
-                "elevation_rad",
-                "azimuth_rad",
-                "landed_x_m",
-                "landed_y_m",
-            )
-            if c in self.data
-        ]
+        named = ("mass_kg", *_RELEASE_COLUMNS, "landed_x_m", "landed_y_m")
+        cols = [c for c in named if c in self.data]
         rows = np.column_stack([self.num(c) for c in cols]) if len(self) else np.empty((0, 0))
         distinct = len({tuple(np.round(r, 9)) for r in rows})
         if distinct < n_min:

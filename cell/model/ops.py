@@ -9,7 +9,7 @@ optimiser. No formula is duplicated between the two.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -28,26 +28,17 @@ class Ops:
     where: Callable[[Any, Any, Any], Any]
     fmax: Callable[[Any, Any], Any]
 
+    @classmethod
+    def of(cls, module: Any, **other: Callable[..., Any]) -> Ops:
+        """The operations as `module`'s functions of the same names, but those in `other`."""
+        return cls(**{f.name: other.get(f.name) or getattr(module, f.name) for f in fields(cls)})
 
-NUMPY = Ops(
-    sqrt=np.sqrt,
-    cos=np.cos,
-    sin=np.sin,
-    atan2=np.arctan2,
-    where=np.where,
-    fmax=np.maximum,
-)
+
+NUMPY = Ops.of(np, atan2=np.arctan2, fmax=np.maximum)
 
 
 def casadi_ops() -> Ops:
     """The CasADi back-end (imported lazily: casadi is only needed to plan)."""
     import casadi as ca
 
-    return Ops(
-        sqrt=ca.sqrt,
-        cos=ca.cos,
-        sin=ca.sin,
-        atan2=ca.atan2,
-        where=lambda c, a, b: ca.if_else(c, a, b),
-        fmax=ca.fmax,
-    )
+    return Ops.of(ca, where=lambda c, a, b: ca.if_else(c, a, b))

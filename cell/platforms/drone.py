@@ -144,24 +144,6 @@ class DronePlatform:
         """Where the gripped item's centre of mass is released [m, W], shape (3,)."""
         return np.array([*self.xy, self.hover_height_m - self.release_depth_m])
 
-    def release_pose(
-        self,
-        elevation: float,
-        azimuth: float,
-        stroke_m: float,
-        obj: ObjectParams,
-        roll: float = 0.0,
-    ) -> tuple[list[float], list[float]]:
-        """The end-effector frame E's pose that puts the item's centre at `release_point`.
-
-        As `CellScene.ee_pose_for_release`: the item's centre sits at
-        z = L_s + size_z/2 in E, on the throw axis u(e, a).
-
-        Returns:
-            (position [m], quaternion x y z w) of E in W.
-        """
-        return ee_pose_for_item_centre(self.release_point, elevation, azimuth, stroke_m, obj, roll)
-
     def air_velocity(self, points: np.ndarray) -> np.ndarray:
         """Downwash air velocity at points [m/s, W], shape (n, 3)."""
         return air_velocity(points, self.rotor_centre, self.rotor_rpm, self.law)
@@ -239,8 +221,12 @@ class DroneScene(CellScene):
         obj: ObjectParams,
         roll: float = 0.0,
     ) -> None:
-        """Teleport the end-effector to its release pose under the drone."""
-        pos, orn = self.drone.release_pose(elevation, azimuth, stroke_m, obj, roll)
+        """Teleport the end-effector to its release pose under the drone: the pose of E
+        that puts the gripped item's centre of mass at the drone's `release_point`, the
+        throw axis along u(e, a) (`cell.sim.frames.ee_pose_for_item_centre`)."""
+        pos, orn = ee_pose_for_item_centre(
+            self.drone.release_point, elevation, azimuth, stroke_m, obj, roll
+        )
         self.hold_ee(pos, orn, teleport=True)
 
     def step(self, n: int = 1) -> None:

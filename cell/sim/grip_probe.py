@@ -101,12 +101,13 @@ def grasped_in_scene(
     (the scene, the item, a function giving the item's pose in the end-effector's frame
     now: position [m] and quaternion x y z w, the end-effector)."""
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
+    from cell.sim.frames import ee_pose_for_item_centre
     from cell.sim.scene import CellScene
 
     with CellScene(robot=None) as sc:
         ee = PyBulletEndEffector(sc)
         cl = sc.client
-        pos, orn = sc.ee_pose_for_release(
+        pos, orn = ee_pose_for_item_centre(
             (0.0, 0.0, 0.7), elevation_rad, 0.0, stroke_m, obj, roll_rad
         )
         sc.hold_ee(pos, orn, teleport=True)

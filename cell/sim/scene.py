@@ -43,7 +43,6 @@ from cell.sim.frames import (
     FLANGE_YAW_RAD,
     MOUNT_FORCE_N,
     PANDA_READY,
-    ee_pose_for_item_centre,
     panda_urdf,
     release_orientation,
 )
@@ -232,35 +231,6 @@ class CellScene:
         """The end-effector frame E now: position [m, W] and rotation matrix, shape (3, 3)."""
         p, o = self.client.getBasePositionAndOrientation(self.ee_body)
         return np.asarray(p), np.asarray(self.client.getMatrixFromQuaternion(o)).reshape(3, 3)
-
-    def ee_pose_for_release(
-        self,
-        p0: Sequence[float],
-        elevation: float,
-        azimuth: float,
-        stroke_m: float,
-        obj: ObjectParams,
-        roll: float = 0.0,
-    ) -> tuple[list[float], list[float]]:
-        """The pose of E (position [m], quaternion x y z w, W) that puts the gripped item's
-        centre of mass at p0 [m, W], on the throw axis at z = L_s + size_z/2 in E."""
-        return ee_pose_for_item_centre(p0, elevation, azimuth, stroke_m, obj, roll)
-
-    def ee_pose_for_place(
-        self,
-        point_xy: Sequence[float],
-        surface_z: float,
-        obj: ObjectParams,
-        stroke_m: float,
-        *,
-        clearance_m: float = 0.02,
-        yaw: float = 0.0,
-    ) -> tuple[list[float], list[float]]:
-        """The pose of E pointing down that holds the grip's lowest point `clearance_m`
-        above a surface; `cell.sim.scene_arm.ee_pose_for_place`."""
-        return scene_arm.ee_pose_for_place(
-            point_xy, surface_z, obj, stroke_m, self.geometry, clearance_m=clearance_m, yaw=yaw
-        )
 
     # -- items -----------------------------------------------------------------
     def spawn_item(

@@ -27,6 +27,7 @@ from cell.log.records import throw_record
 from cell.log.table import ThrowTable
 from cell.loop import Decision, ItemLoop
 from cell.model.objects import ObjectParams
+from cell.sim.frames import ee_pose_for_item_centre
 from cell.sim.items import resolve_object
 from cell.sim.scene import CellScene
 
@@ -69,7 +70,7 @@ class ReleasePose:
         return Decision("throw", self.stroke)
 
     def pick(self, d: Decision, obj: ObjectParams, item: Any) -> None:
-        pose = self.scene.ee_pose_for_release(
+        pose = ee_pose_for_item_centre(
             self.position, self.elevation, self.azimuth, self.stroke, obj, self.roll
         )
         self.scene.hold_ee(*pose, teleport=True)

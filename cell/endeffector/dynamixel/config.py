@@ -47,12 +47,14 @@ def _check(problems: list[tuple[str, str]]) -> None:
         raise InvalidParameter("; ".join(f"{k}: {m}" for k, m in problems))
 
 
-def _id_problem(v: int) -> str | None:
-    return None if 0 <= v <= 252 else f"must be a servo ID in 0..252, got {v}"
-
-
-def _model_problem(v: str) -> str | None:
-    return None if v in MODELS else f"unknown model {v!r}; valid: {sorted(MODELS)}"
+def _servo_problems(servo_id: int, model: str) -> list[tuple[str, str]]:
+    """(field, message) for a servo's bus ID and model, those invalid."""
+    out = []
+    if not 0 <= servo_id <= 252:
+        out.append(("id", f"must be a servo ID in 0..252, got {servo_id}"))
+    if model not in MODELS:
+        out.append(("model", f"unknown model {model!r}; valid: {sorted(MODELS)}"))
+    return out
 
 
 @dataclass(frozen=True)
@@ -79,11 +81,7 @@ class LatchConfig:
 
     def problems(self) -> list[tuple[str, str]]:
         """(field, message) for every invalid field."""
-        out = []
-        if (m := _id_problem(self.id)) is not None:
-            out.append(("id", m))
-        if (m := _model_problem(self.model)) is not None:
-            out.append(("model", m))
+        out = _servo_problems(self.id, self.model)
         for name in ("engaged_position", "released_position"):
             if not 0 <= getattr(self, name) <= 4095:
                 out.append((name, f"must be in 0..4095 ticks, got {getattr(self, name)}"))
@@ -125,11 +123,7 @@ class SpoolConfig:
 
     def problems(self) -> list[tuple[str, str]]:
         """(field, message) for every invalid field."""
-        out = []
-        if (m := _id_problem(self.id)) is not None:
-            out.append(("id", m))
-        if (m := _model_problem(self.model)) is not None:
-            out.append(("model", m))
+        out = _servo_problems(self.id, self.model)
         if not (math.isfinite(self.radius_m) and 0.001 <= self.radius_m <= 0.1):
             out.append(("radius_m", f"must be in [0.001, 0.1] m, got {self.radius_m}"))
         lo, hi = EXTENDED_POSITION_RANGE
