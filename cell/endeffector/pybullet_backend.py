@@ -376,7 +376,7 @@ class PyBulletEndEffector(EndEffector):
             )
         self.band.stroke_cmd_m = self.band.position()
         widest = sc.geometry.finger_open_m
-        self.band.open_to_m = min(widest, pad_width_m(self.item.obj) / 2 + PLACE_OPENING_M)
+        self.band.open_to_m = min(widest, pad_width_m(item.obj) / 2 + PLACE_OPENING_M)
         self.band.fingers_closing = False
         sc.run_for(0.1)
         self.last_released, self.item = self.item, None
