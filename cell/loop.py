@@ -108,6 +108,11 @@ def _scored(
     )
 
 
+# Outcome (or the NoLanding error) → (ItemResult, landing point [m, W]): how an item
+# released is scored once the plant says where it came to rest
+Score = Callable[[Any], tuple[ItemResult, Any]]
+
+
 @dataclass
 class InFlight:
     """A thrown (or placed) item the loop is not waiting for: `score(outcome)` makes its
@@ -125,7 +130,7 @@ class InFlight:
     obj: ObjectParams
     item: Any
     decision: Decision
-    score: Callable[[Any], tuple[ItemResult, Any]]
+    score: Score
 
     @property
     def index(self) -> int:
@@ -248,9 +253,10 @@ class ItemLoop:
                 self._land_while(lambda: any(_settling_in(f, spec.bin) for f in self._flying))
             pf.carry(decision, obj, item)
             if decision.action == "place":
-                flying = self._place(base, obj, item, decision, target, t0)
+                score = self._place(base, decision, target, t0)
             else:
-                flying = self._throw(base, obj, item, decision, target, t0)
+                score = self._throw(base, obj, item, decision, target, t0)
+            flying = InFlight(base, obj, item, decision, score)
             if not pf.overlaps:
                 return self._wait_for(flying)
             return flying
@@ -270,17 +276,9 @@ class ItemLoop:
             if flying is None:  # an item released is tidied once it is scored (_settle)
                 self.plant.tidy(item)
 
-    def _place(
-        self,
-        base: dict[str, Any],
-        obj: ObjectParams,
-        item: Any,
-        d: Decision,
-        target: Any,
-        t0: float,
-    ) -> InFlight:
+    def _place(self, base: dict[str, Any], d: Decision, target: Any, t0: float) -> Score:
         """Release slowly and leave; the item, settling in the bin, is scored where it
-        comes to rest. The arm does not wait for it: a soft item rocks for up to 0.8 s
+        comes to rest (the score returned). The arm does not wait for it: a soft item rocks for up to 0.8 s
         (the demo's teddy), while a box rests before the pads are out of the bin."""
         if not isinstance(self.platform, Places):
             raise InvalidInput(f"the {self.platform.name} platform does not place items")
@@ -293,7 +291,7 @@ class ItemLoop:
             err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
             return _scored(base, "place", d, out, target, err, t_release - t0), out.rest_xyz
 
-        return InFlight(base, obj, item, d, score)
+        return score
 
     def _throw(
         self,
@@ -303,8 +301,9 @@ class ItemLoop:
         d: Decision,
         target: Any,
         t0: float,
-    ) -> InFlight:
-        """Open the latch at once; the item in flight, scored and recorded once it rests."""
+    ) -> Score:
+        """Open the latch at once; the item in flight is scored and recorded once it rests
+        (the score returned)."""
         released_at = self.plant.item_position(item)
         if self.observer is not None and not d.moving:
             self.observer.on_release(
@@ -349,7 +348,7 @@ class ItemLoop:
             res = _scored(base, "throw", d, out, target, err, t_release - t0, throw_id)
             return res, (cross[0], cross[1], land_z)
 
-        return InFlight(base, obj, item, d, score)
+        return score
 
     # -- items in flight ---------------------------------------------------------------
     def _settle(self, f: InFlight, out: Any) -> ItemResult:

@@ -4,17 +4,12 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterator
+from typing import Any
 
-from cell.cli.common import (
-    add_json_arg,
-    add_object_args,
-    add_vector_arg,
-    json_to_stdout,
-    object_from_args,
-    print_json,
-    write_json,
-)
+from cell.cli.common import add_json_arg, add_object_args, add_vector_arg, object_from_args, report
 from cell.errors import InvalidInput, InvalidParameter
+from cell.model.objects import ObjectParams
 from cell.params import load_params
 
 
@@ -109,31 +104,30 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
-    if json_to_stdout(args):
-        print_json(plan.as_dict())
-        return 0
-    d = plan.as_dict()
-    print(f"object        {d['object_id']}  ({obj.mass:.3f} kg, {obj.shape})")
-    print(
+    return report(args, plan.as_dict(), _text(plan, obj))
+
+
+def _text(plan: Any, obj: ObjectParams) -> Iterator[str]:
+    """The plan as a person reads it, line by line."""
+    yield f"object        {plan.as_dict()['object_id']}  ({obj.mass:.3f} kg, {obj.shape})"
+    yield (
         f"target        x = {plan.target_x_m:.4f} m, y = {plan.target_y_m:.4f} m "
         f"on z = {plan.land_z_m:.3f} m (world frame)"
     )
-    print(
+    yield (
         f"release at    x = {plan.x_m:.4f}, y = {plan.y_m:.4f}, z = {plan.z_m:.4f} m; "
         f"base velocity ({plan.vx_mps:.3f}, {plan.vy_mps:.3f}, {plan.vz_mps:.3f}) m/s"
     )
-    print(
+    yield (
         f"throw axis    elevation {plan.elevation_rad:.4f} rad ({math.degrees(plan.elevation_rad):.1f}°), "
         f"azimuth {plan.azimuth_rad:.4f} rad ({math.degrees(plan.azimuth_rad):.1f}°), "
         f"roll {plan.roll_rad:.4f} rad"
     )
-    print(f"stroke        L_s = {plan.stroke_m:.5f} m")
-    print(
+    yield f"stroke        L_s = {plan.stroke_m:.5f} m"
+    yield (
         f"predicted     lands at x = {plan.pred_x_m:.4f} m, y = {plan.pred_y_m:.4f} m; "
         f"miss {plan.miss_m * 1e3:.3f} mm"
     )
-    print(f"flight time   {plan.t_flight_s:.4f} s (from the start of the push)")
-    print(f"stored energy {plan.energy_j:.4f} J (both band halves)")
-    print(f"method        {plan.method}")
-    write_json(args, plan.as_dict())
-    return 0
+    yield f"flight time   {plan.t_flight_s:.4f} s (from the start of the push)"
+    yield f"stored energy {plan.energy_j:.4f} J (both band halves)"
+    yield f"method        {plan.method}"

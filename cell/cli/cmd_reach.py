@@ -4,17 +4,12 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
-from cell.cli.common import (
-    add_axis_args,
-    add_json_arg,
-    add_vector_arg,
-    json_to_stdout,
-    print_json,
-    write_json,
-)
+from cell.cli.common import add_axis_args, add_json_arg, add_vector_arg, report
 from cell.kinds import ROBOTS
 
 
@@ -70,17 +65,17 @@ def run(args: argparse.Namespace) -> int:
         "move_time_s": t_move,
         "from_q": q0,
     }
-    if json_to_stdout(args):
-        print_json(out)
-        return 0
-    print(f"robot           {args.robot}")
-    print("q [rad]         " + " ".join(f"{v:+.4f}" for v in res.q))
-    print(f"position error  {res.position_error_m * 1e3:.3f} mm")
-    print(f"axis error      {math.degrees(res.axis_error_rad):.3f}°")
+    return report(args, out, _text(args, res, t_move))
+
+
+def _text(args: argparse.Namespace, res: Any, t_move: float) -> Iterator[str]:
+    """The solution as a person reads it, line by line."""
+    yield f"robot           {args.robot}"
+    yield "q [rad]         " + " ".join(f"{v:+.4f}" for v in res.q)
+    yield f"position error  {res.position_error_m * 1e3:.3f} mm"
+    yield f"axis error      {math.degrees(res.axis_error_rad):.3f}°"
     if args.roll is not None:
-        print(f"roll error      {math.degrees(res.roll_error_rad):.3f}°")
-    print(
+        yield f"roll error      {math.degrees(res.roll_error_rad):.3f}°"
+    yield (
         f"move time       {t_move:.3f} s (jerk-limited, from {'home' if args.q_from is None else 'the given q'})"
     )
-    write_json(args, out)
-    return 0

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -12,12 +14,10 @@ from cell.cli.common import (
     add_json_arg,
     add_object_args,
     add_vector_arg,
-    json_to_stdout,
     object_from_args,
-    print_json,
-    write_json,
+    report,
 )
-from cell.model import ThrowBatch, band_state, predict_landing
+from cell.model import ObjectParams, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
 
@@ -82,20 +82,20 @@ def run(args: argparse.Namespace) -> int:
         "grip_force_n": float(band.grip),
         "stored_energy_j": float(band.energy),
     }
-    if json_to_stdout(args):
-        print_json(out)
-        return 0
-    print(f"object        {out['object']}  ({obj.mass:.3f} kg, {obj.shape})")
-    print(
+    return report(args, out, _text(out, obj, args.land_z))
+
+
+def _text(out: dict[str, Any], obj: ObjectParams, land_z: float) -> Iterator[str]:
+    """The prediction as a person reads it, line by line."""
+    yield f"object        {out['object']}  ({obj.mass:.3f} kg, {obj.shape})"
+    yield (
         f"lands at      x = {out['landed_x_m']:.4f} m, y = {out['landed_y_m']:.4f} m "
-        f"on z = {args.land_z:.3f} m (world frame)"
+        f"on z = {land_z:.3f} m (world frame)"
     )
-    print(f"flight time   {out['t_flight_s']:.4f} s (from the start of the push)")
-    print(f"launch speed  {out['launch_speed_mps']:.3f} m/s")
-    print(
+    yield f"flight time   {out['t_flight_s']:.4f} s (from the start of the push)"
+    yield f"launch speed  {out['launch_speed_mps']:.3f} m/s"
+    yield (
         f"band          stretch ΔL = {out['band_stretch_m']:.5f} m, push f_o = "
         f"{out['push_force_n']:.3f} N, grip f_g = {out['grip_force_n']:.3f} N"
     )
-    print(f"stored energy {out['stored_energy_j']:.4f} J (both band halves)")
-    write_json(args, out)
-    return 0
+    yield f"stored energy {out['stored_energy_j']:.4f} J (both band halves)"

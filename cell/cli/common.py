@@ -7,6 +7,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +30,7 @@ __all__ = [
     "object_from_args",
     "plural",
     "print_json",
+    "report",
     "to_jsonable",
     "write_json",
 ]
@@ -157,6 +159,19 @@ def write_json(args: argparse.Namespace, obj: Any) -> None:
     tmp = out.with_name(out.name + ".tmp")
     tmp.write_text(text)
     tmp.replace(out)
+
+
+def report(args: argparse.Namespace, doc: Any, lines: Iterable[str]) -> int:
+    """A command's result: `doc` as JSON on standard output when --json asks for that (the
+    text not made), else the text `lines` printed and then, with --json PATH, `doc`
+    written there (`write_json`). Returns the exit status, 0."""
+    if json_to_stdout(args):
+        print_json(doc)
+        return 0
+    for line in lines:
+        print(line)
+    write_json(args, doc)
+    return 0
 
 
 def plural(n: int, word: str, words: str | None = None) -> str:
