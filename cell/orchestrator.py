@@ -353,7 +353,7 @@ class Orchestrator(
             lifted, motion = self._moving_route(st.moving, obj, d.stroke_m, self.q, q_lift)
             if lifted:
                 log.info("%s: up to the lift, then the release on the move", obj.name or obj.shape)
-                self._move([q_lift])
+                self.move([q_lift])
             st.motion = motion
         else:
             plan = d.plan
@@ -368,7 +368,7 @@ class Orchestrator(
                 q_rel = st.q_release
             q_rel = self._release_branch(q_lift, q_rel, st.q_release, tcp, plan)
             q0, t0 = self.q, self.scene.t
-            self._move(self._departure(q_lift, q_rel, plan))
+            self.move(self._departure(q_lift, q_rel, plan))
             self._time_floor(q0, t0, settle_s=self.tuning.settle_s)
             if self._grip_stroke != d.stroke_m:  # carried at a shorter one (`_carry_stroke`)
                 self._check_held(obj)
@@ -393,7 +393,7 @@ class Orchestrator(
     def after_place(self, d: Decision) -> None:
         """Back up out of the bin; no settle: nothing is held, and the next move starts
         from rest."""
-        self._move(d.state.rise or [d.state.q_above], settle_s=0.0)
+        self.move(d.state.rise or [d.state.q_above], settle_s=0.0)
 
     def finish(self, d: Decision | None) -> None:
         """Nothing of the item is held any more."""

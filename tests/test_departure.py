@@ -19,6 +19,7 @@ import pytest
 from cell.arm.grip_limits import carry_hold
 from cell.arm.joints import GRIP_DOWN, joint_gap
 from cell.arm.tuning import TUNING
+from cell.frames import tcp_for_item_centre
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot.carry import plan_carry
@@ -37,8 +38,10 @@ seed: 0
 """
 
 
-def _cell(text: str, tmp_path: Path, session: str, **kw: Any) -> Iterator[Orchestrator]:
-    o = Orchestrator(parse_job(text, str(tmp_path / "job.yaml")), session=session, **kw)
+def _cell(
+    text: str, tmp_path: Path, session: str, arm: type[Orchestrator] = Orchestrator, **kw: Any
+) -> Iterator[Orchestrator]:
+    o = arm(parse_job(text, str(tmp_path / "job.yaml")), session=session, **kw)
     yield o
     o.close()
 
@@ -119,12 +122,12 @@ def test_a_path_that_slides_the_item_across_the_station_is_refused(
     obj = spec.obj
     item = orch.present(0, obj)
     stroke = 0.06
-    q_pick, _ = orch._over_item(item, stroke, obj)
+    q_pick, _ = orch.over_item(item, stroke, obj)
     p = orch.scene.item_position(item)
 
     def at(dx: float, dz: float) -> np.ndarray:
-        tcp = orch._tcp_for_item_centre(p + np.array([dx, 0.0, dz]), *GRIP_DOWN, stroke, obj)
-        return orch._ik_frame(tcp, q_pick)
+        tcp = tcp_for_item_centre(p + np.array([dx, 0.0, dz]), *GRIP_DOWN, stroke, obj)
+        return orch.ik_frame(tcp, q_pick)
 
     assert not orch._rises_from_station([q_pick, at(0.08, 0.0)])  # slid sideways
     assert not orch._rises_from_station([q_pick, at(0.08, 0.01)])  # rises too little
@@ -144,13 +147,26 @@ seed: 0
 """
 
 
+class Placer(Orchestrator):
+    """The arm, keeping whether each place's descent joined its spot without a stop."""
+
+    joined: list[bool]
+
+    def descends_straight(self, *a: Any) -> bool:
+        self.joined.append(super().descends_straight(*a))
+        return self.joined[-1]
+
+
 @pytest.fixture(params=["panda", "ur5"])
-def placer(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
-    yield from _cell(PLACE_JOB % request.param, tmp_path, "place-descent")
+def placer(request: Any, tmp_path: Path) -> Iterator[Placer]:
+    for o in _cell(PLACE_JOB % request.param, tmp_path, "place-descent", Placer):
+        assert isinstance(o, Placer)
+        o.joined = []
+        yield o
 
 
 def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_there(
-    placer: Orchestrator, monkeypatch: pytest.MonkeyPatch
+    placer: Placer, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     orch, sc = placer, placer.scene
     bin_body = sc.bin_bodies["tote"]
@@ -169,12 +185,8 @@ def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_ther
         )
 
     monkeypatch.setattr(sc, "set_arm", record)
-    joined: list[bool] = []
-    straight = orch._descends_straight
-    monkeypatch.setattr(
-        orch, "_descends_straight", lambda *a: (joined.append(straight(*a)), joined[-1])[1]
-    )
     summary = orch.run()
+    joined = orch.joined
     assert [r.action for r in summary.results] == ["place"] * 4
     assert summary.in_bin == 4  # every item rests in the tote
     assert any(joined)  # at least one place passed over its spot without stopping

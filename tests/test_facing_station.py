@@ -40,26 +40,23 @@ seed: 0
 """
 
 
-def run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, turn: bool) -> tuple[list, list, float]:
+def run(tmp_path: Path, turn: bool) -> tuple[list, list, float]:
     """(each throw's (release azimuth [rad, W], moving, release point (x, y) [m, W]), each moving release's gap between
     the item at the latch and the plan's release point [m], the run's simulated time [s])
     with the items' (action, failure, in bin) checked."""
     decided: list[tuple[float, bool, tuple[float, float]]] = []
     gaps: list[float] = []
-    release = Orchestrator.release
 
-    def watched(self: Orchestrator, d: Decision) -> np.ndarray | None:
-        p = d.plan
-        decided.append((math.atan2(p.y_m, p.x_m), bool(d.moving), (p.x_m, p.y_m)))
-        at = release(self, d)
-        if at is not None:
-            gaps.append(float(np.linalg.norm(at - np.array([p.x_m, p.y_m, p.z_m]))))
-        return at
+    class Watched(Orchestrator):
+        def release(self, d: Decision) -> np.ndarray | None:
+            p = d.plan
+            decided.append((math.atan2(p.y_m, p.x_m), bool(d.moving), (p.x_m, p.y_m)))
+            at = super().release(d)
+            if at is not None:
+                gaps.append(float(np.linalg.norm(at - np.array([p.x_m, p.y_m, p.z_m]))))
+            return at
 
-    monkeypatch.setattr(Orchestrator, "release", watched)
-    o = Orchestrator(
-        parse_job(JOB, str(tmp_path / "job.yaml")), session="facing", turn_release=turn
-    )
+    o = Watched(parse_job(JOB, str(tmp_path / "job.yaml")), session="facing", turn_release=turn)
     try:
         summary = o.run()
     finally:
@@ -73,12 +70,12 @@ def test_a_throw_released_turned_toward_the_station_lands_sooner(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)
-    decided, gaps, t_turned = run(tmp_path, monkeypatch, turn=True)
+    decided, gaps, t_turned = run(tmp_path, turn=True)
     bin_az, station_az = math.atan2(2.162, 0.066), math.atan2(-0.4, 0.45)
     for az, _, _ in decided:  # released between the bin's azimuth and the station's
         assert station_az < az < bin_az - math.radians(30.0), decided
     assert all(g < 0.02 for g in gaps), gaps  # the item left from the plan's release point
-    decided, _, t_facing = run(tmp_path, monkeypatch, turn=False)  # the default
+    decided, _, t_facing = run(tmp_path, turn=False)  # the default
     assert all(abs(az - bin_az) < math.radians(5.0) for az, _, _ in decided), decided
     assert t_turned < t_facing, (t_turned, t_facing)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -122,19 +123,20 @@ def test_picks_for_one_bin_are_alike_in_the_scene():
     0.3 rad here (measured)."""
     job = parse_job(JOB, "two_bins.yaml")
     gaps: dict[str, list[float]] = {}
+
+    class Recorded(Orchestrator):
+        picks: list[np.ndarray]
+
+        def pick(self, d: Any, obj: Any, item: Any) -> None:
+            super().pick(d, obj, item)
+            self.picks.append(self.q.copy())  # the arm at the pick, the item in the grip
+
     for order in ORDERS:
-        orch = Orchestrator(
+        orch = Recorded(
             job, order=order, session=f"order-{order}", cycle_search=False, turn_release=False
         )
         picks: list[np.ndarray] = []
-        pick = orch._pick_kinematic
-
-        def recorded(*a, _pick=pick, _orch=orch, _picks=picks, **kw):
-            out = _pick(*a, **kw)
-            _picks.append(_orch.q.copy())  # the arm at the pick, the item in the grip
-            return out
-
-        orch._pick_kinematic = recorded  # type: ignore[method-assign]
+        orch.picks = picks
         try:
             res = orch.run().results
         finally:

@@ -131,7 +131,7 @@ def test_pick_lifts_the_item_by_contact_without_teleport(orch: Orchestrator, nam
     stroke = 0.06
     with watch_item_teleports(cl, item.body) as teleports:
         q_lift = orch._pick(obj, item, stroke, 0.0, True)
-        orch._move([q_lift])  # up to the lift pose, as the carry starts
+        orch.move([q_lift])  # up to the lift pose, as the carry starts
     assert teleports == []
     links = {c[3] for c in cl.getContactPoints(bodyA=sc.ee_body, bodyB=item.body)}
     assert {FINGER_LEFT, FINGER_RIGHT} <= links

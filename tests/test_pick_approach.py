@@ -51,9 +51,9 @@ def test_the_approach_comes_straight_down_onto_the_item_and_the_grasp_holds_it(
     approach = orch._approach
     monkeypatch.setattr(orch, "_approach", lambda *a: (taken.append(approach(*a)), taken[-1])[1])
     picks: list[np.ndarray] = []
-    over_item = orch._over_item
+    over_item = orch.over_item
     monkeypatch.setattr(
-        orch, "_over_item", lambda *a: (picks.append(over_item(*a)[0]), over_item(*a))[1]
+        orch, "over_item", lambda *a: (picks.append(over_item(*a)[0]), over_item(*a))[1]
     )
     lim, dt = orch.robot.limits, orch.scene.dt_s
     for index, spec in enumerate(orch.job.expanded_items()):

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from cell.errors import UnreachableTarget
+from cell.frames import tcp_for_item_centre
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 
@@ -46,7 +47,7 @@ def _released_where_planned(orch: Orchestrator, d: Any, obj: Any) -> None:
     plan has it (within 1 mm)."""
     plan = d.plan
     centre = np.array([plan.x_m, plan.y_m, plan.z_m])
-    tcp = orch._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
+    tcp = tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, d.stroke_m, obj)
     p, _ = orch.robot.tcp_pose(d.state.q_release)
     assert np.linalg.norm(p - tcp) < 1e-3
 

@@ -39,15 +39,14 @@ def test_the_carry_goes_to_the_release_branch_the_decision_timed(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     at_release: list[float] = []
-    release = Orchestrator.release
 
-    def watched(self: Orchestrator, d: Decision) -> np.ndarray | None:
-        if d.action == "throw":
-            gap = np.abs(np.asarray(self.q) - np.asarray(d.state.q_release))
-            at_release.append(float(gap.max()))
-        return release(self, d)
+    class Watched(Orchestrator):
+        def release(self, d: Decision) -> np.ndarray | None:
+            if d.action == "throw":
+                gap = np.abs(np.asarray(self.q) - np.asarray(d.state.q_release))
+                at_release.append(float(gap.max()))
+            return super().release(d)
 
-    monkeypatch.setattr(Orchestrator, "release", watched)
-    rows = job_rows(JOB, tmp_path, "branch")
+    rows = job_rows(JOB, tmp_path, "branch", Watched)
     assert rows == [("throw", "", True)], rows
     assert len(at_release) == 1 and at_release[0] < 1e-3, at_release  # [rad]

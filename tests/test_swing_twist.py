@@ -73,15 +73,14 @@ def test_a_carry_behind_the_arm_turns_the_grip_about_one_axis(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     carries: list[float] = []
-    follow = Orchestrator._follow
 
-    def watched(self: Orchestrator, traj, q_end, settle_s):  # type: ignore[no-untyped-def]
-        if self.ee.item is not None:
-            ts = np.linspace(0.0, traj.duration, 80)
-            carries.append(twist_deg(self.robot, np.asarray(traj.sample_many(ts)[0])))
-        return follow(self, traj, q_end, settle_s)
+    class Watched(Orchestrator):
+        def follow(self, traj, q_end, settle_s):  # type: ignore[no-untyped-def]
+            if self.ee.item is not None:
+                ts = np.linspace(0.0, traj.duration, 80)
+                carries.append(twist_deg(self.robot, np.asarray(traj.sample_many(ts)[0])))
+            return super().follow(traj, q_end, settle_s)
 
-    monkeypatch.setattr(Orchestrator, "_follow", watched)
-    rows = job_rows(JOB, tmp_path, "twist")
+    rows = job_rows(JOB, tmp_path, "twist", Watched)
     assert rows == [("throw", "", True)] * 2, rows
     assert carries and max(carries) < 45.0, carries  # [°]; 74-80° along the swing

@@ -39,7 +39,7 @@ PickState = tuple[np.ndarray, np.ndarray | None, ObjectParams, float]
 
 
 def plan_time(trajs: list[Any], settle_s: float) -> float:
-    """How long [s] `_move` takes along `_move_plan`'s trajectories: their durations and a
+    """How long [s] `move` takes along `_move_plan`'s trajectories: their durations and a
     settle of `settle_s` [s] at each stop between them."""
     return sum(float(t.duration) for t in trajs) + settle_s * (len(trajs) - 1)
 

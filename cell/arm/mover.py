@@ -28,7 +28,7 @@ log = logging.getLogger(__name__)
 class Mover(ArmBase):
     """The mover (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
-    def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
+    def move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
         """Follow a toppra path through joint waypoints in the scene; returns its duration [s].
 
         Empty, the path uses `speed_scale` of the joint limits; carrying, the
@@ -46,7 +46,7 @@ class Mover(ArmBase):
         settle_s = self.tuning.settle_s if settle_s is None else settle_s
         trajs = self._move_plan(self.q, waypoints, settle_s)
         ends = waypoints if len(trajs) > 1 else waypoints[-1:]
-        return sum(self._follow(t, w, settle_s) for t, w in zip(trajs, ends, strict=True))
+        return sum(self.follow(t, w, settle_s) for t, w in zip(trajs, ends, strict=True))
 
     def _move_plan(
         self,
@@ -55,8 +55,8 @@ class Mover(ArmBase):
         settle_s: float,
         carried: tuple[ObjectParams, float] | None = None,
     ) -> list[Any]:
-        """The trajectories `_move` follows from q_from through the waypoints [rad]: the
-        one path, or one per waypoint when it stops at each (`_move`'s choice, a settle of
+        """The trajectories `move` follows from q_from through the waypoints [rad]: the
+        one path, or one per waypoint when it stops at each (`move`'s choice, a settle of
         `settle_s` [s] at each stop). `carried`: the item and its stroke [m] carried
         (default: what the grip holds)."""
         path: Any = None
@@ -109,7 +109,7 @@ class Mover(ArmBase):
             q = w
         return out
 
-    def _follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
+    def follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
         """Step the scene along a joint trajectory ending at rest at q_end [rad], then
         `settle_s` [s] more; returns the time taken [s]."""
         sc = self.scene
@@ -216,6 +216,14 @@ class Mover(ArmBase):
     def _run_for(self, seconds: float) -> None:
         """Let the plant run `seconds` [s] with the arm where it is (a settle, a wait)."""
         self.scene.run_for(seconds)
+
+    # the old names, by which the parts changed in parallel (cell/arm/pick.py, release.py,
+    # routes.py) may still call these; remove once none does
+    def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
+        return self.move(waypoints, settle_s)
+
+    def _follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
+        return self.follow(traj, q_end, settle_s)
 
     def _release_on_the_move(self, motion: Any) -> np.ndarray:
         """Follow a release on the move's `motion` in the plant, the latch opening at its

@@ -66,14 +66,14 @@ class Place(ArmBase):
             sx, sy, surface_z = spot
             centre = np.array([sx, sy, obj.size[2] / 2 + self.tuning.place_clearance_m + surface_z])
             above = centre + np.array([0, 0, max(self.tuning.lift_m, target.rim_height + 0.05)])
-            q_above = self._ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
+            q_above = self.ik_frame(self._tcp_for_item_centre(above, *GRIP_DOWN, d.stroke_m, obj))
             tcp_down = self._tcp_for_item_centre(centre, *GRIP_DOWN, d.stroke_m, obj)
             if not on_branch:
-                return centre, q_above, self._ik_frame(tcp_down)
+                return centre, q_above, self.ik_frame(tcp_down)
             return centre, q_above, self._down_vertical(q_above, tcp_down)[-1]
 
         spots = place_spots(sc, target.id, obj, wall_margin_m=pads)
-        for spot in self._spots_to_try(spots, sc.bin_spec(target.id).wall):
+        for spot in self.spots_to_try(spots, sc.bin_spec(target.id).wall):
             try:
                 centre, q_above, q_down = poses(spot, on_branch=True)
                 break
@@ -96,24 +96,24 @@ class Place(ArmBase):
         for via in ([], [mid]):
             try:
                 qs = [
-                    self._ik_frame(
+                    self.ik_frame(
                         self._tcp_for_item_centre(v, *GRIP_DOWN, d.stroke_m, obj), q_above
                     )
                     for v in via
                 ]
             except IKFailed:
                 continue
-            if self._descends_straight([self.q, *way, *qs, q_down], bottom, target, obj):
+            if self.descends_straight([self.q, *way, *qs, q_down], bottom, target, obj):
                 log.debug("place: over the spot without stopping (%d via)", len(via))
-                self._move([*way, *qs, q_down])
+                self.move([*way, *qs, q_down])
                 break
         else:
             log.debug("place: stopping over the spot")
-            self._move(way)
-            self._move([*inner, q_down])
+            self.move(way)
+            self.move([*inner, q_down])
         d.state.q_above = q_above
 
-    def _spots_to_try(
+    def spots_to_try(
         self, spots: list[tuple[float, float, float]], floor_z: float
     ) -> list[tuple[float, float, float]]:
         """The place spots tried, in order: the best PLACE_SPOTS_TRIED (`place_spots`),
@@ -134,7 +134,7 @@ class Place(ArmBase):
         and the TCP at height tcp_z [m]?"""
         return tcp_z + self.scene.geometry.housing_to_tcp_m < target.rim_height + 0.01
 
-    def _descends_straight(
+    def descends_straight(
         self,
         waypoints: list[np.ndarray],
         bottom_z: float,
