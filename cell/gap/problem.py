@@ -91,17 +91,6 @@ class GapProblem:
     def __len__(self) -> int:
         return int(self.observed.shape[0])
 
-    def predict(
-        self,
-        idx: np.ndarray,
-        effects: list[Effect] | tuple[Effect, ...] = (),
-        *,
-        permute: bool = False,
-        ee: EndEffectorParams | None = None,
-    ) -> np.ndarray:
-        """Predicted observed landing points of throws idx, shape (m, 2) (NaN: no landing)."""
-        return self.landing(idx, effects, permute=permute, ee=ee).xy
-
     def landing(
         self,
         idx: np.ndarray,
@@ -170,7 +159,7 @@ class GapProblem:
         ee: EndEffectorParams | None = None,
     ) -> np.ndarray:
         """Observed minus predicted landing [m], shape (m, 2); a miss counts MISS_PENALTY_M."""
-        r = self.observed[idx] - self.predict(idx, effects, permute=permute, ee=ee)
+        r = self.observed[idx] - self.landing(idx, effects, permute=permute, ee=ee).xy
         return np.where(np.isfinite(r), r, MISS_PENALTY_M)
 
     def subset(self, mask: np.ndarray) -> GapProblem:
