@@ -31,16 +31,28 @@ seed: 0
 """
 
 
+class Watched(Orchestrator):
+    """The arm, keeping the pick configuration of each grip over an item (`over_item`)."""
+
+    picks: list[np.ndarray]
+
+    def over_item(self, item: Any, stroke: float, obj: Any) -> tuple[np.ndarray, np.ndarray]:
+        out = super().over_item(item, stroke, obj)
+        self.picks.append(out[0])
+        return out
+
+
 @pytest.fixture(params=["panda", "ur5"])
-def orch(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
+def orch(request: Any, tmp_path: Path) -> Iterator[Watched]:
     job = parse_job(JOB % request.param, str(tmp_path / "job.yaml"))
-    o = Orchestrator(job, session="approach")
+    o = Watched(job, session="approach")
+    o.picks = []
     yield o
     o.close()
 
 
 def test_the_approach_comes_straight_down_onto_the_item_and_the_grasp_holds_it(
-    orch: Orchestrator, monkeypatch: pytest.MonkeyPatch
+    orch: Watched, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     commanded: list[np.ndarray] = []
     set_arm = orch.scene.set_arm
@@ -50,11 +62,7 @@ def test_the_approach_comes_straight_down_onto_the_item_and_the_grasp_holds_it(
     taken: list[bool] = []
     approach = orch._approach
     monkeypatch.setattr(orch, "_approach", lambda *a: (taken.append(approach(*a)), taken[-1])[1])
-    picks: list[np.ndarray] = []
-    over_item = orch.over_item
-    monkeypatch.setattr(
-        orch, "over_item", lambda *a: (picks.append(over_item(*a)[0]), over_item(*a))[1]
-    )
+    picks = orch.picks
     lim, dt = orch.robot.limits, orch.scene.dt_s
     for index, spec in enumerate(orch.job.expanded_items()):
         commanded.clear()
