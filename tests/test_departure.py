@@ -204,13 +204,24 @@ seed: 1
 """
 
 
+class Leveller(Orchestrator):
+    """The arm, handing each carry to `watch` (the carry itself as an argument)."""
+
+    watch: Any = None
+
+    def carry(self, d: Any, obj: Any, item: Any) -> None:
+        self.watch(lambda: super(Leveller, self).carry(d, obj, item), d, obj, item)
+
+
 @pytest.fixture
-def leveller(tmp_path: Path) -> Iterator[Orchestrator]:
-    yield from _cell(LEVEL_JOB, tmp_path, "level", release="static")
+def leveller(tmp_path: Path) -> Iterator[Leveller]:
+    for o in _cell(LEVEL_JOB, tmp_path, "level", Leveller, release="static"):
+        assert isinstance(o, Leveller)
+        yield o
 
 
 def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
-    leveller: Orchestrator, monkeypatch: pytest.MonkeyPatch
+    leveller: Leveller, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A 100 mm box that would turn in the pads if the grip rolled while it hangs (its
     carry is kept level, `_turns_if_rolled`), on random layout 1's UR5 geometry: where the
@@ -224,10 +235,9 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
     ways: list[list[np.ndarray]] = []
     departure = orch._departure
     monkeypatch.setattr(orch, "_departure", lambda *a: (ways.append(departure(*a)), ways[-1])[1])
-    carry = orch.carry
     unswung: list[tuple[float, float, float]] = []  # (turn in the grip [deg], took, swing's [s])
 
-    def carried(d: Any, obj: Any, item: Any) -> None:
+    def carried(carry: Any, d: Any, obj: Any, item: Any) -> None:
         def in_grip() -> Rotation:
             tcp = orch.robot.tcp_pose(orch.q)[1]
             return Rotation.from_matrix(tcp.T @ np.asarray(sc.item_pose(item)[1]))
@@ -235,7 +245,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
         assert orch._turns_if_rolled()
         q_pick, q_lift = orch.q.copy(), d.state.q_lift
         before, t0 = in_grip(), sc.t
-        carry(d, obj, item)
+        carry()
         took, way = sc.t - t0, ways[-1]
         swing = orch._swung(q_lift, way[-1], d.plan)
         if len(way) <= 2 and swing:  # a lift at most, then the release: no swing
@@ -244,7 +254,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
             turn = float(np.degrees((in_grip() * before.inv()).magnitude()))
             unswung.append((turn, took, traj.duration + TUNING.settle_s))
 
-    monkeypatch.setattr(orch, "carry", carried)
+    orch.watch = carried
     summary = orch.run()
     assert summary.in_bin == 3, [r.reason for r in summary.results]
     assert unswung, "no carry left the swing out"
