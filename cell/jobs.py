@@ -189,22 +189,18 @@ def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, flo
     """
     platform = c.text(cell["platform"], "cell.platform", PLATFORMS) if "platform" in cell else "arm"
     drone = _platform_section(c, cell, platform, "drone", DRONE_KEYS)
-    hover = _setting(c, drone, "cell.drone", "hover_height_m", 2.0, (0.5, 10.0))
-    rpm = _setting(c, drone, "cell.drone", "rotor_rpm", 0.0, (0.0, 30000.0))
+    hover = _setting(c, drone, "cell.drone.hover_height_m", 2.0, 0.5, 10.0)
+    rpm = _setting(c, drone, "cell.drone.rotor_rpm", 0.0, 0.0, 30000.0)
     mobile = _platform_section(c, cell, platform, "mobile", MOBILE_KEYS)
-    speed = _setting(c, mobile, "cell.mobile", "speed_mps", 0.0, (0.0, 2.0))
+    speed = _setting(c, mobile, "cell.mobile.speed_mps", 0.0, 0.0, 2.0)
     return platform, hover, rpm, speed
 
 
 def _platform_section(
     c: Checker, cell: dict[str, Node], platform: str, name: str, keys: Any
 ) -> dict[str, Node]:
-    """The section `cell.<name>` of a platform's settings (known keys only; empty when
-    absent).
-
-    Raises:
-        JobError: the section is given for another platform, or has an unknown key.
-    """
+    """The section `cell.<name>` of a platform's settings, known keys only ({} when absent);
+    JobError when it is given for another platform."""
     if name not in cell:
         return {}
     if platform != name:
@@ -213,17 +209,11 @@ def _platform_section(
 
 
 def _setting(
-    c: Checker,
-    section: dict[str, Node],
-    where: str,
-    key: str,
-    default: float,
-    bounds: tuple[float, float],
+    c: Checker, sec: dict[str, Node], path: str, default: float, lo: float, hi: float
 ) -> float:
-    """A number of a platform's section, within [lo, hi] (`default` when absent)."""
-    if key not in section:
-        return default
-    return c.number(section[key], f"{where}.{key}", lo=bounds[0], hi=bounds[1])
+    """The number at `path` (cell.<section>.<key>) within [lo, hi]; `default` when absent."""
+    key = path.rsplit(".", 1)[1]
+    return c.number(sec[key], path, lo=lo, hi=hi) if key in sec else default
 
 
 def _cell_file(c: Checker, cell: dict[str, Node], key: str, base: Path) -> str:
