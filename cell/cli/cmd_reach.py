@@ -8,14 +8,17 @@ import math
 import numpy as np
 
 from cell.cli.common import add_axis_args, add_json_arg, json_to_stdout, print_json, write_json
-from cell.kinds import ROBOTS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reach", help="inverse kinematics to a release pose, and the move time from home"
     )
-    p.add_argument("--robot", default="panda", choices=ROBOTS, help="arm (panda)")
+    p.add_argument(
+        "--robot",
+        default="panda",
+        help="arm: a name under robots/ (docs/arms.md) or a mount.yaml path (panda)",
+    )
     p.add_argument(
         "--at",
         type=float,
