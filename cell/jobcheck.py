@@ -5,8 +5,9 @@ calls these; every problem goes into the one report the job is refused with).
   floor (`station_problems`).
 * The pick station out of the arm's reach: inverse kinematics of the grip pointing down
   over the station's centre, at the lowest and the highest grip the job's items need
-  (the shortest item gripped at the shortest stroke; the tallest at the longest, lifted
-  by the lift over the pick), as the pick solves it (`reach_problems`).
+  (the shortest item gripped at the shortest stroke; the tallest at the longest), as the
+  pick solves it (`reach_problems`; the lift over the pick is lowered where the arm
+  does not reach it, `cell.arm.kinematics`).
 * A bin placed into out of the arm's reach: the bins the job places into (every bin
   under `policy: place`, those within `limits.place_reach_m` under `auto`), IK of the
   grip pointing down over the bin's point nearest the base (3 cm in from its walls),
@@ -34,7 +35,6 @@ STATION_HALF_M = 0.12  # [m] half the pick station's square top (cell.sim.scene_
 STROKE_RANGE_M = (0.03, 0.11)  # [m] the strokes an item is gripped at (MODEL.md)
 BIN_INSET_M = 0.03  # [m] the place pose checked this far in from the bin's near walls
 OVER_RIM_M = 0.05  # [m] the item's lowest point over the rim, as the place goes over it
-LIFT_M = 0.15  # [m] the lift over the pick (cell.arm.tuning.ArmTuning.lift_m)
 
 
 def station_problems(
@@ -107,6 +107,13 @@ def _reach_m(robot: Any, xy: Sequence[float], z: float) -> float:
     return lo
 
 
+def _out(reach: float) -> str:
+    """How far out the grip pointing down reaches at a height, in words."""
+    if reach <= 0.0:
+        return "the arm's grip pointing down does not get there at that height"
+    return f"the arm's grip pointing down reaches about {reach:.2f} m out at that height"
+
+
 def _fmt(v: Any) -> str:
     return "(" + ", ".join(f"{x:.2f}" for x in v) + ")"
 
@@ -138,10 +145,10 @@ def reach_problems(
     heights = [float(it.obj.size[2]) for it in items] or [0.05]
     out: list[str] = []
     centre_lo = pick[2] + min(heights) / 2
-    centre_hi = pick[2] + max(heights) / 2 + LIFT_M
+    centre_hi = pick[2] + max(heights) / 2
     checks = (
         (_tcp_z(centre_lo, STROKE_RANGE_M[0], min(heights)), "the shortest item gripped"),
-        (_tcp_z(centre_hi, STROKE_RANGE_M[1], max(heights)), "the tallest item lifted"),
+        (_tcp_z(centre_hi, STROKE_RANGE_M[1], max(heights)), "the tallest item gripped"),
     )
     for z, what in checks:
         tcp = np.array([pick[0], pick[1], z])
@@ -154,9 +161,8 @@ def reach_problems(
             f"the {robot.name} arm does not reach the pick station at {_fmt(pick)} m "
             f"({what}: the grip pointing down with its TCP at {_fmt(tcp)} m, missed by "
             f"{miss * 1000:.0f} mm); the station's centre is "
-            f"{math.hypot(pick[0], pick[1]):.2f} m from the base and the arm's grip pointing "
-            f"down reaches about {reach:.2f} m out at that height: move the station within "
-            "that, or choose another arm"
+            f"{math.hypot(pick[0], pick[1]):.2f} m from the base and {_out(reach)}: move "
+            "the station within that, or choose another arm"
         )
         break
     for i in placed:
@@ -173,7 +179,7 @@ def reach_problems(
             f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
             f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
             f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach (missed by "
-            f"{miss * 1000:.0f} mm; the grip pointing down reaches about {reach:.2f} m out there): "
+            f"{miss * 1000:.0f} mm; {_out(reach)}): "
             "move the bin "
             "closer, or have its items thrown (policy: auto with limits.place_reach_m below "
             f"{math.hypot(*b.position):.2f} m)"

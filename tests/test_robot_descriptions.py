@@ -15,8 +15,8 @@ import pytest
 from cell.errors import InvalidInput, InvalidParameter, MissingDependency
 from cell.robot import paths
 from cell.robot.composite import composite_urdf, end_effector_urdf, load_mount
-from cell.robot.mount import robot_names
 from cell.robot.model import EE_JOINTS, TCP_FRAME, load_robot
+from cell.robot.mount import robot_names
 
 ROBOTS_DIR = Path(__file__).resolve().parents[1] / "robots"
 EE_LINKS = ("ee_base", "ee_finger_left", "ee_finger_right", "ee_band", "ee_tcp")

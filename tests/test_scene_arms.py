@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cell.robot.mount import robot_names
 from cell.robot.model import load_robot
+from cell.robot.mount import robot_names
 from cell.sim import EE_TO_TCP_M, CellScene
 
 
