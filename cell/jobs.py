@@ -420,7 +420,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
     """
     tree = _job_tree(text, path)
     c = Checker(path)
-    errors = Errors()
+    errors = Errors(path)
     top = errors.run(_top_sections, c, tree, errors) or {}
     cell = errors.run(cell_section, c, top, tree, path)
     pick = errors.run(_pick_position, c, top)

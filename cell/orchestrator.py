@@ -225,7 +225,7 @@ class Orchestrator(
         from cell.yamltree import Errors
 
         job = self.job
-        errors = Errors()
+        errors = Errors(job.path)
         for spec in job.items:
             try:
                 check_sortable(

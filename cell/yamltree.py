@@ -139,7 +139,8 @@ class Checker:
 class Errors:
     """The errors of a job, collected so that one report names them all."""
 
-    def __init__(self) -> None:
+    def __init__(self, path: str) -> None:
+        self.path = path
         self.messages: list[str] = []
 
     def add(self, exc: JobError) -> None:
@@ -158,4 +159,6 @@ class Errors:
         if len(self.messages) == 1:
             raise JobError(self.messages[0])
         if self.messages:
-            raise JobError(f"{len(self.messages)} errors in the job:\n" + "\n".join(self.messages))
+            raise JobError(
+                f"{self.path}: {len(self.messages)} errors:\n" + "\n".join(self.messages)
+            )

@@ -198,7 +198,7 @@ def test_every_error_of_a_job_is_in_one_report() -> None:
     with pytest.raises(JobError) as err:
         parse_job(text, "j.yaml")
     lines = str(err.value).splitlines()
-    assert lines[0] == "4 errors in the job:"
+    assert lines[0] == "j.yaml: 4 errors:"
     assert any("unknown key 'nmae'" in ln for ln in lines)
     assert any("bins[0]: missing 'rim_height_m'" in ln for ln in lines)
     assert any("items[1].object: unknown catalogue id 'cyl51'" in ln for ln in lines)
@@ -214,7 +214,7 @@ def test_a_bin_under_the_station_and_a_place_out_of_reach_are_refused() -> None:
     with pytest.raises(JobError) as err:
         parse_job(BINS.replace("policy: auto", "policy: place"), "j.yaml")
     lines = str(err.value).splitlines()
-    assert lines[0] == "3 errors in the job:"
+    assert lines[0] == "j.yaml: 3 errors:"
     for i, chute in ((2, "chute_1"), (3, "chute_2"), (4, "chute_3")):
         assert any(
             f"bins[{i}].position_m: the panda arm cannot place into bin '{chute}'" in ln
