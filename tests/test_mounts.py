@@ -131,6 +131,7 @@ WRONG = [
         "its movable joints: shoulder_pan_joint",
     ),
     (lambda s: s.replace("[10.0, 10.0,", "[-10.0, 10.0,"), "acceleration_limits", "positive"),
+    (lambda s: s.replace("home: [0.0,", "home: [9.0,"), "home", "shoulder_pan_joint"),
     (lambda s: s.replace("[1000.0, 1000.0,", "["), "jerk_limits", "6 finite numbers"),
     (lambda s: s + "speed: 3\n", "unknown field", "valid: arm, arm_urdf"),
     (

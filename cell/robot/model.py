@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput, MissingDependency
+from cell.errors import InvalidInput, InvalidParameter, MissingDependency
 from cell.frames import axis_frame
 from cell.robot.composite import composite_urdf
 from cell.robot.limits import JointLimits
@@ -85,7 +85,10 @@ class Robot:
             jerk=jerk,
         )
         self.home = np.array(spec.home, dtype=float)
-        self.limits.check_position(self.home, name=f"{spec.name} home")
+        try:
+            self.limits.check_position(self.home, name="home")
+        except InvalidInput as exc:  # the mount file's field, named (docs/arms.md)
+            raise InvalidParameter(f"{spec.path}: field 'home': {exc}") from None
         # one Robot per process is shared by every run in it (`load_robot`): its arrays are
         # read-only, so no run can change what a later one plans with
         for a in (self.home, *vars(self.limits).values()):

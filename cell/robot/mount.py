@@ -338,4 +338,21 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
             f"flange {spec.flange!r} are {chain}, not {list(spec.arm_joints)}; list those "
             "joints in order, or name the link the tool is bolted to (below the last joint)"
         )
+    _check_home(spec, root)
     return arm_path, root
+
+
+def _check_home(spec: MountSpec, root: ET.Element) -> None:
+    """InvalidParameter naming the mount file when `home` is outside a joint's position
+    limits in the URDF (a continuous joint has none)."""
+    joints = {j.get("name", ""): j for j in root.findall("joint")}
+    for name, q in zip(spec.arm_joints, spec.home, strict=True):
+        lim = joints[name].find("limit")
+        if joints[name].get("type") == "continuous" or lim is None:
+            continue
+        lo, hi = float(lim.get("lower", "0")), float(lim.get("upper", "0"))
+        if not lo - 1e-9 <= q <= hi + 1e-9:
+            raise InvalidParameter(
+                f"{spec.path}: field 'home': {q} rad for {name} is outside its range "
+                f"[{lo}, {hi}] rad in {spec.arm_urdf}"
+            )
