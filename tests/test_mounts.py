@@ -224,7 +224,7 @@ def test_a_bin_under_the_station_and_a_place_out_of_reach_are_refused() -> None:
     # the UR3 under auto with the default place reach (0.75 m) would place into a bin it
     # cannot reach: refused, the place reach to lower named
     ur3 = (ROOT / "tasks" / "bins_ur3.yaml").read_text()
-    far_tote = ur3.replace("[-0.05, 0.42]", "[-0.05, 0.70]").replace(
+    far_tote = ur3.replace("[0.00, -0.42]", "[0.00, -0.70]").replace(
         "place_reach_m: 0.5", "place_reach_m: 0.75"
     )
     with pytest.raises(JobError, match=r"cannot place into bin 'tote_b'.*place_reach_m below 0.70"):
@@ -277,3 +277,21 @@ def test_the_ur3_sorts_a_job_laid_out_within_its_reach() -> None:
     s = _sort(head + items + tail, "bins_ur3.yaml")
     assert (s.items, s.placed, s.thrown) == (2, 1, 1)
     assert s.in_bin == 2, [(r.target, r.landed_in, r.failure) for r in s.results]
+
+
+def test_every_item_a_run_cannot_sort_is_in_one_report() -> None:
+    """The planner's checks before a run (an item the pads cannot hold, a bin beyond every
+    throw) name every such item at its line, not the first alone."""
+    from cell.orchestrator import Orchestrator
+
+    text = (
+        "bins:\n  - {id: moon, position_m: [6.0, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.1}\n"
+        "items:\n  - {object: cube50, bin: moon}\n  - {object: cyl50, bin: moon}\n"
+        "policy: throw\n"
+    )
+    with pytest.raises(JobError) as err:
+        Orchestrator(parse_job(text, "moon.yaml"))
+    lines = str(err.value).splitlines()
+    assert lines[0] == "moon.yaml: 2 errors:"
+    assert lines[1].startswith("moon.yaml, line 4: item cube50 to bin 'moon'")
+    assert lines[2].startswith("moon.yaml, line 5: item cyl50 to bin 'moon'")
