@@ -27,15 +27,24 @@ import numpy as np
 
 from cell.catalogue import catalogue
 from cell.jobs import ROBOT_BASE_CLEARANCE_M
-from cell.kinds import ROBOTS
 
-__all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "FACING_HALF_RANGE_RAD"]
+__all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "facing_half_range_rad"]
 
 CALIBRATION_SET = "thesis14"  # catalogue set thrown by `cell calibrate`
 
-# Half-range of azimuths a bin may be drawn at, by arm [rad]: the first joint's
-# range (Panda ±2.90 rad, UR5 ±2π) less a margin for the wrist to face the bin.
-FACING_HALF_RANGE_RAD = {"panda": math.radians(150.0), "ur5": math.pi}
+
+def facing_half_range_rad(robot: str) -> float:
+    """Half-range of azimuths a bin may be drawn at for this arm [rad]: its mount file's
+    `facing_half_range_deg` (the first joint's range less a margin for the wrist to face
+    the bin: Panda 150° of its ±166°; the URs turn all around, π).
+
+    Raises:
+        InvalidInput: an unknown arm (naming the known ones).
+    """
+    from cell.robot.mount import load_mount
+
+    return load_mount(robot).facing_half_range_rad
+
 
 PICK_STATION_XY_M = (0.45, -0.40)  # [m, W] the default pick station (cell.jobs)
 PICK_STATION_CLEAR_M = 0.35  # [m] no bin footprint within this of the station's centre
@@ -96,7 +105,7 @@ def _adhoc_item(rng: np.random.Generator) -> dict[str, Any]:
 def _bins(rng: np.random.Generator, robot: str) -> list[dict[str, Any]]:
     r = LayoutRanges
     n = int(rng.integers(r.bins[0], r.bins[1] + 1))
-    half = FACING_HALF_RANGE_RAD[robot]
+    half = facing_half_range_rad(robot)
     out: list[dict[str, Any]] = []
     tries = 0
     while len(out) < n:
@@ -176,7 +185,7 @@ def random_job(
 
     Args:
         seed: names the job (0 ≤ seed < 2³²).
-        robot: one of cell.kinds.ROBOTS.
+        robot: an arm's name under robots/ (`cell.robot.mount.robot_names`).
         params: the model parameters the feasibility check uses.
         refused: appended to with the kinds drawn again.
     """
@@ -184,8 +193,7 @@ def random_job(
 
     if params is None:
         params = load_params(scene_params_path())
-    if robot not in ROBOTS:
-        raise ValueError(f"robot {robot!r}: valid: {', '.join(ROBOTS)}")
+    facing_half_range_rad(robot)  # an unknown arm is refused before anything is drawn
     r = LayoutRanges
     rng = np.random.default_rng([seed, 0x10B])
     bins = _bins(rng, robot)

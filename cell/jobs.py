@@ -10,7 +10,7 @@ line and the field path and says what would be valid.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -18,21 +18,18 @@ import yaml
 
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
+from cell.jobcell import cell_section
 from cell.jobschema import (
     BIN_KEYS,
-    CELL_KEYS,
-    DRONE_KEYS,
     ITEM_KEYS,
     LIMIT_KEYS,
-    MOBILE_KEYS,
     PICK_KEYS,
     TOP_KEYS,
     job_keys,
 )
-from cell.kinds import EE_BACKENDS, PLATFORMS, ROBOTS
 from cell.model.objects import SHAPES, ObjectParams
 from cell.yamlsafe import check_yaml, read_yaml_text
-from cell.yamltree import Checker, Node, to_tree
+from cell.yamltree import Checker, Errors, Node, to_tree
 
 __all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
@@ -107,6 +104,7 @@ class Job:
     rotor_rpm: float = 0.0
     base_speed_mps: float = 0.0
     extras: dict[str, Any] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
 
     def bin(self, bin_id: str) -> BinSpec:
         """The bin with this id."""
@@ -137,21 +135,6 @@ def _footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> boo
     return all(abs(pos_a[k] - pos_b[k]) < (size_a[k] + size_b[k]) / 2 for k in (0, 1))
 
 
-@dataclass(frozen=True)
-class _CellSpec:
-    """The `cell` section, validated: robot, end-effector, files and platform."""
-
-    robot: str
-    ee: str
-    ee_config: str
-    params: str
-    residual: str
-    platform: str
-    hover_height_m: float
-    rotor_rpm: float
-    base_speed_mps: float
-
-
 def _job_tree(text: str, path: str) -> Node:
     """The job's YAML as a tree of nodes with their lines.
 
@@ -171,88 +154,23 @@ def _job_tree(text: str, path: str) -> Node:
     return to_tree(root, path)
 
 
-def _top_sections(c: Checker, tree: Node, path: str) -> dict[str, Node]:
-    """The top-level sections, known keys only, with bins and items required."""
-    top = c.mapping(tree, "", dict.fromkeys(TOP_KEYS, ""))
+def _top_sections(c: Checker, tree: Node, errors: Errors) -> dict[str, Node]:
+    """The top-level sections: each unknown key and each missing list (bins, items) one
+    error; the known sections returned."""
+    if not isinstance(tree.value, dict):
+        raise c.fail(tree, "", f"must be a mapping with keys {', '.join(TOP_KEYS)}")
+    top: dict[str, Node] = {}
+    for k, v in tree.value.items():
+        if k in TOP_KEYS:
+            top[k] = v
+        else:
+            errors.add(
+                c.fail(v, k, f"unknown key {k!r}; valid keys here: {', '.join(sorted(TOP_KEYS))}")
+            )
     for req in ("bins", "items"):
         if req not in top:
-            raise JobError(f"{path}, line {tree.line}: the job needs a '{req}' list")
+            errors.add(JobError(f"{c.path}, line {tree.line}: the job needs a '{req}' list"))
     return top
-
-
-def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, float]:
-    """The platform and its settings.
-
-    Returns:
-        (platform, hover height [m], rotor speed [rpm], base speed [m/s]); the drone's
-        and the mobile base's settings keep their defaults on other platforms.
-    """
-    platform = c.text(cell["platform"], "cell.platform", PLATFORMS) if "platform" in cell else "arm"
-    drone = _platform_section(c, cell, platform, "drone", DRONE_KEYS)
-    hover = _setting(c, drone, "cell.drone.hover_height_m", 2.0, 0.5, 10.0)
-    rpm = _setting(c, drone, "cell.drone.rotor_rpm", 0.0, 0.0, 30000.0)
-    mobile = _platform_section(c, cell, platform, "mobile", MOBILE_KEYS)
-    speed = _setting(c, mobile, "cell.mobile.speed_mps", 0.0, 0.0, 2.0)
-    return platform, hover, rpm, speed
-
-
-def _platform_section(
-    c: Checker, cell: dict[str, Node], platform: str, name: str, keys: Any
-) -> dict[str, Node]:
-    """The section `cell.<name>` of a platform's settings, known keys only ({} when absent);
-    JobError when it is given for another platform."""
-    if name not in cell:
-        return {}
-    if platform != name:
-        raise c.fail(cell[name], f"cell.{name}", f"only for platform: {name}")
-    return c.mapping(cell[name], f"cell.{name}", dict.fromkeys(keys, ""))
-
-
-def _setting(
-    c: Checker, sec: dict[str, Node], path: str, default: float, lo: float, hi: float
-) -> float:
-    """The number at `path` (cell.<section>.<key>) within [lo, hi]; `default` when absent."""
-    key = path.rsplit(".", 1)[1]
-    return c.number(sec[key], path, lo=lo, hi=hi) if key in sec else default
-
-
-def _cell_file(c: Checker, cell: dict[str, Node], key: str, base: Path) -> str:
-    """The file a `cell` key names, as given if it exists, else relative to the job's folder
-    ("" when the key is absent).
-
-    Raises:
-        JobError: the file exists in neither place.
-    """
-    if key not in cell:
-        return ""
-    p = Path(c.text(cell[key], f"cell.{key}"))
-    full = p if p.is_absolute() or p.exists() else base / p
-    if not full.exists():
-        raise c.fail(
-            cell[key],
-            f"cell.{key}",
-            f"file {p} does not exist (relative to the current folder or to {base})",
-        )
-    return str(full)
-
-
-def _cell_section(c: Checker, top: dict[str, Node], tree: Node, path: str) -> _CellSpec:
-    """The `cell` section: platform, robot, end-effector back-end and the files they read."""
-    cell = c.mapping(top["cell"], "cell", dict.fromkeys(CELL_KEYS, "")) if "cell" in top else {}
-    platform, hover, rpm, speed = _platform(c, cell)
-    robot = c.text(cell["robot"], "cell.robot", ROBOTS) if "robot" in cell else "panda"
-    ee = c.text(cell["ee"], "cell.ee", EE_BACKENDS) if "ee" in cell else "pybullet"
-    base = Path(path).parent if path != "<job>" else Path(".")
-    ee_config = _cell_file(c, cell, "ee_config", base)
-    params = _cell_file(c, cell, "params", base)
-    residual = _cell_file(c, cell, "residual", base)
-    if ee == "dynamixel" and not ee_config:
-        raise c.fail(
-            cell.get("ee", tree),
-            "cell.ee_config",
-            "the dynamixel back-end needs ee_config (e.g. robots/throwing_ee/dynamixel.yaml)",
-        )
-    return _CellSpec(robot, ee, ee_config, params, residual, platform, hover, rpm, speed)
 
 
 def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, float]:
@@ -312,15 +230,26 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec]) -> BinSpec:
     return BinSpec(bid, pos, size, rim)  # type: ignore[arg-type]
 
 
-def _bins(c: Checker, top: dict[str, Node]) -> list[BinSpec]:
-    """The `bins` list, in job order."""
+def _bins(c: Checker, top: dict[str, Node], errors: Errors) -> tuple[list[BinSpec], list[str]]:
+    """The `bins` list, in job order, each bad bin one error.
+
+    Returns:
+        (the bins that are valid, the ids every bin gives, valid or not: an item naming
+        a bad bin is not told the bin does not exist).
+    """
     bins_node = top["bins"]
     if not isinstance(bins_node.value, list) or not bins_node.value:
         raise c.fail(bins_node, "bins", "must be a non-empty list of bins")
     bins: list[BinSpec] = []
+    ids: list[str] = []
     for i, bn in enumerate(bins_node.value):
-        bins.append(_bin(c, bn, f"bins[{i}]", bins))
-    return bins
+        b = errors.run(_bin, c, bn, f"bins[{i}]", bins)
+        if b is not None:
+            bins.append(b)
+        given = bn.value.get("id") if isinstance(bn.value, dict) else None
+        if isinstance(given, Node) and isinstance(given.value, str) and given.value:
+            ids.append(given.value)
+    return bins, list(dict.fromkeys(ids))
 
 
 def _routing(c: Checker, top: dict[str, Node], bin_ids: list[str]) -> dict[str, str]:
@@ -406,14 +335,18 @@ def _item(
 
 
 def _items(
-    c: Checker, top: dict[str, Node], routing: dict[str, str], bin_ids: list[str]
+    c: Checker, top: dict[str, Node], routing: dict[str, str], bin_ids: list[str], errors: Errors
 ) -> list[ItemSpec]:
-    """The `items` list, in job order."""
+    """The `items` list, in job order, each bad item one error (the valid ones returned)."""
     items_node = top["items"]
     if not isinstance(items_node.value, list) or not items_node.value:
         raise c.fail(items_node, "items", "must be a non-empty list of items")
     cat = catalogue()
-    return [_item(c, itn, i, cat, routing, bin_ids) for i, itn in enumerate(items_node.value)]
+    out = [
+        errors.run(_item, c, itn, i, cat, routing, bin_ids)
+        for i, itn in enumerate(items_node.value)
+    ]
+    return [it for it in out if it is not None]
 
 
 def _limits(c: Checker, top: dict[str, Node]) -> tuple[float, int, float]:
@@ -443,36 +376,94 @@ def _limits(c: Checker, top: dict[str, Node]) -> tuple[float, int, float]:
     return reach, max_items, tlim
 
 
-def parse_job(text: str, path: str = "<job>") -> Job:
-    """Validate a job given as YAML text.
+def _where(job: Job, tree: Node, top: dict[str, Node]) -> dict[str, str]:
+    """ "file, line N" of the job's parts for `cell.jobcheck`'s messages: "cell",
+    "pick_station" and "bins[i]" (i the index in `job.bins`)."""
+
+    def bin_id(node: Node) -> str | None:
+        v = node.value.get("id") if isinstance(node.value, dict) else None
+        return v.value if isinstance(v, Node) and isinstance(v.value, str) else None
+
+    where = {"cell": f"{job.path}, line {top['cell'].line if 'cell' in top else tree.line}"}
+    where["pick_station"] = (
+        f"{job.path}, line {top['pick_station'].line}" if "pick_station" in top else where["cell"]
+    )
+    lines = {bin_id(n): n.line for n in top["bins"].value}
+    for i, b in enumerate(job.bins):
+        where[f"bins[{i}]"] = f"{job.path}, line {lines.get(b.id, tree.line)}"
+    return where
+
+
+def _unsorted_warning(job: Job) -> tuple[str, ...]:
+    """A warning when limits.max_items leaves items of the job unsorted."""
+    listed = sum(it.count for it in job.items)
+    if listed <= job.max_items:
+        return ()
+    return (
+        f"{job.path}: limits.max_items is {job.max_items} and the job lists {listed} items: "
+        f"the first {job.max_items} are sorted, {listed - job.max_items} are left unsorted",
+    )
+
+
+def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Job:
+    """Validate a job given as YAML text: every error in one report.
+
+    Each section, bin and item is checked on its own, and the job as a whole against its
+    arm (`cell.jobcheck`: a bin under the pick station; with `check_reach`, the arm's
+    reach of the station and of the bins it places into); a job with errors is refused
+    with all of them, one a line. `limits.max_items` below the items listed is not an
+    error: `Job.warnings` says how many are left unsorted.
 
     Raises:
-        JobError: naming the file, the line and the field path, and what is valid.
+        JobError: naming, for each error, the file, the line and the field path, and what
+            is valid.
     """
     tree = _job_tree(text, path)
     c = Checker(path)
-    top = _top_sections(c, tree, path)
-    cell = _cell_section(c, top, tree, path)
-    pick = _pick_position(c, top)
-    bins = _bins(c, top)
-    bin_ids = [b.id for b in bins]
-    routing = _routing(c, top, bin_ids)
-    items = _items(c, top, routing, bin_ids)
-    policy = c.text(top["policy"], "policy", POLICIES) if "policy" in top else "auto"
-    seed = c.integer(top["seed"], "seed", 0, 2**32 - 1) if "seed" in top else 0
-    reach, max_items, tlim = _limits(c, top)
-    return Job(
+    errors = Errors(path)
+    top = errors.run(_top_sections, c, tree, errors) or {}
+    cell = errors.run(cell_section, c, top, tree, path)
+    pick = errors.run(_pick_position, c, top)
+    both = errors.run(_bins, c, top, errors) if "bins" in top else None
+    bins, bin_ids = both if both is not None else (None, [])
+    routing = errors.run(_routing, c, top, bin_ids) or {}
+    items = errors.run(_items, c, top, routing, bin_ids, errors) if "items" in top else None
+    policy = (
+        errors.run(lambda: c.text(top["policy"], "policy", POLICIES)) if "policy" in top else "auto"
+    )
+    seed = errors.run(lambda: c.integer(top["seed"], "seed", 0, 2**32 - 1)) if "seed" in top else 0
+    limits = errors.run(_limits, c, top)
+    parts = (cell, pick, bins, items, policy, seed, limits)
+    if errors.messages and any(p is None for p in parts):
+        errors.raise_all()
+    assert cell is not None and pick is not None and bins is not None and items is not None
+    assert policy is not None and seed is not None and limits is not None
+    job = Job(
         path=path,
+        robot=cell.robot,
+        ee=cell.ee,
+        ee_config=cell.ee_config,
+        params=cell.params,
+        residual=cell.residual,
         pick_position=pick,
         bins=tuple(bins),
         items=tuple(items),
         policy=policy,
         seed=seed,
-        place_reach_m=reach,
-        max_items=max_items,
-        item_time_limit_s=tlim,
-        **{f.name: getattr(cell, f.name) for f in fields(cell)},  # the `cell` section's
+        place_reach_m=limits[0],
+        max_items=limits[1],
+        item_time_limit_s=limits[2],
+        platform=cell.platform,
+        hover_height_m=cell.hover_height_m,
+        rotor_rpm=cell.rotor_rpm,
+        base_speed_mps=cell.base_speed_mps,
     )
+    if cell.platform == "arm":
+        from cell.jobcheck import job_problems
+
+        errors.messages += job_problems(job, _where(job, tree, top), reach=check_reach)
+    errors.raise_all()
+    return replace(job, warnings=_unsorted_warning(job))
 
 
 def load_job(path: str | Path) -> Job:

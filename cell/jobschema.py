@@ -30,7 +30,17 @@ TOP_KEYS = (
     "name",
     "description",
 )
-CELL_KEYS = ("robot", "ee", "ee_config", "params", "residual", "platform", "drone", "mobile")
+CELL_KEYS = (
+    "robot",
+    "mount",
+    "ee",
+    "ee_config",
+    "params",
+    "residual",
+    "platform",
+    "drone",
+    "mobile",
+)
 BIN_KEYS = ("id", "position_m", "size_m", "rim_height_m")
 ITEM_KEYS = ("object", "shape", "mass_kg", "size_m", "count", "bin")
 LIMIT_KEYS = ("place_reach_m", "max_items", "item_time_limit_s")

@@ -1,6 +1,7 @@
 """The names the cell knows, each list defined here once.
 
-* `ROBOTS`: the arms with a mount under robots/ (`robots/<name>_throwing/mount.yaml`).
+* The arms are not listed here: they are the mount files under robots/ (and any a job
+  names), `cell.robot.mount.robot_names`.
 * `PLATFORMS`: what carries the end-effector. Its order is an encoding (the gap
   diagnosis codes a platform by its index, a synthetic world draws them in this order):
   add new names at the end.
@@ -19,11 +20,9 @@ __all__ = [
     "PICKS",
     "PLATFORMS",
     "RELEASES",
-    "ROBOTS",
     "SIM_EE_BACKEND",
 ]
 
-ROBOTS: tuple[str, ...] = ("panda", "ur5")
 PLATFORMS: tuple[str, ...] = ("arm", "mobile", "drone")
 SIM_EE_BACKEND = "pybullet"
 EE_BACKENDS: tuple[str, ...] = (SIM_EE_BACKEND, "dynamixel")

@@ -219,10 +219,13 @@ class Orchestrator(
 
     def _check_job(self) -> None:
         """Refuse the job before it starts if an item cannot be gripped or its bin is
-        out of its reach (by the planner's model of the scene)."""
+        out of its reach (by the planner's model of the scene): every such item in one
+        report, one a line."""
         from cell.errors import JobError
+        from cell.yamltree import Errors
 
         job = self.job
+        errors = Errors(job.path)
         for spec in job.items:
             try:
                 check_sortable(
@@ -240,10 +243,13 @@ class Orchestrator(
                     else f"; move bin {spec.bin!r} within the reach above, or send the item "
                     "to another bin"
                 )
-                raise JobError(
-                    f"{job.path}, line {spec.line}: item {spec.obj.name or spec.obj.shape} "
-                    f"to bin {spec.bin!r}: {exc}{instead}"
-                ) from None
+                errors.add(
+                    JobError(
+                        f"{job.path}, line {spec.line}: item {spec.obj.name or spec.obj.shape} "
+                        f"to bin {spec.bin!r}: {exc}{instead}"
+                    )
+                )
+        errors.raise_all()
 
     # -- motion ----------------------------------------------------------------
 

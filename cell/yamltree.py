@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import yaml
 
 from cell.errors import JobError
 
-__all__ = ["Checker", "Node", "shown", "to_tree"]
+__all__ = ["Checker", "Errors", "Node", "shown", "to_tree"]
+
+_T = TypeVar("_T")
 
 
 class Node:
@@ -131,3 +134,31 @@ class Checker:
             self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
             for i, x in enumerate(node.value)
         )
+
+
+class Errors:
+    """The errors of a job, collected so that one report names them all."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.messages: list[str] = []
+
+    def add(self, exc: JobError) -> None:
+        self.messages.append(str(exc))
+
+    def run(self, fn: Callable[..., _T], *args: Any) -> _T | None:
+        """fn(*args), or None with its JobError kept."""
+        try:
+            return fn(*args)
+        except JobError as exc:
+            self.add(exc)
+            return None
+
+    def raise_all(self) -> None:
+        """JobError with every message, one a line (none: nothing)."""
+        if len(self.messages) == 1:
+            raise JobError(self.messages[0])
+        if self.messages:
+            raise JobError(
+                f"{self.path}: {len(self.messages)} errors:\n" + "\n".join(self.messages)
+            )

@@ -10,7 +10,7 @@ import yaml
 from cell.arm.launch import check_sortable
 from cell.catalogue import catalogue
 from cell.cli import main
-from cell.jobgen import CALIBRATION_SET, FACING_HALF_RANGE_RAD, LayoutRanges, random_job
+from cell.jobgen import CALIBRATION_SET, LayoutRanges, facing_half_range_rad, random_job
 from cell.jobs import ROBOT_BASE_CLEARANCE_M, load_job, parse_job
 from cell.params import load_params, scene_params_path
 
@@ -36,7 +36,7 @@ def test_bins_lie_in_the_ranges_and_keep_clear(jobs):
             x, y = b["position_m"]
             d = math.hypot(x, y)
             assert r.distance_m[0] - 1e-9 <= d <= r.distance_m[1] + 1e-3
-            assert abs(math.atan2(y, x)) <= FACING_HALF_RANGE_RAD["panda"] + 1e-3
+            assert abs(math.atan2(y, x)) <= facing_half_range_rad("panda") + 1e-3
             assert all(r.width_m[0] - 1e-3 <= w <= r.width_m[1] + 1e-3 for w in b["size_m"])
             assert r.rim_m[0] - 1e-3 <= b["rim_height_m"] <= r.rim_m[1] + 1e-3
             assert d - math.hypot(*b["size_m"]) / 2 >= ROBOT_BASE_CLEARANCE_M

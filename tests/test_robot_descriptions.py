@@ -14,8 +14,9 @@ import pytest
 
 from cell.errors import InvalidInput, InvalidParameter, MissingDependency
 from cell.robot import paths
-from cell.robot.composite import MOUNTS, composite_urdf, end_effector_urdf, load_mount
+from cell.robot.composite import composite_urdf, end_effector_urdf, load_mount
 from cell.robot.model import EE_JOINTS, TCP_FRAME, load_robot
+from cell.robot.mount import robot_names
 
 ROBOTS_DIR = Path(__file__).resolve().parents[1] / "robots"
 EE_LINKS = ("ee_base", "ee_finger_left", "ee_finger_right", "ee_band", "ee_tcp")
@@ -23,7 +24,7 @@ EE_LINKS = ("ee_base", "ee_finger_left", "ee_finger_right", "ee_band", "ee_tcp")
 
 def all_descriptions() -> list[Path]:
     """Every URDF under robots/ and the composite of every mount."""
-    return sorted(ROBOTS_DIR.rglob("*.urdf")) + [composite_urdf(r) for r in sorted(MOUNTS)]
+    return sorted(ROBOTS_DIR.rglob("*.urdf")) + [composite_urdf(r) for r in robot_names()]
 
 
 def test_every_description_folder_has_a_readme():
@@ -117,7 +118,7 @@ def test_end_effector_inertias_are_those_of_its_drawn_shapes():
     assert total == pytest.approx(0.612, abs=1e-12)
 
 
-@pytest.mark.parametrize("robot", sorted(MOUNTS))
+@pytest.mark.parametrize("robot", robot_names())
 def test_composite_has_the_arm_the_end_effector_and_no_franka_hand(robot):
     path = composite_urdf(robot)
     root = ET.parse(path).getroot()
@@ -225,7 +226,7 @@ def test_every_description_loads_in_pinocchio_without_output(tmp_path):
     assert proc.stdout.strip() == "" and proc.stderr.strip() == ""
 
 
-@pytest.mark.parametrize("robot", sorted(MOUNTS))
+@pytest.mark.parametrize("robot", robot_names())
 def test_pybullet_and_pinocchio_agree_on_the_grip_centre(robot):
     """Two independent kinematics engines read the same composite URDF."""
     import pybullet as p
@@ -292,9 +293,9 @@ def test_missing_robots_folder_is_a_clear_error(monkeypatch, tmp_path):
 
 
 def test_unknown_robot_names_the_valid_ones():
-    with pytest.raises(InvalidInput, match="panda, ur5"):
+    with pytest.raises(InvalidInput, match="panda, ur10, ur3, ur5"):
         load_robot("kuka")
-    with pytest.raises(InvalidInput, match="panda, ur5"):
+    with pytest.raises(InvalidInput, match="panda, ur10, ur3, ur5"):
         composite_urdf("kuka")
 
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cell.robot.composite import MOUNTS
 from cell.robot.model import load_robot
+from cell.robot.mount import robot_names
 from cell.sim import EE_TO_TCP_M, CellScene
 
 
-@pytest.mark.parametrize("robot", sorted(MOUNTS))
+@pytest.mark.parametrize("robot", robot_names())
 def test_the_scene_tcp_equals_pinocchios_for_random_configurations(robot):
     rb = load_robot(robot)
     qs = rb.random_configuration(np.random.default_rng(7), 25)

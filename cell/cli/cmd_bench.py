@@ -194,12 +194,13 @@ def _set_figures(layout_set: str, first: int, layouts: int) -> dict[str, object]
 
 def _robots(text: str) -> tuple[str, ...]:
     from cell.errors import InvalidInput
-    from cell.kinds import ROBOTS
+    from cell.robot.mount import robot_names
 
+    names = robot_names()
     robots = tuple(r.strip() for r in text.split(",") if r.strip())
-    bad = [r for r in robots if r not in ROBOTS]
+    bad = [r for r in robots if r not in names]
     if bad or not robots:
-        raise InvalidInput(f"--robots {text!r}: give arms from {', '.join(ROBOTS)}")
+        raise InvalidInput(f"--robots {text!r}: give arms from {', '.join(names)}")
     return robots
 
 

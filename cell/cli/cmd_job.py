@@ -6,8 +6,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from cell.kinds import ROBOTS
-
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("job", help="sort-job tools (draw a random job)")
@@ -23,7 +21,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     r.add_argument("--seed", type=int, default=0, help="names the job (0)")
-    r.add_argument("--robot", choices=ROBOTS, default="panda", help="the arm (panda)")
+    r.add_argument(
+        "--robot",
+        default="panda",
+        help="the arm: a name under robots/ (docs/arms.md) (panda)",
+    )
     r.add_argument("-o", "--output", metavar="JOB.yaml", help="write here (default: stdout)")
     r.set_defaults(func=run_random)
 

@@ -10,14 +10,17 @@ from typing import Any
 import numpy as np
 
 from cell.cli.common import add_axis_args, add_json_arg, add_vector_arg, report
-from cell.kinds import ROBOTS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "reach", help="inverse kinematics to a release pose, and the move time from home"
     )
-    p.add_argument("--robot", default="panda", choices=ROBOTS, help="arm (panda)")
+    p.add_argument(
+        "--robot",
+        default="panda",
+        help="arm: a name under robots/ (docs/arms.md) or a mount.yaml path (panda)",
+    )
     add_vector_arg(p, "--at", "grip centre in the arm's base frame [m]", required=True)
     add_axis_args(p)
     p.add_argument(

@@ -188,6 +188,8 @@ def run(args: argparse.Namespace) -> int:
     from cell.errors import HardwareError, InvalidInput
 
     job = load_job(args.job)
+    for warning in job.warnings:  # limits.max_items leaves items unsorted
+        print(f"cell: warning: {warning}", file=sys.stderr)
     if not 0.0 < args.speed_scale <= 1.0:
         raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
     kind = args.ee or job.ee

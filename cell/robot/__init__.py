@@ -6,7 +6,7 @@
 - `plan_path`, `plan_move`, `plan_stop`, `release_joint_velocity`: trajectories.
 """
 
-from cell.robot.composite import MOUNTS, composite_urdf, end_effector_urdf, load_mount
+from cell.robot.composite import composite_urdf, end_effector_urdf
 from cell.robot.ik import IKNoSolution, IKResult, ReleasePose, pose_error, solve_ik
 from cell.robot.limits import JointLimits
 from cell.robot.model import EE_JOINTS, TCP_FRAME, Robot, axis_frame, load_robot
@@ -19,11 +19,12 @@ from cell.robot.motion import (
     plan_stop,
     release_joint_velocity,
 )
+from cell.robot.mount import MountSpec, load_mount, robot_names
 from cell.robot.paths import example_robot_data_dir, robots_dir
 
 __all__ = [
     "EE_JOINTS",
-    "MOUNTS",
+    "MountSpec",
     "TCP_FRAME",
     "IKNoSolution",
     "IKResult",
@@ -44,6 +45,7 @@ __all__ = [
     "plan_stop",
     "pose_error",
     "release_joint_velocity",
+    "robot_names",
     "robots_dir",
     "solve_ik",
 ]

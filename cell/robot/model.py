@@ -13,10 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput, MissingDependency
+from cell.errors import InvalidInput, InvalidParameter, MissingDependency
 from cell.frames import axis_frame
-from cell.robot.composite import MOUNTS, MountSpec, composite_urdf, load_mount
+from cell.robot.composite import composite_urdf
 from cell.robot.limits import JointLimits
+from cell.robot.mount import MountSpec, load_mount
 from cell.robot.paths import example_robot_data_dir, robots_dir
 
 __all__ = [
@@ -56,7 +57,7 @@ class Robot:
             raise MissingDependency("Pinocchio is missing: pip install pin") from exc
         self.name = spec.name
         self.spec = spec
-        self.urdf = composite_urdf(spec.name)
+        self.urdf = composite_urdf(spec.path)
         full = pin.buildModelFromUrdf(str(self.urdf))
         names = list(full.names)
         missing = [j for j in spec.arm_joints if j not in names]
@@ -84,7 +85,10 @@ class Robot:
             jerk=jerk,
         )
         self.home = np.array(spec.home, dtype=float)
-        self.limits.check_position(self.home, name=f"{spec.name} home")
+        try:
+            self.limits.check_position(self.home, name="home")
+        except InvalidInput as exc:  # the mount file's field, named (docs/arms.md)
+            raise InvalidParameter(f"{spec.path}: field 'home': {exc}") from None
         # one Robot per process is shared by every run in it (`load_robot`): its arrays are
         # read-only, so no run can change what a later one plans with
         for a in (self.home, *vars(self.limits).values()):
@@ -151,27 +155,27 @@ class Robot:
 
 
 @lru_cache(maxsize=8)
-def _load(name: str, robots: Path, robot_data: Path) -> Robot:
-    """The Robot of `name` as described in these folders (`load_robot`): the key names where
-    the description is read from, so a run never gets an arm read from folders it does
-    not use ($CELL_ROBOTS_DIR, $CELL_EXAMPLE_ROBOT_DATA set or changed since)."""
-    return Robot(load_mount(name))
+def _load(spec: MountSpec, robots: Path, robot_data: Path) -> Robot:
+    """The Robot of this mount as described in these folders (`load_robot`): the key is
+    the mount's content and where the descriptions are read from, so a run never gets an
+    arm read from another mount file or from folders it does not use ($CELL_ROBOTS_DIR,
+    $CELL_EXAMPLE_ROBOT_DATA set or changed since)."""
+    return Robot(spec)
 
 
 def load_robot(name: str) -> Robot:
-    """The arm with the end-effector, by name (cached per process, per the folders its
-    description is read from: `cell.robot.paths`).
+    """The arm with the end-effector, by reference (cached per process, per its mount
+    file's content and the folders its description is read from: `cell.robot.paths`).
 
     Args:
-        name: "panda" or "ur5".
+        name: an arm's name under robots/ ("panda", "ur10") or a mount file's path.
 
     Returns:
-        The shared Robot instance of that name (its `data` is scratch space).
+        The shared Robot instance of that mount (its `data` is scratch space).
 
     Raises:
         InvalidInput: unknown robot.
+        InvalidParameter: a wrong mount file (naming the file and the field).
         MissingDependency: Pinocchio, example-robot-data or robots/ is missing.
     """
-    if name not in MOUNTS:
-        raise InvalidInput(f"unknown robot {name!r}; valid: {', '.join(sorted(MOUNTS))}")
-    return _load(name, robots_dir(), example_robot_data_dir())
+    return _load(load_mount(name), robots_dir(), example_robot_data_dir())

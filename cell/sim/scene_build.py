@@ -21,10 +21,15 @@ def check_settings(
         raise InvalidParameter(
             f"time steps dt_s={dt_s}, launch_dt_s={launch_dt_s} s: need 0 < launch ≤ dt ≤ 0.01"
         )
-    from cell.robot.composite import MOUNTS
+    from cell.robot.mount import load_mount
 
-    if robot is not None and robot not in MOUNTS:
-        raise InvalidParameter(f"robot {robot!r}: valid are {sorted(MOUNTS)} or None")
+    if robot is not None:
+        try:
+            load_mount(robot)
+        except InvalidParameter:
+            raise
+        except ValueError as exc:  # an unknown name or a missing file
+            raise InvalidParameter(f"{exc}; or None (the end-effector alone)") from None
     ids = [b.id for b in bins]
     if len(set(ids)) != len(ids):
         raise InvalidParameter(f"bin ids must be unique, got {ids}")

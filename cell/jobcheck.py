@@ -1,0 +1,237 @@
+"""What a sort job asks of its arm, checked before anything runs (`cell.jobs.parse_job`
+calls these; every problem goes into the one report the job is refused with).
+
+* The pick station under a bin: the station's 0.24 m block and a bin's footprint share
+  floor (`station_problems`).
+* The pick station out of the arm's reach: inverse kinematics of the grip pointing down
+  over the station's centre, at the lowest and the highest grip the job's items need
+  (the shortest item gripped at the shortest stroke; the tallest at the longest), as the
+  pick solves it (`reach_problems`; the lift over the pick is lowered where the arm
+  does not reach it, `cell.arm.kinematics`).
+* A bin placed into out of the arm's reach: the bins the job places into (every bin
+  under `policy: place`, those within `limits.place_reach_m` under `auto`), IK of the
+  grip pointing down over the bin's point nearest the base (3 cm in from its walls),
+  the tallest item bound there held over the rim.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "BIN_INSET_M",
+    "STATION_HALF_M",
+    "STROKE_RANGE_M",
+    "job_problems",
+    "reach_problems",
+    "station_problems",
+]
+
+STATION_HALF_M = 0.12  # [m] half the pick station's square top (cell.sim.scene_build)
+STROKE_RANGE_M = (0.03, 0.11)  # [m] the strokes an item is gripped at (MODEL.md)
+BIN_INSET_M = 0.03  # [m] the place pose checked this far in from the bin's near walls
+OVER_RIM_M = 0.05  # [m] the item's lowest point over the rim, as the place goes over it
+
+
+def station_problems(
+    pick: Sequence[float], bins: Sequence[Any], where: dict[str, str]
+) -> list[str]:
+    """A bin whose footprint reaches under the pick station's block.
+
+    Args:
+        pick: the station's top centre (x, y, z) [m, W].
+        bins: the job's BinSpecs.
+        where: "bins[i]" / "pick_station" -> "file, line N".
+
+    Returns:
+        One message per bin under the station.
+    """
+    out = []
+    for i, b in enumerate(bins):
+        dx = abs(b.position[0] - pick[0]) - b.size[0] / 2
+        dy = abs(b.position[1] - pick[1]) - b.size[1] / 2
+        if dx < STATION_HALF_M and dy < STATION_HALF_M:
+            out.append(
+                f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: bin {b.id!r} "
+                f"({b.size[0]:.2f} × {b.size[1]:.2f} m at ({b.position[0]:.2f}, "
+                f"{b.position[1]:.2f})) is under the pick station, a {2 * STATION_HALF_M:.2f} m "
+                f"block at ({pick[0]:.2f}, {pick[1]:.2f}) ({where.get('pick_station', '?')}): "
+                "move the bin or the station apart"
+            )
+    return out
+
+
+@lru_cache(maxsize=16)
+def _farthest_m(robot: Any) -> float:
+    """The farthest the arm's TCP gets from its base over 500 random configurations [m]
+    (seeded), and 5 % more: a pose farther out is out of reach without a search."""
+    qs = robot.random_configuration(np.random.default_rng(0), 500)
+    return 1.05 * max(float(np.linalg.norm(robot.tcp_pose(q)[0])) for q in qs)
+
+
+def _reaches(robot: Any, tcp: np.ndarray) -> float:
+    """0 when the grip pointing down reaches TCP position `tcp` [m, W], else how far the
+    nearest solution found misses it [m]."""
+    from cell.errors import IKFailed
+    from cell.robot.ik import ReleasePose, solve_ik
+
+    far = float(np.linalg.norm(tcp)) - _farthest_m(robot)
+    if not far < 0.0:  # beyond any configuration (or not finite): no search
+        return far if math.isfinite(far) else math.inf
+    pose = ReleasePose(np.asarray(tcp, float), np.array([0.0, 0.0, -1.0]))
+    try:
+        solve_ik(robot, pose, robot.home)
+        return 0.0
+    except IKFailed as exc:
+        miss = getattr(exc, "position_error_m", None)
+        return float(miss) if miss is not None else float("nan")
+
+
+def _tcp_z(centre_z: float, stroke: float, height: float) -> float:
+    """The TCP's height [m] for the grip pointing down with the item's centre at
+    centre_z, gripped at `stroke` (`cell.frames.tcp_for_item_centre`)."""
+    from cell.sim.frames import EE_TO_TCP_M
+
+    return centre_z - (EE_TO_TCP_M - stroke - height / 2)
+
+
+def _reach_m(robot: Any, xy: Sequence[float], z: float) -> float:
+    """How far out from the base, toward xy and at TCP height z, the arm reaches with the
+    grip pointing down [m] (bisection on IK, to 1 cm; 0 when not even 0.15 m out is): for
+    the messages ("the arm reaches about ...")."""
+    d = np.array([xy[0], xy[1]], float)
+    d = d / (np.linalg.norm(d) or 1.0)
+
+    def ok(r: float) -> bool:
+        return _reaches(robot, np.array([d[0] * r, d[1] * r, z])) == 0.0
+
+    lo, hi = 0.15, _farthest_m(robot)
+    if not ok(lo):
+        return 0.0
+    while hi - lo > 0.01:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+def _missed(miss: float) -> str:
+    """How far the nearest IK solution missed a pose, in words."""
+    if math.isfinite(miss):
+        return f"missed by {miss * 1000:.0f} mm"
+    return "farther than any configuration reaches"
+
+
+def _out(reach: float) -> str:
+    """How far out the grip pointing down reaches at a height, in words."""
+    if reach <= 0.0:
+        return "the arm's grip pointing down does not get there at that height"
+    return f"the arm's grip pointing down reaches about {reach:.2f} m out at that height"
+
+
+def _fmt(v: Any) -> str:
+    return "(" + ", ".join(f"{x:.2f}" for x in v) + ")"
+
+
+def reach_problems(
+    robot_ref: str,
+    pick: Sequence[float],
+    bins: Sequence[Any],
+    items: Sequence[Any],
+    placed: Sequence[int],
+    where: dict[str, str],
+) -> list[str]:
+    """The pick station and the bins placed into that the arm does not reach.
+
+    Args:
+        robot_ref: the arm (a name under robots/ or a mount file: `cell.robot.mount`).
+        pick: the station's top centre (x, y, z) [m, W].
+        bins: the job's BinSpecs.
+        items: the job's ItemSpecs.
+        placed: the indices of the bins the job places into.
+        where: "bins[i]" / "pick_station" / "cell" -> "file, line N".
+
+    Returns:
+        One message per pose the arm does not reach, naming the field and what would do.
+    """
+    from cell.robot.model import load_robot
+
+    robot = load_robot(robot_ref)
+    heights = [float(it.obj.size[2]) for it in items] or [0.05]
+    out: list[str] = []
+    centre_lo = pick[2] + min(heights) / 2
+    centre_hi = pick[2] + max(heights) / 2
+    checks = (
+        (_tcp_z(centre_lo, STROKE_RANGE_M[0], min(heights)), "the shortest item gripped"),
+        (_tcp_z(centre_hi, STROKE_RANGE_M[1], max(heights)), "the tallest item gripped"),
+    )
+    for z, what in checks:
+        tcp = np.array([pick[0], pick[1], z])
+        miss = _reaches(robot, tcp)
+        if miss == 0.0:
+            continue
+        reach = _reach_m(robot, pick, z)
+        out.append(
+            f"{where.get('pick_station', where.get('cell', '?'))}, pick_station.position_m: "
+            f"the {robot.name} arm does not reach the pick station at {_fmt(pick)} m "
+            f"({what}: the grip pointing down with its TCP at {_fmt(tcp)} m, "
+            f"{_missed(miss)}); the station's centre is "
+            f"{math.hypot(pick[0], pick[1]):.2f} m from the base and {_out(reach)}: move "
+            "the station within that, or choose another arm"
+        )
+        break
+    for i in placed:
+        b = bins[i]
+        tall = max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
+        xy = _nearest_point(b)
+        centre_z = b.rim_height + OVER_RIM_M + tall / 2
+        tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall)])
+        miss = _reaches(robot, tcp)
+        if miss == 0.0:
+            continue
+        reach = _reach_m(robot, xy, float(tcp[2]))
+        out.append(
+            f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
+            f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
+            f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
+            f"{_out(reach)}): "
+            "move the bin "
+            "closer, or have its items thrown (policy: auto with limits.place_reach_m below "
+            f"{math.hypot(*b.position):.2f} m)"
+        )
+    return out
+
+
+def _nearest_point(b: Any) -> tuple[float, float]:
+    """The point of bin b's floor nearest the base, BIN_INSET_M in from its walls [m, W]."""
+    hx = max(b.size[0] / 2 - BIN_INSET_M, 0.0)
+    hy = max(b.size[1] / 2 - BIN_INSET_M, 0.0)
+    x = min(max(0.0, b.position[0] - hx), b.position[0] + hx)
+    y = min(max(0.0, b.position[1] - hy), b.position[1] + hy)
+    return (x, y)
+
+
+def job_problems(job: Any, where: dict[str, str], *, reach: bool = True) -> list[str]:
+    """What the job asks of its arm that it cannot do: a bin under the station, and (with
+    `reach`, once nothing else is wrong) the station and the bins placed into out of the
+    arm's reach.
+
+    Args:
+        job: the job (`cell.jobs.Job`, on the arm platform).
+        where: "cell", "pick_station", "bins[i]" -> "file, line N".
+        reach: check the arm's reach (IK) too.
+    """
+    out = station_problems(job.pick_position, job.bins, where)
+    if reach and not out:
+        placed = [
+            i
+            for i, b in enumerate(job.bins)
+            if job.policy == "place"
+            or (job.policy == "auto" and math.hypot(*b.position) <= job.place_reach_m)
+        ]
+        out += reach_problems(job.robot, job.pick_position, job.bins, job.items, placed, where)
+    return out

@@ -1,0 +1,358 @@
+"""Mount files: the arms the cell knows, each described by one `mount.yaml`.
+
+No list of arms is kept in the code: the arms are the mount files found under
+`robots/*/mount.yaml` (each named by its `arm` field) and any mount file a job names
+(`cell: {mount: path/to/mount.yaml}`). A robot is referred to by a *reference*: a name
+(`"ur10"`, resolved by scanning robots/) or the path of a mount file. docs/arms.md says how
+to add an arm; every field is checked here, and against the arm's URDF by
+`check_against_urdf`, so that a wrong mount file is refused naming the file, the field and
+what would be valid.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from cell.errors import InvalidInput, InvalidParameter
+from cell.robot.paths import example_robot_data_dir, robots_dir
+
+__all__ = [
+    "MOUNT_FIELDS",
+    "MountSpec",
+    "check_against_urdf",
+    "is_mount_path",
+    "load_mount",
+    "mount_files",
+    "resolve_mount",
+    "robot_names",
+]
+
+MOUNT_FILE = "mount.yaml"
+REQUIRED = (
+    "arm",
+    "arm_urdf",
+    "arm_joints",
+    "flange",
+    "end_effector",
+    "mount_xyz",
+    "mount_rpy",
+    "home",
+    "acceleration_limits",
+    "jerk_limits",
+)
+OPTIONAL = ("drop_below_flange", "facing_half_range_deg")
+MOUNT_FIELDS = REQUIRED + OPTIONAL
+"""Every field a mount file may hold (docs/arms.md describes each)."""
+_NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
+_MOVABLE = ("revolute", "continuous", "prismatic")
+MAX_ACCELERATION = 1000.0  # [rad/s²] beyond any arm's motors: a typo (1e300)
+MAX_JERK = 1.0e6  # [rad/s³]
+
+
+@dataclass(frozen=True)
+class MountSpec:
+    """One arm with the end-effector on its flange (the contents of a mount.yaml).
+
+    Attributes:
+        name: the arm's name (the file's `arm` field: "panda", "ur10").
+        folder: the name of the folder that holds the mount file.
+        path: the mount file, absolute.
+        arm_urdf: the arm's URDF, relative to example-robot-data's robots/ folder.
+        flange: the arm link the end-effector is bolted to.
+        drop_below_flange: remove the links downstream of the flange (the arm's own tool).
+        end_effector: the end-effector's URDF, relative to robots/.
+        mount_xyz: ee_base origin in the flange frame [m].
+        mount_rpy: ee_base roll, pitch, yaw in the flange frame [rad].
+        arm_joints: the arm's actuated joints, base to flange.
+        home: the home configuration [rad], one value per arm joint.
+        acceleration_limits: joint acceleration limits [rad/s²], one per arm joint.
+        jerk_limits: joint jerk limits [rad/s³], one per arm joint.
+        facing_half_range_rad: half the range of azimuths about the base the arm may
+            face a bin at [rad] (random layouts draw bins within it); π: all around.
+    """
+
+    name: str
+    folder: str
+    path: str
+    arm_urdf: str
+    flange: str
+    drop_below_flange: bool
+    end_effector: str
+    mount_xyz: tuple[float, float, float]
+    mount_rpy: tuple[float, float, float]
+    arm_joints: tuple[str, ...]
+    home: tuple[float, ...]
+    acceleration_limits: tuple[float, ...]
+    jerk_limits: tuple[float, ...]
+    facing_half_range_rad: float = math.pi
+
+
+def is_mount_path(ref: str) -> bool:
+    """Whether a robot reference is a mount file's path (else it is an arm's name)."""
+    return ref.endswith((".yaml", ".yml")) or "/" in ref or "\\" in ref
+
+
+def _read(path: Path) -> dict[str, Any]:
+    """A mount file's mapping (bounded, safe YAML); InvalidParameter naming the file."""
+    from cell.yamlsafe import read_yaml_text, safe_load
+
+    try:
+        raw = safe_load(read_yaml_text(path, "mount file"), str(path))
+    except InvalidInput as exc:
+        raise InvalidParameter(str(exc)) from None
+    if not isinstance(raw, dict):
+        raise InvalidParameter(
+            f"{path}: a mount file is a mapping with the fields {list(REQUIRED)}"
+        )
+    return raw
+
+
+def mount_files() -> dict[str, Path]:
+    """The arms under robots/: name (each file's `arm` field) -> its mount file.
+
+    Raises:
+        InvalidParameter: a mount file without a valid `arm` name, or two with the same.
+    """
+    out: dict[str, Path] = {}
+    for path in sorted(robots_dir().glob(f"*/{MOUNT_FILE}")):
+        name = _arm_name(_read(path), path)
+        if name in out:
+            raise InvalidParameter(
+                f"{path}: field 'arm': {name!r} is also the arm of {out[name]}; "
+                "give each mount file its own name"
+            )
+        out[name] = path
+    return out
+
+
+def robot_names() -> tuple[str, ...]:
+    """The names of the arms under robots/, sorted."""
+    return tuple(sorted(mount_files()))
+
+
+def _arm_name(raw: dict[str, Any], path: Path) -> str:
+    name = raw.get("arm")
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise InvalidParameter(
+            f"{path}: field 'arm' must be the arm's name (lower-case letters, digits and _, "
+            f"starting with a letter, at most 32), got {name!r}"
+        )
+    return name
+
+
+def resolve_mount(ref: str) -> Path:
+    """The mount file of a robot reference: a name under robots/, or a mount file's path.
+
+    Raises:
+        InvalidInput: an unknown name (naming the known ones) or a missing file.
+    """
+    if is_mount_path(ref):
+        p = Path(ref).expanduser()
+        if not p.is_file():
+            raise InvalidInput(f"mount file {ref}: no such file")
+        return p.resolve()
+    files = mount_files()
+    if ref not in files:
+        raise InvalidInput(
+            f"unknown robot {ref!r}; valid: {', '.join(sorted(files))} (the arms of "
+            f"{robots_dir()}/*/{MOUNT_FILE}), or the path of a mount file"
+        )
+    return files[ref]
+
+
+def _vector3(raw: dict[str, Any], key: str, path: Path) -> tuple[float, float, float]:
+    v = raw[key]
+    try:
+        vals = tuple(float(x) for x in v) if isinstance(v, list) else ()
+    except (TypeError, ValueError):
+        vals = ()
+    if len(vals) != 3 or not all(math.isfinite(x) and abs(x) <= 10.0 for x in vals):
+        raise InvalidParameter(
+            f"{path}: field '{key}' must be a list of 3 finite numbers (|x| ≤ 10), got {v!r}"
+        )
+    return (vals[0], vals[1], vals[2])
+
+
+def _per_joint(raw: dict[str, Any], key: str, n: int, path: Path) -> tuple[float, ...]:
+    v = raw[key]
+    try:
+        vals = tuple(float(x) for x in v) if isinstance(v, list) else ()
+    except (TypeError, ValueError):
+        vals = ()
+    if len(vals) != n or not all(math.isfinite(x) for x in vals):
+        raise InvalidParameter(
+            f"{path}: field '{key}' must be {n} finite numbers (one per arm joint), got {v!r}"
+        )
+    top = {"acceleration_limits": MAX_ACCELERATION, "jerk_limits": MAX_JERK}.get(key)
+    if top is not None and not all(0.0 < x <= top for x in vals):
+        raise InvalidParameter(f"{path}: field '{key}' must be positive and ≤ {top:g}, got {v!r}")
+    return vals
+
+
+def _joints(raw: dict[str, Any], path: Path) -> tuple[str, ...]:
+    joints = raw["arm_joints"]
+    if (
+        not isinstance(joints, list)
+        or not 1 <= len(joints) <= 12
+        or not all(isinstance(j, str) and j for j in joints)
+        or len(set(joints)) != len(joints)
+    ):
+        raise InvalidParameter(
+            f"{path}: field 'arm_joints' must be a list of 1 to 12 distinct joint names "
+            f"(base to flange), got {joints!r}"
+        )
+    return tuple(joints)
+
+
+def _text(raw: dict[str, Any], key: str, path: Path) -> str:
+    v = raw[key]
+    if not isinstance(v, str) or not v:
+        raise InvalidParameter(f"{path}: field '{key}' must be a non-empty text, got {v!r}")
+    return v
+
+
+def _facing(raw: dict[str, Any], path: Path) -> float:
+    v = raw.get("facing_half_range_deg", 180.0)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not 10.0 <= v <= 180.0:
+        raise InvalidParameter(
+            f"{path}: field 'facing_half_range_deg' must be a number from 10 to 180 [deg], "
+            f"got {v!r}"
+        )
+    return math.pi if v == 180.0 else math.radians(float(v))
+
+
+def load_mount(ref: str) -> MountSpec:
+    """The mount description of a robot, read from its mount file.
+
+    Args:
+        ref: an arm's name under robots/ ("panda", "ur10") or a mount file's path.
+
+    Returns:
+        The validated MountSpec (its fields; `check_against_urdf` checks it against the URDF).
+
+    Raises:
+        InvalidInput: unknown robot name or missing file.
+        InvalidParameter: the mount file is missing a field or has a bad value (naming the
+            file, the field and what would be valid).
+    """
+    path = resolve_mount(ref)
+    raw = _read(path)
+    unknown = sorted(str(k) for k in raw if k not in MOUNT_FIELDS)
+    if unknown:
+        raise InvalidParameter(
+            f"{path}: unknown field(s) {unknown}; valid: {', '.join(MOUNT_FIELDS)}"
+        )
+    missing = [f for f in REQUIRED if f not in raw]
+    if missing:
+        raise InvalidParameter(f"{path}: missing field(s) {missing}; required: {list(REQUIRED)}")
+    joints = _joints(raw, path)
+    drop = raw.get("drop_below_flange", True)
+    if not isinstance(drop, bool):
+        raise InvalidParameter(f"{path}: field 'drop_below_flange' must be true or false")
+    return MountSpec(
+        name=_arm_name(raw, path),
+        folder=path.parent.name,
+        path=str(path),
+        arm_urdf=_text(raw, "arm_urdf", path),
+        flange=_text(raw, "flange", path),
+        drop_below_flange=drop,
+        end_effector=_text(raw, "end_effector", path),
+        mount_xyz=_vector3(raw, "mount_xyz", path),
+        mount_rpy=_vector3(raw, "mount_rpy", path),
+        arm_joints=joints,
+        home=_per_joint(raw, "home", len(joints), path),
+        acceleration_limits=_per_joint(raw, "acceleration_limits", len(joints), path),
+        jerk_limits=_per_joint(raw, "jerk_limits", len(joints), path),
+        facing_half_range_rad=_facing(raw, path),
+    )
+
+
+def _chain(root: ET.Element, flange: str) -> list[ET.Element]:
+    """The joints from the URDF's root link down to `flange`, base first."""
+    parent_joint = {}
+    for j in root.findall("joint"):
+        child = j.find("child")
+        if child is not None:
+            parent_joint[child.get("link", "")] = j
+    chain: list[ET.Element] = []
+    link = flange
+    while link in parent_joint and len(chain) < 1000:
+        j = parent_joint[link]
+        chain.append(j)
+        p = j.find("parent")
+        link = p.get("link", "") if p is not None else ""
+    return chain[::-1]
+
+
+def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
+    """Check a mount against its arm's URDF: the file exists, the flange is one of its
+    links, and the arm joints are the movable joints from the base to the flange, in order.
+
+    Returns:
+        (the arm's URDF file, its parsed root element).
+
+    Raises:
+        InvalidParameter: naming the mount file, the field and what would be valid.
+    """
+    where = spec.path
+    erd = example_robot_data_dir()
+    arm_path = erd / spec.arm_urdf
+    if not arm_path.is_file() or ".." in Path(spec.arm_urdf).parts:
+        raise InvalidParameter(
+            f"{where}: field 'arm_urdf': {spec.arm_urdf!r} is not a file under {erd}"
+        )
+    ee = robots_dir() / spec.end_effector
+    if not ee.is_file() or ".." in Path(spec.end_effector).parts:
+        raise InvalidParameter(
+            f"{where}: field 'end_effector': {spec.end_effector!r} is not a file under "
+            f"{robots_dir()} (the throwing end-effector is throwing_ee/throwing_ee.urdf)"
+        )
+    try:
+        root = ET.parse(arm_path).getroot()
+    except ET.ParseError as exc:
+        raise InvalidParameter(
+            f"{where}: field 'arm_urdf': {arm_path} is not XML ({exc})"
+        ) from None
+    links = [lk.get("name", "") for lk in root.findall("link")]
+    if spec.flange not in links:
+        raise InvalidParameter(
+            f"{where}: field 'flange': {spec.flange!r} is not a link of {arm_path.name}; "
+            f"its links: {', '.join(links)}"
+        )
+    movable = [j.get("name", "") for j in root.findall("joint") if j.get("type") in _MOVABLE]
+    unknown = [j for j in spec.arm_joints if j not in movable]
+    if unknown:
+        raise InvalidParameter(
+            f"{where}: field 'arm_joints': {unknown} are not movable joints of "
+            f"{arm_path.name}; its movable joints: {', '.join(movable)}"
+        )
+    chain = [j.get("name", "") for j in _chain(root, spec.flange) if j.get("type") in _MOVABLE]
+    if chain != list(spec.arm_joints):
+        raise InvalidParameter(
+            f"{where}: fields 'arm_joints' and 'flange': the movable joints from the base to "
+            f"flange {spec.flange!r} are {chain}, not {list(spec.arm_joints)}; list those "
+            "joints in order, or name the link the tool is bolted to (below the last joint)"
+        )
+    _check_home(spec, root)
+    return arm_path, root
+
+
+def _check_home(spec: MountSpec, root: ET.Element) -> None:
+    """InvalidParameter naming the mount file when `home` is outside a joint's position
+    limits in the URDF (a continuous joint has none)."""
+    joints = {j.get("name", ""): j for j in root.findall("joint")}
+    for name, q in zip(spec.arm_joints, spec.home, strict=True):
+        lim = joints[name].find("limit")
+        if joints[name].get("type") == "continuous" or lim is None:
+            continue
+        lo, hi = float(lim.get("lower", "0")), float(lim.get("upper", "0"))
+        if not lo - 1e-9 <= q <= hi + 1e-9:
+            raise InvalidParameter(
+                f"{spec.path}: field 'home': {q} rad for {name} is outside its range "
+                f"[{lo}, {hi}] rad in {spec.arm_urdf}"
+            )
