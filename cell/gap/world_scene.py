@@ -18,7 +18,8 @@ The scene applies its own drag −c·|v|·v to every item (c = ½ ρ C_d A, `cel
 this world adds, before each physics step, the force that turns it into the effect's:
 −c_f·|v − w|·(v − w) + c·|v|·v, plus any side force.
 
-A tracker's landing scatter (`noise_m` per axis) and, optionally, outliers (landings
+A landing with bounce is logged where the item rests, or where it still rolls 3 s
+after it crossed the landing plane. A tracker's landing scatter (`noise_m` per axis) and, optionally, outliers (landings
 moved 0.3–1 m, mis-logged) are added to the logged landings. The campaign's floor is
 the world's own: the same configurations thrown again in the same scene without the
 effect, logged with the same tracker scatter, against the model as configured
@@ -44,6 +45,7 @@ G = 9.81  # [m/s²]
 LAND_Z_M = 0.1  # [m] the campaign's landing plane (the crossing logged without bounce)
 REST_SPEED = 0.01  # [m/s] an item slower than this for REST_STEPS steps is at rest
 REST_STEPS = 30
+REST_WAIT_S = 3.0  # [s] after the crossing, a still rolling item is logged where it is
 STATION_XY = (-8.0, -8.0)  # [m] the pick station, far from every flight
 
 
@@ -162,7 +164,7 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool) -> tuple[np.ndarray, f
                     return cross
             if cross is not None:
                 slow = slow + 1 if np.linalg.norm(v) < REST_SPEED else 0
-                if slow >= REST_STEPS:
+                if slow >= REST_STEPS or sc.t - t0 > cross[1] + REST_WAIT_S:
                     return p[:2].copy(), cross[1], cross[2]
             if p[2] < -1.0:
                 break
@@ -270,7 +272,7 @@ def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> di
 
 
 def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, params: Any,
-                        *, n: int = 160, noise_m: float = 0.01, outliers: float = 0.0,
+                        *, n: int = 160, noise_m: float = 0.025, outliers: float = 0.0,
                         repeats: int = 2, drone_share: float = 0.0) -> SceneCampaign:  # fmt: skip
     """Throw a campaign in the scene with `effects` on (see the module table), and the same
     throws without them for the floor. `params` is the model as configured
