@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from cell.gap.check_other import judge_campaign
-from cell.gap.world_scene import draw_scene_campaign
+from cell.gap.world_scene import draw_scene_campaign, matched_objects
 
 __all__ = ["SCENE_CASES", "FAST_SCENE", "scene_cases", "check_scene_case", "run_scene_check"]
 
@@ -31,6 +31,7 @@ def _e(kind: str, form: str = "const", **kw: Any) -> dict[str, Any]:
     return {"kind": kind, "form": form, **kw}
 
 
+FLIGHT_KINDS = ("wind", "drag_scale", "downwash", "side_force")
 _JET: dict[str, Any] = {"w_mps": 9.0, "radius_m": 0.25, "core_m": 0.8}
 _SLIDE = {"one_of": [{"tau_s": "measured"}, {"inv_mu": "measured"}]}
 W, B = "wind", "bounce"
@@ -48,6 +49,13 @@ SCENE_CASES: dict[
         {W: {"x_mps": 2.5, "y_mps": -1.2}},
         {},
     ),  # fmt: skip
+    "s:wind-all-objects": (
+        [_e(W, x_mps=2.5, y_mps=-1.2)],
+        W,
+        {W: "flight"},
+        {W: {"x_mps": 2.5, "y_mps": -1.2}},
+        {"all_objects": True},
+    ),
     "s:wind-throw": (
         [_e(W, "throw", x_mps=-1.5, y_mps=2.0, sd=0.5)],
         W,
@@ -164,12 +172,18 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
         raise MissingDependency("robots/cell_scene/ee_params.yaml: the scene's parameters")
     mp = load_params(path)
     rng = np.random.default_rng(case["world_seed"])
-    camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], **case["options"])
+    opts = dict(case["options"])
+    flight = any(e["kind"] in FLIGHT_KINDS for e in case["effects"])
+    if opts.pop("all_objects", False) or not flight:
+        objects = None
+    else:
+        objects = matched_objects(mp)
+    camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
     judged = {**case, "expect": _measured(case["expect"], camp.truth)}
     row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
                          objects=mp.objects)  # fmt: skip
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
-            "throws": len(camp.records)}  # fmt: skip
+            "throws": len(camp.records), "objects": list(objects or ["thesis14"])}  # fmt: skip
 
 
 def run_scene_check(

@@ -114,12 +114,12 @@ class Throw:
     rpm: float
 
 
-def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2,
-              drone_share: float = 0.0) -> list[Throw]:  # fmt: skip
-    """n throws of the catalogue's thesis14 objects, each configuration thrown `repeats`
-    times (shuffled): strokes 35–105 mm, elevations 15–50°, any azimuth, from 0.5–0.9 m
-    (arm) or 1.2–2.0 m under a drone at 3000–9000 rpm."""
-    ids = sorted(k for k, e in catalogue().items() if e.set == "thesis14")
+def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share: float = 0.0,
+              objects: tuple[str, ...] | None = None) -> list[Throw]:  # fmt: skip
+    """n throws of the catalogue's thesis14 objects (or `objects`), each configuration
+    thrown `repeats` times (shuffled): strokes 35–105 mm, elevations 15–50°, any azimuth,
+    from 0.5–0.9 m (arm) or 1.2–2.0 m under a drone at 3000–9000 rpm."""
+    ids = sorted(objects or (k for k, e in catalogue().items() if e.set == "thesis14"))
     cfg: list[Throw] = []
     for _ in range(-(-n // repeats)):
         drone = rng.uniform() < drone_share
@@ -273,11 +273,12 @@ def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> di
 
 def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, params: Any,
                         *, n: int = 160, noise_m: float = 0.025, outliers: float = 0.0,
-                        repeats: int = 2, drone_share: float = 0.0) -> SceneCampaign:  # fmt: skip
+                        repeats: int = 2, drone_share: float = 0.0,
+                        objects: tuple[str, ...] | None = None) -> SceneCampaign:  # fmt: skip
     """Throw a campaign in the scene with `effects` on (see the module table), and the same
     throws without them for the floor. `params` is the model as configured
     (`cell.params.ModelParams`)."""
-    plan = draw_plan(n, rng, repeats=repeats, drone_share=drone_share)
+    plan = draw_plan(n, rng, repeats=repeats, drone_share=drone_share, objects=objects)
     seed = int(rng.integers(2**31))
     xy, tl, vc = throw_plan(plan, effects, seed)
     xy0, tl0, vc0 = throw_plan(plan, [], seed)
@@ -307,3 +308,22 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         outliers=tuple(int(k) for k in np.flatnonzero(out[ok])),
         truth=truth,
     )
+
+
+def matched_objects(params: Any, tol: float = 0.1) -> tuple[str, ...]:
+    """The thesis14 objects whose drag constant under the configured parameters (its
+    identified mass and size, `params.objects`) is within `tol` of the scene's own
+    (the catalogue's): the objects a flight effect can be measured on without the
+    configured model's own drag error scaling it."""
+    from cell.sim.items import resolve_object
+
+    out = []
+    for k, e in sorted(catalogue().items()):
+        if e.set != "thesis14" or k not in params.objects:
+            continue
+        true, _ = resolve_object(k)
+        conf = params.objects[k]
+        ratio = (conf.cd * conf.area / conf.mass) / (true.cd * true.area / true.mass)
+        if abs(ratio - 1.0) <= tol:
+            out.append(k)
+    return tuple(out)
