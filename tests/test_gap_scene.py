@@ -86,3 +86,23 @@ def test_strong_wind_in_the_scene_is_named_wind_in_flight():
     got = np.hypot(v["params"]["wind"]["x_mps"], v["params"]["wind"]["y_mps"])
     assert got == pytest.approx(np.hypot(2.0, 2.0), rel=0.3)
     assert v["heldout_rmse_robust_m"] <= 1.3 * camp.floor_m
+
+
+def test_scene_cases_cover_the_brief():
+    from cell.cli import main
+    from cell.gap.check_scene import SCENE_CASES, scene_cases
+
+    cases = scene_cases()
+    assert len(cases) >= 12
+    kinds = {e["kind"] for c in cases for e in c["effects"]}
+    assert kinds >= {"wind", "drag_scale", "downwash", "bounce", "tracker", "side_force"}
+    for kind in ("wind", "drag_scale", "bounce", "tracker"):  # ≥ 2 laws or sizes each
+        laws = {(e["form"], tuple(sorted((k, str(v)) for k, v in e.items())))
+                for c in cases for e in c["effects"] if e["kind"] == kind}  # fmt: skip
+        assert len(laws) >= 2, kind
+    assert {e["form"] for c in cases for e in c["effects"]} >= {"throw", "object"}
+    assert sum("+" in c["truth"] for c in cases) >= 2
+    assert sum(c["options"].get("outliers", 0) > 0 for c in cases) >= 2
+    assert any(c["truth"] == "unknown" for c in cases)
+    assert "s:wind" in SCENE_CASES
+    assert main(["gap", "check", "--worlds", "scene", "--truths", "s:gremlins"]) == 2
