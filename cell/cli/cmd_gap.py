@@ -186,8 +186,7 @@ def _check_other(args: argparse.Namespace) -> int:
     scene = args.worlds == "scene"
     fast: tuple[str, ...] = FAST_SCENE if scene else FAST_OTHER
     cases = SCENE_CASES if scene else OTHER_CASES
-    runner = run_scene_check if scene else run_other_check
-    n_default, n_quick = (140, 100) if scene else (400, 240)
+    n_default, n_quick = (80, 60) if scene else (400, 240)
     names = tuple(args.truths) if args.truths else (fast if args.quick else None)
     bad = [t for t in names or () if t not in cases]
     if bad:
@@ -195,10 +194,22 @@ def _check_other(args: argparse.Namespace) -> int:
     n = args.n or (n_quick if args.quick else n_default)
     if n < 60:
         raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
-    rows = runner(names, n=n, seed=args.seed, workers=args.workers, address=args.ray_address)
+    if scene:  # a scene case takes minutes: each row on standard error as it arrives
+        rows = run_scene_check(names, n=n, seed=args.seed, workers=args.workers,
+                               address=args.ray_address, on_row=_print_row)  # fmt: skip
+    else:
+        rows = run_other_check(names, n=n, seed=args.seed, workers=args.workers,
+                               address=args.ray_address)  # fmt: skip
     print(format_other(rows))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(jsonable(other_json(rows)), fh, indent=2, allow_nan=False)
         print(f"check -> {args.json}")
     return 0 if all(r["passes"] for r in rows) else 1
+
+
+def _print_row(r: dict) -> None:
+    import sys
+
+    print(f"{r['case']}: {r['verdict']} (truth {r['truth']}), A/F {r['after_over_floor']:.2f}, "
+          f"{'passes' if r['passes'] else 'fails'}", file=sys.stderr, flush=True)  # fmt: skip

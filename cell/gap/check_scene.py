@@ -13,6 +13,7 @@ world's own floor (the same throws without the effect, against the configured mo
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -138,7 +139,7 @@ SCENE_CASES: dict[
 FAST_SCENE = ("s:wind", "s:none")
 
 
-def scene_cases(names: tuple[str, ...] | None = None, *, n: int = 160, seed: int = 0
+def scene_cases(names: tuple[str, ...] | None = None, *, n: int = 80, seed: int = 0
                 ) -> list[dict[str, Any]]:  # fmt: skip
     """The cases as plain dicts (each with its own world seed)."""
     rng = np.random.default_rng(seed + 5757)
@@ -189,16 +190,23 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
 def run_scene_check(
     names: tuple[str, ...] | None = None,
     *,
-    n: int = 160,
+    n: int = 80,
     seed: int = 0,
     workers: int = 1,
     address: str | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Every case (or `names`) thrown, diagnosed blind and judged; one row per case (the
-    same rows serially or on Ray: each case carries its own seeds)."""
+    same rows serially or on Ray: each case carries its own seeds). `on_row` is called
+    with each row as it arrives."""
     from cell.parallel import run_campaign
+
+    def done(i: int, row: dict[str, Any]) -> None:
+        if on_row is not None:
+            on_row(row)
 
     return list(
         run_campaign(check_scene_case, scene_cases(names, n=n, seed=seed), workers=workers,
-                     address=address, desc="cell gap check --worlds scene", progress=False)
+                     address=address, desc="cell gap check --worlds scene", on_result=done,
+                     progress=False)
     )  # fmt: skip
