@@ -36,6 +36,8 @@ FLIGHT_KINDS = ("wind", "drag_scale", "downwash", "side_force")
 _JET: dict[str, Any] = {"w_mps": 9.0, "radius_m": 0.25, "core_m": 0.8}
 _SLIDE = {"one_of": [{"tau_s": "measured"}, {"inv_mu": "measured"}]}
 W, B = "wind", "bounce"
+_BLOCKS = ("cube30", "cube40", "cube50", "cube60", "cuboid_a", "cuboid_b", "cuboid_c")
+_BALLS = ("sphere40", "sphere55", "sphere70")
 
 # name -> (effects, truth, {effect: phase}, {effect: {param: value}}, options)
 SCENE_CASES: dict[
@@ -100,21 +102,31 @@ SCENE_CASES: dict[
         {"drone_share": 0.6},
     ),  # fmt: skip
     "s:bounce-slide": (
-        [_e(B, "contact", restitution=0.05, friction=0.3)],
+        [_e(B, "contact", restitution=0.05, friction=1.0)],
         B,
         {B: "landing"},
         {B: _SLIDE},
-        {},
+        {"objects": _BLOCKS},
+    ),  # fmt: skip
+    "s:bounce-roll": (
+        [_e(B, "contact", restitution=0.05, friction=1.0, rolling_m=0.05)],
+        B,
+        {B: "landing"},
+        {B: _SLIDE},
+        {"objects": _BALLS},
     ),  # fmt: skip
     "s:bounce-hop": (
-        [_e(B, "contact", restitution=0.6, friction=0.9)],
+        [_e(B, "contact", restitution=0.6, friction=1.0, rolling_m=0.05)],
         B,
         {B: "landing"},
         {B: _SLIDE},
         {},
     ),  # fmt: skip
     "s:wind+bounce": (
-        [_e(W, x_mps=2.0, y_mps=-1.5), _e(B, "contact", restitution=0.05, friction=0.3)],
+        [
+            _e(W, x_mps=2.0, y_mps=-1.5),
+            _e(B, "contact", restitution=0.05, friction=1.0, rolling_m=0.05),
+        ],
         "bounce+wind",
         {W: "flight", B: "landing"},
         {W: {"x_mps": 2.0, "y_mps": -1.5}, B: _SLIDE},
@@ -175,9 +187,9 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
     rng = np.random.default_rng(case["world_seed"])
     opts = dict(case["options"])
     flight = any(e["kind"] in FLIGHT_KINDS for e in case["effects"])
-    if opts.pop("all_objects", False) or not flight:
-        objects = None
-    else:
+    objects: tuple[str, ...] | None = opts.pop("objects", None)
+    every = opts.pop("all_objects", False)
+    if flight and not every:
         objects = matched_objects(mp)
     camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
     judged = {**case, "expect": _measured(case["expect"], camp.truth)}

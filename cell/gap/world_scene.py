@@ -67,10 +67,14 @@ class EffectScene(CellScene):
         self.jet: tuple[np.ndarray, float, dict[str, Any]] | None = None
         self.side_mps2 = np.zeros(3)
 
-    def set_floor(self, restitution: float, friction: float) -> None:
-        """The floor's contact: restitution and lateral friction."""
+    def set_floor(self, restitution: float, friction: float, rolling_m: float = 0.0) -> None:
+        """The floor's contact: restitution, lateral friction and rolling friction [m]."""
         self.client.changeDynamics(
-            self.floor, -1, restitution=float(restitution), lateralFriction=float(friction)
+            self.floor,
+            -1,
+            restitution=float(restitution),
+            lateralFriction=float(friction),
+            rollingFriction=float(rolling_m),
         )
 
     def air(self, p: np.ndarray) -> np.ndarray:
@@ -118,7 +122,9 @@ def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share
               objects: tuple[str, ...] | None = None) -> list[Throw]:  # fmt: skip
     """n throws of the catalogue's thesis14 objects (or `objects`), each configuration
     thrown `repeats` times (shuffled): strokes 35–105 mm, elevations 15–50°, any azimuth,
-    from 0.5–0.9 m (arm) or 1.2–2.0 m under a drone at 3000–9000 rpm."""
+    released within ±0.8 m of the origin in x and y (a tracker's scale, about the origin,
+    then differs from a slide along the flight) from 0.5–0.9 m high (arm) or 1.2–2.0 m
+    under a drone at 3000–9000 rpm."""
     ids = sorted(objects or (k for k, e in catalogue().items() if e.set == "thesis14"))
     cfg: list[Throw] = []
     for _ in range(-(-n // repeats)):
@@ -127,7 +133,7 @@ def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share
         t = Throw(
             object_id=str(ids[int(rng.integers(len(ids)))]),
             stroke=float(rng.uniform(0.035, 0.105)),
-            p0=(float(rng.uniform(-0.2, 0.2)), float(rng.uniform(-0.2, 0.2)), float(z)),
+            p0=(float(rng.uniform(-0.8, 0.8)), float(rng.uniform(-0.8, 0.8)), float(z)),
             elevation=math.radians(float(rng.uniform(15.0, 50.0))),
             azimuth=float(rng.uniform(-math.pi, math.pi)),
             platform="drone" if drone else "arm",
@@ -191,7 +197,7 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int
     try:
         ee = make_end_effector("pybullet", plant=sc)
         if bo:
-            sc.set_floor(bo["restitution"], bo["friction"])
+            sc.set_floor(bo["restitution"], bo["friction"], float(bo.get("rolling_m", 0.0)))
         if sf:
             sc.side_mps2 = np.array([float(sf["x_mps2"]), float(sf["y_mps2"]), 0.0])
         for i, th in enumerate(plan):
