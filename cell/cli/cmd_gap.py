@@ -56,11 +56,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--truths", nargs="+", metavar="NAME", help="only these cases")
     g.add_argument(
         "--worlds",
-        choices=("own", "other"),
+        choices=("own", "other", "scene"),
         default="own",
         help="own: worlds drawn with the tool's formulas (default); other: worlds from "
         "another implementation (cell.gap.world_other), judged on verdict, phase, "
-        "parameters within 30 %% and A within 1.3 x the world's own floor",
+        "parameters within 30 %% and A within 1.3 x the world's own floor; scene: "
+        "campaigns thrown in the PyBullet scene with each effect applied as a force, a "
+        "contact or a tracker (cell.gap.world_scene), judged the same way",
     )
     from cell.parallel import add_campaign_args
 
@@ -127,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
 def _check(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    if args.worlds == "other":
+    if args.worlds in ("other", "scene"):
         return _check_other(args)
 
     from cell.gap.check import CASES, check_json, format_check, run_check
@@ -178,21 +180,36 @@ def _check_other(args: argparse.Namespace) -> int:
         other_json,
         run_other_check,
     )
+    from cell.gap.check_scene import FAST_SCENE, SCENE_CASES, run_scene_check
     from cell.gap.report import jsonable
 
-    names = tuple(args.truths) if args.truths else (FAST_OTHER if args.quick else None)
-    bad = [t for t in names or () if t not in OTHER_CASES]
+    scene = args.worlds == "scene"
+    fast: tuple[str, ...] = FAST_SCENE if scene else FAST_OTHER
+    cases = SCENE_CASES if scene else OTHER_CASES
+    n_default, n_quick = (80, 60) if scene else (400, 240)
+    names = tuple(args.truths) if args.truths else (fast if args.quick else None)
+    bad = [t for t in names or () if t not in cases]
     if bad:
-        raise InvalidInput(f"--truths: unknown {bad}; valid: {', '.join(OTHER_CASES)}")
-    n = args.n or (240 if args.quick else 400)
+        raise InvalidInput(f"--truths: unknown {bad}; valid: {', '.join(cases)}")
+    n = args.n or (n_quick if args.quick else n_default)
     if n < 60:
         raise InvalidInput(f"--n {n}: a campaign needs at least 60 throws")
-    rows = run_other_check(
-        names, n=n, seed=args.seed, workers=args.workers, address=args.ray_address
-    )
+    if scene:  # a scene case takes minutes: each row on standard error as it arrives
+        rows = run_scene_check(names, n=n, seed=args.seed, workers=args.workers,
+                               address=args.ray_address, on_row=_print_row)  # fmt: skip
+    else:
+        rows = run_other_check(names, n=n, seed=args.seed, workers=args.workers,
+                               address=args.ray_address)  # fmt: skip
     print(format_other(rows))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(jsonable(other_json(rows)), fh, indent=2, allow_nan=False)
         print(f"check -> {args.json}")
     return 0 if all(r["passes"] for r in rows) else 1
+
+
+def _print_row(r: dict) -> None:
+    import sys
+
+    print(f"{r['case']}: {r['verdict']} (truth {r['truth']}), A/F {r['after_over_floor']:.2f}, "
+          f"{'passes' if r['passes'] else 'fails'}", file=sys.stderr, flush=True)  # fmt: skip

@@ -24,7 +24,7 @@ from cell.log.csvio import read_throws_csv, write_throws_csv
 from cell.log.table import ThrowTable
 from cell.model.params import DEFAULT_EE
 
-__all__ = ["OTHER_CASES", "FAST_OTHER", "check_other_case", "other_cases", "run_other_check",
+__all__ = ["OTHER_CASES", "FAST_OTHER", "check_other_case", "judge_campaign", "other_cases", "run_other_check",
            "other_json", "format_other"]  # fmt: skip
 
 PARAM_TOL = 0.30
@@ -286,6 +286,9 @@ def _params_ok(expect: dict[str, Any], got: dict[str, Any]) -> tuple[bool, dict[
     errs: dict[str, Any] = {}
     ok = True
     for eff, ps in expect.items():
+        if "one_of" in ps:  # the law the tool chose among the world's measured ones
+            have = got.get(eff, {})
+            ps = next((a for a in ps["one_of"] if set(a) <= set(have)), ps["one_of"][0])
         flat = dict(ps)
         if "per_object" in flat:
             per = flat.pop("per_object")
@@ -309,21 +312,30 @@ def _params_ok(expect: dict[str, Any], got: dict[str, Any]) -> tuple[bool, dict[
 
 
 def check_other_case(case: dict[str, Any]) -> dict[str, Any]:
-    """Draw one case's campaign, write it to a throw log, read it back and diagnose it blind.
+    """Draw one case's campaign, write it to a throw log, read it back and diagnose it blind
+    (`judge_campaign`)."""
+    rng = np.random.default_rng(case["world_seed"])
+    camp = draw_other_campaign(case["effects"], rng, n=case["n"], **case["options"])
+    return judge_campaign(case, camp.records, camp.floor_m, camp.outliers)
+
+
+def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m: float,
+                   outliers: tuple[int, ...], *, ee: Any = DEFAULT_EE,
+                   objects: dict[str, Any] | None = None) -> dict[str, Any]:  # fmt: skip
+    """Write a case's campaign to a throw log, read it back, diagnose it blind against the
+    model as configured (`ee`, `objects`) and judge the verdict.
 
     Returns:
         The row as a plain dict: the verdict, its phases, parameters and their errors, the
         world's floor and the tool's, the robust held-out RMSE, the outliers flagged
         against the true ones, and whether it passes.
     """
-    rng = np.random.default_rng(case["world_seed"])
-    camp = draw_other_campaign(case["effects"], rng, n=case["n"], **case["options"])
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "throws.csv"
-        write_throws_csv(ThrowTable.from_records(camp.records), path)
+        write_throws_csv(ThrowTable.from_records(records), path)
         table = read_throws_csv(path)
     t0 = time.perf_counter()
-    d, _ = diagnose_log(table, DEFAULT_EE, seed=case["seed"])
+    d, _ = diagnose_log(table, ee, objects=objects, seed=case["seed"])
     secs = time.perf_counter() - t0
     rep = d.report
     v = rep["verdict"]
@@ -334,17 +346,17 @@ def check_other_case(case: dict[str, Any]) -> dict[str, Any]:
     params_ok, errs = _params_ok(case["expect"], v.get("params", {}))
     after = v.get("heldout_rmse_robust_m", v["heldout_rmse_m"])
     diag = verdict == case["truth"]
-    floor_ok = case["truth"] in ("none", "unknown") or after <= FLOOR_RATIO * camp.floor_m
+    floor_ok = case["truth"] in ("none", "unknown") or after <= FLOOR_RATIO * floor_m
     flagged = set(rep.get("outliers", {}).get("rows", []))
-    true_out = {i + 1 for i in camp.outliers}  # rows: 1 = first data row
+    true_out = {i + 1 for i in outliers}  # rows: 1 = first data row
     return {
         "case": case["name"], "truth": case["truth"], "verdict": verdict,
         "diagonal": bool(diag), "phases": phases, "phase_ok": bool(phase_ok),
         "laws": v.get("laws", {}), "params": v.get("params", {}), "param_errors": errs,
-        "params_ok": bool(params_ok), "world_floor_m": camp.floor_m,
+        "params_ok": bool(params_ok), "world_floor_m": floor_m,
         "tool_floor_m": rep["noise_floor_m"], "baseline_m": rep["baseline"]["heldout_rmse_m"],
         "after_m": v["heldout_rmse_m"], "after_robust_m": after,
-        "after_over_floor": after / camp.floor_m, "floor_ok": bool(floor_ok),
+        "after_over_floor": after / floor_m, "floor_ok": bool(floor_ok),
         "outliers_true": len(true_out), "outliers_found": len(flagged & true_out),
         "outliers_false": len(flagged - true_out),
         "proposal": rep.get("proposal", {}).get("law"),

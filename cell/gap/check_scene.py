@@ -1,0 +1,224 @@
+"""`cell gap check --worlds scene`: the diagnosis on campaigns thrown in the PyBullet scene
+with each effect applied physically (`cell.gap.world_scene`).
+
+Each case is a world (effects as forces, contacts or a tracker), the verdict it should get,
+the phase of each effect and the parameters the diagnosis should find. The model as
+configured is the scene's calibrated parameter file (robots/cell_scene/ee_params.yaml, its
+identified objects included). A bounce's parameter is the one measured in the world
+(the slide from the crossing to the rest point per impact speed), compared in the law the
+tool chose. Judged as `cell.gap.check_other` judges (`judge_campaign`): diagonal, phase,
+parameters within 30 % (a scale within 0.5 %), robust held-out RMSE within 1.3 × the
+world's own floor (the same throws without the effect, against the configured model).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from cell.gap.check_other import judge_campaign
+from cell.gap.world_scene import draw_scene_campaign, matched_objects
+
+__all__ = ["SCENE_CASES", "FAST_SCENE", "scene_cases", "check_scene_case", "run_scene_check"]
+
+_PER_OBJ_CD = {"cube30": 2.6, "cube40": 2.2, "cube50": 1.8, "cube60": 1.6, "cuboid_a": 2.0,
+               "cuboid_b": 2.4, "cuboid_c": 1.5, "cyl40": 2.8, "cyl50": 2.3, "cyl60": 1.9,
+               "cyl70": 1.6, "sphere40": 3.0, "sphere55": 2.5, "sphere70": 2.0}  # fmt: skip
+
+
+def _e(kind: str, form: str = "const", **kw: Any) -> dict[str, Any]:
+    return {"kind": kind, "form": form, **kw}
+
+
+FLIGHT_KINDS = ("wind", "drag_scale", "downwash", "side_force")
+_JET: dict[str, Any] = {"w_mps": 9.0, "radius_m": 0.25, "core_m": 0.8}
+_SLIDE = {"one_of": [{"tau_s": "measured"}, {"inv_mu": "measured"}]}
+W, B = "wind", "bounce"
+_BLOCKS = ("cube30", "cube40", "cube50", "cube60", "cuboid_a", "cuboid_b", "cuboid_c")
+_BALLS = ("sphere40", "sphere55", "sphere70")
+
+# name -> (effects, truth, {effect: phase}, {effect: {param: value}}, options)
+SCENE_CASES: dict[
+    str, tuple[list[dict[str, Any]], str, dict[str, str], dict[str, Any], dict[str, Any]]
+] = {  # fmt: skip
+    "s:none": ([], "none", {}, {}, {}),
+    "s:none+outliers": ([], "none", {}, {}, {"outliers": 0.05}),
+    "s:wind": (
+        [_e(W, x_mps=2.5, y_mps=-1.2)],
+        W,
+        {W: "flight"},
+        {W: {"x_mps": 2.5, "y_mps": -1.2}},
+        {},
+    ),  # fmt: skip
+    "s:wind-all-objects": (
+        [_e(W, x_mps=2.5, y_mps=-1.2)],
+        W,
+        {W: "flight"},
+        {W: {"x_mps": 2.5, "y_mps": -1.2}},
+        {"all_objects": True},
+    ),
+    "s:wind-throw": (
+        [_e(W, "throw", x_mps=-1.5, y_mps=2.0, sd=0.5)],
+        W,
+        {W: "flight"},
+        {W: {"x_mps": -1.5, "y_mps": 2.0}},
+        {},
+    ),  # fmt: skip
+    "s:wind+outliers": (
+        [_e(W, x_mps=-2.0, y_mps=-2.0)],
+        W,
+        {W: "flight"},
+        {W: {"x_mps": -2.0, "y_mps": -2.0}},
+        {"outliers": 0.05},
+    ),  # fmt: skip
+    "s:drag-const": (
+        [_e("drag_scale", value=2.5)],
+        "drag_scale",
+        {"drag_scale": "flight"},
+        {"drag_scale": {"factor": 2.5}},
+        {},
+    ),  # fmt: skip
+    "s:drag-object": (
+        [_e("drag_scale", "object", value=2.0, per_object=_PER_OBJ_CD)],
+        "drag_scale",
+        {"drag_scale": "flight"},
+        {},
+        {},
+    ),  # fmt: skip
+    "s:downwash": (
+        [_e("downwash", **_JET)],
+        "downwash",
+        {"downwash": "flight"},
+        {},
+        {"drone_share": 0.6},
+    ),  # fmt: skip
+    "s:downwash+wind": (
+        [_e("downwash", **_JET), _e(W, x_mps=2.0, y_mps=1.0)],
+        "downwash+wind",
+        {"downwash": "flight", W: "flight"},
+        {W: {"x_mps": 2.0, "y_mps": 1.0}},
+        {"drone_share": 0.6},
+    ),  # fmt: skip
+    "s:bounce-slide": (
+        [_e(B, "contact", restitution=0.05, friction=1.0)],
+        B,
+        {B: "landing"},
+        {B: _SLIDE},
+        {"objects": _BLOCKS},
+    ),  # fmt: skip
+    "s:bounce-roll": (
+        [_e(B, "contact", restitution=0.05, friction=1.0, rolling_m=0.05)],
+        B,
+        {B: "landing"},
+        {B: _SLIDE},
+        {"objects": _BALLS},
+    ),  # fmt: skip
+    "s:bounce-hop": (
+        [_e(B, "contact", restitution=0.6, friction=1.0, rolling_m=0.05)],
+        B,
+        {B: "landing"},
+        {B: _SLIDE},
+        {},
+    ),  # fmt: skip
+    "s:wind+bounce": (
+        [
+            _e(W, x_mps=2.0, y_mps=-1.5),
+            _e(B, "contact", restitution=0.05, friction=1.0, rolling_m=0.05),
+        ],
+        "bounce+wind",
+        {W: "flight", B: "landing"},
+        {W: {"x_mps": 2.0, "y_mps": -1.5}, B: _SLIDE},
+        {},
+    ),  # fmt: skip
+    "s:scale": (
+        [_e("tracker", scale=1.03)],
+        "tracking_scale",
+        {"tracking_scale": "measurement"},
+        {"tracking_scale": {"scale_factor": 1.03}},
+        {},
+    ),  # fmt: skip
+    "s:scale+latency": (
+        [_e("tracker", scale=0.97, latency_s=0.03)],
+        "tracking_scale",
+        {"tracking_scale": "measurement"},
+        {"tracking_scale": {"scale_factor": 0.97}},
+        {},
+    ),  # fmt: skip
+    "s:side-force": ([_e("side_force", x_mps2=0.0, y_mps2=0.8)], "unknown", {}, {}, {}),
+}
+FAST_SCENE = ("s:wind", "s:none")
+
+
+def scene_cases(names: tuple[str, ...] | None = None, *, n: int = 80, seed: int = 0
+                ) -> list[dict[str, Any]]:  # fmt: skip
+    """The cases as plain dicts (each with its own world seed)."""
+    rng = np.random.default_rng(seed + 5757)
+    out = []
+    for i, name in enumerate(names or tuple(SCENE_CASES)):
+        effects, truth, phases, expect, opts = SCENE_CASES[name]
+        out.append({"name": name, "n": n, "world_seed": int(rng.integers(2**31)),
+                    "seed": seed + i, "effects": effects, "truth": truth, "phases": phases,
+                    "expect": expect, "options": opts})  # fmt: skip
+    return out
+
+
+def _measured(expect: dict[str, Any], truth: dict[str, float]) -> dict[str, Any]:
+    """The case's expectations with the world's measured values put in."""
+    out: dict[str, Any] = {}
+    for eff, ps in expect.items():
+        if "one_of" in ps:
+            ps = {"one_of": [{k: truth[k] for k in alt} for alt in ps["one_of"]]}
+        out[eff] = ps
+    return out
+
+
+def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
+    """Throw one case's campaign in the scene, diagnose it blind, judge it; the row also
+    carries the world's measured truth and its tracker scatter."""
+    from cell.errors import MissingDependency
+    from cell.params import load_params, scene_params_path
+
+    path = scene_params_path()
+    if path is None:
+        raise MissingDependency("robots/cell_scene/ee_params.yaml: the scene's parameters")
+    mp = load_params(path)
+    rng = np.random.default_rng(case["world_seed"])
+    opts = dict(case["options"])
+    flight = any(e["kind"] in FLIGHT_KINDS for e in case["effects"])
+    objects: tuple[str, ...] | None = opts.pop("objects", None)
+    every = opts.pop("all_objects", False)
+    if flight and not every:
+        objects = matched_objects(mp)
+    camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
+    judged = {**case, "expect": _measured(case["expect"], camp.truth)}
+    row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
+                         objects=mp.objects)  # fmt: skip
+    return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
+            "throws": len(camp.records), "objects": list(objects or ["thesis14"])}  # fmt: skip
+
+
+def run_scene_check(
+    names: tuple[str, ...] | None = None,
+    *,
+    n: int = 80,
+    seed: int = 0,
+    workers: int = 1,
+    address: str | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Every case (or `names`) thrown, diagnosed blind and judged; one row per case (the
+    same rows serially or on Ray: each case carries its own seeds). `on_row` is called
+    with each row as it arrives."""
+    from cell.parallel import run_campaign
+
+    def done(i: int, row: dict[str, Any]) -> None:
+        if on_row is not None:
+            on_row(row)
+
+    return list(
+        run_campaign(check_scene_case, scene_cases(names, n=n, seed=seed), workers=workers,
+                     address=address, desc="cell gap check --worlds scene", on_result=done,
+                     progress=False)
+    )  # fmt: skip

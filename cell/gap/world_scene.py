@@ -1,0 +1,335 @@
+"""Worlds from the PyBullet scene, with each effect applied physically.
+
+A campaign of this world is thrown in the cell's scene (`cell.sim.scene.CellScene`
+without an arm, the end-effector held at each release pose as `cell calibrate`'s campaign
+holds it: `cell.workflows.campaign.ReleasePose`), and the effects act on the flying
+item as forces and contacts, never as a formula on the landing:
+
+| kind | how it acts in the scene | forms |
+|---|---|---|
+| wind | the item's air drag is taken on its velocity relative to a steady air flow (x_mps, y_mps): a force −c_f·|v − w|·(v − w) each physics step | const, throw (each throw's flow drawn around the mean with sd) |
+| drag_scale | the drag force is c_f = factor · ½ ρ C_d A of the object's own C_d and area | const, object (a factor per object id) |
+| downwash | the air under a drone's rotors moves down: a round jet from the release point whose centre speed w_mps · rpm / 5000 falls as 1 / (1 + depth / core_m) and whose radius grows as radius_m + 0.2 · depth | const |
+| side_force | a constant horizontal force m · (x_mps2, y_mps2) on the item in flight (outside the vocabulary) | const |
+| bounce | the landing is where the item comes to rest on the floor, whose restitution and lateral friction are set (changeDynamics) | contact |
+| tracker | the tracker's recorded positions are `scale` times the true ones about the origin and `latency_s` late | const |
+
+The scene applies its own drag −c·|v|·v to every item (c = ½ ρ C_d A, `cell.sim.drag`);
+this world adds, before each physics step, the force that turns it into the effect's:
+−c_f·|v − w|·(v − w) + c·|v|·v, plus any side force.
+
+A landing with bounce is logged where the item rests, or where it still rolls 3 s
+after it crossed the landing plane. A tracker's landing scatter (`noise_m` per axis) and, optionally, outliers (landings
+moved 0.3–1 m, mis-logged) are added to the logged landings. The campaign's floor is
+the world's own: the same configurations thrown again in the same scene without the
+effect, logged with the same tracker scatter, against the model as configured
+(`floor_of`): what a perfect account of the effect would still leave.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cell.catalogue import catalogue
+from cell.errors import NoLanding
+from cell.sim.scene import CellScene
+
+__all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign"]
+
+RHO = 1.225  # [kg/m³] air density of this world
+G = 9.81  # [m/s²]
+LAND_Z_M = 0.1  # [m] the campaign's landing plane (the crossing logged without bounce)
+REST_SPEED = 0.01  # [m/s] an item slower than this for REST_STEPS steps is at rest
+REST_STEPS = 30
+REST_WAIT_S = 3.0  # [s] after the crossing, a still rolling item is logged where it is
+STATION_XY = (-8.0, -8.0)  # [m] the pick station, far from every flight
+
+
+def _find(effs: list[dict[str, Any]], kind: str) -> dict[str, Any] | None:
+    return next((e for e in effs if e["kind"] == kind), None)
+
+
+class EffectScene(CellScene):
+    """The cell's scene (no arm, no bins) with the effects of one throw acting on its items.
+
+    Set `throw_effects` before each throw: the air flow w [m/s, W] (or None), the drag
+    factor, the downwash jet's source (release point, rpm) and the side acceleration.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(robot=None, bins=(), pick_station_xy=STATION_XY)
+        self.wind = np.zeros(3)  # [m/s, W]
+        self.drag_factor = 1.0
+        self.jet: tuple[np.ndarray, float, dict[str, Any]] | None = None
+        self.side_mps2 = np.zeros(3)
+
+    def set_floor(self, restitution: float, friction: float, rolling_m: float = 0.0) -> None:
+        """The floor's contact: restitution, lateral friction and rolling friction [m]."""
+        self.client.changeDynamics(
+            self.floor,
+            -1,
+            restitution=float(restitution),
+            lateralFriction=float(friction),
+            rollingFriction=float(rolling_m),
+        )
+
+    def air(self, p: np.ndarray) -> np.ndarray:
+        """The air velocity at a point [m/s, W]: the steady flow plus the rotor jet."""
+        w = self.wind.copy()
+        if self.jet is not None:
+            src, rpm, jet = self.jet
+            depth = src[2] - p[2]
+            if depth > 0.0:
+                r = math.hypot(p[0] - src[0], p[1] - src[1])
+                width = float(jet["radius_m"]) + 0.2 * depth
+                centre = float(jet["w_mps"]) * rpm / 5000.0 / (1.0 + depth / float(jet["core_m"]))
+                w[2] -= centre * math.exp(-((r / width) ** 2))
+        return w
+
+    def step(self, n: int = 1) -> None:
+        cl = self.client
+        for _ in range(n):
+            for it in self.items:
+                pos, _ = cl.getBasePositionAndOrientation(it.body)
+                v = np.asarray(cl.getBaseVelocity(it.body)[0])
+                rel = v - self.air(np.asarray(pos))
+                c_f = self.drag_factor * 0.5 * RHO * it.obj.cd * it.obj.area  # [kg/m]
+                f = -c_f * np.linalg.norm(rel) * rel + it.drag_c * np.linalg.norm(v) * v
+                f = f + it.obj.mass * self.side_mps2
+                if np.any(f != 0.0):
+                    cl.applyExternalForce(it.body, -1, f.tolist(), pos, cl.WORLD_FRAME)
+            super().step(1)
+
+
+@dataclass(frozen=True)
+class Throw:
+    """One throw's configuration (plain values, so a plan ships to a worker)."""
+
+    object_id: str
+    stroke: float
+    p0: tuple[float, float, float]
+    elevation: float
+    azimuth: float
+    platform: str
+    rpm: float
+
+
+def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share: float = 0.0,
+              objects: tuple[str, ...] | None = None) -> list[Throw]:  # fmt: skip
+    """n throws of the catalogue's thesis14 objects (or `objects`), each configuration
+    thrown `repeats` times (shuffled): strokes 35–105 mm, elevations 15–50°, any azimuth,
+    released within ±0.8 m of the origin in x and y (a tracker's scale, about the origin,
+    then differs from a slide along the flight) from 0.5–0.9 m high (arm) or 1.2–2.0 m
+    under a drone at 3000–9000 rpm."""
+    ids = sorted(objects or (k for k, e in catalogue().items() if e.set == "thesis14"))
+    cfg: list[Throw] = []
+    for _ in range(-(-n // repeats)):
+        drone = rng.uniform() < drone_share
+        z = rng.uniform(1.2, 2.0) if drone else rng.uniform(0.5, 0.9)
+        t = Throw(
+            object_id=str(ids[int(rng.integers(len(ids)))]),
+            stroke=float(rng.uniform(0.035, 0.105)),
+            p0=(float(rng.uniform(-0.8, 0.8)), float(rng.uniform(-0.8, 0.8)), float(z)),
+            elevation=math.radians(float(rng.uniform(15.0, 50.0))),
+            azimuth=float(rng.uniform(-math.pi, math.pi)),
+            platform="drone" if drone else "arm",
+            rpm=float(np.round(rng.uniform(3000, 9000), -2)) if drone else 0.0,
+        )
+        cfg += [t] * repeats
+    return [cfg[i] for i in rng.permutation(len(cfg))[:n]]
+
+
+def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool) -> tuple[np.ndarray, float, np.ndarray]:
+    """Throw once: (logged point xy [m] — the crossing of LAND_Z_M, or the rest point with
+    `rest` —, the crossing time [s since release], the crossing's velocity [m/s])."""
+    from cell.workflows.campaign import ReleasePose
+
+    pf = ReleasePose(sc, ee, th.object_id, th.stroke, th.p0, th.elevation, th.azimuth)
+    item = pf.present(0, None)  # type: ignore[arg-type]
+    cl = sc.client
+    try:
+        pf.pick(pf.decide(0, item.obj, None), item.obj, item)
+        t0 = sc.t
+        pf.release(None)  # type: ignore[arg-type]
+        sc.set_timestep(sc.dt_s)
+        prev = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
+        cross: tuple[np.ndarray, float, np.ndarray] | None = None
+        slow = 0
+        while sc.t - t0 < 8.0:
+            sc.step()
+            p = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
+            v = np.asarray(cl.getBaseVelocity(item.body)[0])
+            if cross is None and prev[2] > LAND_Z_M >= p[2]:
+                s = (prev[2] - LAND_Z_M) / (prev[2] - p[2])
+                cross = (prev[:2] + s * (p[:2] - prev[:2]), sc.t - sc.dt_s * (1 - s) - t0, v)
+                if not rest:
+                    return cross
+            if cross is not None:
+                slow = slow + 1 if np.linalg.norm(v) < REST_SPEED else 0
+                if slow >= REST_STEPS or sc.t - t0 > cross[1] + REST_WAIT_S:
+                    return p[:2].copy(), cross[1], cross[2]
+            if p[2] < -1.0:
+                break
+            prev = p
+        raise NoLanding(f"scene world: {th.object_id} did not land (or rest) within 8 s")
+    finally:
+        pf.finish(None)
+        sc.remove_item(item)
+
+
+def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Throw every planned throw in a fresh EffectScene with `effects` on: (true logged
+    points (n, 2) [m], crossing times (n,) [s], crossing velocities (n, 3) [m/s]); NaN
+    for a throw that did not land. The tracker is not applied here."""
+    from cell.endeffector.factory import make_end_effector
+
+    rng = np.random.default_rng(seed)
+    n = len(plan)
+    xy, tl, vc = np.full((n, 2), np.nan), np.full(n, np.nan), np.full((n, 3), np.nan)
+    wd, dr = _find(effects, "wind"), _find(effects, "drag_scale")
+    dw, sf, bo = _find(effects, "downwash"), _find(effects, "side_force"), _find(effects, "bounce")
+    sc = EffectScene()
+    try:
+        ee = make_end_effector("pybullet", plant=sc)
+        if bo:
+            sc.set_floor(bo["restitution"], bo["friction"], float(bo.get("rolling_m", 0.0)))
+        if sf:
+            sc.side_mps2 = np.array([float(sf["x_mps2"]), float(sf["y_mps2"]), 0.0])
+        for i, th in enumerate(plan):
+            sc.wind = np.zeros(3)
+            if wd:
+                sc.wind[:2] = float(wd["x_mps"]), float(wd["y_mps"])
+                if wd.get("form") == "throw":
+                    sc.wind[:2] += rng.normal(0.0, float(wd["sd"]), 2)
+            sc.drag_factor = 1.0
+            if dr:
+                per = dr.get("per_object", {})
+                sc.drag_factor = float(per.get(th.object_id, dr.get("value", 1.0)))
+            sc.jet = (np.array(th.p0), th.rpm, dw) if dw and th.rpm > 0 else None
+            try:
+                xy[i], tl[i], vc[i] = _one(sc, ee, th, rest=bo is not None)
+            except NoLanding:
+                continue
+    finally:
+        sc.close()
+    return xy, tl, vc
+
+
+@dataclass(frozen=True)
+class SceneCampaign:
+    """A campaign of this world: log records, the world's own floor, the outlier rows.
+
+    Attributes:
+        records: one dict per logged throw (docs/throw_log.md columns).
+        floor_m: RMS distance [m] between the model as configured and the same throws
+            made again in the scene without the effect, logged with the same scatter.
+        noise_m: the tracker's scatter alone (RMS 2-D distance) [m].
+        outliers: row numbers (0-based, in records) of the moved landings.
+        truth: quantities measured in the world itself (a bounce's slide per impact
+            speed, tau_s and inv_mu), for the parameters a case expects.
+    """
+
+    records: list[dict[str, Any]]
+    floor_m: float
+    noise_m: float
+    outliers: tuple[int, ...]
+    truth: dict[str, float]
+
+
+def _records(plan: list[Throw], xy: np.ndarray, tl: np.ndarray, ok: np.ndarray) -> list[dict]:
+    from cell.log.records import throw_record
+    from cell.sim.items import resolve_object
+
+    recs = []
+    for i in np.flatnonzero(ok):
+        th = plan[i]
+        obj, _ = resolve_object(th.object_id)
+        recs.append(throw_record(
+            f"s{i:04d}", obj, stroke_m=th.stroke, position_m=th.p0,
+            elevation_rad=th.elevation, azimuth_rad=th.azimuth, platform=th.platform,
+            rotor_rpm=th.rpm, land_z_m=LAND_Z_M, landed_xy_m=xy[i], t_flight_s=float(tl[i]),
+            session="scene",
+        ))  # fmt: skip
+    return recs
+
+
+def _model_xy(recs: list[dict[str, Any]], params: Any) -> np.ndarray:
+    """The configured model's landings of logged throws (the floor's reference)."""
+    from cell.log.table import ThrowTable
+    from cell.model.throw import predict_landing
+
+    batch = ThrowTable.from_records(recs).to_batch(objects=params.objects)
+    return np.asarray(predict_landing(batch, params.ee).xy, float)
+
+
+def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> dict[str, float]:
+    """The bounce's slide measured in the world: least squares of (rest − crossing) on
+    v_h (tau_s [s]) and on v_h |v_h| / (2 g) (inv_mu [-])."""
+    ok = np.all(np.isfinite(xy_rest), axis=1) & np.all(np.isfinite(xy_cross), axis=1)
+    d, vh = xy_rest[ok] - xy_cross[ok], v[ok, :2]
+    q = vh * (np.linalg.norm(vh, axis=1) / (2 * G))[:, None]
+    return {"tau_s": float(np.sum(d * vh) / np.sum(vh * vh)),
+            "inv_mu": float(np.sum(d * q) / np.sum(q * q))}  # fmt: skip
+
+
+def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, params: Any,
+                        *, n: int = 160, noise_m: float = 0.025, outliers: float = 0.0,
+                        repeats: int = 2, drone_share: float = 0.0,
+                        objects: tuple[str, ...] | None = None) -> SceneCampaign:  # fmt: skip
+    """Throw a campaign in the scene with `effects` on (see the module table), and the same
+    throws without them for the floor. `params` is the model as configured
+    (`cell.params.ModelParams`)."""
+    plan = draw_plan(n, rng, repeats=repeats, drone_share=drone_share, objects=objects)
+    seed = int(rng.integers(2**31))
+    xy, tl, vc = throw_plan(plan, effects, seed)
+    xy0, tl0, vc0 = throw_plan(plan, [], seed)
+    truth: dict[str, float] = {}
+    if _find(effects, "bounce"):
+        truth = _slide_truth(xy, xy0, vc0)
+    tr = _find(effects, "tracker")
+    scale = float(tr["scale"]) if tr else 1.0
+    lat = float(tr.get("latency_s", 0.0)) if tr else 0.0
+    noise = rng.normal(0.0, noise_m, (len(plan), 2))
+    obs = scale * xy + noise
+    ok = np.all(np.isfinite(obs), axis=1) & np.all(np.isfinite(xy0), axis=1)
+    out = np.zeros(len(plan), bool)
+    if outliers > 0:
+        pick = rng.choice(np.flatnonzero(ok), int(round(outliers * ok.sum())), replace=False)
+        ang = rng.uniform(-np.pi, np.pi, pick.size)
+        obs[pick] += rng.uniform(0.3, 1.0, pick.size)[:, None] * np.c_[np.cos(ang), np.sin(ang)]
+        out[pick] = True
+    recs = _records(plan, obs, tl + lat, ok)
+    free = _records(plan, xy0 + noise, tl0, ok)
+    inl = ~out[ok]
+    d = (xy0[ok] + noise[ok] - _model_xy(free, params))[inl]
+    return SceneCampaign(
+        records=recs,
+        floor_m=float(np.sqrt(np.mean(np.sum(d * d, axis=1)))),
+        noise_m=float(np.sqrt(np.mean(np.sum(noise[ok] ** 2, axis=1)))),
+        outliers=tuple(int(k) for k in np.flatnonzero(out[ok])),
+        truth=truth,
+    )
+
+
+def matched_objects(params: Any, tol: float = 0.1) -> tuple[str, ...]:
+    """The thesis14 objects whose drag constant under the configured parameters (its
+    identified mass and size, `params.objects`) is within `tol` of the scene's own
+    (the catalogue's): the objects a flight effect can be measured on without the
+    configured model's own drag error scaling it."""
+    from cell.sim.items import resolve_object
+
+    out = []
+    for k, e in sorted(catalogue().items()):
+        if e.set != "thesis14" or k not in params.objects:
+            continue
+        true, _ = resolve_object(k)
+        conf = params.objects[k]
+        ratio = (conf.cd * conf.area / conf.mass) / (true.cd * true.area / true.mass)
+        if abs(ratio - 1.0) <= tol:
+            out.append(k)
+    return tuple(out)
