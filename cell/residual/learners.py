@@ -208,7 +208,7 @@ def fit_learner(
         GRIDS[name][grid],
         cv=cv,
         scoring="neg_mean_squared_error",
-        n_jobs=1,
+        n_jobs=None,  # 1, or the caller's joblib.parallel_config (cell learn: one per core)
         refit=True,
     )
     with warnings.catch_warnings():
