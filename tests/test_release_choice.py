@@ -52,8 +52,10 @@ def _orchestrator(tmp_path: Path, session: str) -> Orchestrator:
     )
 
 
-def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(tmp_path: Path) -> None:
-    o = _orchestrator(tmp_path, "chosen")
+def _watch_carries(o: Orchestrator) -> list[tuple[float, float, float, float]]:
+    """Watch each static throw's carry: (how far the arm is from the release chosen when
+    the carry ends [rad], how far IK from the pick lands from it [rad], how long the carry
+    took in the scene [s], the time `_static_carry` gave it before [s]), one row a throw."""
     rows: list[tuple[float, float, float, float]] = []
     carry = o.carry
 
@@ -73,10 +75,46 @@ def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(tmp_path: Path)
         rows.append((joint_gap(o.q, chosen), joint_gap(resolved, chosen), o.scene.t - t0, timed))
 
     o.carry = watched  # type: ignore[method-assign]
+    return rows
+
+
+Runs = tuple[Any, Any, list[float], list[tuple[float, float, float, float]]]
+
+
+def _run(tmp_path: Path, session: str, first_only: bool) -> tuple[Any, list[float], list[Any]]:
+    """The job run in the scene; the release heights [m] of the bounds each plan was
+    kept in; and each static throw's carry (`_watch_carries`; not watched with
+    `first_only`). `first_only`: the plan in
+    the first release bounds reached is kept, as before the bounds competed."""
+    o = _orchestrator(tmp_path, session)
+    heights: list[float] = []
+    soonest = o._soonest_release
+    carries = [] if first_only else _watch_carries(o)
+
+    def watched(obj: Any, found: list[Any]) -> Any:
+        r = found[0] if first_only else soonest(obj, found)
+        heights.append(float(r.bounds.release_height))
+        return r
+
+    o._soonest_release = watched  # type: ignore[method-assign]
     try:
-        summary = o.run()
+        return o.run(), heights, carries
     finally:
         o.close()
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> Runs:
+    """The job run with the release bounds chosen (its carries watched) and with the
+    first bounds reached: each run once for the file's tests."""
+    tmp = tmp_path_factory.mktemp("release_choice")
+    chosen, heights, carries = _run(tmp, "bounds", first_only=False)
+    first, _, _ = _run(tmp, "first", first_only=True)
+    return chosen, first, heights, carries
+
+
+def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(runs: Runs) -> None:
+    summary, _, _, rows = runs
     assert len(rows) >= 4, rows  # the static throws
     for at_release, _, took, timed in rows:
         assert at_release < 1e-3, rows  # [rad]: the arm is at the release chosen
@@ -86,38 +124,8 @@ def test_each_carry_ends_at_the_release_chosen_in_the_time_timed(tmp_path: Path)
     assert summary.in_bin == len(summary.results)
 
 
-def _run(tmp_path: Path, session: str, first_only: bool) -> tuple[Any, list[float]]:
-    """The job run in the scene; the release heights [m] of the bounds each plan was
-    kept in. `first_only`: the plan in the first release bounds reached is kept, as
-    before the bounds competed."""
-    o = _orchestrator(tmp_path, session)
-    heights: list[float] = []
-    soonest = o._soonest_release
-
-    def watched(obj: Any, found: list[Any]) -> Any:
-        r = found[0] if first_only else soonest(obj, found)
-        heights.append(float(r.bounds.release_height))
-        return r
-
-    o._soonest_release = watched  # type: ignore[method-assign]
-    try:
-        return o.run(), heights
-    finally:
-        o.close()
-
-
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Any, list[float]]:
-    tmp = tmp_path_factory.mktemp("release_choice")
-    chosen, heights = _run(tmp, "bounds", first_only=False)
-    first, _ = _run(tmp, "first", first_only=True)
-    return chosen, first, heights
-
-
-def test_the_release_bounds_chosen_are_sooner_in_the_scene(
-    runs: tuple[Any, Any, list[float]],
-) -> None:
-    chosen, first, heights = runs
+def test_the_release_bounds_chosen_are_sooner_in_the_scene(runs: Runs) -> None:
+    chosen, first, heights, _ = runs
     # a lower release was taken for at least one item, over the cell's own bounds
     assert min(heights) < max(heights), heights
     # pick to pick: every cycle but the last (which waits for the throws to come to rest)

@@ -50,3 +50,28 @@ def test_bad_learner_input_is_rejected():
         fit_learner("svr", x, y, np.zeros(len(y)))
     with pytest.raises(InvalidParameter, match="finite"):
         fit_learner("svr", x, np.full(len(y), np.nan), g)
+
+
+def test_the_medium_grid_is_the_full_one_with_fewer_candidates_and_the_same_estimators():
+    """`cell learn`'s default grid searches a subset of the full grid's hyper-parameters
+    with the full grid's estimators, so a choice the full search makes from that subset
+    is the same model (docs/learn_speed.md: the example's unseen-object figures are)."""
+    from cell.residual.learners import GRIDS, LEARNERS
+
+    for name in LEARNERS:
+        medium, full = GRIDS[name]["medium"], GRIDS[name]["full"]
+        assert set(medium) == set(full), name
+        assert all(set(medium[k]) <= set(full[k]) for k in medium), name
+        n_medium = int(np.prod([len(v) for v in medium.values()]))
+        assert n_medium < int(np.prod([len(v) for v in full.values()])), name
+        same = make_pipeline(name, grid="full").get_params()["reg"].get_params()
+        assert make_pipeline(name, grid="medium").get_params()["reg"].get_params() == same
+    with pytest.raises(InvalidParameter, match="valid: small, medium, full"):
+        make_pipeline("svr", grid="large")
+
+
+def test_cell_learn_searches_the_medium_grid_by_default():
+    from cell.cli import build_parser
+
+    args = build_parser().parse_args(["learn", "throws.csv", "-o", "r.skops"])
+    assert args.grid == "medium"

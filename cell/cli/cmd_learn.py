@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from cell.cli.common import (
@@ -57,7 +59,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--hold-out", type=int, default=2, metavar="K", help="objects per fold (2)")
     p.add_argument(
-        "--grid", choices=("small", "full"), default="full", help="hyper-parameter grids (full)"
+        "--grid",
+        choices=("small", "medium", "full"),
+        default="medium",
+        help=(
+            "hyper-parameter grids (medium: full's estimators, without the candidates the "
+            "inner CV never chose on 865-throw campaigns; docs/learn_speed.md)"
+        ),
     )
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
     p.add_argument("--plot", metavar="PNG", help="write the Table 5.1 bar chart here")
@@ -118,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
         )
     _enough(data, args.throws)
     try:
-        summary, model = _fit(args, data, compare)
+        with _one_fit_per_core(args):
+            summary, model = _fit(args, data, compare)
     except CellError:
         raise
     except ValueError as exc:  # scikit-learn's refusal of a split too small to fit
@@ -138,6 +147,20 @@ def run(args: argparse.Namespace) -> int:
         plot_table51(summary, args.plot)
     write_json(args, doc)
     return 0
+
+
+@contextmanager
+def _one_fit_per_core(args: argparse.Namespace) -> Iterator[None]:
+    """In this process (no Ray): each grid search fits its candidates one per core of
+    the machine (joblib's processes; every fit is seeded, so the same table and model
+    as one at a time). On Ray (`--workers` > 1 or an address) each unit fits alone."""
+    import os
+
+    from joblib import parallel_config
+
+    alone = args.workers == 1 and not args.ray_address  # run_campaign's in-process case
+    with parallel_config(n_jobs=(os.cpu_count() or 1) if alone else 1):
+        yield
 
 
 def _fit(

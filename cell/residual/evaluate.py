@@ -191,7 +191,7 @@ class FitUnit:
         data: the training data (all rows; the fold's held-out objects are left out).
         learner: learner name.
         fold: the fold.
-        grid: "small" or "full".
+        grid: "small", "medium" or "full".
         seed: the learner's random state.
         predict: the model, batch -> Landing (None: nominal with the data's ee).
     """
@@ -273,7 +273,7 @@ def round_robin(
         data: from `training_data`.
         learners: which learners.
         hold_out: objects held out per fold (thesis: 2).
-        grid: "small" or "full" hyper-parameter grids.
+        grid: "small", "medium" or "full" hyper-parameter grids.
         seed: shuffles the objects into folds; random state of the learners.
         predict: the model, batch -> Landing (default: nominal with the data's ee).
         progress: called with a short text after each fit (the CLI's progress bar).

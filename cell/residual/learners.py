@@ -28,10 +28,18 @@ __all__ = ["LEARNERS", "GRIDS", "RangeClip", "make_pipeline", "fit_learner", "Fi
 
 LEARNERS = ("svr", "rf", "mlp")
 
-# name -> grid size -> parameter grid of the pipeline step "reg"
+# name -> grid size -> parameter grid of the pipeline step "reg". "medium" is "full" without
+# the candidates the inner CV never chose on 865-throw campaigns and that cost the most
+# (SVR's γ 0.03 and "scale", ε 0.02; the forest's 5-throw leaves; the network's α 0.1):
+# docs/learn_speed.md
 GRIDS: dict[str, dict[str, dict[str, list[Any]]]] = {
     "svr": {
         "small": {"reg__C": [10.0, 100.0], "reg__epsilon": [0.05], "reg__gamma": [0.003, 0.01]},
+        "medium": {
+            "reg__C": [1.0, 10.0, 100.0, 1000.0],
+            "reg__epsilon": [0.05, 0.1],
+            "reg__gamma": [0.001, 0.003, 0.01],
+        },
         "full": {
             "reg__C": [1.0, 10.0, 100.0, 1000.0],
             "reg__epsilon": [0.02, 0.05, 0.1],
@@ -40,10 +48,12 @@ GRIDS: dict[str, dict[str, dict[str, list[Any]]]] = {
     },
     "rf": {
         "small": {"reg__min_samples_leaf": [3, 10]},
+        "medium": {"reg__min_samples_leaf": [1, 20], "reg__max_features": [1.0, 0.3]},
         "full": {"reg__min_samples_leaf": [1, 5, 20], "reg__max_features": [1.0, 0.3]},
     },
     "mlp": {
         "small": {"reg__alpha": [1e-3, 1e-1]},
+        "medium": {"reg__alpha": [1e-3, 1.0]},
         "full": {"reg__alpha": [1e-3, 1e-1, 1.0]},
     },
 }
@@ -85,7 +95,8 @@ def make_pipeline(name: str, *, grid: str = "full", seed: int = 0) -> Any:
 
     Args:
         name: one of LEARNERS.
-        grid: "small" (fast, for tests) or "full"; sets the estimator's size too.
+        grid: "small" (fast, for tests; smaller estimators too), "medium" or "full" (the
+            full-size estimators; medium searches fewer hyper-parameters, docs/learn_speed.md).
         seed: random state of the forest and the network.
 
     Raises:
@@ -100,8 +111,8 @@ def make_pipeline(name: str, *, grid: str = "full", seed: int = 0) -> Any:
 
     if name not in LEARNERS:
         raise InvalidParameter(f"unknown learner {name!r}; valid: {', '.join(LEARNERS)}")
-    if grid not in ("small", "full"):
-        raise InvalidParameter(f"unknown grid {grid!r}; valid: small, full")
+    if grid not in GRIDS[name]:
+        raise InvalidParameter(f"unknown grid {grid!r}; valid: {', '.join(GRIDS[name])}")
     small = grid == "small"
     reg: Any
     if name == "svr":
@@ -177,7 +188,7 @@ def fit_learner(
         x: features, shape (n, k).
         delta_m: ΔL_s [m], shape (n,).
         groups: object id of each row, shape (n,): inner folds never split an object.
-        grid: "small" or "full" hyper-parameter grid.
+        grid: "small", "medium" or "full" hyper-parameter grid.
         inner_splits: GroupKFold splits (capped at the number of objects).
         seed: random state.
 
@@ -208,7 +219,7 @@ def fit_learner(
         GRIDS[name][grid],
         cv=cv,
         scoring="neg_mean_squared_error",
-        n_jobs=1,
+        n_jobs=None,  # 1, or the caller's joblib.parallel_config (cell learn: one per core)
         refit=True,
     )
     with warnings.catch_warnings():

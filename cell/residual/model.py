@@ -348,7 +348,7 @@ def train_residual(
     Args:
         data: from `training_data`.
         learner: "svr", "rf" or "mlp".
-        grid: hyper-parameter grid, "small" or "full".
+        grid: hyper-parameter grid, "small", "medium" or "full" (`GRIDS`).
         rows: a boolean mask of the throws it may train on (e.g. without held-out objects).
         seed: random state.
 
