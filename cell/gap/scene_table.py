@@ -48,7 +48,8 @@ def _params(row: dict[str, Any]) -> str:
     text = "; ".join(parts) or "—"
     if row.get("proposal"):
         terms = row["proposal"].split(" + ")
-        text += f" proposal ({len(terms)} terms): {' + '.join(terms[:2])} + …"
+        first = " + ".join(terms[:2]).replace("|", "\\|")  # a cell of the table
+        text += f" proposal ({len(terms)} terms): {first} + …"
     return text
 
 
