@@ -25,7 +25,7 @@ def main(argv: list[str] | None = None) -> int:
             raise ValueError(f"larger than {MAX_BYTES} bytes")
         doc = json.loads(args.json.read_text())
         print(scene_table(doc), end="")
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, RecursionError) as e:
         print(f"cell: error: {args.json}: not a `cell gap check --worlds scene` JSON ({e})",
               file=sys.stderr)  # fmt: skip
         return 2
