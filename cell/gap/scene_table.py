@@ -1,0 +1,81 @@
+"""The Markdown table docs/gap_scene.md shows, made from the JSON that
+`cell gap check --worlds scene --json FILE` writes (one row per case).
+
+Parameters found are printed to 3 significant figures; a world's parameter in brackets
+(the case's setting, or a bounce's as measured in the world, `world_truth`); A / world
+floor to 2 decimals and the floor F in mm; a proposal by its number of terms and its first
+two terms."""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["scene_table", "scene_summary", "case_truths"]
+
+HEAD = (
+    "| case | truth | verdict | phases | parameters found (truth) | A / world floor | passes |\n"
+    "|---|---|---|---|---|---|---|"
+)
+
+
+def case_truths(row: dict[str, Any]) -> dict[str, float]:
+    """The world's parameters of a case as `effect.param` -> value: the case's setting
+    (`cell.gap.check_scene.SCENE_CASES`) or, for a bounce, the slide measured in the world."""
+    from cell.gap.check_scene import SCENE_CASES
+
+    _, _, _, expect, _ = SCENE_CASES[row["case"]]
+    out: dict[str, float] = {}
+    for eff, params in expect.items():
+        for k, v in params.items():
+            if isinstance(v, (int, float)):
+                out[f"{eff}.{k}"] = float(v)
+    for k, v in (row.get("world_truth") or {}).items():
+        out[f"bounce.{k}"] = float(v)
+    return out
+
+
+def _params(row: dict[str, Any]) -> str:
+    truths = case_truths(row)
+    parts = []
+    for eff, params in row["params"].items():
+        items = []
+        for k, v in params.items():
+            key = f"{eff}.{k}"
+            t = f" ({truths[key]:.3g})" if key in truths else ""
+            items.append(f"{key} {v:.3g}{t}")
+        law = row["laws"].get(eff)
+        parts.append("; ".join(items) + (f" — {law}" if law else ""))
+    text = "; ".join(parts) or "—"
+    if row.get("proposal"):
+        terms = row["proposal"].split(" + ")
+        first = " + ".join(terms[:2]).replace("|", "\\|")  # a cell of the table
+        text += f" proposal ({len(terms)} terms): {first} + …"
+    return text
+
+
+def scene_row(row: dict[str, Any]) -> str:
+    phases = "; ".join(f"{k}: {v}" for k, v in row["phases"].items()) or "—"
+    cells = (
+        row["case"],
+        row["truth"],
+        row["verdict"],
+        phases,
+        _params(row),
+        f"{row['after_over_floor']:.2f} (F {1000 * row['world_floor_m']:.0f} mm)",
+        "yes" if row["passes"] else "no",
+    )
+    return "| " + " | ".join(cells) + " |"
+
+
+def scene_summary(doc: dict[str, Any]) -> str:
+    ratio = f"{doc['criteria']['floor_ratio']:g}"
+    return (
+        f"{doc['passes']}/{doc['total']} pass; diagonal {doc['diagonal']}, phase "
+        f"{doc['phase_ok']}, parameters {doc['params_ok']}, A ≤ {ratio} F {doc['floor_ok']}"
+    )
+
+
+def scene_table(doc: dict[str, Any]) -> str:
+    """The table and its summary line, as docs/gap_scene.md shows them."""
+    rows = "\n".join(scene_row(r) for r in doc["campaigns"])
+    return f"{HEAD}\n{rows}\n\n{scene_summary(doc)}\n"

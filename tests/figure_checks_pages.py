@@ -1,0 +1,421 @@
+"""The checks of the figures the guide pages docs/arms.md, docs/jobs.md and docs/gap_scene.md
+quote (run by tests/test_readme_figures.py): measured figures against the JSON `make figures`
+writes, rules and limits against the code's constants, the mount parser and the shipped
+files."""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from tests.figure_quotes import COVERED, ROOT, close, load_json, note, page_text, quoted
+
+
+def _as_written(q: str, value: float) -> None:
+    """`q` is `value` to the decimals `q` is written with."""
+    close(q.replace("−", "-"), value, len(q.split(".")[1]) if "." in q else 0)
+
+
+# -- docs/arms.md ----------------------------------------------------------------------------
+def check_the_arms_page() -> None:
+    from cell.robot import mount
+    from cell.sim.items import resolve_object
+
+    page = "docs/arms.md"
+    (longest,) = quoted(page, r"lower-case letters, digits and `_`, at most (\d+);")
+    assert mount._NAME.fullmatch("a" * int(longest))
+    assert not mount._NAME.fullmatch("a" * (int(longest) + 1))
+    (acc,) = quoted(page, r"\| `acceleration_limits` \| per joint \[rad/s²\] \| one per joint, "
+                    r"positive, at most (\d+) \|")  # fmt: skip
+    assert float(acc) == mount.MAX_ACCELERATION
+    (ten,) = quoted(page, r"\| one per joint, positive, at most (10)⁶ \|")
+    assert float(ten) ** 6 == mount.MAX_JERK
+    lo, hi, default = quoted(page, r"\| from (\d+) to (\d+) \(default (\d+), all around\) \|")
+    facing = mount._facing
+    where = Path("mount.yaml")
+    assert facing({}, where) == math.pi and float(default) == 180.0
+    assert facing({"facing_half_range_deg": float(hi)}, where) == math.pi
+    assert facing({"facing_half_range_deg": float(lo)}, where) == pytest.approx(
+        math.radians(float(lo))
+    )
+    for bad in (float(lo) - 0.01, float(hi) + 0.01):
+        with pytest.raises(Exception, match="facing_half_range_deg"):
+            facing({"facing_half_range_deg": bad}, where)
+    # the demo job: 24 items, 18 thrown into the chutes, 6 placed into the totes
+    job = yaml.safe_load((ROOT / "tasks/bins.yaml").read_text())
+    run = load_json("docs/figures/run.json")
+    items, thrown, near, far, placed = quoted(
+        page,
+        r"The demo's (\d+) items \((\d+) thrown into three chutes ([\d.]+)–([\d.]+) m out, "
+        r"(\d+) placed into two totes\)",
+    )
+    assert (int(items), int(thrown), int(placed)) == (run["items"], run["thrown"], run["placed"])
+    assert int(items) == sum(i["count"] for i in job["items"])
+    chutes = [math.hypot(*b["position_m"]) for b in job["bins"] if b["id"].startswith("chute")]
+    assert len(chutes) == 3
+    close(near, min(chutes), 1)
+    close(far, max(chutes), 1)
+    mass_g, size_mm = quoted(page, r"the second `cyl70` \((\d+) g, (\d+) mm\)")
+    cyl70, _ = resolve_object("cyl70")
+    assert (float(mass_g), float(size_mm)) == (1000 * cyl70.mass, 1000 * cyl70.size[0])
+
+
+# -- docs/arms.md and docs/jobs.md: the demo on the UR3 --------------------------------------
+def _ur3_refusal() -> str:
+    from cell.errors import CellError
+    from cell.jobs import parse_job
+
+    text = (ROOT / "tasks/bins.yaml").read_text().replace("robot: panda", "robot: ur3")
+    with pytest.raises(CellError) as err:
+        parse_job(text, "bins.yaml")
+    return str(err.value)
+
+
+def check_the_ur3_reach() -> None:
+    from cell.jobcheck import STATION_HALF_M
+
+    msg = _ur3_refusal()
+    m = re.search(r"pick_station\.position_m: the ur3 arm does not reach", msg)
+    assert m, msg
+    (said,) = re.findall(r"reaches about ([\d.]+) m out at that height", msg)
+    job = yaml.safe_load((ROOT / "tasks/bins.yaml").read_text())
+    station = math.hypot(*job["pick_station"]["position_m"][:2])
+    out, reach = quoted("docs/arms.md", r"its station is ([\d.]+) m out; the UR3's grip "
+                        r"pointing down reaches about ([\d.]+) m at that height")  # fmt: skip
+    close(out, station, 2)
+    assert reach == said
+    page = "docs/jobs.md"
+    (block,) = quoted(page, r"under the pick station's ([\d.]+) m block")
+    close(block, 2 * STATION_HALF_M, 2)
+    out, reach = quoted(page, r"its station, ([\d.]+) m out, is beyond the ([\d.]+) m the UR3's")
+    close(out, station, 2)
+    assert reach == said
+
+
+# -- docs/gap_scene.md: the table ------------------------------------------------------------
+_ROW = (
+    r"\n\| (s:[\w+-]+) \| ([\w+]+) \| ([\w+]+) \| ([^|]+) \| ((?:[^|\\]|\\\|)+) \| ([\d.]+) "
+    r"\(F (\d+) mm\) \| (yes|no) \|(?=\n)"
+)
+
+
+def _check_parameters(page: str, m: re.Match, row: dict[str, Any]) -> None:
+    from cell.gap.scene_table import case_truths
+
+    cell, at = m.group(5), m.start(5)
+    truths, seen = case_truths(row), 0
+    for p in re.finditer(
+        r"(\w+)\.(\w+) (-?[\d.]+)(?: \((-?[\d.]+)\))?", cell.split(" proposal")[0]
+    ):
+        eff, key, found, truth = p.groups()
+        _as_written(found, row["params"][eff][key])
+        if truth is not None:
+            _as_written(truth, truths[f"{eff}.{key}"])
+        COVERED[page].extend((at + a, at + b) for a, b in (p.span(3), p.span(4)) if a >= 0)
+        seen += 1
+    assert seen == sum(len(v) for v in row["params"].values()), row["case"]
+    prop = re.search(r" proposal \((\d+) terms\): (.*) \+ …$", cell)
+    if row["proposal"] is None:
+        assert prop is None, row["case"]
+        return
+    assert prop, row["case"]
+    terms = row["proposal"].split(" + ")
+    assert int(prop.group(1)) == len(terms)
+    assert prop.group(2).replace("\\|", "|") == " + ".join(terms[:2])
+    COVERED[page].append((at + prop.start(1), at + prop.end(2)))
+
+
+def check_the_gap_scene_table() -> None:
+    from cell.gap.scene_table import scene_table
+
+    page, doc = "docs/gap_scene.md", load_json("docs/figures/gap_check_scene.json")
+    rows = {r["case"]: r for r in doc["campaigns"]}
+    ms = list(re.finditer(_ROW, page_text(page)))
+    assert [m.group(1) for m in ms] == list(rows), "every case once, in the JSON's order"
+    for m in ms:
+        note(page, m)
+        row = rows[m.group(1)]
+        assert (m.group(2), m.group(3), m.group(8)) == (
+            row["truth"],
+            row["verdict"],
+            "yes" if row["passes"] else "no",
+        )
+        phases = "; ".join(f"{k}: {v}" for k, v in row["phases"].items()) or "—"
+        assert m.group(4) == phases
+        _check_parameters(page, m, row)
+        close(m.group(6), row["after_over_floor"], 2)
+        close(m.group(7), 1000 * row["world_floor_m"], 0)
+    passes, total, diag, phase, params, ratio, floor = quoted(
+        page,
+        r"\n(\d+)/(\d+) pass; diagonal (\d+), phase (\d+), parameters (\d+), A ≤ ([\d.]+) F (\d+)\n",
+    )
+    assert [int(x) for x in (passes, total, diag, phase, params, floor)] == [
+        doc[k] for k in ("passes", "total", "diagonal", "phase_ok", "params_ok", "floor_ok")
+    ]
+    assert float(ratio) == doc["criteria"]["floor_ratio"]
+    # examples/11_gap_scene_table.py prints the table as the page shows it
+    assert scene_table(doc) in page_text(page)
+
+
+# -- docs/gap_scene.md: the worlds and what the table shows ----------------------------------
+def _case(name: str) -> tuple[dict[str, Any], ...]:
+    from cell.gap.check_scene import SCENE_CASES
+
+    effects, *_ = SCENE_CASES[name]
+    return tuple(effects)
+
+
+def _drag_ratios() -> dict[str, float]:
+    """Per thesis14 object, the configured model's drag constant over the scene's (as
+    `cell.gap.world_scene.matched_objects` computes it)."""
+    from cell.catalogue import catalogue
+    from cell.params import load_params, scene_params_path
+    from cell.sim.items import resolve_object
+
+    path = scene_params_path()
+    assert path is not None
+    mp, out = load_params(path), {}
+    for k, e in catalogue().items():
+        if e.set == "thesis14" and k in mp.objects:
+            true, _ = resolve_object(k)
+            c = mp.objects[k]
+            out[k] = (c.cd * c.area / c.mass) / (true.cd * true.area / true.mass)
+    return out
+
+
+def check_the_gap_scene_worlds() -> None:
+    """The worlds as the page describes them are `cell.gap.world_scene` and the cases."""
+    from cell.gap import world_scene as ws
+    from cell.gap.check_scene import _JET
+
+    page, src = "docs/gap_scene.md", inspect.getsource(ws)
+    (sd,) = quoted(page, r"steady; drawn throw to throw around a mean \(sd ([\d.]+) m/s\)")
+    assert float(sd) == _case("s:wind-throw")[0]["sd"]
+    rpm0, core, radius, grow, lo, hi = quoted(
+        page,
+        r"centre speed w · rpm / (\d+) falling as 1 / \(1 \+ depth / ([\d.]+) m\), radius "
+        r"([\d.]+) m \+ ([\d.]+) · depth .*? rotor speeds (\d+)–(\d+) rpm",
+    )
+    assert f"rpm / {float(rpm0)} / (1.0 + depth" in src
+    assert (float(core), float(radius)) == (_JET["core_m"], _JET["radius_m"])
+    assert f"+ {grow} * depth" in src and f"rng.uniform({lo}, {hi})" in src
+    wait, mu, e, roll, e_hop = quoted(
+        page,
+        r"where it still rolls (\d+) s after crossing .*? a floor of μ ([\d.]+), e ([\d.]+); "
+        r"balls rolling on it with a rolling friction of ([\d.]+) m; every object on a bouncy "
+        r"floor \(e ([\d.]+)\)",
+    )
+    assert float(wait) == ws.REST_WAIT_S
+    slide, rolls, hop = (_case(n)[0] for n in ("s:bounce-slide", "s:bounce-roll", "s:bounce-hop"))
+    assert (float(mu), float(e)) == (slide["friction"], slide["restitution"])
+    assert float(roll) == rolls["rolling_m"] and float(e_hop) == hop["restitution"]
+    s1, s2, lat = quoted(page, r"\| s = ([\d.]+); s = ([\d.]+) with (\d+) ms latency \|")
+    assert float(s1) == _case("s:scale")[0]["scale"]
+    t2 = _case("s:scale+latency")[0]
+    assert float(s2) == t2["scale"] and float(lat) == 1000 * t2["latency_s"]
+    (side,) = quoted(page, r"\| a = ([\d.]+) m/s² across \|")
+    assert float(side) == _case("s:side-force")[0]["y_mps2"]
+    (rel,) = quoted(page, r"v\(t\) = w − w / \(1 \+ \(c/m\) w t\), within ([\d.]+) %\)")
+    rels = re.findall(r"rel=([\d.e-]+)\)", (ROOT / "tests/test_gap_scene.py").read_text())
+    assert float(rel) / 100 == pytest.approx(float(rels[0]))
+    plane, scatter, share, o_lo, o_hi = quoted(
+        page,
+        r"the crossing of z = ([\d.]+) m .*? a tracker's scatter of (\d+) mm per axis .*? cases, "
+        r"(\d+) % of landings moved by ([\d.]+)–(\d+) m",
+    )
+    assert float(plane) == ws.LAND_Z_M
+    noise = inspect.signature(ws.draw_scene_campaign).parameters["noise_m"].default
+    assert float(scatter) == 1000 * noise
+    assert float(share) / 100 == dict(_case_options("s:none+outliers"))["outliers"]
+    assert f"rng.uniform({o_lo}, {float(o_hi)}, pick.size)" in src
+    a_lo, a_hi, d_lo, d_hi, box = quoted(
+        page,
+        r"Releases are ([\d.]+)–([\d.]+) m high \(([\d.]+)–([\d.]+) m under a drone\), within "
+        r"±([\d.]+) m of the origin",
+    )
+    assert f"rng.uniform({d_lo}, {d_hi}) if drone else rng.uniform({a_lo}, {a_hi})" in src
+    assert f"rng.uniform(-{box}, {box})" in src
+    (ratio,) = quoted(page, r"asks for the verdict's robust held-out RMSE A ≤ ([\d.]+) × that")
+    assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+
+
+def _case_options(name: str) -> dict[str, Any]:
+    from cell.gap.check_scene import SCENE_CASES
+
+    return SCENE_CASES[name][4]
+
+
+def check_the_gap_scene_prose() -> None:
+    from cell.gap.diagnose import NONE_RATIO
+    from cell.gap.world_scene import draw_scene_campaign
+
+    check_the_gap_scene_worlds()
+    page, doc = "docs/gap_scene.md", load_json("docs/figures/gap_check_scene.json")
+    rows = {r["case"]: r for r in doc["campaigns"]}
+    scatter, band = quoted(page, r"log with a scatter of (\d+) mm per axis \(a camera's landing "
+                           r"spot\), under which this mismatch is within the (\d+) % band")  # fmt: skip
+    noise = inspect.signature(draw_scene_campaign).parameters["noise_m"].default
+    assert float(scatter) == 1000 * noise
+    close(band, 100 * (NONE_RATIO - 1), 0)
+    # the drag constants of the configured model against the scene's
+    ratios = _drag_ratios()
+    lo, hi, *named = quoted(
+        page,
+        r"by a factor of ([\d.]+)–([\d.]+) per object \(cube30 ([\d.]+), sphere40 ([\d.]+), "
+        r"cube40 ([\d.]+), cyl40 ([\d.]+), cube50 ([\d.]+), …, cyl70 ([\d.]+)\)",
+    )
+    close(lo, min(ratios.values()), 2)
+    close(hi, max(ratios.values()), 2)
+    for q, k in zip(
+        named, ("cube30", "sphere40", "cube40", "cyl40", "cube50", "cyl70"), strict=True
+    ):
+        close(q, ratios[k], 2)
+    wind, n_obj, tol = quoted(page, r"a ([\d.]+) m/s wind over all (\d+) objects .*? configured "
+                              r"drag constant is within (\d+) % of the scene's")  # fmt: skip
+    assert float(wind) == _case("s:wind-all-objects")[0]["x_mps"]
+    assert int(n_obj) == len(ratios)
+    from cell.gap.world_scene import matched_objects
+
+    close(tol, 100 * inspect.signature(matched_objects).parameters["tol"].default, 0)
+    assert rows["s:wind"]["objects"] == sorted(k for k, r in ratios.items() if abs(r - 1) <= 0.1)
+    # the run
+    cases, n, n_free, workers, secs = quoted(
+        page,
+        r"\((\d+) cases, (\d+) throws each plus (\d+) effect-free; (\d) Ray workers .*? the "
+        r"diagnoses alone (\d+) s\)",
+    )
+    assert int(cases) == doc["total"] == len(rows)
+    assert {r["throws"] for r in rows.values()} == {int(n)} and int(n_free) == int(n)
+    cmd_n, cmd_workers = quoted(page, r"`cell gap check --worlds scene --n (\d+) --workers (\d) "
+                                r"--json docs/figures/gap_check_scene.json`\n\(")  # fmt: skip
+    assert (cmd_n, cmd_workers) == (n, workers)
+    close(secs, sum(r["seconds"] for r in rows.values()), 0)
+    _check_what_passes(page, rows)
+    _check_what_does_not(page, rows, ratios)
+    # tests/test_gap_scene.py's strong-wind case
+    test = (ROOT / "tests/test_gap_scene.py").read_text()
+    speed, throws, within, ratio = quoted(
+        page,
+        r"a ([\d.]+) m/s wind thrown in the scene \((\d+) throws\) named `wind`, phase\s+flight, "
+        r"its speed within (\d+) % and A within ([\d.]+) × the world's floor",
+    )
+    wx, wy = (float(v) for v in re.findall(r'"x_mps": ([\d.]+), "y_mps": -([\d.]+)', test)[0])
+    close(speed, math.hypot(wx, wy), 1)
+    assert f"n={throws}," in test and f"rel={int(within) / 100:g})" in test
+    assert f"<= {ratio} * camp.floor_m" in test
+
+
+def _check_what_passes(page: str, rows: dict[str, dict[str, Any]]) -> None:
+    (share,) = quoted(page, r"the effect-free world \(with and without (\d+) % outliers")
+    assert float(share) / 100 == _case_options("s:none+outliers")["outliers"]
+    out = rows["s:none+outliers"]
+    assert out["outliers_found"] == out["outliers_true"] == 4 and out["outliers_false"] == 0
+    lo, hi = quoted(page, r"with outliers: within (\d+)–(\d+) % per\s+component\)")
+    errs = [
+        e
+        for c in ("s:wind", "s:wind-throw", "s:wind+outliers")
+        for e in rows[c]["param_errors"].values()
+    ]
+    close(lo, 100 * min(errs), 0)
+    close(hi, 100 * max(errs), 0)
+    f1, t1, f2, t2, tol, lat = quoted(
+        page,
+        r"the tracker scale \(([\d.]+) for ([\d.]+) and ([\d.]+) for ([\d.]+), within the "
+        r"check's ([\d.]+) %, a (\d+) ms\s+latency",
+    )
+    for f, t, case in ((f1, t1, "s:scale"), (f2, t2, "s:scale+latency")):
+        _as_written(f, rows[case]["params"]["tracking_scale"]["scale_factor"])
+        assert float(t) == _case(case)[0]["scale"]
+    close(tol, 100 * load_json("docs/figures/gap_check_scene.json")["criteria"]["scale_tol"], 1)
+    assert float(lat) == 1000 * _case("s:scale+latency")[0]["latency_s"]
+    hop = rows["s:bounce-hop"]
+    found, measured = quoted(page, r"the bouncy floor \(1/μ ([\d.]+) against ([\d.]+) measured\)")
+    _as_written(found, hop["params"]["bounce"]["inv_mu"])
+    _as_written(measured, hop["world_truth"]["inv_mu"])
+    force, world = quoted(page, r"a force along\s+y of ([\d.]+) m/s², the world's ([\d.]+)\)")
+    (term,) = re.findall(r"force y \[m/s²\] = ([\d.]+)$", rows["s:side-force"]["proposal"])
+    _as_written(force, float(term))
+    assert float(world) == _case("s:side-force")[0]["y_mps2"]
+
+
+def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict) -> None:
+    every_obj = rows["s:wind-all-objects"]["params"]["wind"]
+    fx, fy, tx, ty, lo, hi = quoted(
+        page,
+        r"phase right, but ([\d.]+)/−([\d.]+) m/s for ([\d.]+)/−([\d.]+): the\s+calibrated "
+        r"objects' drag constants are ([\d.]+)–([\d.]+) × the scene's",
+    )
+    _as_written(fx, every_obj["x_mps"])
+    _as_written(fy, -every_obj["y_mps"])
+    eff = _case("s:wind-all-objects")[0]
+    assert (float(tx), -float(ty)) == (eff["x_mps"], eff["y_mps"])
+    close(lo, min(ratios.values()), 1)
+    close(hi, max(ratios.values()), 1)
+    dc = rows["s:drag-const"]
+    a_f, k, cube, sphere = quoted(
+        page,
+        r"A ([\d.]+) F, but its law is\s+`factor = k · size_x_m` \((\d+) /m: ([\d.]+) for cube30, "
+        r"([\d.]+) for sphere40\)",
+    )
+    close(a_f, dc["after_over_floor"], 2)
+    k_m = dc["params"]["drag_scale"]["k"]
+    _as_written(k, k_m)
+    from cell.sim.items import resolve_object
+
+    for q, name in ((cube, "cube30"), (sphere, "sphere40")):
+        _as_written(q, k_m * resolve_object(name)[0].size[0])
+    f1, r1, w1, f2, r2, w2 = quoted(
+        page,
+        r"the world's factor in the\s+model's terms is ([\d.]+) / ([\d.]+) = ([\d.]+) for cube30 "
+        r"and ([\d.]+) / ([\d.]+) = ([\d.]+) for sphere40",
+    )
+    factor = _case("s:drag-const")[0]["value"]
+    for f, r, w, name in ((f1, r1, w1, "cube30"), (f2, r2, w2, "sphere40")):
+        assert float(f) == factor
+        close(r, ratios[name], 2)
+        close(w, factor / ratios[name], 1)
+    dw = rows["s:downwash"]
+    base, floor, radius = quoted(
+        page,
+        r"the baseline,\s+(\d+) mm, equals the world's effect-free floor, (\d+) mm\): the throws "
+        r"leave the jet \(([\d.]+) m\s+wide at the rotor\)",
+    )
+    close(base, 1000 * dw["baseline_m"], 0)
+    close(floor, 1000 * dw["world_floor_m"], 0)
+    from cell.gap.check_scene import _JET
+
+    assert float(radius) == _JET["radius_m"]
+    long_, repeats = quoted(page, r"on the long drone flights \((\d+) mm, against (\d+) mm the "
+                            r"repeats see\)")  # fmt: skip
+    close(long_, 1000 * dw["baseline_m"], 0)
+    close(repeats, 1000 * dw["tool_floor_m"], 0)
+    dww = rows["s:downwash+wind"]
+    fx, fy, tx, ty, ratio = quoted(
+        page,
+        r"the wind is found \(([\d.]+)/([\d.]+) for (\d+)/(\d+) m/s\) but A stays above\s+([\d.]+) ×",
+    )
+    _as_written(fx, dww["params"]["wind"]["x_mps"])
+    _as_written(fy, dww["params"]["wind"]["y_mps"])
+    w = _case("s:downwash+wind")[1]
+    assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
+    assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+    (mu,) = quoted(page, r"`s:bounce-slide` \(blocks on a μ ([\d.]+) floor\)")
+    assert float(mu) == _case("s:bounce-slide")[0]["friction"]
+    bs = rows["s:bounce-slide"]
+    tool, a = quoted(page, r"the tool's floor \(from repeats,\s+(\d+) mm\) does not contain it "
+                     r"and no named effect brings A \((\d+) mm\)")  # fmt: skip
+    close(tool, 1000 * bs["tool_floor_m"], 0)
+    close(a, 1000 * bs["after_robust_m"], 0)
+    br = rows["s:bounce-roll"]
+    found, measured, a_f = quoted(
+        page, r"\(1/μ ([\d.]+) against ([\d.]+) measured\) and phase, but A is ([\d.]+) × F"
+    )
+    _as_written(found, br["params"]["bounce"]["inv_mu"])
+    _as_written(measured, br["world_truth"]["inv_mu"])
+    close(a_f, br["after_over_floor"], 2)

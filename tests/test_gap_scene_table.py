@@ -1,0 +1,84 @@
+"""examples/11_gap_scene_table.py: docs/gap_scene.md's table from the scene check's JSON."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cell.gap.scene_table import scene_row, scene_table
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "examples/11_gap_scene_table.py"
+
+
+def _run(path: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, str(SCRIPT), str(path)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
+
+
+def test_the_script_prints_the_pages_table() -> None:
+    """The page's table was made outside the repository; the script makes it the same."""
+    r = _run(ROOT / "docs/figures/gap_check_scene.json")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("| case | truth | verdict |")
+    assert r.stdout in (ROOT / "docs/gap_scene.md").read_text()
+
+
+def test_a_row_rounds_as_written() -> None:
+    row = {
+        "case": "s:wind",
+        "truth": "wind",
+        "verdict": "wind",
+        "phases": {"wind": "flight"},
+        "params": {"wind": {"x_mps": 2.4449, "y_mps": -1.0}},
+        "laws": {},
+        "proposal": "force y [m/s²] = 0.5 + force up [1/m] = 0.1 · |v|² + landing shift [s] = 1",
+        "world_truth": {},
+        "after_over_floor": 1.005,
+        "world_floor_m": 0.0425,
+        "passes": False,
+    }
+    assert scene_row(row) == (
+        "| s:wind | wind | wind | wind: flight | wind.x_mps 2.44 (2.5); wind.y_mps -1 (-1.2) "
+        "proposal (3 terms): force y [m/s²] = 0.5 + force up [1/m] = 0.1 · \\|v\\|² + … "
+        "| 1.00 (F 42 mm) | no |"
+    )
+    doc = {
+        "campaigns": [row],
+        "criteria": {"floor_ratio": 1.3},
+        "passes": 0,
+        "total": 1,
+        "diagonal": 1,
+        "phase_ok": 1,
+        "params_ok": 0,
+        "floor_ok": 1,
+    }
+    assert scene_table(doc).endswith(
+        "\n\n0/1 pass; diagonal 1, phase 1, parameters 0, A ≤ 1.3 F 1\n"
+    )
+
+
+@pytest.mark.parametrize(
+    "text", ["not json", "[1, 2]", '{"campaigns": [{}]}', "[" * 100000 + "]" * 100000]
+)
+def test_a_file_that_is_not_the_checks_json_is_refused(tmp_path: Path, text: str) -> None:
+    path = tmp_path / "x.json"
+    path.write_text(text)
+    r = _run(path)
+    assert r.returncode == 2
+    assert r.stderr.startswith(f"cell: error: {path}: ") and "Traceback" not in r.stderr
+    assert path.read_text() == text
+
+
+def test_a_missing_file_is_refused(tmp_path: Path) -> None:
+    r = _run(tmp_path / "none.json")
+    assert r.returncode == 2 and r.stderr.startswith("cell: error: ")
+    assert not (tmp_path / "none.json").exists()
