@@ -46,6 +46,9 @@ figures: install
 	rm -rf $(TMP) && mkdir -p $(TMP)
 	$(BIN)/cell calibrate --n 0 --snapshot robots/cell_scene/scene.png --replace
 	$(BIN)/cell run tasks/bins.yaml --no-log --json $(FIG)/run.json
+	sed 's/robot: panda/robot: ur10/' tasks/bins.yaml > $(TMP)/bins_ur10.yaml
+	$(BIN)/cell run $(TMP)/bins_ur10.yaml --no-log --json $(FIG)/run_ur10.json
+	$(BIN)/cell run tasks/bins_ur3.yaml --no-log --json $(FIG)/run_ur3.json
 	$(BIN)/cell synth -o $(TMP)/throws.csv --seed 0
 	$(BIN)/cell identify $(TMP)/throws.csv -o $(TMP)/ee.yaml --plot $(TMP)/identify --json > $(FIG)/identify.json
 	cp $(TMP)/identify/reach_overview.png $(FIG)/identify_reach_overview.png
