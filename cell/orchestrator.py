@@ -80,6 +80,18 @@ def _check_options(speed_scale: float, pick: str, release: str, order: str) -> N
     check_order(order)
 
 
+def _load_planning_libraries() -> None:
+    """Import what the planning of an item uses (toppra, ruckig, SciPy's least squares:
+    2 s of CPU time here) when the arm is built, not in the first item's planning: a
+    cell loads its libraries once, and an item's `plan_s` is its own planning."""
+    import scipy.optimize  # noqa: F401
+    import toppra  # noqa: F401
+
+    import cell.robot.carry  # noqa: F401
+    import cell.robot.motion  # noqa: F401
+    import cell.robot.moving_release  # noqa: F401
+
+
 class Orchestrator(
     Kinematics, Routes, Mover, Pick, Place, Planner, ReleaseChoice, GripUse, Flywheel
 ):
@@ -152,6 +164,7 @@ class Orchestrator(
         from cell.sim import BinSpec, CellScene
 
         _check_options(speed_scale, pick, release, order)  # before the scene is built
+        _load_planning_libraries()
         self.tuning = tuning
         self.speed_scale = float(speed_scale)
         self.job = job
