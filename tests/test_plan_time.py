@@ -141,3 +141,22 @@ def test_summary_figures_are_those_of_the_items() -> None:
     assert s.items_per_hour_realtime <= s.items_per_hour
     d = s.as_dict()
     assert [r["plan_s"] for r in d["results"]][:4] == plans[:4]
+
+
+def test_bench_sorts_figures_count_each_layout_as_a_run_of_its_own() -> None:
+    from cell.bench.bench_realtime import realtime_figures
+
+    def item(cycle: float, plan: float, in_bin: bool = True) -> dict[str, Any]:
+        return {"cycle_time_s": cycle, "plan_s": plan, "in_bin": in_bin}
+
+    layouts = [
+        {"items": [item(2.0, 1.0), item(2.0, 3.0)]},  # 1 + max(2, 3) + 2 = 6 s
+        {"items": [item(1.5, 0.5, False), item(2.5, 1.0)]},  # 0.5 + max(1.5, 1) + 2.5 = 4.5 s
+    ]
+    f = realtime_figures(layouts)
+    assert f["items_per_hour_realtime"] == pytest.approx(3 * 3600.0 / (6.0 + 4.5))
+    assert f["plan_s_max"] == 3.0
+    assert f["plan_s_median"] == pytest.approx(1.0)
+    assert f["cores"] >= 1
+    # a layout written before plan_s was measured: no figures rather than wrong ones
+    assert realtime_figures([{"items": [{"cycle_time_s": 2.0, "in_bin": True}]}]) == {}
