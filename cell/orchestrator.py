@@ -229,6 +229,7 @@ class Orchestrator(
         # `_approach_s`; `decide` clears them)
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
+        self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
@@ -311,6 +312,7 @@ class Orchestrator(
         will throw with, so the item sits on the band carriage as the plan assumes."""
         self._ik_memo.clear()
         self._approach_memo.clear()
+        self._approach_plans.clear()
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m
