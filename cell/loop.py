@@ -18,6 +18,10 @@ The loop scores what the plant observed (`missed_bin`), records each throw with 
 flight track in the store (`sorted_throw_record`), tells an observer, and accounts
 time honestly: an item's cycle runs from the start of its pick to the start of the
 next item's pick; `items_per_hour` counts only items at rest in their target bin.
+Beside that simulated time, the loop measures each item's planning (`plan_s`): the wall
+time [s] of its present → release other than the plant's stepping (the plant's
+`step_wall_s`; a plant that does not count it has all the wall time counted), from which
+the run's `items_per_hour_realtime` (`cell.results.realtime_cycles`).
 
 A platform that `overlaps` (the arm) starts the next pick while a thrown item flies:
 the plant steps the flying item with everything else and the loop scores it once it
@@ -183,6 +187,7 @@ class ItemLoop:
         self._flying: list[InFlight] = []  # thrown, not yet at rest
         self._scored: dict[int, ItemResult] = {}  # scored, by index, not yet reported
         self._flights: dict[int, tuple[Any, Any]] = {}  # (Outcome, landing) for the observer
+        self._plan_s: dict[int, float] = {}  # each item's planning wall time [s], by index
 
     @property
     def job(self) -> Job:
@@ -225,12 +230,29 @@ class ItemLoop:
         """One item, waiting for it to come to rest. Its `cycle_time_s` is the plant's
         time from the start of its pick until it is scored."""
         t0 = self.plant.t
-        res = self._item(index, spec)
+        res = self._timed_item(index, spec)
         if isinstance(res, InFlight):
             res = self._wait_for(res)
         if self.observer is not None and index in self._flights:
             self.observer.on_flight(index, *self._flights.pop(index))
-        return dc_replace(res, cycle_time_s=self.plant.t - t0)
+        plan_s = self._plan_s.pop(index, math.nan)
+        return dc_replace(res, cycle_time_s=self.plant.t - t0, plan_s=plan_s)
+
+    def _stepping_s(self) -> float:
+        """The wall time [s] the plant has spent stepping so far (its `step_wall_s`; 0
+        for a plant that does not count it)."""
+        return float(getattr(self.plant, "step_wall_s", 0.0))
+
+    def _timed_item(self, index: int, spec: ItemSpec) -> ItemResult | InFlight:
+        """`_item`, its planning wall time kept in `_plan_s`: the wall time of present →
+        release less the plant's stepping meanwhile (everything the cell computes for the
+        item: the decision, IK, the moves' paths, and the loop's own work)."""
+        w0, s0 = time.perf_counter(), self._stepping_s()
+        try:
+            return self._item(index, spec)
+        finally:
+            wall = time.perf_counter() - w0
+            self._plan_s[index] = max(0.0, wall - (self._stepping_s() - s0))
 
     def _item(self, index: int, spec: ItemSpec) -> ItemResult | InFlight:
         """present → decide → pick → carry → release; a throw comes back in flight."""
@@ -426,7 +448,7 @@ class ItemLoop:
         pl = self.plant
         starts: list[float] = []
         results: list[ItemResult] = []
-        self._flying, self._scored, self._flights = [], {}, {}
+        self._flying, self._scored, self._flights, self._plan_s = [], {}, {}, {}
 
         def emit(t_end: float | None = None) -> None:
             # t_end may be 0.0: a lone item that failed before the plant ran is still reported
@@ -434,7 +456,11 @@ class ItemLoop:
                 i + 1 < len(starts) or t_end is not None
             ):
                 t_next = starts[i + 1] if i + 1 < len(starts) else float(t_end or pl.t)
-                res = dc_replace(self._scored.pop(i), cycle_time_s=t_next - starts[i])
+                res = dc_replace(
+                    self._scored.pop(i),
+                    cycle_time_s=t_next - starts[i],
+                    plan_s=self._plan_s.pop(i, math.nan),
+                )
                 results.append(res)
                 if self.observer is not None:
                     if i in self._flights:
@@ -449,7 +475,7 @@ class ItemLoop:
                     self._land_kin(spec.obj)
                 starts.append(pl.t)
                 emit()
-                res = self._item(i, spec)
+                res = self._timed_item(i, spec)
                 if isinstance(res, InFlight):
                     self._flying.append(res)
                 else:

@@ -80,6 +80,18 @@ def _check_options(speed_scale: float, pick: str, release: str, order: str) -> N
     check_order(order)
 
 
+def _load_planning_libraries() -> None:
+    """Import what the planning of an item uses (toppra, ruckig, SciPy's least squares:
+    2 s of CPU time here) when the arm is built, not in the first item's planning: a
+    cell loads its libraries once, and an item's `plan_s` is its own planning."""
+    import scipy.optimize  # noqa: F401
+    import toppra  # noqa: F401
+
+    import cell.robot.carry  # noqa: F401
+    import cell.robot.motion  # noqa: F401
+    import cell.robot.moving_release  # noqa: F401
+
+
 class Orchestrator(
     Kinematics, Routes, Mover, Pick, Place, Planner, ReleaseChoice, GripUse, Flywheel
 ):
@@ -152,12 +164,14 @@ class Orchestrator(
         from cell.sim import BinSpec, CellScene
 
         _check_options(speed_scale, pick, release, order)  # before the scene is built
+        _load_planning_libraries()
         self.tuning = tuning
         self.speed_scale = float(speed_scale)
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.bounds = ThrowBounds()
         self._check_job()  # before the scene is built: a refused job leaves nothing open
+        self._probe_meshes()
         self.store = store
         self.session = session or f"run-{uuid.uuid4().hex[:8]}"
         self.robot = load_robot(job.robot)
@@ -215,7 +229,18 @@ class Orchestrator(
         # `_approach_s`; `decide` clears them)
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
+        self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._placing = False  # the item carried is to be placed (carry_hold)
+
+    def _probe_meshes(self) -> None:
+        """Probe the grip of each kind of mesh item the job holds once, as the job is
+        loaded (`mesh_grip`: the scene's grip probe, remembered per object and stroke),
+        not in the first such item's planning (1.7 s of CPU time a kind here): a cell
+        measures what it will handle before it starts. The same probe, the same hold."""
+        from cell.arm.grip_limits import mesh_grip
+
+        for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape == "mesh"):
+            mesh_grip(self.params, obj)
 
     def _check_job(self) -> None:
         """Refuse the job before it starts if an item cannot be gripped or its bin is
@@ -293,6 +318,7 @@ class Orchestrator(
         will throw with, so the item sits on the band carriage as the plan assumes."""
         self._ik_memo.clear()
         self._approach_memo.clear()
+        self._approach_plans.clear()
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m

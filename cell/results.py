@@ -6,7 +6,9 @@ a sort throw. The item loop (`cell.loop`) scores with these; `cell.loop` re-expo
 from __future__ import annotations
 
 import math
+import os
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -26,10 +28,14 @@ __all__ = [
     "FAILURES",
     "ItemResult",
     "RunSummary",
+    "WALL_CLOCK_KEYS",
+    "cores",
     "failure_of",
     "landing",
     "missed_bin",
+    "plan_figures",
     "rate_per_hour",
+    "realtime_cycles",
     "sorted_throw_record",
     "summarise",
 ]
@@ -80,6 +86,11 @@ class ItemResult:
         cycle_time_s: simulated time for this item [s] (see the module docstring).
         throw_id: the log id of the throw ("" for places and failures).
         moving: the latch opened while the platform moved (a release on the move).
+        plan_s: the wall time [s] the cell spent on this item other than stepping the
+            plant: deciding and planning it (the throw's release search, IK, the moves'
+            paths), and the loop's own work while it was handled (`cell.loop.ItemLoop`);
+            NaN where it was not measured. A wall-clock figure: it differs run to run
+            (`WALL_CLOCK_KEYS`).
     """
 
     index: int
@@ -96,11 +107,19 @@ class ItemResult:
     cycle_time_s: float = 0.0
     throw_id: str = ""
     moving: bool = False
+    plan_s: float = math.nan
 
 
 @dataclass(frozen=True)
 class RunSummary:
-    """The closing table of a run (JSON keys as `cell run --json`)."""
+    """The closing table of a run (JSON keys as `cell run --json`).
+
+    The planning figures are wall-clock ones (`WALL_CLOCK_KEYS`): `plan_s_median`,
+    `plan_s_p95`, `plan_s_max` [s] of the items' `plan_s`, on a machine of `cores`
+    CPU cores (`cores`); `items_per_hour_realtime` counts the items in their bins per
+    hour of the run's real-time cycles (`realtime_cycles`: planning not hidden behind
+    the arm's previous move added), beside `items_per_hour` of simulated time.
+    """
 
     items: int
     placed: int
@@ -116,6 +135,11 @@ class RunSummary:
     wall_time_s: float
     results: list[ItemResult] = field(default_factory=list)
     failures: dict[str, int] = field(default_factory=dict)
+    plan_s_median: float = math.nan
+    plan_s_p95: float = math.nan
+    plan_s_max: float = math.nan
+    items_per_hour_realtime: float = math.nan
+    cores: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values, item results as a list of dicts."""
@@ -128,6 +152,74 @@ def rate_per_hour(in_bin: int, sim_time_s: float) -> float:
     """Items at rest in their bin per hour of `sim_time_s` [s] of arm time (0 with none):
     the `items_per_hour` of a run, a campaign and its floor (`cell.bench.bench_sort`)."""
     return 3600.0 * in_bin / sim_time_s if sim_time_s > 0 else 0.0
+
+
+# The keys of `cell run --json` (and of `cell bench`'s figures) that are wall-clock
+# measurements of this machine, not results of the job: they differ run to run, while
+# everything else is the same bytes in any process (tests/test_same_result.py).
+WALL_CLOCK_KEYS = (
+    "wall_time_s",
+    "plan_s",
+    "plan_s_median",
+    "plan_s_p95",
+    "plan_s_max",
+    "items_per_hour_realtime",
+    "cores",
+)
+
+
+def cores() -> int:
+    """The CPU cores this process may run on (its affinity where the OS says, else
+    `os.cpu_count()`): the machine the planning times were measured on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def realtime_cycles(cycles_s: Sequence[float], plans_s: Sequence[float]) -> list[float]:
+    """The items' real-time cycles [s]: each item's simulated cycle, lengthened by the
+    planning of the next item that the arm's motion does not hide.
+
+    The model: the cell plans item n+1 on another core while the arm executes item n
+    (the planner is one item ahead, as a real cell's would be: a plan needs the arm's
+    pose after the previous item, which that item's plan gives). Item n's motion starts
+    at S(n); the plan of item n+1, started then, is ready at S(n) + plan_s(n+1); item
+    n+1's motion starts when both the arm is free and its plan is ready:
+
+        S(n+1) = S(n) + max(cycle(n), plan_s(n+1))
+
+    so item n's real-time cycle is max(cycle(n), plan_s(n+1)), the last item's its
+    simulated cycle (no item after it). The first item's plan is hidden behind nothing:
+    it is added to the first item's cycle, S(0) = plan_s(0). A plan not measured (NaN)
+    counts as 0. Each real-time cycle is at least the simulated one, so the real-time
+    rate is never above the simulated one. docs/realtime.md says more.
+
+    Args:
+        cycles_s: each item's simulated pick-to-pick cycle [s] (`ItemResult.cycle_time_s`).
+        plans_s: each item's planning wall time [s] (`ItemResult.plan_s`), same length.
+    """
+    if len(cycles_s) != len(plans_s):
+        raise ValueError(f"{len(cycles_s)} cycles but {len(plans_s)} planning times")
+    if not plans_s:
+        return []
+    plans = [float(p) if math.isfinite(p) else 0.0 for p in plans_s]
+    out = [max(float(c), nxt) for c, nxt in zip(cycles_s, [*plans[1:], 0.0], strict=True)]
+    out[0] += plans[0]
+    return out
+
+
+def plan_figures(results: Sequence[ItemResult]) -> dict[str, float]:
+    """{plan_s_median, plan_s_p95, plan_s_max} [s] of the items' measured `plan_s`
+    (NaN each where none was measured)."""
+    p = np.array([r.plan_s for r in results if math.isfinite(r.plan_s)], float)
+    if not p.size:
+        return {"plan_s_median": math.nan, "plan_s_p95": math.nan, "plan_s_max": math.nan}
+    return {
+        "plan_s_median": float(np.median(p)),
+        "plan_s_p95": float(np.percentile(p, 95)),
+        "plan_s_max": float(p.max()),
+    }
 
 
 def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
@@ -152,6 +244,12 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
         wall_time_s=wall_time_s,
         results=list(results),
         failures={k: c for k in FAILURES if (c := sum(r.failure == k for r in results))},
+        **plan_figures(results),
+        items_per_hour_realtime=rate_per_hour(
+            in_bin,
+            sum(realtime_cycles([r.cycle_time_s for r in results], [r.plan_s for r in results])),
+        ),
+        cores=cores(),
     )
 
 

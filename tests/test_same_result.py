@@ -15,6 +15,7 @@ import pytest
 from cell.bench.bench_sort import LAYOUT_SETS, LayoutUnit, first_seed, run_layout
 from cell.cli import main
 from cell.errors import InvalidInput
+from cell.results import WALL_CLOCK_KEYS
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -33,10 +34,13 @@ items:
 
 
 def _canonical(path: Path) -> str:
-    """The run's JSON without what names the run (its throw ids) and its wall time."""
+    """The run's JSON without what names the run (its throw ids) and its wall-clock
+    figures (`WALL_CLOCK_KEYS`: its wall time, the items' planning times)."""
     d = json.loads(path.read_text())
-    d.pop("wall_time_s")
+    for k in WALL_CLOCK_KEYS:  # the wall time, the planning times and what they give
+        d.pop(k, None)
     for r in d["results"]:
+        r.pop("plan_s")
         tid = r.pop("throw_id")  # a throw's: run-<this run's id>-<item>; a place has none
         assert tid.startswith("run-") if r["action"] == "throw" else tid == ""
     return json.dumps(d, indent=2)

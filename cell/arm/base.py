@@ -63,6 +63,7 @@ class ArmBase:
     _placing: bool
     _ik_memo: dict[tuple[bytes, ...], Any]
     _approach_memo: dict[tuple[Any, ...], float]
+    _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
 
     if TYPE_CHECKING:  # the parts call each other through the facade that joins them
 

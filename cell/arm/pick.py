@@ -61,11 +61,29 @@ class Pick(ArmBase):
         over the pick, then down the straight joint-space segment onto the item
         (`plan_approach`). Taken only if, until that point, the grip stays at least that
         high wherever it is over the station or within the grip's reach of it
-        (`_keeps_over_station`); else (or when no IK or move is found) (None, why)."""
+        (`_keeps_over_station`); else (or when no IK or move is found) (None, why).
+        Remembered until the next decision (`decide` clears it, as `_approach_s`): the
+        decision times the approach the pick then takes, from the same configurations."""
+        q0 = self.q if q_from is None else q_from
+        p_item = self.scene.item_position(item)
+        key = (
+            *(np.asarray(q, float).tobytes() for q in (q0, q_pick)),
+            p_item.tobytes(),
+            stroke,
+            obj,
+            self._frame,
+        )
+        if key not in self._approach_plans:
+            self._approach_plans[key] = self._plan_approach(p_item, stroke, obj, q_pick, q0)
+        return self._approach_plans[key]
+
+    def _plan_approach(
+        self, p_item: np.ndarray, stroke: float, obj: ObjectParams, q_pick: np.ndarray, q0: Any
+    ) -> tuple[Any, str]:
+        """`_approach_plan` for the item at p_item [m, W], from q0 [rad], planned."""
         from cell.robot.motion import plan_approach
 
         over = self.scene.geometry.pad_length_m + self.tuning.pick_over_clearance_m
-        p_item = self.scene.item_position(item)
         try:
             tcp = self._tcp_for_item_centre(
                 p_item + np.array([0, 0, over]), *GRIP_DOWN, stroke, obj
@@ -74,7 +92,7 @@ class Pick(ArmBase):
             if joint_gap(q_pick, q_over) > self.tuning.lift_max_dq_rad:  # another IK branch
                 return None, "the point over the pick is on another IK branch"
             traj = plan_approach(
-                self.q if q_from is None else q_from,
+                q0,
                 q_over,
                 q_pick,
                 self.robot,

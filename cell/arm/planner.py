@@ -60,6 +60,13 @@ class ThrowChoice:
     goal: np.ndarray | None = None
 
 
+def _sooner_beat(a: float | None, b: float | None) -> float | None:
+    """The sooner of two cycle estimates to beat [s] (None: none)."""
+    if a is None:
+        return b
+    return a if b is None else min(a, b)
+
+
 def soonest_of(found: list[ThrowChoice]) -> ThrowChoice:
     """Of the plans `found` in the release bounds in `Planner._release_bounds`' order, the
     first, unless a later one's cycle estimate is sooner and its route asks no more of
@@ -95,7 +102,9 @@ class Planner(ArmBase):
         turned = self._facing_toward_station(target)
         for facing in (None,) if turned is None else (None, turned):
             try:
-                r = self._plan_facing(obj, goal, target, index, stroke_max_m, facing)
+                r = self._plan_facing(
+                    obj, goal, target, index, stroke_max_m, facing, self._to_beat(best)
+                )
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
                 continue
@@ -111,6 +120,17 @@ class Planner(ArmBase):
             raise err
         # where it should cross the rim plane
         return dc_replace(best, goal=np.asarray(goal, float))
+
+    @staticmethod
+    def _to_beat(best: ThrowChoice | None) -> float | None:
+        """The cycle estimate [s] the next facing's plan must beat to be kept (`_plan`
+        keeps it only where its cost is below `best`'s), or None: nothing planned yet, no
+        estimate, or `best` asks more of the grip than it holds (then any release that
+        does not wins, whatever its time). `_release_search` need not time a candidate
+        that cannot beat it: the same choice, found sooner."""
+        if best is None or best.cost is None or best.cost[0]:
+            return None
+        return best.cost[1]
 
     def _facing_toward_station(self, target: Any) -> float | None:
         """The azimuth [rad, W] the arm faces at a throw's release if it turns from the
@@ -160,6 +180,7 @@ class Planner(ArmBase):
         index: int,
         stroke_max_m: float,
         facing: float | None,
+        beat: float | None = None,
     ) -> ThrowChoice:
         """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), with
         the release's cycle estimate (`_release_q`; None where none was made).
@@ -172,7 +193,9 @@ class Planner(ArmBase):
         three eggs took up to 8.6 s a cycle released in the cell's bounds, 2.48 s each
         released lower, where the carry's grip bound is far less tight. Where none of these
         is reached, the plan is made in a smaller release box (RELEASE_BOX_SHRINKS), the
-        first reached kept.
+        first reached kept. `beat` [s]: a cycle estimate the caller already has (`_plan`'s
+        other facing, `_to_beat`): a candidate that cannot beat it is not timed, in any of
+        the release bounds (their own `_beat` too), where the cycle is searched.
         """
         err: CellError | None = None
         ordinary, shrunk = self._release_bounds(target)
@@ -189,7 +212,7 @@ class Planner(ArmBase):
                             index,
                             stroke_max_m,
                             dc_replace(bounds, facing_rad=facing),
-                            self._beat(found),
+                            _sooner_beat(self._beat(found), beat),
                         )
                     )
                 except (UnreachableTarget, IKFailed) as exc:

@@ -275,14 +275,11 @@ class Routes(ArmBase):
         motion (`carry`)."""
         lo, hi = self.scene.pick_station_bounds()
         reach = self._grip_reach_m()
-        p0 = self.robot.tcp_pose(qs[0])[0]
-        for q in qs:
-            p = self.robot.tcp_pose(q)[0]
-            near = np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach)
-            side = float(np.hypot(*(p[:2] - p0[:2])))
-            if near and p[2] - p0[2] < min(self.tuning.departure_clear_m, side) - 1e-3:
-                return False
-        return True
+        p = self.robot.tcp_positions(qs)  # every configuration's at once, then the test
+        near = np.all(p[:, :2] > lo[:2] - reach, axis=1) & np.all(p[:, :2] < hi[:2] + reach, axis=1)
+        side = np.hypot(p[:, 0] - p[0, 0], p[:, 1] - p[0, 1])
+        low = p[:, 2] - p[0, 2] < np.minimum(self.tuning.departure_clear_m, side) - 1e-3
+        return not bool(np.any(near & low))
 
     def _grip_reach_m(self) -> float:
         """How far [m] the grip reaches out from its centre, horizontally: the carriage's
@@ -298,12 +295,9 @@ class Routes(ArmBase):
         lo, hi = sc.pick_station_bounds()
         reach = self._grip_reach_m()
         ts = np.arange(0.0, traj.duration + sc.dt_s, sc.dt_s)
-        for q in traj.sample_many(ts)[0]:
-            p = self.robot.tcp_pose(q)[0]
-            near = np.all(p[:2] > lo[:2] - reach) and np.all(p[:2] < hi[:2] + reach)
-            if near and p[2] < z_min - 1e-3:
-                return False
-        return True
+        p = self.robot.tcp_positions(traj.sample_many(ts)[0])
+        near = np.all(p[:, :2] > lo[:2] - reach, axis=1) & np.all(p[:, :2] < hi[:2] + reach, axis=1)
+        return not bool(np.any(near & (p[:, 2] < z_min - 1e-3)))
 
     def _release_branch(
         self, q_lift: np.ndarray, q_rel: np.ndarray, chosen: Any, tcp: np.ndarray, plan: Any

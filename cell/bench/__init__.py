@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 __all__ = ["BENCHES", "available"]
 
-BENCHES = ("predict", "identify", "plan", "robot", "gap", "scene_reach", "ray")
+BENCHES = ("predict", "identify", "plan", "robot", "gap", "scene_reach", "ray", "realtime")
 
 
 def available() -> dict[str, Callable[[bool], dict[str, float]]]:

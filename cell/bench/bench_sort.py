@@ -216,6 +216,7 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
                 "landing_error_m": float(r.landing_error_m),
                 "cycle_time_s": float(r.cycle_time_s),
                 "moving": bool(r.moving),
+                "plan_s": float(r.plan_s),  # wall time (cell.results.WALL_CLOCK_KEYS)
             }
         )
         if unit.floor:
@@ -239,6 +240,7 @@ def wilson_interval(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
 
 def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
     """The campaign's figures (flat JSON) from `run_layout` results."""
+    from cell.bench.bench_realtime import realtime_figures
     from cell.orchestrator import FAILURES
 
     items = [it for lay in layouts for it in lay["items"]]
@@ -264,6 +266,7 @@ def summarise_layouts(layouts: list[dict[str, Any]]) -> dict[str, Any]:
         "in_bin_rate_unseen_lo": ulo,
         "in_bin_rate_unseen_hi": uhi,
         "items_per_hour": rate_per_hour(k, sim),
+        **realtime_figures(layouts),
         **floor_figures(items),
         "median_landing_error_m": errs[len(errs) // 2] if errs else math.nan,
         "sim_time_s": sim,

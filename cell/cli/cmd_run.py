@@ -372,6 +372,15 @@ def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
         ("mean cycle time", _fmt(s.mean_cycle_time_s, " s (simulated)", 2)),
         ("items per hour", f"{s.items_per_hour:,.0f} (simulated time)"),
         ("wall time", _fmt(s.wall_time_s, " s", 1)),
+        (
+            "planning per item",
+            f"median {_fmt(s.plan_s_median, ' s', 2)}, p95 {_fmt(s.plan_s_p95, ' s', 2)}, "
+            f"max {_fmt(s.plan_s_max, ' s', 2)} (wall time, {s.cores} cores)",
+        ),
+        (
+            "real-time items/h",
+            f"{s.items_per_hour_realtime:,.0f} (planning overlapped, docs/realtime.md)",
+        ),
     ]
     if store is not None:
         rows.append(("throw log", f"{store.path}"))

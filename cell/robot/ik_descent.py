@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.linalg import _umath_linalg  # type: ignore[attr-defined]
 
 from cell.robot.ik_pose import ReleasePose, _axis_error, _log3
 from cell.robot.model import Robot
@@ -169,6 +170,14 @@ def _orientation_error(d: _Descent, r: np.ndarray) -> tuple[np.ndarray, float, f
     return w, th, ang
 
 
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """x with a x = b for the descent's damped a (J Jᵀ + λ² I, λ > 0: symmetric positive
+    definite, never singular): LAPACK's gesv, the routine `np.linalg.solve` calls, called
+    directly (bitwise the same result without its checks, a quarter of its time; the
+    descent makes ~15,000 such solves a throw's planning)."""
+    return _umath_linalg.solve1(a, b, signature="dd->d")  # type: ignore[no-any-return]
+
+
 def _dls_step(
     d: _Descent,
     jac: np.ndarray,
@@ -201,9 +210,9 @@ def _dls_step(
         # J⁺e + (I - J⁺J) z = z + J⁺(e - J z), with J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹. The
         # pull stops halfway: at a joint limit it can fight the clamp.
         z0 = d.null_gain * (d.q_cur - q)
-        dq = z0 + jt.T @ np.linalg.solve(a, err - jt @ z0)
+        dq = z0 + jt.T @ _solve(a, err - jt @ z0)
     else:
-        dq = jt.T @ np.linalg.solve(a, err)
+        dq = jt.T @ _solve(a, err)
     step = float(np.max(np.abs(dq)))
     if step > 0.5:
         dq *= 0.5 / step

@@ -114,6 +114,19 @@ class Robot:
         oMf = self.data.oMf[self.tcp_frame]
         return np.array(oMf.translation), np.array(oMf.rotation)
 
+    def tcp_positions(self, qs: np.ndarray) -> np.ndarray:
+        """The grip centre's position [m, W] at each configuration of qs [rad], shape
+        (k, n) → (k, 3): `tcp_pose`'s positions, without copying the rotations."""
+        import pinocchio as pin
+
+        qs = np.asarray(qs, dtype=float)
+        out = np.empty((len(qs), 3))
+        model, data, fid = self.model, self.data, self.tcp_frame
+        for i, q in enumerate(qs):
+            pin.framesForwardKinematics(model, data, q)
+            out[i] = data.oMf[fid].translation
+        return out
+
     def throw_axis(self, q: np.ndarray) -> np.ndarray:
         """The throw axis u (ee_tcp's +z) in W at configuration q, shape (3,)."""
         return self.tcp_pose(q)[1][:, 2]

@@ -15,6 +15,7 @@ the landing of a planned throw, which the closed form of the parabola checks exa
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -68,6 +69,7 @@ class KinematicPlant:
         self.dt_s = float(dt_s)
         self.items: list[KinematicItem] = []
         self._steps = 0  # the clock counts steps: t is the same however it was reached
+        self.step_wall_s = 0.0  # wall time [s] spent stepping (the loop's `plan_s` is the rest)
 
     @property
     def t(self) -> float:
@@ -105,11 +107,13 @@ class KinematicPlant:
     def step(self, n: int = 1) -> None:
         """Advance the time n steps; every item in flight moves along its parabola, and
         rests where its centre comes down to the surface under it."""
+        t0 = time.perf_counter()
         for _ in range(n):
             self._steps += 1
             for item in self.items:
                 if item.released is not None and item.rest is None:
                     self._fly(item)
+        self.step_wall_s += time.perf_counter() - t0
 
     def _fly(self, item: KinematicItem) -> None:
         assert item.released is not None

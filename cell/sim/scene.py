@@ -22,6 +22,7 @@ the kept items (`cell.sim.station`) and watching a released item (`cell.sim.watc
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -115,6 +116,10 @@ class CellScene:
         self.floor = int(cl.loadURDF("plane.urdf"))
         cl.changeDynamics(self.floor, -1, lateralFriction=0.6, restitution=0.1)
         self.t = 0.0
+        # the wall time [s] spent stepping the physics and setting the arm along its
+        # moves (`step`, `set_arm`): the item loop's planning time is the rest (`plan_s`)
+        self.step_wall_s = 0.0
+        self._stepping = 0  # nesting depth of the calls counted in step_wall_s
         self.bins = tuple(bins)
         self.bin_bodies = {b.id: build_bin(cl, b) for b in self.bins}
         self.pick_station_xy = pick_station_xy
@@ -161,13 +166,25 @@ class CellScene:
             raise InvalidInput(
                 f"arm configuration needs {len(self.arm_joints)} values, got {len(q)}"
             )
-        cl = self.client
-        for j, v in zip(self.arm_joints, q, strict=True):
-            cl.resetJointState(self.arm, j, float(v))
-        st = cl.getLinkState(self.arm, self._flange, computeForwardKinematics=True)
-        # E, the base plate's face, lies FLANGE_TO_EE_M along ee_base's z
-        pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
-        self.hold_ee(pos, orn, teleport=teleport)
+        t0 = time.perf_counter()
+        self._stepping += 1
+        try:
+            cl = self.client
+            for j, v in zip(self.arm_joints, q, strict=True):
+                cl.resetJointState(self.arm, j, float(v))
+            st = cl.getLinkState(self.arm, self._flange, computeForwardKinematics=True)
+            # E, the base plate's face, lies FLANGE_TO_EE_M along ee_base's z
+            pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
+            self.hold_ee(pos, orn, teleport=teleport)
+        finally:
+            self._count_wall(t0)
+
+    def _count_wall(self, t0: float) -> None:
+        """Leave a call counted in `step_wall_s` that began at perf_counter() = t0 [s]:
+        only the outermost call adds its wall time."""
+        self._stepping -= 1
+        if self._stepping == 0:
+            self.step_wall_s += time.perf_counter() - t0
 
     def set_arm_motion(self, q_of_t: Callable[[float], Sequence[float]] | None) -> None:
         """Drive the arm on every physics step by q = q_of_t(t) [rad], t the scene time [s].
@@ -367,16 +384,21 @@ class CellScene:
     def step(self, n: int = 1) -> None:
         """Advance n physics steps: band law, drag on every item, then the physics."""
         cl = self.client
-        for _ in range(n):
-            if self._arm_motion is not None:
-                self.set_arm(self._arm_motion(self.t))
-            self.band.apply(self._dt_now)
-            for it in self.items:
-                if it.body not in self._kept:
-                    apply_drag(cl, it.body, it.drag_c)
-            cl.stepSimulation()
-            self.t += self._dt_now
-            watch.sample_trackers(self)
+        t0 = time.perf_counter()
+        self._stepping += 1
+        try:
+            for _ in range(n):
+                if self._arm_motion is not None:
+                    self.set_arm(self._arm_motion(self.t))
+                self.band.apply(self._dt_now)
+                for it in self.items:
+                    if it.body not in self._kept:
+                        apply_drag(cl, it.body, it.drag_c)
+                cl.stepSimulation()
+                self.t += self._dt_now
+                watch.sample_trackers(self)
+        finally:
+            self._count_wall(t0)
 
     def refresh_contacts(self, item: Item) -> None:
         """Drop the cached contacts between the end-effector and `item`, then step once;
