@@ -419,3 +419,11 @@ def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dic
     _as_written(found, br["params"]["bounce"]["inv_mu"])
     _as_written(measured, br["world_truth"]["inv_mu"])
     close(a_f, br["after_over_floor"], 2)
+
+
+# -- docs/realtime.md ------------------------------------------------------------------------
+def check_the_realtime_page() -> None:
+    from cell.bench.bench_realtime import LAYOUT_SEEDS
+
+    a, b = quoted("docs/realtime.md", r"on test layouts (\d+) and (\d+)")
+    assert (int(a), int(b)) == LAYOUT_SEEDS

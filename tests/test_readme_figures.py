@@ -35,6 +35,7 @@ from tests.figure_checks_pages import (
     check_the_arms_page,
     check_the_gap_scene_prose,
     check_the_gap_scene_table,
+    check_the_realtime_page,
     check_the_ur3_reach,
 )
 from tests.figure_quotes import (
@@ -377,6 +378,7 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_gap_laws,
     check_the_arms_page,
     check_the_ur3_reach,
+    check_the_realtime_page,
     check_the_gap_scene_table,
     check_the_gap_scene_prose,
 )
