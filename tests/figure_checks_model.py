@@ -3,7 +3,7 @@ the guide pages quote (run by tests/test_readme_figures.py)."""
 
 from __future__ import annotations
 
-from tests.figure_quotes import close, every, load_json, num, quoted
+from tests.figure_quotes import ROOT, close, every, load_json, num, quoted
 
 
 # -- cell bench ------------------------------------------------------------------------------
@@ -161,6 +161,14 @@ def check_the_gap_check() -> None:
     assert (int(passes), int(cases)) == (other["passes"], other["total"])
     assert int(n) == int(quoted("docs/gap_laws.md", r"--worlds other --n (\d+) --workers")[0])
     assert (int(right), int(total)) == (check["correct"], check["total"])
+    scene = load_json("docs/figures/gap_check_scene.json")
+    passes, cases, n = quoted(
+        "README.md",
+        r"\| (\d+) of (\d+) cases pass \(\[why the others fail\]\(docs/gap_scene.md\)\) \| "
+        r"`cell gap check --worlds scene --n (\d+)",
+    )
+    assert (int(passes), int(cases)) == (scene["passes"], scene["total"])
+    assert f"--worlds scene --n {n} --workers" in (ROOT / "Makefile").read_text()
 
 
 def check_the_scene_gap() -> None:
