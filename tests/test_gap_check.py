@@ -15,7 +15,7 @@ def test_check_reduced_set_is_diagonal() -> None:
     # the full set is run by `make figures` (docs/figures/gap_check.json, test_gap_readme.py);
     # here a launch effect, none and an effect outside the vocabulary
     truths = ("stroke_offset", "none", "unknown")
-    cases = make_cases(truths, n=200, seed=1)
+    cases = make_cases(truths, n=100, seed=1)
     rows = []
     for case in cases:
         # a case and its result are plain data: they can be shipped to a worker and back

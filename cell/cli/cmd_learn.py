@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -191,6 +192,7 @@ def _fit(
                 progress=step,
                 workers=args.workers,
                 address=args.ray_address,
+                jobs=os.cpu_count() or 1,  # in this process: whole fits one per core
             )
     model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
     return summary, model

@@ -255,6 +255,22 @@ def _summary(name: str, results: list[FoldResult]) -> LearnerSummary:
     return out
 
 
+def _fit_in_processes(
+    units: list[FitUnit], jobs: int, done: Callable[[int, Any], None]
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, ResidualModel]]:
+    """`fit_fold` on every unit, `jobs` at a time in joblib's processes; results in
+    unit order. A whole fit (its grid search and its refit) runs in one process, so
+    the refits, which a grid search runs one at a time, overlap too."""
+    from joblib import Parallel, delayed
+
+    out = []
+    fits = Parallel(n_jobs=jobs, return_as="generator")(delayed(fit_fold)(u) for u in units)
+    for i, r in enumerate(fits):  # a joblib process's own grid searches run one fit at a time
+        out.append(r)
+        done(i, r)
+    return out
+
+
 def round_robin(
     data: TrainingData,
     *,
@@ -266,6 +282,7 @@ def round_robin(
     progress: Callable[[str], None] | None = None,
     workers: int = 1,
     address: str | None = None,
+    jobs: int = 1,
 ) -> dict[str, LearnerSummary]:
     """Table 5.1: the round-robin evaluation of each learner.
 
@@ -279,6 +296,9 @@ def round_robin(
         progress: called with a short text after each fit (the CLI's progress bar).
         workers, address: fit on Ray (cell.parallel), one fit (learner × fold) a unit;
             the same table as in this process (every fit is seeded).
+        jobs: in this process (workers 1, no address), how many fits (learner × fold)
+            run at a time, one per joblib process (each fit alone inside, its grid
+            search and refit on one core); the same table as one at a time (seeded).
 
     Returns:
         learner name -> its summary.
@@ -296,15 +316,18 @@ def round_robin(
             u = units[i]
             progress(f"{u.learner} held out {', '.join(u.fold.held_out)}")
 
-    fits = run_campaign(
-        fit_fold,
-        units,
-        workers=workers,
-        address=address,
-        desc="round-robin",
-        on_result=done,
-        progress=False,
-    )
+    if jobs > 1 and workers == 1 and not address:
+        fits = _fit_in_processes(units, jobs, done)
+    else:
+        fits = run_campaign(
+            fit_fold,
+            units,
+            workers=workers,
+            address=address,
+            desc="round-robin",
+            on_result=done,
+            progress=False,
+        )
     out: dict[str, LearnerSummary] = {}
     for name in learners:
         results: list[FoldResult] = []
