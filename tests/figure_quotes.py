@@ -15,7 +15,6 @@ ROOT = Path(__file__).resolve().parents[1]
 # docs/ (a new page is covered as soon as it exists), but for the exemptions below
 NOT_CHECKED = (
     "docs/HISTORY.md",  # a dated record of past measurements at named commits
-    "docs/learn_speed.md",  # the same: cell learn's grid and time measured at named commits
 )
 PAGES = ("README.md",) + tuple(
     p

@@ -55,7 +55,7 @@ def test_bad_learner_input_is_rejected():
 def test_the_medium_grid_is_the_full_one_with_fewer_candidates_and_the_same_estimators():
     """`cell learn`'s default grid searches a subset of the full grid's hyper-parameters
     with the full grid's estimators, so a choice the full search makes from that subset
-    is the same model (docs/learn_speed.md: the example's unseen-object figures are)."""
+    is the same model (docs/HISTORY.md: the example's unseen-object figures are)."""
     from cell.residual.learners import GRIDS, LEARNERS
 
     for name in LEARNERS:

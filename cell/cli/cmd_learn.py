@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="medium",
         help=(
             "hyper-parameter grids (medium: full's estimators, without the candidates the "
-            "inner CV never chose on 865-throw campaigns; docs/learn_speed.md)"
+            "inner CV never chose on 865-throw campaigns; docs/HISTORY.md)"
         ),
     )
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")

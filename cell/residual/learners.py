@@ -31,7 +31,7 @@ LEARNERS = ("svr", "rf", "mlp")
 # name -> grid size -> parameter grid of the pipeline step "reg". "medium" is "full" without
 # the candidates the inner CV never chose on 865-throw campaigns and that cost the most
 # (SVR's γ 0.03 and "scale", ε 0.02; the forest's 5-throw leaves; the network's α 0.1):
-# docs/learn_speed.md
+# docs/HISTORY.md
 GRIDS: dict[str, dict[str, dict[str, list[Any]]]] = {
     "svr": {
         "small": {"reg__C": [10.0, 100.0], "reg__epsilon": [0.05], "reg__gamma": [0.003, 0.01]},
@@ -96,7 +96,7 @@ def make_pipeline(name: str, *, grid: str = "full", seed: int = 0) -> Any:
     Args:
         name: one of LEARNERS.
         grid: "small" (fast, for tests; smaller estimators too), "medium" or "full" (the
-            full-size estimators; medium searches fewer hyper-parameters, docs/learn_speed.md).
+            full-size estimators; medium searches fewer hyper-parameters, docs/HISTORY.md).
         seed: random state of the forest and the network.
 
     Raises:
