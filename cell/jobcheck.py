@@ -8,8 +8,8 @@ calls these; every problem goes into the one report the job is refused with).
   (the shortest item gripped at the shortest stroke; the tallest at the longest), as the
   pick solves it (`reach_problems`; the lift over the pick is lowered where the arm
   does not reach it, `cell.arm.kinematics`).
-* A bin placed into out of the arm's reach: the bins the job places into (every bin
-  under `policy: place`, those within `limits.place_reach_m` under `auto`), IK of the
+* A bin placed into out of the arm's reach: every bin under `policy: place` (an error),
+  those within `limits.place_reach_m` under `auto` (a warning: its items fail), IK of the
   grip pointing down over the bin's point nearest the base (3 cm in from its walls),
   the tallest item bound there held over the rim.
 """
@@ -215,23 +215,35 @@ def _nearest_point(b: Any) -> tuple[float, float]:
     return (x, y)
 
 
-def job_problems(job: Any, where: dict[str, str], *, reach: bool = True) -> list[str]:
+def job_problems(
+    job: Any, where: dict[str, str], *, reach: bool = True
+) -> tuple[list[str], list[str]]:
     """What the job asks of its arm that it cannot do: a bin under the station, and (with
     `reach`, once nothing else is wrong) the station and the bins placed into out of the
     arm's reach.
+
+    A bin out of place reach is an error under `policy: place`; under `auto` (the cell
+    places into a bin within `limits.place_reach_m`) it is a warning, since a job may
+    hold such a bin on purpose and its items then fail one by one (`ik`), each recorded.
 
     Args:
         job: the job (`cell.jobs.Job`, on the arm platform).
         where: "cell", "pick_station", "bins[i]" -> "file, line N".
         reach: check the arm's reach (IK) too.
+
+    Returns:
+        (errors, warnings), each one message a problem.
     """
     out = station_problems(job.pick_position, job.bins, where)
+    warnings: list[str] = []
     if reach and not out:
-        placed = [
+        chosen = [
             i
             for i, b in enumerate(job.bins)
-            if job.policy == "place"
-            or (job.policy == "auto" and math.hypot(*b.position) <= job.place_reach_m)
+            if job.policy == "auto" and math.hypot(*b.position) <= job.place_reach_m
         ]
-        out += reach_problems(job.robot, job.pick_position, job.bins, job.items, placed, where)
-    return out
+        placed = list(range(len(job.bins))) if job.policy == "place" else chosen
+        for msg in reach_problems(job.robot, job.pick_position, job.bins, job.items, placed, where):
+            auto = any(f"bins[{i}].position_m: " in msg for i in chosen)
+            (warnings if auto else out).append(msg)
+    return out, warnings

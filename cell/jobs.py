@@ -458,12 +458,14 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         rotor_rpm=cell.rotor_rpm,
         base_speed_mps=cell.base_speed_mps,
     )
+    reach_warnings: list[str] = []
     if cell.platform == "arm":
         from cell.jobcheck import job_problems
 
-        errors.messages += job_problems(job, _where(job, tree, top), reach=check_reach)
+        problems, reach_warnings = job_problems(job, _where(job, tree, top), reach=check_reach)
+        errors.messages += problems
     errors.raise_all()
-    return replace(job, warnings=_unsorted_warning(job))
+    return replace(job, warnings=_unsorted_warning(job) + tuple(reach_warnings))
 
 
 def load_job(path: str | Path) -> Job:

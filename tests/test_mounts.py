@@ -5,6 +5,7 @@ before it runs (every error in one report); the UR3 and the UR10 sort in the sce
 from __future__ import annotations
 
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -222,13 +223,16 @@ def test_a_bin_under_the_station_and_a_place_out_of_reach_are_refused() -> None:
             for ln in lines
         )
     # the UR3 under auto with the default place reach (0.75 m) would place into a bin it
-    # cannot reach: refused, the place reach to lower named
+    # cannot reach: a warning (its items fail, each recorded), the place reach to lower named;
+    # under policy: place the same bin is refused
     ur3 = (ROOT / "tasks" / "bins_ur3.yaml").read_text()
     far_tote = ur3.replace("[0.00, -0.42]", "[0.00, -0.70]").replace(
         "place_reach_m: 0.5", "place_reach_m: 0.75"
     )
-    with pytest.raises(JobError, match=r"cannot place into bin 'tote_b'.*place_reach_m below 0.70"):
-        parse_job(far_tote, "j.yaml")
+    (warning,) = parse_job(far_tote, "j.yaml").warnings
+    assert re.search(r"cannot place into bin 'tote_b'.*place_reach_m below 0.70", warning)
+    with pytest.raises(JobError, match=r"cannot place into bin 'tote_b'"):
+        parse_job(far_tote.replace("policy: auto", "policy: place"), "j.yaml")
 
 
 def test_max_items_below_the_items_listed_warns_how_many_are_left() -> None:

@@ -188,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     from cell.errors import HardwareError, InvalidInput
 
     job = load_job(args.job)
-    for warning in job.warnings:  # limits.max_items leaves items unsorted
+    for warning in job.warnings:  # items left unsorted, a bin auto would place into out of reach
         print(f"cell: warning: {warning}", file=sys.stderr)
     if not 0.0 < args.speed_scale <= 1.0:
         raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
