@@ -304,7 +304,9 @@ class Orchestrator(
         sides = holding_sides(self.params, obj)  # CannotGrip: none holds
         if place:
             stroke = min(self.tuning.pick_stroke_m, sides[0].stroke_max_m)
-            return Decision("place", stroke, state=ArmState(target, side=sides[0]))
+            return Decision(
+                "place", stroke, state=ArmState(target, side=sides[0]), gripped=sides[0].obj
+            )
         side, choice = self._throw_side(sides, target, index)
         obj, s_grip = side.obj, side.stroke_max_m  # the item as gripped
         plan, delta = choice.plan, choice.delta
@@ -319,6 +321,7 @@ class Orchestrator(
             ee_params=self.params.ee,
             goal_xy=(float(choice.goal[0]), float(choice.goal[1])),
             state=state,
+            gripped=obj,
         )
         mt = None
         if self._may_release_moving(obj, d):

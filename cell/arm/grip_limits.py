@@ -196,19 +196,24 @@ def grip_stroke_at(params: ModelParams, obj: ObjectParams) -> float | None:
     """The longest stroke [m] at which the pads hold BRISK_CARRY_SAFETY x the weight of
     `obj` (as gripped), else CARRY_MARGIN x it; None where neither at any stroke or the
     item is wider than the pads open."""
+    return grip_strokes(params, obj)[0]
+
+
+def grip_strokes(params: ModelParams, obj: ObjectParams) -> tuple[float | None, bool]:
+    """(`grip_stroke_at`, whether the pads hold BRISK_CARRY_SAFETY x the weight there)."""
     from cell.model.grip import grip_friction, max_grip_stroke
     from cell.robot.carry import CARRY_MARGIN
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     obj = as_gripped(obj)
     if obj.width > 2 * DEFAULT_GEOMETRY.finger_open_m:
-        return None
+        return None, False
     mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
     for safety in (BRISK_CARRY_SAFETY, CARRY_MARGIN):
         s_max = max_grip_stroke(params.ee, obj, safety=safety, friction=mu)
         if s_max is not None:
-            return s_max
-    return None
+            return s_max, safety == BRISK_CARRY_SAFETY
+    return None, False
 
 
 def grip_refusal(params: ModelParams, obj: ObjectParams) -> str:

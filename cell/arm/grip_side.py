@@ -9,8 +9,9 @@ swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sph
 wide every way the pads meet them: one side. A mesh is gripped across its first size only
 (its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
 
-Of the sides that hold, a place takes the first (a place's cycle does not depend on the
-side); a throw is planned across each and takes the one with the shorter cycle estimate
+Of the sides that hold (those held briskly, where there are any: `holding_sides`), a
+place takes the first (a place's cycle does not depend on the side); a throw is planned
+across each and takes the one with the shorter cycle estimate
 (`GripSideChoice._throw_side`). Where no side holds, `CannotGrip` says what each side
 held.
 """
@@ -23,7 +24,7 @@ from dataclasses import replace as dc_replace
 from typing import Any
 
 from cell.arm.base import ArmBase
-from cell.arm.grip_limits import grip_refusal, grip_stroke_at
+from cell.arm.grip_limits import grip_refusal, grip_strokes
 from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
@@ -40,11 +41,14 @@ class GripSide:
             0 (across size x) or π/2 (across size y).
         obj: the item as gripped: its size x the width across the pads.
         stroke_max_m: [m] the longest stroke the pads hold it at (`grip_stroke_at`).
+        brisk: the pads hold BRISK_CARRY_SAFETY x its weight there (else only within the
+            carry's bound: it is carried as slowly as the grip asks).
     """
 
     yaw_rad: float
     obj: ObjectParams
     stroke_max_m: float
+    brisk: bool = True
 
     @property
     def width_m(self) -> float:
@@ -68,7 +72,11 @@ def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
 
 
 def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
-    """The sides of `obj` the pads hold (`grip_sides`, in that order).
+    """The sides of `obj` the pads hold (`grip_sides`, in that order): those they hold
+    briskly (BRISK_CARRY_SAFETY x its weight) where there are any, else those they hold
+    only within the carry's bound (carried slowly). cuboid_a is held across 30 mm only
+    carried slowly, across 50 mm briskly: the cell grips it across 50 mm (with both
+    compared by the cycle estimate, the physical pick took the 30 mm side).
 
     Raises:
         CannotGrip: no side holds; the message names each side tried (its width in mm)
@@ -76,11 +84,13 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
     """
     found, tried = [], []
     for yaw, side in grip_sides(obj):
-        s_max = grip_stroke_at(params, side)
+        s_max, brisk = grip_strokes(params, side)
         if s_max is not None:
-            found.append(GripSide(yaw, side, s_max))
+            found.append(GripSide(yaw, side, s_max, brisk))
         else:
             tried.append(grip_refusal(params, side))
+    if any(s.brisk for s in found):
+        found = [s for s in found if s.brisk]
     if not found:
         name = obj.name or obj.shape
         what = "; ".join(tried)

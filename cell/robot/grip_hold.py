@@ -24,6 +24,14 @@ CARRY_MARGIN = 1.35
 _GRAVITY = np.array([0.0, 0.0, -G])
 
 
+# Where a carry's path held still already asks more of the pads' tilt than the carry's
+# bound (a level swing past the horizontal), its accelerations may add this much to it
+# (`carry_use`): else the bisection on the carry's time scale, whose slowest is 0.02, finds
+# none within it, and the carry goes at GENTLE_SCALE. Boxes and cylinders turn in the
+# pads at 1.02-1.23 of T_y (tests/test_grip_probe.py).
+TILT_HEADROOM = 0.05
+
+
 GENTLE_SCALE = 0.3  # time scale of a carry no scaling keeps within the grip (see plan_carry)
 
 
@@ -126,7 +134,7 @@ def carry_use(
     bound = 1.0 / margin
     at_rest = float(np.max(uses(f_rest, np.zeros_like(f_rest), hold)))
     tilt = float(np.max(uses(f, alpha, hold)))
-    return max(plain, tilt * bound / max(bound, at_rest))
+    return max(plain, tilt * bound / max(bound, at_rest + TILT_HEADROOM))
 
 
 def static_grip_use(robot: Robot, hold: GripHold, qs: np.ndarray) -> np.ndarray:
