@@ -92,6 +92,17 @@ def test_a_250_mm_cube_is_refused_and_not_told_to_turn() -> None:
     assert "turn" not in msg and "narrower" not in msg and "wider side" not in msg
 
 
+def test_a_thin_box_is_gripped_across_its_wide_side() -> None:
+    """A 25 x 80 mm box, refused before across 25 mm (the band closes the pads only on
+    items wider than its 20 mm anchor spacing, and holds 50 g there only at the shortest
+    strokes), is gripped across 80 mm."""
+    from cell.model.objects import ObjectParams
+
+    params = load_params(scene_params_path())
+    obj = ObjectParams("cuboid", 0.05, (0.025, 0.08, 0.06), name="thin")
+    assert [s.width_m for s in holding_sides(params, obj)] == [0.08]
+
+
 def test_a_box_held_by_neither_side_names_both() -> None:
     params = load_params(scene_params_path())
     obj = dataclasses.replace(get_object("cuboid_a"), mass=0.5)

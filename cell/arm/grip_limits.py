@@ -13,6 +13,7 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.joints import distinct_waypoints
+from cell.arm.tuning import TUNING, ArmTuning
 from cell.decision import Decision
 from cell.errors import (
     CannotGrip,
@@ -202,18 +203,31 @@ def grip_stroke_at(params: ModelParams, obj: ObjectParams) -> float | None:
 def grip_strokes(params: ModelParams, obj: ObjectParams) -> tuple[float | None, bool]:
     """(`grip_stroke_at`, whether the pads hold BRISK_CARRY_SAFETY x the weight there)."""
     from cell.model.grip import grip_friction, max_grip_stroke
-    from cell.robot.carry import CARRY_MARGIN
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     obj = as_gripped(obj)
     if obj.width > 2 * DEFAULT_GEOMETRY.finger_open_m:
         return None, False
     mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
-    for safety in (BRISK_CARRY_SAFETY, CARRY_MARGIN):
+    for safety in (BRISK_CARRY_SAFETY, carry_safety(obj)):
         s_max = max_grip_stroke(params.ee, obj, safety=safety, friction=mu)
         if s_max is not None:
             return s_max, safety == BRISK_CARRY_SAFETY
     return None, False
+
+
+def carry_safety(obj: ObjectParams, tuning: ArmTuning = TUNING) -> float:
+    """The multiple of its weight the pads must hold `obj` with to carry it at all: the
+    carry's bound CARRY_MARGIN for an item the pads hold by its faces (a box, a cylinder:
+    its carry is slowed to keep the force, twist and tilt within it); for one they hold
+    at points (a sphere, a mesh), the margin measured in the scene,
+    `tuning.point_hold_margin` (a carry's time scaling cannot keep such an item from
+    turning in the pads: it goes at GENTLE_SCALE)."""
+    from cell.robot.carry import CARRY_MARGIN
+
+    if obj.shape in ("sphere", "mesh"):
+        return max(CARRY_MARGIN, tuning.point_hold_margin)
+    return CARRY_MARGIN
 
 
 def grip_refusal(params: ModelParams, obj: ObjectParams) -> str:
@@ -238,10 +252,12 @@ def grip_refusal(params: ModelParams, obj: ObjectParams) -> str:
             f"spacing d = {ee.d * 1000:.0f} mm"
         )
     mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
-    hold = holding_mass_kg(ee, ee.stroke_min, obj.width, mu) / CARRY_MARGIN
+    margin = carry_safety(obj)
+    hold = holding_mass_kg(ee, ee.stroke_min, obj.width, mu) / margin
+    what = "the carry's bound" if margin == CARRY_MARGIN else "held at points, as measured"
     return (
         f"{across}, the pads hold up to {hold * 1000:.0f} g even carried slowly (1/"
-        f"{CARRY_MARGIN} of their friction, the carry's bound)"
+        f"{margin} of their friction: {what})"
     )
 
 

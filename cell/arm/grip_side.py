@@ -94,10 +94,9 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
     if not found:
         name = obj.name or obj.shape
         what = "; ".join(tried)
-        where = "either side" if len(tried) > 1 else "its side"
+        where = " across either side" if len(tried) > 1 else ""
         raise CannotGrip(
-            f"{name} ({obj.mass * 1000:.0f} g) cannot be held across {where}: {what}; "
-            "sort it by hand"
+            f"{name} ({obj.mass * 1000:.0f} g) cannot be held{where}: {what}; sort it by hand"
         )
     return found
 
