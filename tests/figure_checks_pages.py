@@ -193,8 +193,10 @@ def check_the_gap_scene_worlds() -> None:
     """The worlds as the page describes them are `cell.gap.world_scene` and the cases."""
     from cell.gap import world_scene as ws
     from cell.gap.check_scene import _JET
+    from cell.sim import effect_scene
 
-    page, src = "docs/gap_scene.md", inspect.getsource(ws)
+    page = "docs/gap_scene.md"
+    src = inspect.getsource(ws) + inspect.getsource(effect_scene)
     (sd,) = quoted(page, r"steady; drawn throw to throw around a mean \(sd ([\d.]+) m/s\)")
     assert float(sd) == _case("s:wind-throw")[0]["sd"]
     rpm0, core, radius, grow, lo, hi = quoted(

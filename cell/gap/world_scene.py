@@ -36,73 +36,19 @@ import numpy as np
 
 from cell.catalogue import catalogue
 from cell.errors import NoLanding
-from cell.sim.scene import CellScene
+from cell.sim.effect_scene import EffectScene
 
 __all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign"]
 
-RHO = 1.225  # [kg/m³] air density of this world
 G = 9.81  # [m/s²]
 LAND_Z_M = 0.1  # [m] the campaign's landing plane (the crossing logged without bounce)
 REST_SPEED = 0.01  # [m/s] an item slower than this for REST_STEPS steps is at rest
 REST_STEPS = 30
 REST_WAIT_S = 3.0  # [s] after the crossing, a still rolling item is logged where it is
-STATION_XY = (-8.0, -8.0)  # [m] the pick station, far from every flight
 
 
 def _find(effs: list[dict[str, Any]], kind: str) -> dict[str, Any] | None:
     return next((e for e in effs if e["kind"] == kind), None)
-
-
-class EffectScene(CellScene):
-    """The cell's scene (no arm, no bins) with the effects of one throw acting on its items.
-
-    Set `throw_effects` before each throw: the air flow w [m/s, W] (or None), the drag
-    factor, the downwash jet's source (release point, rpm) and the side acceleration.
-    """
-
-    def __init__(self) -> None:
-        super().__init__(robot=None, bins=(), pick_station_xy=STATION_XY)
-        self.wind = np.zeros(3)  # [m/s, W]
-        self.drag_factor = 1.0
-        self.jet: tuple[np.ndarray, float, dict[str, Any]] | None = None
-        self.side_mps2 = np.zeros(3)
-
-    def set_floor(self, restitution: float, friction: float, rolling_m: float = 0.0) -> None:
-        """The floor's contact: restitution, lateral friction and rolling friction [m]."""
-        self.client.changeDynamics(
-            self.floor,
-            -1,
-            restitution=float(restitution),
-            lateralFriction=float(friction),
-            rollingFriction=float(rolling_m),
-        )
-
-    def air(self, p: np.ndarray) -> np.ndarray:
-        """The air velocity at a point [m/s, W]: the steady flow plus the rotor jet."""
-        w = self.wind.copy()
-        if self.jet is not None:
-            src, rpm, jet = self.jet
-            depth = src[2] - p[2]
-            if depth > 0.0:
-                r = math.hypot(p[0] - src[0], p[1] - src[1])
-                width = float(jet["radius_m"]) + 0.2 * depth
-                centre = float(jet["w_mps"]) * rpm / 5000.0 / (1.0 + depth / float(jet["core_m"]))
-                w[2] -= centre * math.exp(-((r / width) ** 2))
-        return w
-
-    def step(self, n: int = 1) -> None:
-        cl = self.client
-        for _ in range(n):
-            for it in self.items:
-                pos, _ = cl.getBasePositionAndOrientation(it.body)
-                v = np.asarray(cl.getBaseVelocity(it.body)[0])
-                rel = v - self.air(np.asarray(pos))
-                c_f = self.drag_factor * 0.5 * RHO * it.obj.cd * it.obj.area  # [kg/m]
-                f = -c_f * np.linalg.norm(rel) * rel + it.drag_c * np.linalg.norm(v) * v
-                f = f + it.obj.mass * self.side_mps2
-                if np.any(f != 0.0):
-                    cl.applyExternalForce(it.body, -1, f.tolist(), pos, cl.WORLD_FRAME)
-            super().step(1)
 
 
 @dataclass(frozen=True)
@@ -150,19 +96,18 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool) -> tuple[np.ndarray, f
 
     pf = ReleasePose(sc, ee, th.object_id, th.stroke, th.p0, th.elevation, th.azimuth)
     item = pf.present(0, None)  # type: ignore[arg-type]
-    cl = sc.client
     try:
         pf.pick(pf.decide(0, item.obj, None), item.obj, item)
         t0 = sc.t
         pf.release(None)  # type: ignore[arg-type]
         sc.set_timestep(sc.dt_s)
-        prev = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
+        prev = sc.item_position(item)
         cross: tuple[np.ndarray, float, np.ndarray] | None = None
         slow = 0
         while sc.t - t0 < 8.0:
             sc.step()
-            p = np.asarray(cl.getBasePositionAndOrientation(item.body)[0])
-            v = np.asarray(cl.getBaseVelocity(item.body)[0])
+            p = sc.item_position(item)
+            v = sc.item_velocity(item)[0]
             if cross is None and prev[2] > LAND_Z_M >= p[2]:
                 s = (prev[2] - LAND_Z_M) / (prev[2] - p[2])
                 cross = (prev[:2] + s * (p[:2] - prev[:2]), sc.t - sc.dt_s * (1 - s) - t0, v)

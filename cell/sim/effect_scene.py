@@ -1,0 +1,71 @@
+"""The PyBullet cell with the effects of a diagnosis world acting physically on its flying
+items (`cell.gap.world_scene` throws its campaigns in it): a steady air flow and a rotor's
+downwash jet as the air the item moves through, drag as a force from the object's own C_d and
+area times a factor, a constant side force, and the floor's contact (restitution, friction).
+It is part of the plant: nothing above it talks to PyBullet."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from cell.sim.scene import CellScene
+
+__all__ = ["RHO", "STATION_XY", "EffectScene"]
+
+RHO = 1.225  # [kg/m³] air density of this world
+STATION_XY = (-8.0, -8.0)  # [m] the pick station, far from every flight
+
+
+class EffectScene(CellScene):
+    """The cell's scene (no arm, no bins) with the effects of one throw acting on its items.
+
+    Set `throw_effects` before each throw: the air flow w [m/s, W] (or None), the drag
+    factor, the downwash jet's source (release point, rpm) and the side acceleration.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(robot=None, bins=(), pick_station_xy=STATION_XY)
+        self.wind = np.zeros(3)  # [m/s, W]
+        self.drag_factor = 1.0
+        self.jet: tuple[np.ndarray, float, dict[str, Any]] | None = None
+        self.side_mps2 = np.zeros(3)
+
+    def set_floor(self, restitution: float, friction: float, rolling_m: float = 0.0) -> None:
+        """The floor's contact: restitution, lateral friction and rolling friction [m]."""
+        self.client.changeDynamics(
+            self.floor,
+            -1,
+            restitution=float(restitution),
+            lateralFriction=float(friction),
+            rollingFriction=float(rolling_m),
+        )
+
+    def air(self, p: np.ndarray) -> np.ndarray:
+        """The air velocity at a point [m/s, W]: the steady flow plus the rotor jet."""
+        w = self.wind.copy()
+        if self.jet is not None:
+            src, rpm, jet = self.jet
+            depth = src[2] - p[2]
+            if depth > 0.0:
+                r = math.hypot(p[0] - src[0], p[1] - src[1])
+                width = float(jet["radius_m"]) + 0.2 * depth
+                centre = float(jet["w_mps"]) * rpm / 5000.0 / (1.0 + depth / float(jet["core_m"]))
+                w[2] -= centre * math.exp(-((r / width) ** 2))
+        return w
+
+    def step(self, n: int = 1) -> None:
+        cl = self.client
+        for _ in range(n):
+            for it in self.items:
+                pos, _ = cl.getBasePositionAndOrientation(it.body)
+                v = np.asarray(cl.getBaseVelocity(it.body)[0])
+                rel = v - self.air(np.asarray(pos))
+                c_f = self.drag_factor * 0.5 * RHO * it.obj.cd * it.obj.area  # [kg/m]
+                f = -c_f * np.linalg.norm(rel) * rel + it.drag_c * np.linalg.norm(v) * v
+                f = f + it.obj.mass * self.side_mps2
+                if np.any(f != 0.0):
+                    cl.applyExternalForce(it.body, -1, f.tolist(), pos, cl.WORLD_FRAME)
+            super().step(1)
