@@ -270,7 +270,7 @@ def _carry_item(
         q_pick = orc._ik(orc._tcp_for_item_centre(p, *down, stroke_m, obj), *down)
         lift = p + np.array([0, 0, TUNING.lift_m])
         q_lift = orc._ik(orc._tcp_for_item_centre(lift, *down, stroke_m, obj), *down)
-        orc._move([q_lift, q_pick], settle_s=settle_s)
+        orc.move([q_lift, q_pick], settle_s=settle_s)
         orc.ee.grasp(stroke_m, item)
 
         def in_grip() -> tuple[np.ndarray, Rotation]:
@@ -441,7 +441,7 @@ def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
     )
     orc = Orchestrator(job)
     steps: list[float] = []
-    move = orc._move
+    move = orc.move
 
     def recorded(waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
         if orc.ee.item is not None:
@@ -451,7 +451,7 @@ def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
             )
         return move(waypoints, settle_s)
 
-    orc._move = recorded  # type: ignore[method-assign]
+    orc.move = recorded  # type: ignore[method-assign]
     try:
         summary = orc.run()
     finally:

@@ -146,7 +146,7 @@ def _carry_tall(count_tilt: bool) -> tuple[bool, float, float]:
         q_pick = orc._ik(orc._tcp_for_item_centre(p, *down, stroke, obj), *down)
         lift = p + np.array([0, 0, TUNING.lift_m])
         q_lift = orc._ik(orc._tcp_for_item_centre(lift, *down, stroke, obj), *down)
-        orc._move([q_lift, q_pick], settle_s=0.05)
+        orc.move([q_lift, q_pick], settle_s=0.05)
         orc.ee.grasp(stroke, item)
         az = 1.2
         centre = np.array([0.35 * math.cos(az), 0.35 * math.sin(az), 0.6])

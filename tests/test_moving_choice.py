@@ -103,7 +103,7 @@ def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Pat
             item = o.present(index, obj)
             d = o.decide(index, obj, target)
             o._frame = o._pick_frame(d.plan, d.state.q_release)  # as the pick grips it
-            q_pick, q_lift = o._over_item(item, d.stroke_m, obj)
+            q_pick, q_lift = o.over_item(item, d.stroke_m, obj)
             at = (q_pick, o.scene.item_position(item), obj, d.stroke_m)
             before, timed = o._static_carry(at, q_lift, d.state.q_release, d.plan)
             o.pick(d, obj, item)
@@ -112,7 +112,7 @@ def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Pat
             for a, b in zip(before, after, strict=True):
                 assert np.allclose(a, b, atol=1e-3), (index, a, b)
             t0 = o.scene.t
-            o._move(after)
+            o.move(after)
             assert abs((o.scene.t - t0) - timed) < 0.02, (index, o.scene.t - t0, timed)
             o.effector.throw()
             o.finish(d)

@@ -49,7 +49,7 @@ def test_a_release_on_the_move_from_the_pick_leaves_the_item_on_the_station(
         p_item = o.scene.item_position(item)
         q_lift = o._pick_kinematic(obj, item, STROKE_M)  # the arm at the pick, gripping
         if from_lift:
-            o._move([q_lift])
+            o.move([q_lift])
         centre = p_item + np.array([0.0, 0.0, UP_M])
         tcp = o._tcp_for_item_centre(centre, ELEVATION_RAD, AZIMUTH_RAD, STROKE_M, obj)
         q_rel = o._ik_gripped(tcp, ELEVATION_RAD, AZIMUTH_RAD, o.q)

@@ -48,7 +48,7 @@ def _decide(o: Orchestrator, k: int, exhaustive: bool) -> tuple[Any, list[tuple[
 
     def watched(obj: Any, plan: Any, stroke: float, q_rel: Any, over: Any = None) -> float:
         t = cycle(obj, plan, stroke, q_rel, over)
-        q_pick = (over or o._over_item(o._presented, stroke, obj))[0]
+        q_pick = (over or o.over_item(o._presented, stroke, obj))[0]
         timed.append((bound(q_pick, q_rel), t))
         return t
 

@@ -245,13 +245,3 @@ class Kinematics(ArmBase):
             return self._down_vertical(q_top, self.robot.tcp_pose(q_bottom)[0], step_m)[:-1]
         except IKFailed:
             return []
-
-    # the old names, by which the parts changed in parallel (cell/arm/pick.py, release.py,
-    # routes.py, place.py) may still call these; remove once none does
-    def _ik_frame(self, tcp: np.ndarray, seed: np.ndarray | None = None) -> np.ndarray:
-        return self.ik_frame(tcp, seed)
-
-    def _over_item(
-        self, item: Any, stroke: float, obj: ObjectParams
-    ) -> tuple[np.ndarray, np.ndarray]:
-        return self.over_item(item, stroke, obj)

@@ -219,14 +219,6 @@ class Mover(ArmBase):
         """Let the plant run `seconds` [s] with the arm where it is (a settle, a wait)."""
         self.scene.run_for(seconds)
 
-    # the old names, by which the parts changed in parallel (cell/arm/pick.py, release.py,
-    # routes.py) may still call these; remove once none does
-    def _move(self, waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
-        return self.move(waypoints, settle_s)
-
-    def _follow(self, traj: Any, q_end: np.ndarray, settle_s: float) -> float:
-        return self.follow(traj, q_end, settle_s)
-
     def _release_on_the_move(self, motion: Any) -> np.ndarray:
         """Follow a release on the move's `motion` in the plant, the latch opening at its
         planned instant (`cell.sim.release.release_in_scene`); the item's centre at the

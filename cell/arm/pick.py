@@ -31,10 +31,10 @@ class Pick(ArmBase):
         (PyBulletEndEffector.grasp) turned `side_yaw` [rad] about the grip's axis (the
         side it is gripped across, `cell.arm.grip_side`; `obj`: the item as gripped);
         returns the lift configuration."""
-        q_pick, q_lift = self._over_item(item, stroke, obj)
+        q_pick, q_lift = self.over_item(item, stroke, obj)
         q0, t0 = self.q, self.scene.t
         if not self._approach(item, stroke, obj, q_pick):
-            self._move([q_lift, q_pick])
+            self.move([q_lift, q_pick])
         self._time_floor(q0, t0)
         self.ee.grasp(stroke, item, yaw_rad=side_yaw)
         self._carried = (obj, stroke)  # the item and its throw's stroke: what routes are for
@@ -49,7 +49,7 @@ class Pick(ArmBase):
             log.info("%s: over the lift instead", why)
             return False
         # no settle: the grasp that follows holds the arm still while the pads close
-        self._follow(traj, q_pick, 0.0)
+        self.follow(traj, q_pick, 0.0)
         return True
 
     def _approach_plan(
@@ -92,7 +92,7 @@ class Pick(ArmBase):
             tcp = self._tcp_for_item_centre(
                 p_item + np.array([0, 0, over]), *GRIP_DOWN, stroke, obj
             )
-            q_over = self._ik_frame(tcp, q_pick)
+            q_over = self.ik_frame(tcp, q_pick)
             if joint_gap(q_pick, q_over) > self.tuning.lift_max_dq_rad:  # another IK branch
                 return None, "the point over the pick is on another IK branch"
             traj = plan_approach(
@@ -338,11 +338,11 @@ class Pick(ArmBase):
             at(self.tuning.lift_m), stroke, obj, elevation, azimuth, rolls
         )
         q_near = self._ik_grip(at(self.tuning.approach_m), stroke, obj, (elevation, azimuth, roll))
-        self._move([q_high])
+        self.move([q_high])
         # the carriage may still be on its way in from the last throw's end stop: the
         # grip goes down over the item only once it is at the stroke
         self.ee.wait_wound()
-        self._move([q_near])
+        self.move([q_near])
         # the item as the plant reports it now that it rests (a mesh may still have been
         # rocking when it was first seen): over it again if it moved, then a guarded
         # descent onto it
@@ -363,7 +363,7 @@ class Pick(ArmBase):
         if np.linalg.norm(p - aimed[0]) > self.tuning.replan_m or turned > self.tuning.replan_rad:
             q_over = self._ik_grip(at(self.tuning.approach_m), stroke, obj, axes)
             if not np.allclose(q_over, self.q, atol=1e-6):
-                self._move([q_over])
+                self.move([q_over])
         q_from, q_to = self.q.copy(), self._ik_grip(at(-self.tuning.press_m), stroke, obj, axes)
         depth = float(np.linalg.norm(self.robot.tcp_pose(q_to)[0] - self.robot.tcp_pose(q_from)[0]))
 

@@ -107,7 +107,7 @@ class ReleaseChoice(ArmBase):
         for roll in WEIGHT_ROLLS_RAD:
             self._frame = (a, roll)  # the pick is gripped at this roll
             try:
-                over = self._over_item(self._presented, stroke, obj)
+                over = self.over_item(self._presented, stroke, obj)
                 t_approach = self._approach_s(self.q, over, stroke, obj)
             except (IKFailed, TrajectoryError):
                 continue
@@ -172,7 +172,7 @@ class ReleaseChoice(ArmBase):
         from cell.robot.ik import ReleasePose
 
         try:
-            q_pick, q_lift = self._over_item(self._presented, stroke, obj)
+            q_pick, q_lift = self.over_item(self._presented, stroke, obj)
             t_approach = self._approach_s(self.q, (q_pick, q_lift), stroke, obj)
         except (IKFailed, TrajectoryError):
             return []
@@ -248,7 +248,7 @@ class ReleaseChoice(ArmBase):
         found."""
         from cell.robot.moving_release import COAST_S
 
-        q_pick, q_lift = over or self._over_item(self._presented, stroke, obj)
+        q_pick, q_lift = over or self.over_item(self._presented, stroke, obj)
         at = (q_pick, self.scene.item_position(self._presented), obj, stroke)
         _, t_carry = self._static_carry(at, q_lift, q_rel, plan)
         return t_carry + COAST_S + self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
@@ -278,7 +278,7 @@ class ReleaseChoice(ArmBase):
         stroke = plan.stroke_m + delta
         self._frame = self._pick_frame(plan, throw.q_release)
         try:
-            _, q_lift = self._over_item(self._presented, stroke, obj)
+            _, q_lift = self.over_item(self._presented, stroke, obj)
             choice = choose_release(
                 self.robot,
                 throw.model_obj,
@@ -335,7 +335,7 @@ class ReleaseChoice(ArmBase):
         if item is None or self.pick_mode == "physical":
             return True  # no pick to time from (`choose_release`'s choice stands)
         s_moving = mt.plan.stroke_m + delta
-        q_pick, q_lift = self._over_item(item, s_moving, obj)
+        q_pick, q_lift = self.over_item(item, s_moving, obj)
         lifted, motion = self._moving_route(mt, obj, s_moving, q_pick, q_lift)
         t_moving = motion.duration_s + self._approach_s(
             motion.q_end, (q_pick, q_lift), s_moving, obj

@@ -198,7 +198,7 @@ class Routes(ArmBase):
             if up > 0.0 and p_pick is not None:
                 lift = p_pick + np.array([0.0, 0.0, up])
                 try:
-                    q_up = self._ik_frame(
+                    q_up = self.ik_frame(
                         self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj), q_pick
                     )
                 except IKFailed:
