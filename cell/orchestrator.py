@@ -196,8 +196,7 @@ class Orchestrator(
         self.pick_mode, self.release_mode = pick, release
         self.turn_release = bool(turn_release)  # `_facing_toward_station`
         self.cycle_search = bool(cycle_search)  # `_release_costs`, `_plan_facing`
-        # with `floor`: per item index, (the seconds its approach and its throw's carry
-        # took, the seconds each would take as one direct move: `_time_floor`)
+        # `floor`: per item, (its approach's and carry's seconds, as direct moves)
         self.floor = bool(floor)
         self.floors: dict[int, tuple[float, float]] = {}
         # the kinematic pick moves the item into the grip: the pads, longer than a flat

@@ -168,6 +168,10 @@ def check_the_gap_check() -> None:
         r"`cell gap check --worlds scene --n (\d+)",
     )
     assert (int(passes), int(cases)) == (scene["passes"], scene["total"])
+    passes, cases = quoted(
+        "README.md", r"The diagnosis in the scene\*\* passes (\d+) of its (\d+) cases"
+    )
+    assert (int(passes), int(cases)) == (scene["passes"], scene["total"])
     assert f"--worlds scene --n {n} --workers" in (ROOT / "Makefile").read_text()
 
 

@@ -57,19 +57,17 @@ def plan_carry(
         shape: also try the path shaped by the grip as a toppra constraint.
         tie: where no time scaling keeps within 1/margin, the fastest within
             1/margin + tie is taken before a gentle carry (0: never).
-        gentle_floor: never slower than the path at GENTLE_SCALE of the limits (a hold
-            that only speeds up what was a gentle carry: where the path at rest asks
-            nearly all the bound allows, the fastest uniform carry within it crawls).
+        gentle_floor: never slower than the path at GENTLE_SCALE of the limits (where the
+            path at rest asks nearly all the bound, a carry within it would crawl).
 
     Returns:
         (the trajectory, its peak use of the grip, `grip_use`): at most 1/margin (or
-        1/margin + tie), or, when no time scaling gets it there (the path's geometry
-        asks too much), the path at GENTLE_SCALE of the limits and its use (logged);
-        with `gentle_floor`, that path wherever it is sooner.
+        1/margin + tie), or, when no time scaling gets it there (the path asks too much),
+        the path at GENTLE_SCALE of the limits (logged); with `gentle_floor`, that path
+        wherever it is sooner.
 
     Raises:
-        TrajectoryError: the grip cannot hold the item's weight alone within the
-            margin, or toppra fails.
+        TrajectoryError: the grip cannot hold the weight within the margin; toppra fails.
     """
     bound = _bound(hold, margin)
     scaled = _TimeScaled(
