@@ -91,6 +91,18 @@ def check_the_demo_table() -> None:
     close(p95, run["plan_s_p95"], 2)
     assert num(realtime) == round(run["items_per_hour_realtime"])
     assert num(rate) == round(run["items_per_hour"])
+    ur10, ur3 = load_json("docs/figures/run_ur10.json"), load_json("docs/figures/run_ur3.json")
+    got = quoted(
+        "README.md",
+        r"UR10 (\d+)/(\d+) in their bins, ([\d,]+) items per hour; UR3 (\d+)/(\d+), ([\d,]+) "
+        r"items per hour",
+    )
+    for (n_in, n, rate), r in ((got[:3], ur10), (got[3:], ur3)):
+        assert (int(n_in), int(n), num(rate)) == (
+            r["in_bin"],
+            r["items"],
+            round(r["items_per_hour"]),
+        )
     n_in, n, rate, err = quoted(
         "README.md",
         r"the demo job \| (\d+)/(\d+) in their bins, ([\d,]+) items per hour, mean landing "
