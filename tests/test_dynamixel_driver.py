@@ -64,7 +64,9 @@ def test_place_unwinds_slowly_to_rest() -> None:
     with rig() as (emu, ee):
         ee.grasp(0.04)
         ee.place()
-        assert emu.true_stroke_m() == pytest.approx(FAST.stroke.rest_m)
+        # within an encoder tick of rest: what the driver can see (a loaded machine's
+        # polling stopped 13 µm short, under a tick, of the exact rest)
+        assert emu.true_stroke_m() == pytest.approx(FAST.stroke.rest_m, abs=TICK_M)
         assert not ee.status().holding
         goal, pv = emu.servo(2).goal_log[-1]
         assert goal == FAST.spool.rest_position
