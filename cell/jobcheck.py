@@ -28,6 +28,7 @@ __all__ = [
     "STATION_HALF_M",
     "STROKE_RANGE_M",
     "job_problems",
+    "place_problems",
     "reach_problems",
     "station_problems",
 ]
@@ -184,6 +185,19 @@ def reach_problems(
             "the station within that, or choose another arm"
         )
         break
+    return out + place_problems(robot, bins, items, placed, where)
+
+
+def place_problems(
+    robot: Any,
+    bins: Sequence[Any],
+    items: Sequence[Any],
+    placed: Sequence[int],
+    where: dict[str, str],
+) -> list[str]:
+    """The bins placed into (indices `placed`) that the arm (`cell.robot.model.Robot`) does
+    not reach with the grip pointing down over their nearest point, one message a bin."""
+    out: list[str] = []
     for i in placed:
         b = bins[i]
         tall = max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
@@ -242,8 +256,11 @@ def job_problems(
             for i, b in enumerate(job.bins)
             if job.policy == "auto" and math.hypot(*b.position) <= job.place_reach_m
         ]
-        placed = list(range(len(job.bins))) if job.policy == "place" else chosen
-        for msg in reach_problems(job.robot, job.pick_position, job.bins, job.items, placed, where):
-            auto = any(f"bins[{i}].position_m: " in msg for i in chosen)
-            (warnings if auto else out).append(msg)
+        forced = list(range(len(job.bins))) if job.policy == "place" else []
+        out += reach_problems(job.robot, job.pick_position, job.bins, job.items, forced, where)
+        if chosen:
+            from cell.robot.model import load_robot
+
+            robot = load_robot(job.robot)
+            warnings += place_problems(robot, job.bins, job.items, chosen, where)
     return out, warnings
