@@ -229,6 +229,7 @@ class Orchestrator(
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
+        self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
@@ -318,6 +319,7 @@ class Orchestrator(
         self._ik_memo.clear()
         self._approach_memo.clear()
         self._approach_plans.clear()
+        self._plan_memo.clear()
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m

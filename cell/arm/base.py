@@ -64,6 +64,7 @@ class ArmBase:
     _ik_memo: dict[tuple[bytes, ...], Any]
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
+    _plan_memo: dict[tuple[Any, ...], Any]
 
     if TYPE_CHECKING:  # the parts call each other through the facade that joins them
 

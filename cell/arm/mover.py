@@ -25,6 +25,11 @@ from cell.model.objects import ObjectParams
 log = logging.getLogger(__name__)
 
 
+def _joint_bytes(qs: list[np.ndarray]) -> bytes:
+    """Joint waypoints [rad] as one key: their float64 bytes, in order."""
+    return b"".join(np.asarray(q, float).tobytes() for q in qs)
+
+
 class Mover(ArmBase):
     """The mover (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
@@ -87,13 +92,36 @@ class Mover(ArmBase):
         from cell.robot.motion import plan_path
 
         if carried is None and self.ee.item is None:
-            return plan_path(
-                [q_from, *waypoints],
-                self.robot,
-                velocity_scale=self.speed_scale,
-                acceleration_scale=self.speed_scale,
+            qs = [q_from, *waypoints]
+            return self._planned(
+                ("empty", _joint_bytes(qs), self.speed_scale),
+                lambda: plan_path(
+                    qs,
+                    self.robot,
+                    velocity_scale=self.speed_scale,
+                    acceleration_scale=self.speed_scale,
+                ),
             )
         return self._carry_path([q_from, *waypoints], carried)
+
+    def _planned(self, key: tuple[Any, ...], plan: Callable[[], Any]) -> Any:
+        """`plan()`, remembered under `key` until the next decision (`decide` clears it,
+        as `_solve_ik`): a path through the same waypoints [rad] (the same bytes) with the
+        same limits and hold is the same trajectory, or the same TrajectoryError (toppra
+        and the carry's bisection are deterministic). The decision times the carries and
+        the routes the execution then takes, from the same configurations; `_static_carry`
+        times the route `_departure` chose by timing it. Every caller gets the same
+        Trajectory: nothing in the cell writes into one."""
+        found = self._plan_memo.get(key)
+        if found is None:
+            try:
+                found = plan()
+            except TrajectoryError as exc:
+                found = exc
+            self._plan_memo[key] = found
+        if isinstance(found, Exception):
+            raise found
+        return found
 
     def _stops(
         self,
@@ -143,16 +171,21 @@ class Mover(ArmBase):
         hold = carry_hold(
             self.params, obj, stroke, probed=self._seated_as_probed(), placing=self._placing
         )
-        traj, _ = plan_carry(
-            waypoints,
-            self.robot,
-            hold,
-            velocity_scale=self.speed_scale,
-            acceleration_scale=self.speed_scale,
-            tie=self._over_bound(obj),
-            gentle_floor=obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing,
+        tie = self._over_bound(obj)
+        gentle = obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing
+        key = ("carry", _joint_bytes(waypoints), hold, self.speed_scale, tie, gentle)
+        return self._planned(
+            key,
+            lambda: plan_carry(
+                waypoints,
+                self.robot,
+                hold,
+                velocity_scale=self.speed_scale,
+                acceleration_scale=self.speed_scale,
+                tie=tie,
+                gentle_floor=gentle,
+            )[0],
         )
-        return traj
 
     def _straight(
         self,

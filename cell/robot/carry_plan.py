@@ -70,20 +70,21 @@ def plan_carry(
     """
     bound = _bound(hold, margin)
     scaled = _TimeScaled(waypoints_q, robot, hold, velocity_scale, acceleration_scale, iterations)
+    best = _fastest_within(scaled, bound, shape, tie)
     if gentle_floor:
-        best = plan_carry(
-            waypoints_q,
-            robot,
-            hold,
-            margin=margin,
-            velocity_scale=velocity_scale,
-            acceleration_scale=acceleration_scale,
-            iterations=iterations,
-            shape=shape,
-            tie=tie,
-        )
+        # the path at GENTLE_SCALE is planned once (`attempt` remembers it): where no
+        # time scaling held the item, the carry above is that same path already
         return _sooner(scaled.attempt(GENTLE_SCALE), best)
+    return best
 
+
+def _fastest_within(
+    scaled: _TimeScaled, bound: float, shape: bool, tie: float
+) -> tuple[Trajectory, float]:
+    """`plan_carry` without its gentle floor: the fastest of `scaled`'s path within the
+    grip's `bound` (with `tie`), shaped by the grip where that is sooner, else gentle."""
+    waypoints_q, robot, hold = scaled.waypoints_q, scaled.robot, scaled.hold
+    velocity_scale, acceleration_scale = scaled.velocity_scale, scaled.acceleration_scale
     best = scaled.attempt(1.0)
     if best[1] <= bound:
         return best
@@ -145,18 +146,22 @@ class _TimeScaled:
         self.waypoints_q, self.robot, self.hold = waypoints_q, robot, hold
         self.velocity_scale, self.acceleration_scale = velocity_scale, acceleration_scale
         self.iterations = iterations
+        self._planned: dict[float, tuple[Trajectory, float]] = {}
 
     def attempt(self, s: float) -> tuple[Trajectory, float]:
-        """The path planned at time scale s, and its use of the grip (`grip_use`)."""
+        """The path planned at time scale s, and its use of the grip (`grip_use`);
+        remembered: the same scale is the same plan (toppra is deterministic)."""
         from cell.robot.motion import plan_path
 
-        tr = plan_path(
-            self.waypoints_q,
-            self.robot,
-            velocity_scale=self.velocity_scale * math.sqrt(s),
-            acceleration_scale=self.acceleration_scale * s,
-        )
-        return tr, grip_use(tr, self.robot, self.hold)
+        if s not in self._planned:
+            tr = plan_path(
+                self.waypoints_q,
+                self.robot,
+                velocity_scale=self.velocity_scale * math.sqrt(s),
+                acceleration_scale=self.acceleration_scale * s,
+            )
+            self._planned[s] = (tr, grip_use(tr, self.robot, self.hold))
+        return self._planned[s]
 
     def gentle(self, bound: float) -> tuple[Trajectory, float]:
         """The path at GENTLE_SCALE of the limits and its use (logged: over `bound`)."""
