@@ -12,6 +12,7 @@ import numpy as np
 from cell.errors import InvalidInput, TrajectoryError
 from cell.robot.model import Robot
 from cell.robot.spline import spline_path
+from cell.robot.toppra_bulk import propose_gridpoints
 from cell.robot.trajectory import (
     POSITION_TOL_RAD,
     ToppraTrajectory,
@@ -110,6 +111,8 @@ def plan_path(
     path = _spline_within(rb, keep)
     vmax = rb.limits.velocity * velocity_scale
     amax = rb.limits.acceleration * acceleration_scale
+    # toppra's own gridpoints (its TOPPRA's defaults), proposed once for every margin
+    grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
     for margin in (0.98, 0.95, 0.9, 0.8):
         pc_vel = constraint.JointVelocityConstraint(np.c_[-vmax * margin, vmax * margin])
         pc_acc = constraint.JointAccelerationConstraint(
@@ -119,8 +122,8 @@ def plan_path(
         inst = algo.TOPPRA(
             [pc_vel, pc_acc, *constraints],
             path,
+            gridpoints=grid,
             parametrizer="ParametrizeConstAccel",
-            gridpt_min_nb_points=100,
         )
         raw = inst.compute_trajectory(0.0, 0.0)
         if raw is None:

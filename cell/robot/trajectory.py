@@ -83,10 +83,16 @@ class ToppraTrajectory(Trajectory):
         self.kind = "toppra"
 
     def _eval(self, ts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        q = np.atleast_2d(self._traj(ts))
-        dq = np.atleast_2d(self._traj(ts, 1))
-        ddq = np.atleast_2d(self._traj(ts, 2))
-        return q, dq, ddq
+        from toppra.parametrizer import ParametrizeConstAccel
+
+        from cell.robot.toppra_bulk import const_accel_states
+
+        if type(self._traj) is ParametrizeConstAccel and ts.size > 0:
+            # `plan_path`'s: the same states, the parameterisation evaluated once
+            q, dq, ddq = const_accel_states(self._traj, ts)
+        else:
+            q, dq, ddq = self._traj(ts), self._traj(ts, 1), self._traj(ts, 2)
+        return np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq)
 
 
 class RuckigTrajectory(Trajectory):
