@@ -66,6 +66,33 @@ def _spline_within(rb: Robot, keep: list[np.ndarray]) -> Any:
     return path
 
 
+# toppra's joint-limit constraints by their limits' bytes: building one formats its limits
+# into a description string (1.6 ms a pair, more than toppra's own planning of a short
+# path's grid takes); nothing in them changes once built. Bounded: cleared when full.
+_LIMIT_CONSTRAINTS: dict[bytes, tuple[Any, Any]] = {}
+_LIMIT_CONSTRAINTS_MAX = 256
+
+
+def _joint_limits(vlim: np.ndarray, alim: np.ndarray) -> tuple[Any, Any]:
+    """toppra's joint velocity and acceleration (interpolated) constraints for the limits
+    vlim and alim, each shape (dof, 2) [rad/s, rad/s²], built once for those limits."""
+    import toppra.constraint as constraint
+
+    key = vlim.tobytes() + alim.tobytes()
+    found = _LIMIT_CONSTRAINTS.get(key)
+    if found is None:
+        if len(_LIMIT_CONSTRAINTS) >= _LIMIT_CONSTRAINTS_MAX:
+            _LIMIT_CONSTRAINTS.clear()
+        found = (
+            constraint.JointVelocityConstraint(vlim),
+            constraint.JointAccelerationConstraint(
+                alim, discretization_scheme=constraint.DiscretizationType.Interpolation
+            ),
+        )
+        _LIMIT_CONSTRAINTS[key] = found
+    return found
+
+
 def plan_path(
     waypoints_q: Sequence[np.ndarray] | np.ndarray,
     robot: Robot | str,
@@ -102,7 +129,6 @@ def plan_path(
             limits between waypoints.
     """
     import toppra.algorithm as algo
-    import toppra.constraint as constraint
 
     rb = as_robot(robot)
     _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
@@ -114,10 +140,8 @@ def plan_path(
     # toppra's own gridpoints (its TOPPRA's defaults), proposed once for every margin
     grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
     for margin in (0.98, 0.95, 0.9, 0.8):
-        pc_vel = constraint.JointVelocityConstraint(np.c_[-vmax * margin, vmax * margin])
-        pc_acc = constraint.JointAccelerationConstraint(
-            np.c_[-amax * margin, amax * margin],
-            discretization_scheme=constraint.DiscretizationType.Interpolation,
+        pc_vel, pc_acc = _joint_limits(
+            np.c_[-vmax * margin, vmax * margin], np.c_[-amax * margin, amax * margin]
         )
         inst = algo.TOPPRA(
             [pc_vel, pc_acc, *constraints],
