@@ -22,7 +22,18 @@ def _bounded_solve(robot: Robot, pose: ReleasePose, q0: np.ndarray) -> np.ndarra
     six = pose.roll is not None
     r_des = pose.rotation()
 
+    last: list[tuple[bytes, tuple[np.ndarray, np.ndarray]]] = []
+
     def parts(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # the solver asks for the residual and then the Jacobian at the same q: the
+        # kinematics once for both (the same arrays: the same numbers)
+        key = q.tobytes()
+        if not last or last[0][0] != key:
+            last[:] = [(key, _parts(q))]
+        res, jac = last[0][1]
+        return res.copy(), jac.copy()
+
+    def _parts(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         p, r = robot.tcp_pose(q)
         jac = robot.tcp_jacobian(q)
         cols = (2,) if not six else (0, 1, 2)
@@ -231,7 +242,7 @@ def _descend(robot: Robot, d: _Descent, seed: np.ndarray, s: _Search) -> tuple[f
     import pinocchio as pin
 
     model, data, fid = robot.model, robot.data, robot.tcp_frame
-    lim = robot.limits
+    lower, upper = robot.limits.lower, robot.limits.upper
     world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     q = np.array(seed, dtype=float)
     seed_best = (math.inf, q)
@@ -255,5 +266,5 @@ def _descend(robot: Robot, d: _Descent, seed: np.ndarray, s: _Search) -> tuple[f
         s.iterations += 1
         jac = pin.getFrameJacobian(model, data, fid, world)
         dq = _dls_step(d, jac, r, e_p, w, q, k)
-        q = np.clip(q + dq, lim.lower, lim.upper)
+        q = np.minimum(np.maximum(q + dq, lower), upper)  # np.clip's result, sooner
     return seed_best

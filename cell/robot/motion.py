@@ -162,8 +162,12 @@ def _ruckig(
         raise TrajectoryError(f"ruckig found no trajectory (result {result})")
     traj = RuckigTrajectory(raw, n)
     lower, upper = lim.lower - POSITION_TOL_RAD, lim.upper + POSITION_TOL_RAD
-    lo, hi = traj.position_bounds(amax, within=(lower, upper))
-    bad = np.flatnonzero((lo < lower) | (hi > upper))
+    at_rest = not velocity_interface and not np.any(a0) and np.all(np.abs(v0) <= vmax)
+    if at_rest and _within_by_speed(p0, p1, vmax, traj.duration, lower, upper):
+        bad = np.zeros(0, dtype=int)  # no joint can reach a limit: nothing to sample
+    else:
+        lo, hi = traj.position_bounds(amax, within=(lower, upper))
+        bad = np.flatnonzero((lo < lower) | (hi > upper))
     if bad.size:
         i = int(bad[0])
         raise TrajectoryError(
@@ -175,6 +179,29 @@ def _ruckig(
     if not math.isfinite(traj.duration):
         raise TrajectoryError("ruckig returned a trajectory of infinite duration")
     return traj
+
+
+def _within_by_speed(
+    p0: np.ndarray,
+    p1: np.ndarray,
+    vmax: np.ndarray,
+    duration_s: float,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> bool:
+    """Can no joint of a move from p0 to p1 [rad] in duration_s [s], never faster than
+    vmax [rad/s], leave [lower, upper] [rad]? At time t a joint is within vmax·t of p0 and
+    within vmax·(T − t) of p1, so never further up than (p0 + p1 + vmax·T) / 2, nor
+    further down than (p0 + p1 − vmax·T) / 2 (with margins over ruckig's own rounding:
+    1e-6 of vmax, 1e-7 rad). Where both are within the limits, `_ruckig` need not sample
+    the move (`RuckigTrajectory.position_bounds`): it would find it within them. Only for
+    a move that starts without acceleration and within vmax, whose target is a position
+    (ruckig keeps such a move within vmax)."""
+    if not math.isfinite(duration_s):
+        return False
+    reach = np.asarray(vmax, float) * (1.0 + 1e-6) * duration_s + 1e-7
+    mid = p0 + p1
+    return bool(np.all((mid + reach) / 2.0 <= upper) and np.all((mid - reach) / 2.0 >= lower))
 
 
 class ChainTrajectory(Trajectory):
