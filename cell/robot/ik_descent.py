@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.linalg import _umath_linalg  # type: ignore[attr-defined]
 
-from cell.robot.ik_pose import ReleasePose, _axis_error, _log3
+from cell.robot.ik_pose import ReleasePose, _axis_angle, _axis_error, _log3
 from cell.robot.model import Robot
 
 _AXIS_LEVER_M = 0.3  # [m] weighs axis errors against position errors in the bounded solve
@@ -173,7 +173,7 @@ def _orientation_error(d: _Descent, r: np.ndarray) -> tuple[np.ndarray, float, f
     """
     if d.six:
         w = _log3(d.r_des @ r.T)
-        th = _axis_error(r[:, 2], d.pose.axis, r[:, 0])[1]
+        th = _axis_angle(r[:, 2], d.pose.axis)
         ang = math.sqrt(float(w @ w))
     else:
         w, th = _axis_error(r[:, 2], d.pose.axis, r[:, 0])
@@ -224,7 +224,7 @@ def _dls_step(
         dq = z0 + jt.T @ _solve(a, err - jt @ z0)
     else:
         dq = jt.T @ _solve(a, err)
-    step = float(np.max(np.abs(dq)))
+    step = float(np.abs(dq).max())
     if step > 0.5:
         dq *= 0.5 / step
     return dq

@@ -114,11 +114,16 @@ class IKResult:
     seeds_tried: int
 
 
+_SKEW_PLUS = np.array([7, 2, 3])  # r[2, 1], r[0, 2], r[1, 0] of a (3, 3) r, flattened
+_SKEW_MINUS = np.array([5, 6, 1])  # r[1, 2], r[2, 0], r[0, 1]
+
+
 def _log3(r: np.ndarray) -> np.ndarray:
     """Rotation vector of a rotation matrix [rad], shape (3,)."""
-    c = max(-1.0, min(1.0, (float(np.trace(r)) - 1.0) / 2.0))
+    f = r.ravel()  # the trace and the skew part from the nine entries, in np.trace's order
+    c = max(-1.0, min(1.0, (float(f[0] + f[4] + f[8]) - 1.0) / 2.0))
     th = math.acos(c)
-    v = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    v = f[_SKEW_PLUS] - f[_SKEW_MINUS]
     if th < 1e-8:
         return 0.5 * v
     if math.pi - th < 1e-6:
@@ -128,6 +133,12 @@ def _log3(r: np.ndarray) -> np.ndarray:
         ax = b[:, k] / math.sqrt(max(b[k, k], 1e-12))
         return th * ax / np.linalg.norm(ax)
     return th / (2.0 * math.sin(th)) * v
+
+
+def _axis_angle(z: np.ndarray, u: np.ndarray) -> float:
+    """The angle [rad] between z and u: `_axis_error`'s, without its rotation vector."""
+    c = np.array([z[1] * u[2] - z[2] * u[1], z[2] * u[0] - z[0] * u[2], z[0] * u[1] - z[1] * u[0]])
+    return math.atan2(math.sqrt(float(c @ c)), float(z @ u))
 
 
 def _axis_error(z: np.ndarray, u: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, float]:
