@@ -25,6 +25,23 @@ from cell.model.objects import ObjectParams
 log = logging.getLogger(__name__)
 
 
+def stops_bound_s(
+    robot: Any, q_from: np.ndarray, waypoints: list[np.ndarray], settle_s: float
+) -> float:
+    """A lower bound [s] on how long a move from q_from stopping at each of the waypoints
+    [rad] takes (`plan_time` of `Mover._stops`): each stretch from rest to rest no
+    quicker than its slowest joint's bang-bang time at `robot`'s full velocity and
+    acceleration limits (as `_cycle_bound_s` bounds a cycle: a carry's limits are these or
+    a fraction of them), and the settles of `settle_s` [s] between. Where it is no sooner
+    than the path through them, `_move_plan` keeps the path without planning the stops:
+    they would not be taken (tests/test_stops_bound.py)."""
+    lim = robot.limits
+    v, a = lim.velocity * (1 + 1e-3), lim.acceleration * (1 + 1e-3)
+    d = np.abs(np.diff(np.asarray([q_from, *waypoints], float), axis=0))
+    t = np.where(d <= v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
+    return float(np.sum(np.max(t, axis=1))) + settle_s * (len(waypoints) - 1)
+
+
 def _joint_bytes(qs: list[np.ndarray]) -> bytes:
     """Joint waypoints [rad] as one key: their float64 bytes, in order."""
     return b"".join(np.asarray(q, float).tobytes() for q in qs)
@@ -73,6 +90,10 @@ class Mover(ArmBase):
         if len(waypoints) >= 2 and (
             path is None or spline_within_limits(self.robot, [q_from, *waypoints], 400) is None
         ):
+            if path is not None and stops_bound_s(self.robot, q_from, waypoints, settle_s) >= (
+                path.duration
+            ):
+                return [path]  # stopping at each cannot be sooner: not planned
             stops = self._stops(q_from, waypoints, carried)
             t_stops = plan_time(stops, settle_s)
             if path is None or t_stops < path.duration:
