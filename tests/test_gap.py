@@ -112,11 +112,19 @@ def test_other_launcher_from_tracks() -> None:
     assert all(c["phase"] != "launch" for c in rep["candidates"])
 
 
-def test_measurement_phase_from_tracks() -> None:
+@pytest.fixture(scope="module")
+def scale_run() -> tuple:
+    """A tracker 5 % off in scale, the cell's own launcher: the campaign and its diagnosis
+    (drawn and diagnosed once for the two tests that read it)."""
     camp = draw_tracked_campaign(
         (TrackingScale(1.05),), np.random.default_rng(8), n=120, other_launcher=False
     )
-    d, _ = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
+    d, prob = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
+    return camp, d, prob
+
+
+def test_measurement_phase_from_tracks(scale_run: tuple) -> None:
+    _, d, _ = scale_run
     assert d.report["where"]["phase"] == "measurement"
     assert d.report["tracks"]["g_ratio"] == pytest.approx(1.05, abs=0.01)
     assert d.report["verdict"]["effects"] == ["tracking_scale"]
@@ -142,3 +150,29 @@ def test_cli_gap_writes_json_and_html(tmp_path, capsys) -> None:
     bad = tmp_path / "bad.yaml"
     bad.write_text("effects: {gremlins: {}}\n")
     assert main(["gap", str(log), "--params", str(bad)]) == 2
+
+
+def test_gap_record_draws_each_track_beside_the_model_flight(scale_run: tuple, tmp_path) -> None:
+    """`cell.record.gap` (read back with Rerun's reader): each track beside the model's
+    flight; here, not in test_record_gap.py, to share `scale_run`'s diagnosis."""
+    from cell.model.throw import predict_landing
+    from cell.record.gap import record_gap
+    from cell.record.read import read_rows
+
+    F32 = 1e-6  # [m] Rerun stores positions as float32
+    camp, d, prob = scale_run
+    rows = read_rows(record_gap(tmp_path / "gap.rrd", d, prob, camp.tracks))
+    ids = prob.table.text("throw_id")
+    tracks = rows["/world/throw/track"]
+    flights = rows["/world/throw/model_flight"]
+    assert len(tracks) == len(flights) == len(ids)
+    k = 7
+    got = np.asarray(tracks[k]["LineStrips3D:strips"][0])
+    assert tracks[k]["throw"] == k
+    assert np.allclose(got, camp.tracks[ids[k]][:, 1:4], atol=F32)
+    # the model's flight leaves the logged release point and ends on the fast path's landing
+    fl = np.asarray(flights[k]["LineStrips3D:strips"][0])
+    release = [prob.table.num(c)[k] for c in ("x_m", "y_m", "z_m")]
+    assert np.allclose(fl[0], release, atol=F32)
+    land = predict_landing(prob.batch.take(np.array([k])), prob.ee)
+    assert np.hypot(fl[-1, 0] - land.x[0], fl[-1, 1] - land.y[0]) < 2e-3

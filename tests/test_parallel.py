@@ -54,12 +54,12 @@ def _strip(layouts):
 
 
 def _bench_sort(tmp_path, tag, capsys, *extra):
-    """`cell bench sort` on 4 test-set layouts of 2 items each: its figures without the
+    """`cell bench sort` on 4 test-set layouts of 1 item each: its figures without the
     wall time, and each layout's result (--out) as JSON text without its wall time."""
     from cell.cli import main
 
     out = tmp_path / tag
-    argv = ["bench", "sort", "--layouts", "4", "--robots", "panda,ur5", "--max-items", "2"]
+    argv = ["bench", "sort", "--layouts", "4", "--robots", "panda,ur5", "--max-items", "1"]
     assert main([*argv, "--json", "--out", str(out), *extra]) == 0
     figures = json.loads(capsys.readouterr().out)
     from cell.results import WALL_CLOCK_KEYS
@@ -71,14 +71,15 @@ def _bench_sort(tmp_path, tag, capsys, *extra):
 
 
 def test_cli_bench_sort_on_two_workers_equals_the_serial_run(local_ray, tmp_path, capsys):
-    # 4 layouts on 2 workers: each worker process runs a layout after another one
+    # 4 layouts on 2 workers: each worker process runs a layout after another one (one
+    # item a layout: what one layout leaves in a process shows in the next one's item)
     serial = _bench_sort(tmp_path, "serial", capsys)
     on_ray = _bench_sort(tmp_path, "ray", capsys, "--workers", "2")
     assert serial[1] == on_ray[1]  # every layout, item for item, to the last digit
     assert serial[0] == on_ray[0]
     figures = json.loads(serial[0])
     assert figures["set"] == "test" and figures["seeds"] == [1000, 1003]
-    assert figures["items"] == 8 and figures["layouts"] == 4
+    assert figures["items"] == 4 and figures["layouts"] == 4
 
 
 def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ray, tmp_path):

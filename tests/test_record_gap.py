@@ -11,17 +11,13 @@ import numpy as np
 import pytest
 
 from cell.cli import main
-from cell.gap.run import diagnose_log
 from cell.gap.world import draw_campaign
-from cell.gap.world_tracks import draw_tracked_campaign
 from cell.log import read_throws_csv
 from cell.log.csvio import write_throws_csv
-from cell.model.effects import TrackingScale
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE
 from cell.model.throw import ThrowBatch, predict_landing
 from cell.record.flight import predicted_flight
-from cell.record.gap import record_gap
 from cell.record.read import read_rows
 
 F32 = 1e-6  # [m] Rerun stores positions as float32
@@ -73,28 +69,6 @@ def test_cli_gap_record_holds_every_throw_before_and_after_the_verdict(tmp_path,
     assert rep["verdict"]["effects"] == ["stroke_offset"] and rms_a < 0.5 * rms_b
     assert rms_b == pytest.approx(rep["baseline"]["fit_rmse_m"], rel=1e-6)
     assert "stroke_offset" in rows["/verdict"][0]["TextDocument:text"][0]
-
-
-def test_gap_record_draws_each_track_beside_the_model_flight(tmp_path) -> None:
-    camp = draw_tracked_campaign(
-        (TrackingScale(1.05),), np.random.default_rng(8), n=120, other_launcher=False
-    )
-    d, prob = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
-    rows = read_rows(record_gap(tmp_path / "gap.rrd", d, prob, camp.tracks))
-    ids = prob.table.text("throw_id")
-    tracks = rows["/world/throw/track"]
-    flights = rows["/world/throw/model_flight"]
-    assert len(tracks) == len(flights) == len(ids)
-    k = 7
-    got = np.asarray(tracks[k]["LineStrips3D:strips"][0])
-    assert tracks[k]["throw"] == k
-    assert np.allclose(got, camp.tracks[ids[k]][:, 1:4], atol=F32)
-    # the model's flight leaves the logged release point and ends on the fast path's landing
-    fl = np.asarray(flights[k]["LineStrips3D:strips"][0])
-    release = [prob.table.num(c)[k] for c in ("x_m", "y_m", "z_m")]
-    assert np.allclose(fl[0], release, atol=F32)
-    land = predict_landing(prob.batch.take(np.array([k])), prob.ee)
-    assert np.hypot(fl[-1, 0] - land.x[0], fl[-1, 1] - land.y[0]) < 2e-3
 
 
 def test_cli_calibrate_record_nominal_and_fitted_against_the_scene(tmp_path) -> None:
