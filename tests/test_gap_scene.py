@@ -106,3 +106,49 @@ def test_scene_cases_cover_the_brief():
     assert any(c["truth"] == "unknown" for c in cases)
     assert "s:wind" in SCENE_CASES
     assert main(["gap", "check", "--worlds", "scene", "--truths", "s:gremlins"]) == 2
+
+
+def _batch(objects: tuple[str, ...]):  # type: ignore[no-untyped-def]
+    from cell.log.records import throw_record
+    from cell.log.table import ThrowTable
+    from cell.sim.items import resolve_object
+
+    recs = []
+    for i in range(12):
+        obj, _ = resolve_object(objects[i % len(objects)])
+        recs.append(throw_record(
+            f"t{i}", obj, stroke_m=0.04 + 0.005 * i, position_m=(0.0, 0.0, 0.7),
+            elevation_rad=0.5, azimuth_rad=0.0, land_z_m=0.1, landed_xy_m=(1.0, 0.0),
+            t_flight_s=0.5,
+        ))  # fmt: skip
+    return ThrowTable.from_records(recs).to_batch()
+
+
+def test_a_law_in_mass_or_size_needs_three_values_of_it():
+    """With two objects, a law in the mass, one in the size and one per object are the same
+    two numbers: only the stroke (12 values) is offered as a covariate; with three objects
+    the mass and size are too."""
+    from cell.gap.laws import MIN_LEVELS, law_forms, levels
+    from cell.model.effects import DragScale
+
+    two, three = _batch(("cube30", "sphere40")), _batch(("cube30", "sphere40", "cube50"))
+    assert MIN_LEVELS == 3
+    assert [levels(two, c) for c in ("stroke_m", "mass_kg", "size_x_m")] == [12, 2, 2]
+    assert {f.covariate for f in law_forms(DragScale, two)} == {"stroke_m"}  # type: ignore[attr-defined]
+    got = {f.covariate for f in law_forms(DragScale, three)}  # type: ignore[attr-defined]
+    assert got == {"stroke_m", "mass_kg", "size_x_m"}
+    assert len(law_forms(DragScale)) == 6  # without a batch: every form
+
+
+def test_a_constant_told_per_object_is_judged_object_by_object():
+    """A world's constant factor found as a per-object law passes when every object's value
+    is within 30 % of it, and fails when one is not (the scene's s:drag-const)."""
+    from cell.gap.check_other import _params_ok
+
+    expect = {"drag_scale": {"factor": 2.5}}
+    law = {"common": 2.78, "spread": 0.3, "per_object": {"cube30": 2.73, "sphere40": 3.16}}
+    ok, errs = _params_ok(expect, {"drag_scale": law})
+    assert ok and errs["drag_scale.factor"] == pytest.approx(0.66 / 2.5)
+    law["per_object"]["sphere40"] = 3.3
+    assert not _params_ok(expect, {"drag_scale": law})[0]
+    assert not _params_ok(expect, {"drag_scale": {"k": 82.0}})[0]  # a law in a covariate

@@ -4,7 +4,8 @@ Each case is a world (a list of effects, each with its law form), the verdict it
 get, the phase of each effect, and the parameters the diagnosis should find (the world's
 law in the diagnosis' terms). A case passes when the verdict names the effects right
 (diagonal), every effect's phase is right, every expected parameter is within 30 % of
-the world's (a tracking scale within 0.5 %), and the verdict's robust held-out RMSE is
+the world's (a tracking scale within 0.5 %; a constant the tool gave per object: every
+object's value), and the verdict's robust held-out RMSE is
 within 1.3 × the world's own floor (its landings without scatter and without throw-to-
 throw variation; outliers left out).
 """
@@ -301,6 +302,13 @@ def _params_ok(expect: dict[str, Any], got: dict[str, Any]) -> tuple[bool, dict[
         for k, v in flat.items():
             val = got.get(eff, {}).get(k)
             tol = SCALE_TOL if eff == "tracking_scale" else PARAM_TOL
+            per = got.get(eff, {}).get("per_object")
+            if val is None and isinstance(per, dict) and per and eff != "tracking_scale":
+                # a constant world told by a per-object law: every object's value is judged
+                rel = max(abs(float(x) - v) / abs(v) for x in per.values())
+                errs[f"{eff}.{k}"] = float(rel)
+                ok = ok and rel <= tol
+                continue
             if val is None:
                 errs[f"{eff}.{k}"] = None
                 ok = False

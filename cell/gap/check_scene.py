@@ -34,10 +34,15 @@ def _e(kind: str, form: str = "const", **kw: Any) -> dict[str, Any]:
 
 FLIGHT_KINDS = ("wind", "drag_scale", "downwash", "side_force")
 _JET: dict[str, Any] = {"w_mps": 9.0, "radius_m": 0.25, "core_m": 0.8}
+# a jet wide and strong enough to move the drone throws' landings by about 2 floors
+_JET_STRONG: dict[str, Any] = {"w_mps": 15.0, "radius_m": 1.5, "core_m": 2.0}
 _SLIDE = {"one_of": [{"tau_s": "measured"}, {"inv_mu": "measured"}]}
 W, B = "wind", "bounce"
 _BLOCKS = ("cube30", "cube40", "cube50", "cube60", "cuboid_a", "cuboid_b", "cuboid_c")
 _BALLS = ("sphere40", "sphere55", "sphere70")
+TS, DS = "tracking_scale", "drag_scale"
+_HOP = _e(B, "contact", restitution=0.6, friction=1.0, rolling_m=0.05)
+_OUT = {"outliers": 0.05}
 
 # name -> (effects, truth, {effect: phase}, {effect: {param: value}}, options)
 SCENE_CASES: dict[
@@ -147,7 +152,51 @@ SCENE_CASES: dict[
         {},
     ),  # fmt: skip
     "s:side-force": ([_e("side_force", x_mps2=0.0, y_mps2=0.8)], "unknown", {}, {}, {}),
-}
+    # more laws per effect, each a sibling of a case above with other values
+    "s:wind-low": ([_e(W, x_mps=1.0, y_mps=0.5)], W, {W: "flight"}, {W: {"x_mps": 1.0, "y_mps": 0.5}}, {}),
+    "s:wind-y": ([_e(W, x_mps=0.0, y_mps=3.0)], W, {W: "flight"}, {W: {"y_mps": 3.0}}, {}),
+    "s:wind-throw-wide": ([_e(W, "throw", x_mps=2.0, y_mps=0.0, sd=1.0)], W, {W: "flight"},
+                          {W: {"x_mps": 2.0}}, {}),
+    "s:drag-low": ([_e(DS, value=0.4)], DS, {DS: "flight"}, {DS: {"factor": 0.4}}, {}),
+    "s:drag-high": ([_e(DS, value=1.8)], DS, {DS: "flight"}, {DS: {"factor": 1.8}}, {}),
+    "s:drag-stroke": ([_e(DS, "stroke", k=30.0)], DS, {DS: "flight"}, {DS: {"k": 30.0}}, {}),
+    "s:downwash-strong": ([_e("downwash", **_JET_STRONG)], "downwash", {"downwash": "flight"}, {},
+                          {"drone_share": 0.6}),
+    "s:none-drone": ([], "none", {}, {}, {"drone_share": 0.6}),
+    "s:bounce-hop-mu05": ([_e(B, "contact", restitution=0.6, friction=0.5, rolling_m=0.05)], B,
+                          {B: "landing"}, {B: _SLIDE}, {}),
+    "s:bounce-roll-one": ([_e(B, "contact", restitution=0.05, friction=1.0, rolling_m=0.05)], B,
+                          {B: "landing"}, {B: _SLIDE}, {"objects": ("sphere55",)}),
+    "s:bounce-slide-mu03": ([_e(B, "contact", restitution=0.05, friction=0.3)], B,
+                            {B: "landing"}, {B: _SLIDE}, {"objects": _BLOCKS}),
+    "s:scale-1.02": ([_e("tracker", scale=1.02)], TS, {TS: "measurement"},
+                     {TS: {"scale_factor": 1.02}}, {}),
+    "s:scale-0.98": ([_e("tracker", scale=0.98)], TS, {TS: "measurement"},
+                     {TS: {"scale_factor": 0.98}}, {}),
+    "s:latency": ([_e("tracker", scale=1.0, latency_s=0.05)], "none", {}, {}, {}),
+    # outliers with each effect
+    "s:drag+outliers": ([_e(DS, value=1.8)], DS, {DS: "flight"}, {DS: {"factor": 1.8}}, _OUT),
+    "s:scale+outliers": ([_e("tracker", scale=1.02)], TS, {TS: "measurement"},
+                         {TS: {"scale_factor": 1.02}}, _OUT),
+    "s:bounce-hop+outliers": ([_HOP], B, {B: "landing"}, {B: _SLIDE}, _OUT),
+    # compounds across phases
+    "s:wind+scale": ([_e(W, x_mps=2.0, y_mps=-1.0), _e("tracker", scale=1.02)], f"{TS}+{W}",
+                     {W: "flight", TS: "measurement"},
+                     {W: {"x_mps": 2.0, "y_mps": -1.0}, TS: {"scale_factor": 1.02}}, {}),
+    "s:wind+hop": ([_e(W, x_mps=2.0, y_mps=-1.5), _HOP], f"{B}+{W}", {W: "flight", B: "landing"},
+                   {W: {"x_mps": 2.0, "y_mps": -1.5}, B: _SLIDE}, {}),
+    "s:drag+hop": ([_e(DS, value=1.8), _HOP], f"{B}+{DS}", {DS: "flight", B: "landing"},
+                   {DS: {"factor": 1.8}, B: _SLIDE}, {}),
+    "s:scale+hop": ([_e("tracker", scale=1.02), _HOP], f"{B}+{TS}",
+                    {B: "landing", TS: "measurement"}, {TS: {"scale_factor": 1.02}, B: _SLIDE}, {}),
+    "s:downwash-strong+wind": ([_e("downwash", **_JET_STRONG), _e(W, x_mps=2.0, y_mps=1.0)],
+                               "downwash+wind", {"downwash": "flight", W: "flight"},
+                               {W: {"x_mps": 2.0, "y_mps": 1.0}}, {"drone_share": 0.6}),
+    # outside the vocabulary
+    "s:side-force-x": ([_e("side_force", x_mps2=-0.6, y_mps2=0.0)], "unknown", {}, {}, {}),
+    "s:launch-yaw-stroke": ([_e("launch", "stroke", yaw_k=1.0)], "unknown", {}, {}, {}),
+    "s:launch-speed-stroke": ([_e("launch", "stroke", speed_k=0.8)], "unknown", {}, {}, {}),
+}  # fmt: skip
 FAST_SCENE = ("s:wind", "s:none")
 
 

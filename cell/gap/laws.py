@@ -16,7 +16,10 @@ value per throw (an array), which the model's effect code evaluates unchanged. T
 diagnosis picks the form by held-out evidence with a penalty for each extra term
 (`choose_law`): a form replaces the constant only when its held-out RMSE, raised by
 TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
-interval above zero.
+interval above zero. A covariate form is tried only where the covariate takes at least
+MIN_LEVELS distinct values in the log: on two values (a log of two objects, say) a law in
+the mass, one in the size and one per object are the same two numbers, so the difference
+is the per-object form's, which pays for its second term.
 """
 
 from __future__ import annotations
@@ -31,10 +34,12 @@ from cell.gap.problem import GapProblem
 from cell.model.effects import Effect
 from cell.model.throw import ThrowBatch
 
-__all__ = ["COVARIATES", "LAW_BASES", "law_class", "law_text", "TERM_PENALTY", "choose_law"]
+__all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_text", "levels", "TERM_PENALTY",
+           "choose_law"]  # fmt: skip
 
 TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
+MIN_LEVELS = 3  # a covariate form is tried where the covariate takes this many values
 # covariate name -> (how to read it off a batch, its typical largest value)
 COVARIATES: dict[str, tuple[Any, float]] = {
     "stroke_m": (lambda b: b.stroke, 0.11),
@@ -180,9 +185,17 @@ def shrunk(values: np.ndarray, ci: np.ndarray | None) -> tuple[np.ndarray, float
     return mean + b * (v - mean), mean, float(np.sqrt(tau2))
 
 
-def law_forms(base: type[Effect]) -> list[type[Effect]]:
-    """Every covariate form of a one-parameter effect (proportional and linear)."""
-    return [law_class(base, c, i) for c in COVARIATES for i in (False, True)]
+def law_forms(base: type[Effect], batch: ThrowBatch | None = None) -> list[type[Effect]]:
+    """Every covariate form of a one-parameter effect (proportional and linear); with a
+    batch, only those of covariates that take at least MIN_LEVELS values in it."""
+    covs = [c for c in COVARIATES if batch is None or levels(batch, c) >= MIN_LEVELS]
+    return [law_class(base, c, i) for c in covs for i in (False, True)]
+
+
+def levels(batch: ThrowBatch, covariate: str) -> int:
+    """How many distinct values (to 1e-9 of its unit) a covariate takes in a batch."""
+    read, _ = COVARIATES[covariate]
+    return int(np.unique(np.round(np.asarray(read(batch), float), 9)).size)
 
 
 def _warm(cls: type[Effect], p: float, cov_mean: float) -> np.ndarray:
@@ -236,7 +249,7 @@ def choose_law(
         p = float(eff.vector()[0])
         rows = {"constant": best.heldout_rmse_m}
         pick, pick_val = best, best.heldout_rmse_m
-        forms = law_forms(base)
+        forms = law_forms(base, prob.batch)
         n_obj = len(set(_object_keys(prob.batch)))
         if 2 <= n_obj <= MAX_OBJECTS:
             forms.append(per_object_class(base, prob))

@@ -8,8 +8,9 @@ item as forces and contacts, never as a formula on the landing:
 | kind | how it acts in the scene | forms |
 |---|---|---|
 | wind | the item's air drag is taken on its velocity relative to a steady air flow (x_mps, y_mps): a force −c_f·|v − w|·(v − w) each physics step | const, throw (each throw's flow drawn around the mean with sd) |
-| drag_scale | the drag force is c_f = factor · ½ ρ C_d A of the object's own C_d and area | const, object (a factor per object id) |
+| drag_scale | the drag force is c_f = factor · ½ ρ C_d A of the object's own C_d and area | const, object (a factor per object id), stroke (factor = k · stroke) |
 | downwash | the air under a drone's rotors moves down: a round jet from the release point whose centre speed w_mps · rpm / 5000 falls as 1 / (1 + depth / core_m) and whose radius grows as radius_m + 0.2 · depth | const |
+| launch | as the item leaves the pads its velocity is turned by yaw_k · stroke about the vertical and scaled by 1 + speed_k · stroke (outside the vocabulary) | stroke |
 | side_force | a constant horizontal force m · (x_mps2, y_mps2) on the item in flight (outside the vocabulary) | const |
 | bounce | the landing is where the item comes to rest on the floor, whose restitution and lateral friction are set (changeDynamics) | contact |
 | tracker | the tracker's recorded positions are `scale` times the true ones about the origin and `latency_s` late | const |
@@ -89,9 +90,11 @@ def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share
     return [cfg[i] for i in rng.permutation(len(cfg))[:n]]
 
 
-def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool) -> tuple[np.ndarray, float, np.ndarray]:
+def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] | None = None
+         ) -> tuple[np.ndarray, float, np.ndarray]:  # fmt: skip
     """Throw once: (logged point xy [m] — the crossing of LAND_Z_M, or the rest point with
-    `rest` —, the crossing time [s since release], the crossing's velocity [m/s])."""
+    `rest` —, the crossing time [s since release], the crossing's velocity [m/s]). `kick`
+    (a launch effect) turns and scales the item's velocity as it leaves the pads."""
     from cell.workflows.campaign import ReleasePose
 
     pf = ReleasePose(sc, ee, th.object_id, th.stroke, th.p0, th.elevation, th.azimuth)
@@ -100,6 +103,9 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool) -> tuple[np.ndarray, f
         pf.pick(pf.decide(0, item.obj, None), item.obj, item)
         t0 = sc.t
         pf.release(None)  # type: ignore[arg-type]
+        if kick:
+            yaw = float(kick.get("yaw_k", 0.0)) * th.stroke
+            sc.launch_error(item, yaw, float(kick.get("speed_k", 0.0)) * th.stroke)
         sc.set_timestep(sc.dt_s)
         prev = sc.item_position(item)
         cross: tuple[np.ndarray, float, np.ndarray] | None = None
@@ -138,6 +144,7 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int
     xy, tl, vc = np.full((n, 2), np.nan), np.full(n, np.nan), np.full((n, 3), np.nan)
     wd, dr = _find(effects, "wind"), _find(effects, "drag_scale")
     dw, sf, bo = _find(effects, "downwash"), _find(effects, "side_force"), _find(effects, "bounce")
+    kick = _find(effects, "launch")
     sc = EffectScene()
     try:
         ee = make_end_effector("pybullet", plant=sc)
@@ -155,9 +162,11 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int
             if dr:
                 per = dr.get("per_object", {})
                 sc.drag_factor = float(per.get(th.object_id, dr.get("value", 1.0)))
+                if dr.get("form") == "stroke":
+                    sc.drag_factor = float(dr["k"]) * th.stroke
             sc.jet = (np.array(th.p0), th.rpm, dw) if dw and th.rpm > 0 else None
             try:
-                xy[i], tl[i], vc[i] = _one(sc, ee, th, rest=bo is not None)
+                xy[i], tl[i], vc[i] = _one(sc, ee, th, rest=bo is not None, kick=kick)
             except NoLanding:
                 continue
     finally:
@@ -235,7 +244,11 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
     xy0, tl0, vc0 = throw_plan(plan, [], seed)
     truth: dict[str, float] = {}
     if _find(effects, "bounce"):
-        truth = _slide_truth(xy, xy0, vc0)
+        # the slide from where the item crosses the plane in the same air (the effects
+        # without the floor's contact) to where it rests
+        air = [e for e in effects if e["kind"] not in ("bounce", "tracker")]
+        xyc, _, vcc = throw_plan(plan, air, seed) if air else (xy0, tl0, vc0)
+        truth = _slide_truth(xy, xyc, vcc)
     tr = _find(effects, "tracker")
     scale = float(tr["scale"]) if tr else 1.0
     lat = float(tr.get("latency_s", 0.0)) if tr else 0.0

@@ -43,6 +43,16 @@ class EffectScene(CellScene):
             rollingFriction=float(rolling_m),
         )
 
+    def launch_error(self, item: Any, yaw_rad: float, speed_share: float) -> None:
+        """Turn a just-launched item's velocity by yaw_rad about the vertical and scale its
+        speed by (1 + speed_share): a launch error applied as the item leaves the pads."""
+        cl = self.client
+        v, w = cl.getBaseVelocity(item.body)
+        c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+        f = 1.0 + speed_share
+        out = [f * (c * v[0] - s * v[1]), f * (s * v[0] + c * v[1]), f * v[2]]
+        cl.resetBaseVelocity(item.body, out, w)
+
     def air(self, p: np.ndarray) -> np.ndarray:
         """The air velocity at a point [m/s, W]: the steady flow plus the rotor jet."""
         w = self.wind.copy()
