@@ -19,8 +19,9 @@ from cell.robot.grip_hold import (
     GENTLE_SCALE,
     GripHold,
     _point_motion,
+    carry_use,
     grip_use,
-    uses,
+    rest_force,
 )
 from cell.robot.model import Robot
 from cell.robot.trajectory import Trajectory
@@ -69,7 +70,9 @@ def plan_carry(
         TrajectoryError: the grip cannot hold the weight within the margin; toppra fails.
     """
     bound = _bound(hold, margin)
-    scaled = _TimeScaled(waypoints_q, robot, hold, velocity_scale, acceleration_scale, iterations)
+    scaled = _TimeScaled(
+        waypoints_q, robot, hold, velocity_scale, acceleration_scale, iterations, margin
+    )
     if gentle_floor:
         best = plan_carry(
             waypoints_q,
@@ -88,8 +91,8 @@ def plan_carry(
     if best[1] <= bound:
         return best
     scales = (velocity_scale, acceleration_scale)
-    shaped = _shaped(waypoints_q, robot, hold, bound, *scales) if shape else None
-    dilated = _Dilated(best[0], robot, hold)
+    shaped = _shaped(waypoints_q, robot, hold, margin, *scales) if shape else None
+    dilated = _Dilated(best[0], robot, hold, margin=margin)
     best = scaled.fastest(bound, best, dilated)
     if best[1] > bound and tie > 0.0:
         # Not even a slow move keeps within the bound. Where the path at rest asks no
@@ -141,13 +144,16 @@ class _TimeScaled:
         velocity_scale: float,
         acceleration_scale: float,
         iterations: int,
+        margin: float = CARRY_MARGIN,
     ) -> None:
         self.waypoints_q, self.robot, self.hold = waypoints_q, robot, hold
+        self.margin = margin
         self.velocity_scale, self.acceleration_scale = velocity_scale, acceleration_scale
         self.iterations = iterations
 
     def attempt(self, s: float) -> tuple[Trajectory, float]:
-        """The path planned at time scale s, and its use of the grip (`grip_use`)."""
+        """The path planned at time scale s, and its use of the grip (`grip_use` with the
+        tilt, `carry_use`)."""
         from cell.robot.motion import plan_path
 
         tr = plan_path(
@@ -156,7 +162,7 @@ class _TimeScaled:
             velocity_scale=self.velocity_scale * math.sqrt(s),
             acceleration_scale=self.acceleration_scale * s,
         )
-        return tr, grip_use(tr, self.robot, self.hold)
+        return tr, grip_use(tr, self.robot, self.hold, margin=self.margin)
 
     def gentle(self, bound: float) -> tuple[Trajectory, float]:
         """The path at GENTLE_SCALE of the limits and its use (logged: over `bound`)."""
@@ -219,7 +225,14 @@ class _Dilated:
     n instants along it as `grip_use` samples the dilated path: f_s = s R⊤a_c − R⊤g,
     α_s = s α."""
 
-    def __init__(self, traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201) -> None:
+    def __init__(
+        self,
+        traj: Trajectory,
+        robot: Robot,
+        hold: GripHold,
+        n: int = 201,
+        margin: float = CARRY_MARGIN,
+    ) -> None:
         ts = np.linspace(0.0, traj.duration, n)
         qs, dqs, ddqs = traj.sample_many(ts)
         a, alpha, rots = _point_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
@@ -227,19 +240,20 @@ class _Dilated:
         self._motion = np.einsum("kij,kj->ki", rt, a)  # R⊤a_c, scales by s
         self._weight = np.einsum("kij,j->ki", rt, _GRAVITY)  # R⊤g, does not
         self._alpha = np.einsum("kij,kj->ki", rt, alpha)
-        self._hold = hold
+        self._rest = rest_force(rots)  # −R⊤g: held still on the path
+        self._hold, self._margin = hold, margin
 
     def use(self, s: float) -> float:
         """`grip_use` of the path at time scale s (velocity × √s, acceleration × s)."""
         f = s * self._motion - self._weight
-        return float(np.max(uses(f, s * self._alpha, self._hold, tilt=False)))
+        return carry_use(f, s * self._alpha, self._rest, self._hold, self._margin)
 
 
 def _shaped(
     waypoints_q: Sequence[np.ndarray],
     robot: Robot,
     hold: GripHold,
-    bound: float,
+    margin: float,
     velocity_scale: float,
     acceleration_scale: float,
 ) -> tuple[Trajectory, float] | None:
@@ -250,6 +264,7 @@ def _shaped(
     None when toppra finds no parameterisation (the path asks too much at rest)."""
     from cell.robot.motion import plan_path
 
+    bound = 1.0 / margin
     # toppra logs a path it cannot parameterise as a warning; here that is an expected
     # answer (the uniformly slowed path is kept), not something for the user to see
     toppra_log = logging.getLogger("toppra")
@@ -268,7 +283,7 @@ def _shaped(
             except TrajectoryError as exc:
                 log.debug("no carry shaped by the grip: %s", exc)
                 return None
-            use = grip_use(tr, robot, hold, n=501)
+            use = grip_use(tr, robot, hold, n=501, margin=margin)
             if use <= bound:
                 return tr, use
         return None
