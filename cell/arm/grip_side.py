@@ -9,11 +9,12 @@ swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sph
 wide every way the pads meet them: one side. A mesh is gripped across its first size only
 (its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
 
-Of the sides that hold (those held briskly, where there are any: `holding_sides`), a
-place takes the first (a place's cycle does not depend on the side); a throw is planned
-across each and takes the one with the shorter cycle estimate
-(`GripSideChoice._throw_side`). Where no side holds, `CannotGrip` says what each side
-held.
+The sides kept (`holding_sides`): the first size alone where the pads hold it briskly
+across it (every item the cell sorted before is gripped as it was); else the other side
+where it holds briskly; else the sides held only slowly. A place takes the first kept (a
+place's cycle does not depend on the side); a throw is planned across each kept and takes
+the one with the shorter cycle estimate (`GripSideChoice._throw_side`). Where no side
+holds, `CannotGrip` says what each side held.
 """
 
 from __future__ import annotations
@@ -72,11 +73,17 @@ def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
 
 
 def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
-    """The sides of `obj` the pads hold (`grip_sides`, in that order): those they hold
-    briskly (BRISK_CARRY_SAFETY x its weight) where there are any, else those they hold
-    only within the carry's bound (carried slowly). cuboid_a is held across 30 mm only
-    carried slowly, across 50 mm briskly: the cell grips it across 50 mm (with both
-    compared by the cycle estimate, the physical pick took the 30 mm side).
+    """The sides of `obj` the pads hold (`grip_sides`, in that order): its first size
+    alone where the pads hold it briskly across it (BRISK_CARRY_SAFETY x its weight: every
+    item the cell sorted before is gripped, planned and carried as it was); else the other
+    sides they hold briskly, where there are any; else those they hold only within the
+    carry's bound (carried slowly). cuboid_a is held across 30 mm only carried slowly,
+    across 50 mm briskly: the cell grips it across 50 mm (with both compared by the cycle
+    estimate, the physical pick took the 30 mm side).
+
+    Offered both sides of every box whenever both held briskly, the cell had turned boxes
+    it sorted well across their first size and their throws changed with it (the merge
+    reverted at cf2d90b, docs/HISTORY.md).
 
     Raises:
         CannotGrip: no side holds; the message names each side tried (its width in mm)
@@ -89,7 +96,9 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
             found.append(GripSide(yaw, side, s_max, brisk))
         else:
             tried.append(grip_refusal(params, side))
-    if any(s.brisk for s in found):
+    if found and found[0].yaw_rad == 0.0 and found[0].brisk:
+        found = found[:1]  # across its first size, as the cell always gripped it
+    elif any(s.brisk for s in found):
         found = [s for s in found if s.brisk]
     if not found:
         name = obj.name or obj.shape

@@ -17,11 +17,14 @@ from cell.robot.grip_hold import (
     _GRAVITY,
     CARRY_MARGIN,
     GENTLE_SCALE,
+    TILT_SLOWS_OVER,
     GripHold,
     _point_motion,
     carry_use,
     grip_use,
     rest_force,
+    tilt_use,
+    uses,
 )
 from cell.robot.model import Robot
 from cell.robot.trajectory import Trajectory
@@ -60,39 +63,67 @@ def plan_carry(
         gentle_floor: never slower than the path at GENTLE_SCALE of the limits (where the
             path at rest asks nearly all the bound, a carry within it would crawl).
 
+    The grip's tilt (an item held by its faces: `GripHold.torque_y_nm`) is counted after:
+    where the path so timed asks more than TILT_SLOWS_OVER of the grip with the tilt
+    (`tilt_use`), it is planned again keeping its use with the tilt within the bound
+    (`carry_use`: or within what the path asks held still, a level swing past the
+    horizontal), and the slower of the two is taken. Any other carry is timed as without
+    the tilt (so are the routes `_soonest` compares by it); one the tilt binds is slowed,
+    never sped up: left out, carries that asked 0.73 without the tilt and 1.23 with it
+    dropped their items (issue 59).
+
     Returns:
-        (the trajectory, its peak use of the grip, `grip_use`): at most 1/margin (or
-        1/margin + tie), or, when no time scaling gets it there (the path asks too much),
-        the path at GENTLE_SCALE of the limits (logged); with `gentle_floor`, that path
-        wherever it is sooner.
+        (the trajectory, its peak use of the grip, `grip_use`; the tilt counted where it
+        was slowed for it): at most 1/margin (or 1/margin + tie), or, when
+        no time scaling gets it there (the path asks too much), the path at GENTLE_SCALE
+        of the limits (logged); with `gentle_floor`, that path wherever it is sooner.
 
     Raises:
         TrajectoryError: the grip cannot hold the weight within the margin; toppra fails.
     """
+    args = (waypoints_q, robot, hold, margin, velocity_scale, acceleration_scale, iterations)
+    plain = _plan(*args, shape, tie, gentle_floor, None)
+    if hold.torque_y_nm <= 0.0:
+        return plain
+    # the grip's tilt counted: the carry is slowed only where it would tip the item
+    tipping = tilt_use(plain[0], robot, hold)
+    if tipping <= TILT_SLOWS_OVER:
+        return plain
+    log.info("the carry's use with the grip's tilt %.3f: slowed within its bound", tipping)
+    tilted = _plan(*args, shape, tie, gentle_floor, margin)
+    return tilted if tilted[0].duration > plain[0].duration else plain
+
+
+def _plan(
+    waypoints_q: Sequence[np.ndarray],
+    robot: Robot,
+    hold: GripHold,
+    margin: float,
+    velocity_scale: float,
+    acceleration_scale: float,
+    iterations: int,
+    shape: bool,
+    tie: float,
+    gentle_floor: bool,
+    tilt: float | None,
+) -> tuple[Trajectory, float]:
+    """`plan_carry`'s path within 1/margin of the grip's force-and-twist use (`tilt`
+    None), or of its use with the tilt counted (`tilt`: the margin, `carry_use`)."""
     bound = _bound(hold, margin)
     scaled = _TimeScaled(
-        waypoints_q, robot, hold, velocity_scale, acceleration_scale, iterations, margin
+        waypoints_q, robot, hold, velocity_scale, acceleration_scale, iterations, tilt
     )
     if gentle_floor:
-        best = plan_carry(
-            waypoints_q,
-            robot,
-            hold,
-            margin=margin,
-            velocity_scale=velocity_scale,
-            acceleration_scale=acceleration_scale,
-            iterations=iterations,
-            shape=shape,
-            tie=tie,
-        )
+        args = (waypoints_q, robot, hold, margin, velocity_scale, acceleration_scale)
+        best = _plan(*args, iterations, shape, tie, False, tilt)
         return _sooner(scaled.attempt(GENTLE_SCALE), best)
 
     best = scaled.attempt(1.0)
     if best[1] <= bound:
         return best
     scales = (velocity_scale, acceleration_scale)
-    shaped = _shaped(waypoints_q, robot, hold, margin, *scales) if shape else None
-    dilated = _Dilated(best[0], robot, hold, margin=margin)
+    shaped = _shaped(waypoints_q, robot, hold, bound, tilt, *scales) if shape else None
+    dilated = _Dilated(best[0], robot, hold, margin=tilt)
     best = scaled.fastest(bound, best, dilated)
     if best[1] > bound and tie > 0.0:
         # Not even a slow move keeps within the bound. Where the path at rest asks no
@@ -144,16 +175,16 @@ class _TimeScaled:
         velocity_scale: float,
         acceleration_scale: float,
         iterations: int,
-        margin: float = CARRY_MARGIN,
+        margin: float | None = None,
     ) -> None:
         self.waypoints_q, self.robot, self.hold = waypoints_q, robot, hold
-        self.margin = margin
+        self.margin = margin  # None: the force-and-twist use; else the tilt counted
         self.velocity_scale, self.acceleration_scale = velocity_scale, acceleration_scale
         self.iterations = iterations
 
     def attempt(self, s: float) -> tuple[Trajectory, float]:
-        """The path planned at time scale s, and its use of the grip (`grip_use` with the
-        tilt, `carry_use`)."""
+        """The path planned at time scale s, and its use of the grip (`grip_use`; with
+        `margin`, the tilt counted: `carry_use`)."""
         from cell.robot.motion import plan_path
 
         tr = plan_path(
@@ -231,7 +262,7 @@ class _Dilated:
         robot: Robot,
         hold: GripHold,
         n: int = 201,
-        margin: float = CARRY_MARGIN,
+        margin: float | None = None,
     ) -> None:
         ts = np.linspace(0.0, traj.duration, n)
         qs, dqs, ddqs = traj.sample_many(ts)
@@ -246,6 +277,8 @@ class _Dilated:
     def use(self, s: float) -> float:
         """`grip_use` of the path at time scale s (velocity × √s, acceleration × s)."""
         f = s * self._motion - self._weight
+        if self._margin is None:
+            return float(np.max(uses(f, s * self._alpha, self._hold, tilt=False)))
         return carry_use(f, s * self._alpha, self._rest, self._hold, self._margin)
 
 
@@ -253,7 +286,8 @@ def _shaped(
     waypoints_q: Sequence[np.ndarray],
     robot: Robot,
     hold: GripHold,
-    margin: float,
+    bound: float,
+    tilt: float | None,
     velocity_scale: float,
     acceleration_scale: float,
 ) -> tuple[Trajectory, float] | None:
@@ -264,7 +298,6 @@ def _shaped(
     None when toppra finds no parameterisation (the path asks too much at rest)."""
     from cell.robot.motion import plan_path
 
-    bound = 1.0 / margin
     # toppra logs a path it cannot parameterise as a warning; here that is an expected
     # answer (the uniformly slowed path is kept), not something for the user to see
     toppra_log = logging.getLogger("toppra")
@@ -283,7 +316,7 @@ def _shaped(
             except TrajectoryError as exc:
                 log.debug("no carry shaped by the grip: %s", exc)
                 return None
-            use = grip_use(tr, robot, hold, n=501, margin=margin)
+            use = grip_use(tr, robot, hold, n=501, margin=tilt)
             if use <= bound:
                 return tr, use
         return None
