@@ -73,7 +73,7 @@ def _check_the_sides(page: str, params: Any) -> None:
 
 def _check_the_carry(page: str, params: Any) -> None:
     """The carry's bound and tilt, the tetrapack, the items held at points."""
-    from cell.arm import grip_limits
+    from cell.arm import grip_limits, planner
     from cell.arm.grip_side import holding_sides
     from cell.arm.tuning import TUNING, ArmTuning
     from cell.catalogue import get_object
@@ -84,8 +84,14 @@ def _check_the_carry(page: str, params: Any) -> None:
                            r"\(the pads hold ([\d.]+)-([\d.]+) of their static friction")  # fmt: skip
     assert bound == f"1/{grip_hold.CARRY_MARGIN}"
     assert f"the pads hold {lo}-{hi} of what they hold at rest" in inspect.getsource(grip_hold)
-    (headroom,) = quoted(page, r"within that plus ([\d.]+)\.")
+    (over,) = quoted(
+        page, r"asks more than ([\d.]+) of the grip with the tilt \(`TILT_SLOWS_OVER`\)"
+    )
+    assert float(over) == grip_hold.TILT_SLOWS_OVER
+    (headroom,) = quoted(page, r"within that plus ([\d.]+), and the slower")
     assert float(headroom) == grip_hold.TILT_HEADROOM
+    (held,) = quoted(page, r"would ask more than ([\d.]+) of the grip \(`RELEASE_HELD_MAX`")
+    assert float(held) == planner.RELEASE_HELD_MAX
     without, with_ = quoted(page, r"a carry that asked ([\d.]+) without it asked ([\d.]+) with it")
     assert f"asked {without} of it, {with_} with the tilt counted" in inspect.getsource(grip_hold)
     # the tetrapack: held only below the brisk margin, carried slowly, not refused

@@ -220,13 +220,6 @@ def leveller(tmp_path: Path) -> Iterator[Leveller]:
         yield o
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="since the grip's merge (the carry's use counts the grip's tilt, "
-    "cell/robot/grip_hold.carry_use) no carry of this job leaves the swing out, though all "
-    "three boxes still land in their bin; not yet traced whether the direct route now asks "
-    "more than the swing may (the case no longer exercises the choice) or the choice regressed",
-)
 def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
     leveller: Leveller, monkeypatch: pytest.MonkeyPatch
 ) -> None:
