@@ -84,9 +84,7 @@ def _check_the_carry(page: str, params: Any) -> None:
                            r"\(the pads hold ([\d.]+)-([\d.]+) of their static friction")  # fmt: skip
     assert bound == f"1/{grip_hold.CARRY_MARGIN}"
     assert f"the pads hold {lo}-{hi} of what they hold at rest" in inspect.getsource(grip_hold)
-    (over,) = quoted(
-        page, r"asks more than ([\d.]+) of the grip with the tilt \(`TILT_SLOWS_OVER`\)"
-    )
+    (over,) = quoted(page, r"asks more than ([\d.]+) of the grip with the tilt \(`TILT_SLOWS_OVER`")
     assert float(over) == grip_hold.TILT_SLOWS_OVER
     (headroom,) = quoted(page, r"within that plus ([\d.]+), and the slower")
     assert float(headroom) == grip_hold.TILT_HEADROOM
