@@ -33,7 +33,7 @@ import numpy as np
 
 from cell.arm.flywheel import Flywheel, LandingCorrection
 from cell.arm.grip_limits import GripUse
-from cell.arm.grip_side import GripSideChoice, holding_sides
+from cell.arm.grip_side import GripSideChoice, holding_sides, throw_sides
 from cell.arm.kinematics import Kinematics
 from cell.arm.launch import check_sortable
 from cell.arm.mover import Mover
@@ -338,7 +338,7 @@ class Orchestrator(
             return Decision(
                 "place", stroke, state=ArmState(target, side=sides[0]), gripped=sides[0].obj
             )
-        side, choice = self._throw_side(sides, target, index)
+        side, choice = self._throw_side(throw_sides(sides, obj), target, index)
         obj, s_grip = side.obj, side.stroke_max_m  # the item as gripped
         plan, delta = choice.plan, choice.delta
         assert choice.goal is not None

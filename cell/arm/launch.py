@@ -121,15 +121,16 @@ def check_sortable(
 ) -> None:
     """Raise CannotGrip or UnreachableTarget when the cell cannot sort `obj` into the
     bin: the pads hold it across none of its sides (`cell.arm.grip_side`), or (for a
-    throw) no release within the bounds lands it there, across any side that holds, by
+    throw) none briskly (`throw_sides`), or no release within the bounds lands it there, across any side that holds, by
     the planner's model of the scene."""
-    from cell.arm.grip_side import holding_sides
+    from cell.arm.grip_side import holding_sides, throw_sides
     from cell.optimize.bounds import ThrowBounds
 
     sides = holding_sides(params, obj)
     dist = math.hypot(*bin_spec.position)
     if policy == "place" or (policy == "auto" and dist <= place_reach_m):
         return
+    sides = throw_sides(sides, obj)
     goal = (*bin_spec.position, bin_spec.rim_height)
     err: Exception | None = None
     for side in sides:
