@@ -138,3 +138,11 @@ def check_the_grip_page() -> None:
         dataclasses.replace(get_object("cuboid_a"), mass=0.5),
     ):
         _quoted_message(page, _refusal(params, obj))
+    # the item held only slowly: placed, never thrown
+    from cell.arm.grip_side import holding_sides, throw_sides
+    from cell.errors import CannotGrip
+
+    tetra = get_object("o5_tetrapack")
+    with pytest.raises(CannotGrip) as err:
+        throw_sides(holding_sides(params, tetra), tetra)
+    _quoted_message(page, str(err.value))

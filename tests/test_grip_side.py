@@ -18,12 +18,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.arm.grip_limits import carry_hold
-from cell.arm.grip_side import holding_sides
+from cell.arm.grip_limits import carry_hold, grip_strokes
+from cell.arm.grip_side import holding_sides, throw_sides, turned
 from cell.arm.tuning import TUNING
 from cell.catalogue import get_object
 from cell.errors import CannotGrip, JobError
 from cell.jobs import parse_job
+from cell.model.objects import ObjectParams
 from cell.orchestrator import Orchestrator
 from cell.params import load_params, scene_params_path
 from cell.robot.carry import CARRY_MARGIN, plan_carry
@@ -96,7 +97,6 @@ def test_a_thin_box_is_gripped_across_its_wide_side() -> None:
     """A 25 x 80 mm box, refused before across 25 mm (the band closes the pads only on
     items wider than its 20 mm anchor spacing, and holds 50 g there only at the shortest
     strokes), is gripped across 80 mm."""
-    from cell.model.objects import ObjectParams
 
     params = load_params(scene_params_path())
     obj = ObjectParams("cuboid", 0.05, (0.025, 0.08, 0.06), name="thin")
@@ -124,6 +124,34 @@ def test_cuboid_a_is_gripped_across_50_mm_and_thrown_into_its_bin(pick: str) -> 
 def test_the_tetrapack_is_placed() -> None:
     result, _ = _run("object: o5_tetrapack, bin: near")
     assert result.action == "place" and result.in_bin, (result.failure, result.reason)
+
+
+def test_the_tetrapack_is_not_thrown_and_the_job_says_to_place_it() -> None:
+    """Held only carried slowly (no side at the grip model's 1.6x), the tetrapack is
+    placed but never thrown (`throw_sides`): a job throwing it is refused up front, by
+    line, with what to do instead; a box the pads hold briskly across its first side
+    keeps it for its throw."""
+    params = load_params(scene_params_path())
+    tetra = get_object("o5_tetrapack")
+    assert holding_sides(params, tetra) and not any(s.brisk for s in holding_sides(params, tetra))
+    with pytest.raises(CannotGrip, match="place it in a bin within place reach"):
+        throw_sides(holding_sides(params, tetra), tetra)
+    with pytest.raises(JobError) as err:
+        Orchestrator(parse_job(JOB % "object: o5_tetrapack, bin: far", "tetra.yaml"))
+    assert "tetra.yaml, line 8" in str(err.value) and "held only carried slowly" in str(err.value)
+    box = ObjectParams("cuboid", 0.05, (0.04, 0.07, 0.06), name="box")
+    kept = throw_sides(holding_sides(params, box), box)
+    assert [(s.yaw_rad, s.width_m) for s in kept] == [(0.0, 0.04)]
+
+
+def test_a_box_held_briskly_across_its_first_size_is_gripped_across_it_alone() -> None:
+    """Where the pads hold a box briskly across its first size, that side alone is offered
+    (as the cell always gripped it), though its other side holds briskly too; across the
+    other side only where the first does not hold briskly (cuboid_a, above)."""
+    params = load_params(scene_params_path())
+    box = ObjectParams("cuboid", 0.05, (0.04, 0.07, 0.06), name="box")
+    assert grip_strokes(params, box)[1] and grip_strokes(params, turned(box))[1]
+    assert [(s.yaw_rad, s.width_m) for s in holding_sides(params, box)] == [(0.0, 0.04)]
 
 
 TALL = "shape: cuboid, mass_kg: 0.15, size_m: [0.065, 0.065, 0.2], bin: far"
