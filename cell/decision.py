@@ -27,6 +27,9 @@ class Decision:
             point of the bin clear of what it holds); None: the bin's centre.
         state: the platform's own typed state for its later steps (the arm's:
             `cell.arm.state.ArmState`; None where a platform keeps none).
+        gripped: the item as gripped (its size x the width across the pads: the arm may
+            grip it across another side, `cell.arm.grip_side`), as the throw log records
+            it; None: as the job gives it.
     """
 
     action: str
@@ -38,3 +41,4 @@ class Decision:
     moving: bool = False
     goal_xy: tuple[float, float] | None = None
     state: Any = None
+    gripped: Any = None

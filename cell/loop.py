@@ -354,7 +354,7 @@ class ItemLoop:
                     sorted_throw_record(
                         self.session,
                         throw_id,
-                        obj,
+                        d.gripped or obj,  # the item as the pads held it
                         d.plan,
                         d.stroke_m,
                         released_at,

@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 
 from cell.arm.flywheel import Flywheel, LandingCorrection
-from cell.arm.grip_limits import GripUse, grip_stroke_limit
+from cell.arm.grip_limits import GripUse
+from cell.arm.grip_side import GripSideChoice, holding_sides, throw_sides
 from cell.arm.kinematics import Kinematics
 from cell.arm.launch import check_sortable
 from cell.arm.mover import Mover
@@ -93,7 +94,16 @@ def _load_planning_libraries() -> None:
 
 
 class Orchestrator(
-    Kinematics, Routes, Mover, Pick, Place, Planner, ReleaseChoice, GripUse, Flywheel
+    Kinematics,
+    Routes,
+    Mover,
+    Pick,
+    Place,
+    Planner,
+    ReleaseChoice,
+    GripUse,
+    GripSideChoice,
+    Flywheel,
 ):
     """Runs a sort job in the PyBullet cell.
 
@@ -324,14 +334,17 @@ class Orchestrator(
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m
         )
-        s_grip = grip_stroke_limit(self.params, obj)
+        sides = holding_sides(self.params, obj)  # CannotGrip: none holds
         if place:
-            stroke = min(self.tuning.pick_stroke_m, s_grip)
-            return Decision("place", stroke, state=ArmState(target))
-        choice = self._plan(obj, target, index, s_grip)
+            stroke = min(self.tuning.pick_stroke_m, sides[0].stroke_max_m)
+            return Decision(
+                "place", stroke, state=ArmState(target, side=sides[0]), gripped=sides[0].obj
+            )
+        side, choice = self._throw_side(throw_sides(sides, obj), target, index)
+        obj, s_grip = side.obj, side.stroke_max_m  # the item as gripped
         plan, delta = choice.plan, choice.delta
         assert choice.goal is not None
-        state = ArmState(target, choice, choice.q_release)
+        state = ArmState(target, choice, choice.q_release, side=side)
         d = Decision(
             "throw",
             plan.stroke_m + delta,
@@ -341,6 +354,7 @@ class Orchestrator(
             ee_params=self.params.ee,
             goal_xy=(float(choice.goal[0]), float(choice.goal[1])),
             state=state,
+            gripped=obj,
         )
         mt = None
         if self._may_release_moving(obj, d):
@@ -355,13 +369,14 @@ class Orchestrator(
         the throw axis up, it does not twist the item about it (a twist in the grip
         spoils the launch, see `_pick_frame`)."""
         st: ArmState = d.state
+        obj, yaw = st.gripped(obj), st.grip_yaw_rad
         self._frame = self._pick_frame(d.plan, st.q_release)
         if self.pick_mode == "physical":
             heading = self._carry_heading(d.plan, st.target, st.q_release)
-            st.q_lift = self._pick(obj, item, d.stroke_m, *heading)
+            st.q_lift = self._pick(obj, item, d.stroke_m, *heading, side_yaw=yaw)
             self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
         else:
-            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m)
+            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m, yaw)
         self.effector.grasp(d.stroke_m)  # held in the plant already: the hardware winds
         stroke = self._carry_stroke(obj, d)
         if stroke != d.stroke_m:  # the item held, the carriage draws it up off the station
@@ -372,6 +387,7 @@ class Orchestrator(
         """To the release pose: over the bin and down into it (a place), or along the
         twist-free swing to the release configuration (a throw); the item still held."""
         st: ArmState = d.state
+        obj = st.gripped(obj)
         q_lift = st.q_lift
         assert q_lift is not None
         if d.action == "place":

@@ -49,7 +49,7 @@ bins:
   - {id: far, position_m: [1.6, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.1}
 items:
   - {object: cube50, bin: far}
-  - {shape: cuboid, mass_kg: %s, size_m: [%s, 0.06, 0.06], bin: far}
+  - {shape: cuboid, mass_kg: %s, size_m: [%s, %s, 0.06], bin: far}
 """
 
 
@@ -58,7 +58,8 @@ items:
     [(0.9, 0.02, "cannot be held"), (0.05, 0.2, "pads")],
 )
 def test_an_item_the_pads_cannot_hold_is_refused_before_the_job(mass, width, says):
-    job = parse_job(JOB % (mass, width), "job.yaml")
+    # square in section: no other side to grip it across (cell.arm.grip_side)
+    job = parse_job(JOB % (mass, width, width), "job.yaml")
     with pytest.raises(JobError) as err:
         Orchestrator(job)
     msg = str(err.value)

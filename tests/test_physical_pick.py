@@ -201,13 +201,13 @@ def test_an_item_displaced_after_the_approach_is_missed_then_picked_on_the_retry
     close_on = orch.ee.close_on
     knocked: list[int] = []
 
-    def knock_then_close(item: Any) -> None:
+    def knock_then_close(item: Any, **kw: Any) -> None:
         if not knocked:
             knocked.append(1)
             cl = orch.scene.client
             p, o = cl.getBasePositionAndOrientation(item.body)
             cl.resetBasePositionAndOrientation(item.body, [p[0], p[1] + 0.06, p[2]], o)
-        close_on(item)
+        close_on(item, **kw)
 
     monkeypatch.setattr(orch.ee, "close_on", knock_then_close)
     attempts = count_attempts(orch, monkeypatch)
@@ -221,11 +221,11 @@ def test_an_item_knocked_off_the_station_is_not_retried(
 ) -> None:
     close_on = orch.ee.close_on
 
-    def knock_off_then_close(item: Any) -> None:
+    def knock_off_then_close(item: Any, **kw: Any) -> None:
         cl = orch.scene.client
         _, o = cl.getBasePositionAndOrientation(item.body)
         cl.resetBasePositionAndOrientation(item.body, [0.45, -0.9, 0.05], o)  # on the floor
-        close_on(item)
+        close_on(item, **kw)
 
     monkeypatch.setattr(orch.ee, "close_on", knock_off_then_close)
     attempts = count_attempts(orch, monkeypatch)
@@ -239,8 +239,8 @@ def test_an_item_that_slips_out_while_carried_is_dropped_while_carried(
 ) -> None:
     pick = orch._pick
 
-    def pick_then_grease(obj: Any, item: Any, *args: Any) -> Any:
-        q = pick(obj, item, *args)
+    def pick_then_grease(obj: Any, item: Any, *args: Any, **kw: Any) -> Any:
+        q = pick(obj, item, *args, **kw)
         orch.scene.client.changeDynamics(item.body, -1, lateralFriction=0.01)
         return q
 

@@ -14,6 +14,7 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.figure_checks_grip import check_the_grip_page
 from tests.figure_checks_guides import (
     check_the_cli_limits,
     check_the_gap_laws,
@@ -409,6 +410,7 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_realtime_page,
     check_the_gap_scene_table,
     check_the_gap_scene_prose,
+    check_the_grip_page,
 )
 
 

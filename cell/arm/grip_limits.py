@@ -13,6 +13,7 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.joints import distinct_waypoints
+from cell.arm.tuning import TUNING, ArmTuning
 from cell.decision import Decision
 from cell.errors import (
     CannotGrip,
@@ -36,6 +37,13 @@ PAD_COUPLE_FACTOR = 4.0
 # to a throw at the probed couple (carry_hold): the egg, a rock (1.0) and the teddy (0.88),
 # not the duck (0.69), which turned 4° in the pads so carried
 MESH_PROBED_MIN_RATIO = 0.85
+
+
+# A throw's stroke is kept where the pads hold this multiple of the item's weight (the
+# 1.6 the grip model used as its carrying margin), where there is such a stroke: the cell's
+# throws of the items it sorted before keep their strokes and carries. Not a refusal: an
+# item the pads hold only below it is carried within CARRY_MARGIN (`grip_stroke_at`).
+BRISK_CARRY_SAFETY = 1.6
 
 
 MIN_THROW_STROKE_RANGE_M = 1e-3  # [m] a throw needs at least this much stroke to choose from
@@ -163,46 +171,94 @@ def mesh_grip(params: ModelParams, obj: ObjectParams) -> tuple[float, float]:
 
 
 def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
-    """The longest stroke [m] the pads hold `obj` at (cell.model.grip).
+    """The longest stroke [m] the pads hold `obj` at (cell.model.grip), gripped across its
+    first size (`cell.arm.grip_side` turns the item to grip it across another).
+
+    Where the pads hold BRISK_CARRY_SAFETY x the item's weight, the longest stroke they do
+    (the carries of the items the cell sorted before, unchanged); else, where they hold
+    CARRY_MARGIN x its weight (what a carry may use of the grip, `cell.robot.carry`), the
+    longest stroke they do: a heavy item, carried as slowly as its grip asks
+    (`cell.robot.carry.plan_carry`, the tilt included).
 
     Raises:
         CannotGrip: the item is too wide for the pads, or too heavy for its width at
-            every stroke; the message says what the cell can hold instead.
+            every stroke even carried slowly; the message says what it was tried at.
     """
-    from cell.model.grip import GRIP_SAFETY, grip_friction, holding_mass_kg, max_grip_stroke
+    why = grip_refusal(params, obj)
+    if why:
+        name = obj.name or obj.shape
+        raise CannotGrip(f"{name} ({obj.mass * 1000:.0f} g) cannot be held: {why}; sort it by hand")
+    s_max = grip_stroke_at(params, obj)
+    assert s_max is not None
+    return s_max
+
+
+def grip_stroke_at(params: ModelParams, obj: ObjectParams) -> float | None:
+    """The longest stroke [m] at which the pads hold BRISK_CARRY_SAFETY x the weight of
+    `obj` (as gripped), else CARRY_MARGIN x it; None where neither at any stroke or the
+    item is wider than the pads open."""
+    return grip_strokes(params, obj)[0]
+
+
+def grip_strokes(params: ModelParams, obj: ObjectParams) -> tuple[float | None, bool]:
+    """(`grip_stroke_at`, whether the pads hold BRISK_CARRY_SAFETY x the weight there)."""
+    from cell.model.grip import grip_friction, max_grip_stroke
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+    obj = as_gripped(obj)
+    if obj.width > 2 * DEFAULT_GEOMETRY.finger_open_m:
+        return None, False
+    mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
+    for safety in (BRISK_CARRY_SAFETY, carry_safety(obj)):
+        s_max = max_grip_stroke(params.ee, obj, safety=safety, friction=mu)
+        if s_max is not None:
+            return s_max, safety == BRISK_CARRY_SAFETY
+    return None, False
+
+
+def carry_safety(obj: ObjectParams, tuning: ArmTuning = TUNING) -> float:
+    """The multiple of its weight the pads must hold `obj` with to carry it at all: the
+    carry's bound CARRY_MARGIN for an item the pads hold by its faces (a box, a cylinder:
+    its carry is slowed to keep the force, twist and tilt within it); for one they hold
+    at points (a sphere, a mesh), the margin measured in the scene,
+    `tuning.point_hold_margin` (a carry's time scaling cannot keep such an item from
+    turning in the pads: it goes at GENTLE_SCALE)."""
+    from cell.robot.carry import CARRY_MARGIN
+
+    if obj.shape in ("sphere", "mesh"):
+        return max(CARRY_MARGIN, tuning.point_hold_margin)
+    return CARRY_MARGIN
+
+
+def grip_refusal(params: ModelParams, obj: ObjectParams) -> str:
+    """Why the pads cannot hold `obj` across its first size (as gripped), "" where they
+    can: too wide for the pads, too narrow for the band to close on, or too heavy for
+    its width even carried slowly (the weight over CARRY_MARGIN of the grip's force)."""
+    from cell.model.grip import grip_friction, holding_mass_kg
+    from cell.robot.carry import CARRY_MARGIN
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     ee = params.ee
-    name = obj.name or obj.shape
     obj = as_gripped(obj)
+    across = f"{obj.width * 1000:.0f} mm across the pads"
     widest = 2 * DEFAULT_GEOMETRY.finger_open_m
-    # a sphere is as wide every way: no other side to turn toward the pads
-    turn = "" if obj.shape == "sphere" else "turn it so a narrower side faces the pads, or "
     if obj.width > widest:
-        raise CannotGrip(
-            f"{name} is {obj.width * 1000:.0f} mm wide across the pads; they open to "
-            f"{widest * 1000:.0f} mm: {turn}sort it by hand"
+        return f"{across}, wider than they open ({widest * 1000:.0f} mm)"
+    if grip_stroke_at(params, obj) is not None:
+        return ""
+    if obj.width <= ee.d:
+        return (
+            f"{across}: the band closes the pads only on items wider than its anchor "
+            f"spacing d = {ee.d * 1000:.0f} mm"
         )
     mu = grip_friction(obj, DEFAULT_GEOMETRY.pad_length_m)
-    s_max = max_grip_stroke(ee, obj, friction=mu)
-    if s_max is None:
-        hold = holding_mass_kg(ee, ee.stroke_min, obj.width, mu) / GRIP_SAFETY
-        if obj.width <= ee.d:
-            why = (
-                f"the band closes the pads only on items wider than its anchor spacing "
-                f"d = {ee.d * 1000:.0f} mm"
-            )
-        else:
-            why = (
-                f"the pads hold up to {hold * 1000:.0f} g at {obj.width * 1000:.0f} mm "
-                f"(with a {GRIP_SAFETY}x margin for carrying)"
-            )
-        wider = "" if obj.shape == "sphere" else "grip it across a wider side, or "
-        raise CannotGrip(
-            f"{name} ({obj.mass * 1000:.0f} g, {obj.width * 1000:.0f} mm across the pads) "
-            f"cannot be held: {why}; {wider}sort it by hand"
-        )
-    return s_max
+    margin = carry_safety(obj)
+    hold = holding_mass_kg(ee, ee.stroke_min, obj.width, mu) / margin
+    what = "the carry's bound" if margin == CARRY_MARGIN else "held at points, as measured"
+    return (
+        f"{across}, the pads hold up to {hold * 1000:.0f} g even carried slowly (1/"
+        f"{margin} of their friction: {what})"
+    )
 
 
 def release_grip_use(
@@ -252,7 +308,7 @@ def grip_bounds(bounds: Any, params: ModelParams, stroke_max_m: float, what: str
         raise CannotGrip(
             f"{what or 'the item'}: the pads hold it only at the shortest stroke "
             f"({lo * 1000:.0f} mm), too weak a throw to plan: place it in a bin within "
-            "reach, grip it across a narrower side, or sort it by hand"
+            "reach, or sort it by hand"
         )
     return dc_replace(bounds, stroke_min=lo, stroke_max=hi)
 

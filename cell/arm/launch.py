@@ -13,9 +13,9 @@ import numpy as np
 from cell.arm.grip_limits import (
     MIN_THROW_STROKE_RANGE_M,
     grip_bounds,
-    grip_stroke_limit,
 )
 from cell.errors import (
+    CannotGrip,
     UnreachableTarget,
 )
 from cell.model.objects import ObjectParams
@@ -120,16 +120,27 @@ def check_sortable(
     bounds: Any = None,
 ) -> None:
     """Raise CannotGrip or UnreachableTarget when the cell cannot sort `obj` into the
-    bin: the pads cannot hold it, or (for a throw) no release within the bounds lands
-    it there by the planner's model of the scene."""
+    bin: the pads hold it across none of its sides (`cell.arm.grip_side`), or (for a
+    throw) none briskly (`throw_sides`), or no release within the bounds lands it there, across any side that holds, by
+    the planner's model of the scene."""
+    from cell.arm.grip_side import holding_sides, throw_sides
     from cell.optimize.bounds import ThrowBounds
 
-    s_max = grip_stroke_limit(params, obj)
+    sides = holding_sides(params, obj)
     dist = math.hypot(*bin_spec.position)
     if policy == "place" or (policy == "auto" and dist <= place_reach_m):
         return
-    b = bounds or ThrowBounds()
-    if b.stroke_max is None or s_max < b.stroke_max:
-        b = grip_bounds(b, params, s_max, obj.name or obj.shape)
+    sides = throw_sides(sides, obj)
     goal = (*bin_spec.position, bin_spec.rim_height)
-    plan_clean(params, obj, params.model_object(obj), goal, b)
+    err: Exception | None = None
+    for side in sides:
+        b = bounds or ThrowBounds()
+        try:
+            if b.stroke_max is None or side.stroke_max_m < b.stroke_max:
+                b = grip_bounds(b, params, side.stroke_max_m, obj.name or obj.shape)
+            plan_clean(params, side.obj, params.model_object(side.obj), goal, b)
+            return
+        except (CannotGrip, UnreachableTarget) as exc:
+            err = err or exc
+    assert err is not None
+    raise err

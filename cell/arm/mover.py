@@ -186,7 +186,8 @@ class Mover(ArmBase):
         all the bound allows, the fastest uniform carry within it crawls (three eggs on
         random layout 11, UR5: 29 s a cycle without this floor, 8.6 s with it, 6.1-6.9 s
         before the probe's couple)."""
-        from cell.robot.carry import plan_carry
+        from cell.arm.grip_limits import carry_safety
+        from cell.robot.carry import CARRY_MARGIN, plan_carry
 
         obj, stroke = carried or (self._carried[0], self._grip_stroke)
         hold = carry_hold(
@@ -194,13 +195,15 @@ class Mover(ArmBase):
         )
         tie = self._over_bound(obj)
         gentle = obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing
-        key = ("carry", _joint_bytes(waypoints), hold, self.speed_scale, tie, gentle)
+        margin = carry_safety(obj, self.tuning) if obj.shape == "sphere" else CARRY_MARGIN
+        key = ("carry", _joint_bytes(waypoints), hold, margin, self.speed_scale, tie, gentle)
         return self._planned(
             key,
             lambda: plan_carry(
                 waypoints,
                 self.robot,
                 hold,
+                margin=margin,
                 velocity_scale=self.speed_scale,
                 acceleration_scale=self.speed_scale,
                 tie=tie,

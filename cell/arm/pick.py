@@ -24,15 +24,19 @@ log = logging.getLogger(__name__)
 class Pick(ArmBase):
     """The pick (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
-    def _pick_kinematic(self, obj: ObjectParams, item: Any, stroke: float) -> np.ndarray:
+    def _pick_kinematic(
+        self, obj: ObjectParams, item: Any, stroke: float, side_yaw: float = 0.0
+    ) -> np.ndarray:
         """The kinematic pick: the grip over the item, which is moved into it
-        (PyBulletEndEffector.grasp); returns the lift configuration."""
+        (PyBulletEndEffector.grasp) turned `side_yaw` [rad] about the grip's axis (the
+        side it is gripped across, `cell.arm.grip_side`; `obj`: the item as gripped);
+        returns the lift configuration."""
         q_pick, q_lift = self.over_item(item, stroke, obj)
         q0, t0 = self.q, self.scene.t
         if not self._approach(item, stroke, obj, q_pick):
             self.move([q_lift, q_pick])
         self._time_floor(q0, t0)
-        self.ee.grasp(stroke, item)
+        self.ee.grasp(stroke, item, yaw_rad=side_yaw)
         self._carried = (obj, stroke)  # the item and its throw's stroke: what routes are for
         self._grip_stroke = stroke  # where the carriage holds it now (`_carry_stroke`)
         return q_lift
@@ -156,11 +160,17 @@ class Pick(ArmBase):
 
     @staticmethod
     def _grip_axes(
-        obj: ObjectParams, rot: np.ndarray, heading: float, signed: bool, lean: float = 1.0
+        obj: ObjectParams,
+        rot: np.ndarray,
+        heading: float,
+        signed: bool,
+        lean: float = 1.0,
+        side_yaw: float = 0.0,
     ) -> tuple[float, float, list[float]]:
         """The grip for an item at rotation `rot` (its pose as the plant reports it):
         (elevation, azimuth [rad]) of the approach axis u, and the rolls [rad] about it
-        that close the pads across the item's x axis (its gripping width).
+        that close the pads across the item's x axis turned `side_yaw` [rad] about its z
+        (the side it is gripped across, `cell.arm.grip_side`: 0, its x; π/2, its y).
 
         The grip comes down the item's own axis (−z), so that an item resting tilted (a
         mesh on an uneven side) ends seated square on the carriage as the throw model
@@ -196,10 +206,8 @@ class Pick(ArmBase):
                 obj.shape == "cuboid" and abs(obj.size[0] - obj.size[1]) < 1e-9
             )
             n = 4 if square else 2
-            dirs = [
-                rot @ np.array([math.cos(k * 2 * math.pi / n), math.sin(k * 2 * math.pi / n), 0])
-                for k in range(n)
-            ]
+            angles = [side_yaw + k * 2 * math.pi / n for k in range(n)]
+            dirs = [rot @ np.array([math.cos(a), math.sin(a), 0.0]) for a in angles]
             dirs = [d - (d @ u) * u for d in dirs]  # across the axis (a leaning grip's)
 
         def off(d: np.ndarray) -> float:  # angle between d's horizontal part and the heading
@@ -215,7 +223,13 @@ class Pick(ArmBase):
         return elevation, azimuth, rolls
 
     def _grip_plan(
-        self, obj: ObjectParams, item: Any, heading: float, signed: bool, opening: float
+        self,
+        obj: ObjectParams,
+        item: Any,
+        heading: float,
+        signed: bool,
+        opening: float,
+        side_yaw: float = 0.0,
     ) -> tuple[np.ndarray, float, float, list[float], float]:
         """The item's centre [m, W] as the plant reports it, the grip's approach axis
         (elevation, azimuth) and rolls [rad] (`_grip_axes`), and the least standoff h_min
@@ -231,7 +245,7 @@ class Pick(ArmBase):
         for lean in self.tuning.grip_leans:
             if lean * tilt > self.tuning.max_tilt_rad and lean > 0:
                 continue
-            elevation, azimuth, rolls = self._grip_axes(obj, rot, heading, signed, lean)
+            elevation, azimuth, rolls = self._grip_axes(obj, rot, heading, signed, lean, side_yaw)
             u = axis_frame(elevation, azimuth)[:, 2]
             drop = max(  # lowest pad corner below the pads' tip line on the axis [m]
                 (opening + geo.pad_thickness_m) * abs(f[2, 0]) + geo.pad_half_width_m * abs(f[2, 1])
@@ -260,12 +274,19 @@ class Pick(ArmBase):
         return plan.azimuth_rad + math.pi - roll, True
 
     def _pick(
-        self, obj: ObjectParams, item: Any, stroke: float, heading: float, signed: bool
+        self,
+        obj: ObjectParams,
+        item: Any,
+        stroke: float,
+        heading: float,
+        signed: bool,
+        side_yaw: float = 0.0,
     ) -> np.ndarray:
         """Pick the item off the station into the grip at `stroke` [m], by contact: returns
         the lift configuration the arm is at, the item held by friction between the pads.
         `heading` [rad], `signed`: where the pads' axis should point while it is carried
-        (`_carry_heading`), as far as the item's symmetry allows.
+        (`_carry_heading`), as far as the item's symmetry allows. `side_yaw` [rad]: the
+        side it is gripped across (`cell.arm.grip_side`; `obj` is the item as gripped).
 
         A grasp that fails (the pads close on nothing, the item slips out on the lift) is
         tried again while the item is still on the station, PICK_ATTEMPTS in all.
@@ -276,7 +297,7 @@ class Pick(ArmBase):
         """
         for attempt in range(1, self.tuning.pick_attempts + 1):
             try:
-                return self._pick_once(obj, item, stroke, heading, signed)
+                return self._pick_once(obj, item, stroke, (heading, signed), side_yaw)
             except GraspLost as exc:
                 self.ee.let_go()
                 self._run_for(0.1)  # the fingers open
@@ -289,7 +310,12 @@ class Pick(ArmBase):
         raise AssertionError("unreachable")  # pragma: no cover
 
     def _pick_once(
-        self, obj: ObjectParams, item: Any, stroke: float, heading: float, signed: bool
+        self,
+        obj: ObjectParams,
+        item: Any,
+        stroke: float,
+        toward: tuple[float, bool],
+        side_yaw: float = 0.0,
     ) -> np.ndarray:
         """One pick: over the item (as the plant reports it) with the pads open and the
         spool wound to `stroke`, a guarded descent until the grip touches it, the pads
@@ -301,7 +327,7 @@ class Pick(ArmBase):
             pad_width_m(obj) / 2 + self.tuning.finger_clearance_m, self.scene.geometry.finger_open_m
         )
         self.ee.open_for_pick(stroke, opening)
-        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
+        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, *toward, opening, side_yaw)
 
         def at(h: float) -> np.ndarray:
             """Where the item's centre would sit in the grip with the carriage's face h out
@@ -329,7 +355,7 @@ class Pick(ArmBase):
                 "grasp",
             )
         aimed = (p, elevation, azimuth)
-        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, heading, signed, opening)
+        p, elevation, azimuth, rolls, h_min = self._grip_plan(obj, item, *toward, opening, side_yaw)
         roll = min(rolls, key=lambda r: abs(math.remainder(r - roll, 2 * math.pi)))
         axes = (elevation, azimuth, roll)
         u0, u1 = (axis_frame(e, a)[:, 2] for e, a in (aimed[1:], axes[:2]))
@@ -355,7 +381,7 @@ class Pick(ArmBase):
             # mount's force), and the item must be free to slide as the pads centre it
             d_touch -= float(np.linalg.norm(self.scene.ee_lag()))
             self._straight(along(max(0.0, d_touch - self.tuning.touch_gap_m)), 0.02)
-        self.ee.close_on(item)
+        self.ee.close_on(item, yaw_rad=side_yaw)
         self._carried = (obj, stroke)
         self._grip_stroke = stroke
         # a short lift that shows whether the pads hold it (the move on starts at lift_m)

@@ -8,7 +8,9 @@ from typing import Any
 
 import numpy as np
 
+from cell.arm.grip_side import GripSide
 from cell.arm.planner import ThrowChoice
+from cell.model.objects import ObjectParams
 
 __all__ = ["ArmState"]
 
@@ -27,6 +29,8 @@ class ArmState:
         motion: the release on the move's motion from where the carry starts it (`carry`).
         q_above: a place: the configuration over its spot (`carry`).
         rise: a place: the way back up out of the bin, ending at q_above (`carry`).
+        side: the side the pads grip the item across (`cell.arm.grip_side`); None: its
+            first size.
     """
 
     target: Any
@@ -37,3 +41,13 @@ class ArmState:
     motion: Any = None
     q_above: np.ndarray | None = None
     rise: list[np.ndarray] = field(default_factory=list)
+    side: GripSide | None = None
+
+    def gripped(self, obj: ObjectParams) -> ObjectParams:
+        """The item `obj` as gripped: across the chosen side."""
+        return obj if self.side is None else self.side.obj
+
+    @property
+    def grip_yaw_rad(self) -> float:
+        """[rad] the grip's turn about the item's vertical from its x axis (0 or π/2)."""
+        return 0.0 if self.side is None else self.side.yaw_rad

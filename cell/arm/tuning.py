@@ -81,6 +81,16 @@ class ArmTuning:
     The flywheel (`learn`): an object's correction stays within x1/1.5 … x1.5 of reach and
     ±10° of turn; a class's (shape's, for objects never thrown before) within ±15 % and ±3°.
 
+    The grip (`cell.arm.grip_limits.carry_safety`):
+        point_hold_margin: the multiple of its weight the pads must hold an item they hold
+            at points (a sphere, a mesh) with, to carry it at all (a box or a cylinder,
+            held by its faces, needs the carry's bound, CARRY_MARGIN = 1.35, and is carried
+            as slowly as its grip asks). Measured in the scene: an 88 mm, 182 g sphere the
+            pads hold with 1.4 x its weight at the shortest stroke (at their edges below
+            its equator, `cell.model.grip.grip_friction`) left the pads on all four of its
+            carries of random layout 7, accepted under 1.35 (tests/test_envelope_edges.py);
+            the meshes carried at 1.6 (eggs, teddies, rocks: random layouts 0-19) held.
+
     The physical pick (`pick="physical"`), measured on the demo's objects in the scene
     (tests/test_physical_pick.py):
         pick_scatter_m: [m] items come to rest within ± this of the station's centre.
@@ -129,6 +139,7 @@ class ArmTuning:
     learn_max_turn_rad: float = math.radians(10.0)
     learn_class_max_log_ratio: float = math.log(1.15)
     learn_class_max_turn_rad: float = math.radians(3.0)
+    point_hold_margin: float = 1.6
     pick_scatter_m: float = 0.03
     approach_m: float = 0.02
     descent_mps: float = 0.1

@@ -30,12 +30,12 @@ class InStep(EndEffector):
         self.sim = sim
         self.hardware = hardware
 
-    def grasp(self, stroke_m: float, item: Any = None) -> None:
+    def grasp(self, stroke_m: float, item: Any = None, yaw_rad: float = 0.0) -> None:
         """Grip at stroke L_s [m]: the simulated end-effector takes `item` into its grip
-        (None: the grip already holds it, as after a physical pick), then the hardware
-        winds to the same stroke."""
+        turned `yaw_rad` [rad] about the grip's axis (None: the grip already holds it, as
+        after a physical pick), then the hardware winds to the same stroke."""
         if item is not None:
-            self.sim.grasp(stroke_m, item)
+            self.sim.grasp(stroke_m, item, yaw_rad=yaw_rad)
         if self.hardware is not None:
             self.hardware.grasp(stroke_m)
 

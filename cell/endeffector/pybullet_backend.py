@@ -84,6 +84,7 @@ class PyBulletEndEffector(EndEffector):
         self.place_speed_mps = place_speed_mps
         self.close_time_s = close_time_s
         self.item: Item | None = None
+        self.grip_yaw_rad = 0.0  # the grip's turn about the item held (`across`)
         self._grasp_stroke_m = 0.0
         self.last_released: Item | None = None
 
@@ -162,10 +163,12 @@ class PyBulletEndEffector(EndEffector):
         links = {int(c[3]) for c in cl.getContactPoints(bodyA=self.scene.ee_body, bodyB=item.body)}
         return {n for n, j in (("left", FINGER_LEFT), ("right", FINGER_RIGHT)) if j in links}
 
-    def close_on(self, item: Item) -> None:
+    def close_on(self, item: Item, yaw_rad: float = 0.0) -> None:
         """Close the fingers on the item between the open pads, at the stroke the carriage is
         at (the arm holds the grip over the item): they close by contact with the band's
-        grip force f_g, and from then on friction alone holds the item.
+        grip force f_g, and from then on friction alone holds the item. `yaw_rad`: the
+        grip turned that far about the item's z from its x axis (0: across its size x;
+        π/2: across its size y, `cell.arm.grip_side`).
 
         Raises:
             InvalidInput: already holding an item.
@@ -176,6 +179,7 @@ class PyBulletEndEffector(EndEffector):
         sc = self.scene
         sc.set_timestep(sc.dt_s)
         stroke_m = self.band.position()
+        self.grip_yaw_rad = float(yaw_rad)
         self.band.fingers_closing = True
         self._close_fingers()
         touching = self.pads_touching(item)
@@ -184,7 +188,8 @@ class PyBulletEndEffector(EndEffector):
             self.band.fingers_closing = False
             raise GraspLost(
                 f"the fingers did not close on item {item.obj.name or item.body} "
-                f"(width {item.obj.width * 1000:.0f} mm; pads closed to {opening * 1000:.0f} mm, "
+                f"(width {self.across(item)[0] * 1000:.0f} mm; pads closed to "
+                f"{opening * 1000:.0f} mm, "
                 f"touching it: {sorted(touching) or 'none'})",
                 "grasp",
             )
@@ -228,8 +233,10 @@ class PyBulletEndEffector(EndEffector):
         self.item = None
 
     # -- the interface ---------------------------------------------------------
-    def grasp(self, stroke_m: float, item: Item | None = None) -> None:
-        """Take `item` (default: the one on the pick station) into the grip at stroke L_s [m].
+    def grasp(self, stroke_m: float, item: Item | None = None, yaw_rad: float = 0.0) -> None:
+        """Take `item` (default: the one on the pick station) into the grip at stroke L_s [m],
+        turned `yaw_rad` [rad] about the grip's axis (0: its size x across the pads; π/2:
+        its size y, `cell.arm.grip_side`).
 
         Raises:
             InvalidParameter: stroke out of range.
@@ -241,11 +248,13 @@ class PyBulletEndEffector(EndEffector):
         it = item if item is not None else self.pick_candidate()
         sc, cl = self.scene, self.scene.client
         sc.set_timestep(sc.dt_s)
-        self.band.reset(stroke_m, it.obj.width / 2 + 0.003)
+        self.grip_yaw_rad = float(yaw_rad)
+        self.band.reset(stroke_m, self.across(it)[0] / 2 + 0.003)
         self.band.fingers_closing = False
         e_pos, e_orn = cl.getBasePositionAndOrientation(sc.ee_body)
         centre = stroke_m + it.obj.size[2] / 2 + 5e-4
-        pos, orn = cl.multiplyTransforms(e_pos, e_orn, [0, 0, centre], [0, 0, 0, 1])
+        turn = [0.0, 0.0, math.sin(yaw_rad / 2), math.cos(yaw_rad / 2)]
+        pos, orn = cl.multiplyTransforms(e_pos, e_orn, [0, 0, centre], turn)
         cl.resetBasePositionAndOrientation(it.body, pos, orn)
         # While the fingers close, the item is seated on the hoop, as the approach
         # presses the hoop onto the item resting on the station; then friction holds it.
@@ -258,6 +267,7 @@ class PyBulletEndEffector(EndEffector):
             [0, 0, 0],
             [0, 0, centre - stroke_m],
             [0, 0, 0],
+            parentFrameOrientation=turn,  # the item turned in the grip as set above
         )
         cl.changeConstraint(seat, maxForce=50.0)
         self.band.fingers_closing = True
@@ -269,7 +279,7 @@ class PyBulletEndEffector(EndEffector):
         if not self._in_grip(it, stroke_m):
             raise GraspLost(
                 f"the fingers did not close on item {it.obj.name or it.body} "
-                f"(width {it.obj.width:.3f} m)",
+                f"(width {self.across(it)[0]:.3f} m)",
                 "grasp",
             )
         self._hold(it, stroke_m)
@@ -287,13 +297,21 @@ class PyBulletEndEffector(EndEffector):
         }
         return {FINGER_LEFT, FINGER_RIGHT} <= touching
 
+    def across(self, it: Item) -> tuple[float, float]:
+        """The item's (width across the pads, depth along them) [m] as gripped: its sizes x
+        and y, swapped where the grip is turned a quarter turn about it (`grip_yaw_rad`)."""
+        if abs(math.sin(self.grip_yaw_rad)) > 0.5:
+            return it.obj.size[1], it.obj.size[0]
+        return it.obj.size[0], it.obj.size[1]
+
     def _in_grip(self, it: Item, stroke_m: float) -> bool:
         """The fingers stopped on the item and its centre is between them."""
         cl, ee = self.scene.client, self.scene.ee_body
         e_p, e_o = cl.getBasePositionAndOrientation(ee)
         inv = cl.invertTransform(e_p, e_o)
         p, _ = cl.multiplyTransforms(*inv, *cl.getBasePositionAndOrientation(it.body))
-        half = it.obj.width / 2
+        width, depth = self.across(it)
+        half = width / 2
         reach = float(np.linalg.norm(it.obj.size))
         opening = [cl.getJointState(ee, j)[0] for j in (FINGER_LEFT, FINGER_RIGHT)]
         # closed (not jammed open) on something (not on each other), the item's centre
@@ -302,7 +320,7 @@ class PyBulletEndEffector(EndEffector):
             max(opening) < half + 0.002
             and min(opening) > 1e-3
             and abs(p[0]) < half
-            and abs(p[1]) < it.obj.size[1] / 2
+            and abs(p[1]) < depth / 2
             and stroke_m < p[2] < stroke_m + reach
         )
 
@@ -376,7 +394,9 @@ class PyBulletEndEffector(EndEffector):
             )
         self.band.stroke_cmd_m = self.band.position()
         widest = sc.geometry.finger_open_m
-        self.band.open_to_m = min(widest, pad_width_m(item.obj) / 2 + PLACE_OPENING_M)
+        turned = abs(math.sin(self.grip_yaw_rad)) > 0.5
+        width = self.across(item)[0] if turned else pad_width_m(item.obj)
+        self.band.open_to_m = min(widest, width / 2 + PLACE_OPENING_M)
         self.band.fingers_closing = False
         sc.run_for(0.1)
         self.last_released, self.item = self.item, None

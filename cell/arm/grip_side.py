@@ -1,0 +1,160 @@
+"""The side the pads grip an item across: the sides they can meet from its resting pose,
+which of them hold (`cell.arm.grip_limits`), and the one the cell takes.
+
+An item rests on the pick station on its base; the grip comes down over it and may turn
+about the vertical before the pads close. A box (a cuboid whose horizontal sizes differ)
+is met across its first size (its x, the catalogue's "across the band") or, the grip
+turned a quarter turn, across its second: the item as gripped then has those two sizes
+swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sphere are as
+wide every way the pads meet them: one side. A mesh is gripped across its first size only
+(its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
+
+The sides kept (`holding_sides`): the first size alone where the pads hold it briskly
+across it (every item the cell sorted before is gripped as it was); else the other side
+where it holds briskly; else the sides held only slowly. A place takes the first kept (a
+place's cycle does not depend on the side); a throw, only of an item held briskly
+(`throw_sides`), is planned across each kept and takes the one with the shorter cycle
+estimate (`GripSideChoice._throw_side`). Where no side
+holds, `CannotGrip` says what each side held.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from dataclasses import replace as dc_replace
+from typing import Any
+
+from cell.arm.base import ArmBase
+from cell.arm.grip_limits import grip_refusal, grip_strokes
+from cell.errors import CannotGrip, IKFailed, UnreachableTarget
+from cell.model.objects import ObjectParams
+from cell.params import ModelParams
+
+__all__ = ["GripSide", "GripSideChoice", "grip_sides", "holding_sides", "throw_sides", "turned"]
+
+
+@dataclass(frozen=True)
+class GripSide:
+    """One side the pads grip an item across.
+
+    Attributes:
+        yaw_rad: [rad] the grip's turn about the item's vertical axis from its x axis:
+            0 (across size x) or π/2 (across size y).
+        obj: the item as gripped: its size x the width across the pads.
+        stroke_max_m: [m] the longest stroke the pads hold it at (`grip_stroke_at`).
+        brisk: the pads hold BRISK_CARRY_SAFETY x its weight there (else only within the
+            carry's bound: it is carried as slowly as the grip asks).
+    """
+
+    yaw_rad: float
+    obj: ObjectParams
+    stroke_max_m: float
+    brisk: bool = True
+
+    @property
+    def width_m(self) -> float:
+        """[m] the item's width across the pads."""
+        return self.obj.width
+
+
+def turned(obj: ObjectParams) -> ObjectParams:
+    """`obj` as the pads grip it a quarter turn about the vertical: sizes x and y swapped
+    (its inertia, computed from its sizes, with them)."""
+    sx, sy, sz = obj.size
+    return dc_replace(obj, size=(sy, sx, sz))
+
+
+def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
+    """The sides the pads can meet `obj` across from its resting pose: (the grip's yaw
+    [rad] from the item's x axis, the item as gripped), the first size first."""
+    if obj.shape == "cuboid" and not math.isclose(obj.size[0], obj.size[1], abs_tol=1e-9):
+        return [(0.0, obj), (math.pi / 2, turned(obj))]
+    return [(0.0, obj)]
+
+
+def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
+    """The sides of `obj` the pads hold (`grip_sides`, in that order): its first size
+    alone where the pads hold it briskly across it (BRISK_CARRY_SAFETY x its weight: every
+    item the cell sorted before is gripped, planned and carried as it was); else the other
+    sides they hold briskly, where there are any; else those they hold only within the
+    carry's bound (carried slowly). cuboid_a is held across 30 mm only carried slowly,
+    across 50 mm briskly: the cell grips it across 50 mm (with both compared by the cycle
+    estimate, the physical pick took the 30 mm side).
+
+    Offered both sides of every box whenever both held briskly, the cell had turned boxes
+    it sorted well across their first size and their throws changed with it (the merge
+    reverted at cf2d90b, docs/HISTORY.md).
+
+    Raises:
+        CannotGrip: no side holds; the message names each side tried (its width in mm)
+            and why it does not hold.
+    """
+    found, tried = [], []
+    for yaw, side in grip_sides(obj):
+        s_max, brisk = grip_strokes(params, side)
+        if s_max is not None:
+            found.append(GripSide(yaw, side, s_max, brisk))
+        else:
+            tried.append(grip_refusal(params, side))
+    if found and found[0].yaw_rad == 0.0 and found[0].brisk:
+        found = found[:1]  # across its first size, as the cell always gripped it
+    elif any(s.brisk for s in found):
+        found = [s for s in found if s.brisk]
+    if not found:
+        name = obj.name or obj.shape
+        what = "; ".join(tried)
+        where = " across either side" if len(tried) > 1 else ""
+        raise CannotGrip(
+            f"{name} ({obj.mass * 1000:.0f} g) cannot be held{where}: {what}; sort it by hand"
+        )
+    return found
+
+
+def throw_sides(sides: list[GripSide], obj: ObjectParams) -> list[GripSide]:
+    """Of the `sides` that hold (`holding_sides`), those a throw may grip `obj` across:
+    the ones held briskly. An item the pads hold only carried slowly is placed, not
+    thrown: on tune layout 1 (UR5) the first of four 220 g tetrapacks thrown 1.7 m left
+    the pads on its carry, whose route asked 1.23 of the grip held still (more than the
+    pads hold at any speed), with the merge of this change and again with it narrowed.
+
+    Raises:
+        CannotGrip: none is held briskly; the message says to place it instead.
+    """
+    brisk = [s for s in sides if s.brisk]
+    if not brisk:
+        name = obj.name or obj.shape
+        raise CannotGrip(
+            f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly, too heavy for a "
+            "throw's carry: place it in a bin within place reach, or sort it by hand"
+        )
+    return brisk
+
+
+class GripSideChoice(ArmBase):
+    """The side the arm grips an item across (a part of the arm;
+    `cell.orchestrator.Orchestrator`)."""
+
+    def _throw_side(self, sides: list[GripSide], target: Any, index: int) -> tuple[GripSide, Any]:
+        """(the side, its `ThrowChoice`) of those that hold whose throw to `target` the
+        planner finds with the shortest cycle estimate (`Planner._plan`'s cost: first
+        whether it asks more of the grip than it holds, then the estimate); the first
+        side found where an estimate is missing. UnreachableTarget or IKFailed (the first
+        side's) where no side's throw is found."""
+        best: tuple[GripSide, Any] | None = None
+        err: Exception | None = None
+        for side in sides:
+            try:
+                choice = self._plan(side.obj, target, index, side.stroke_max_m)
+            except (UnreachableTarget, IKFailed) as exc:
+                err = err or exc
+                continue
+            if best is None:
+                best = (side, choice)
+                continue
+            if best[1].cost is not None and choice.cost is not None and choice.cost < best[1].cost:
+                best = (side, choice)
+        if best is None:
+            assert err is not None
+            raise err
+        return best

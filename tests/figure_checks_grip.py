@@ -1,0 +1,148 @@
+"""The checks of the figures the guide page docs/grip.md quotes (run by
+tests/test_readme_figures.py): the margins and the items against the code's constants and
+the catalogue, the refusal messages as the code gives them."""
+
+from __future__ import annotations
+
+import inspect
+import re
+from typing import Any
+
+import pytest
+
+from tests.figure_quotes import COVERED, close, page_text, quoted
+
+
+# -- docs/grip.md ----------------------------------------------------------------------------
+def _quoted_message(page: str, msg: str) -> None:
+    """`msg`, produced by the code, is quoted on `page` (wrapped anywhere)."""
+    m = re.search(re.escape(msg).replace(r"\ ", " ").replace(" ", r"\s+"), page_text(page))
+    assert m, f"{page} no longer quotes {msg!r}"
+    COVERED[page].append(m.span())
+
+
+def _refusal(params: Any, obj: Any) -> str:
+    from cell.arm.grip_side import holding_sides
+    from cell.errors import CannotGrip
+
+    with pytest.raises(CannotGrip) as err:
+        holding_sides(params, obj)
+    return str(err.value)
+
+
+def _check_the_sides(page: str, params: Any) -> None:
+    """How the side is chosen: the margins, cuboid_a's sides, the thin box."""
+    from cell.arm import grip_limits
+    from cell.arm.grip_side import holding_sides, turned
+    from cell.catalogue import get_object
+    from cell.model.grip import grip_friction, holding_mass_kg
+    from cell.model.objects import ObjectParams
+    from cell.robot import grip_hold
+    from cell.sim.mechanism import DEFAULT_GEOMETRY as GEO
+
+    brisk, slow = quoted(page, r"the pads hold ([\d.]+) x the item's weight at some stroke .*? "
+                         r"within the carry's bound only \(([\d.]+) x, see below\)")  # fmt: skip
+    assert float(brisk) == grip_limits.BRISK_CARRY_SAFETY
+    assert float(slow) == grip_hold.CARRY_MARGIN
+    # cuboid_a: across 30 mm only slowly, across 50 mm briskly up to the longest stroke
+    sx, sy, sz, mass, narrow, ask, across, wide = quoted(
+        page,
+        r"`cuboid_a` \((\d+) x (\d+) x (\d+) mm, (\d+) g\) is held across (\d+) mm only slowly "
+        r"\(its weight asks ([\d.]+) of the pads' friction at the shortest stroke\) and across "
+        r"(\d+) mm briskly up to the longest stroke: the cell grips it across (\d+) mm",
+    )
+    obj = get_object("cuboid_a")
+    assert [float(v) / 1000 for v in (sx, sy, sz)] == pytest.approx(list(obj.size))
+    assert float(mass) / 1000 == pytest.approx(obj.mass)
+    assert float(narrow) / 1000 == pytest.approx(obj.width)
+    mu = grip_friction(obj, GEO.pad_length_m)
+    close(ask, obj.mass / holding_mass_kg(params.ee, params.ee.stroke_min, obj.width, mu), 2)
+    assert grip_limits.grip_strokes(params, obj)[1] is False
+    assert grip_limits.grip_strokes(params, turned(obj)) == (
+        pytest.approx(params.ee.stroke_max),
+        True,
+    )
+    sides = holding_sides(params, obj)
+    assert [1000 * s.width_m for s in sides] == [pytest.approx(float(across))]
+    assert float(wide) == float(across)
+    g, a, b, c, taken = quoted(page, r"A (\d+) g box (\d+) x (\d+) x (\d+) mm, refused before, "
+                               r"is gripped across (\d+) mm")  # fmt: skip
+    box = ObjectParams("cuboid", float(g) / 1000, tuple(float(v) / 1000 for v in (a, b, c)))
+    assert [1000 * s.width_m for s in holding_sides(params, box)] == [pytest.approx(float(taken))]
+
+
+def _check_the_carry(page: str, params: Any) -> None:
+    """The carry's bound and tilt, the tetrapack, the items held at points."""
+    from cell.arm import grip_limits, planner
+    from cell.arm.grip_side import holding_sides
+    from cell.arm.tuning import TUNING, ArmTuning
+    from cell.catalogue import get_object
+    from cell.robot import grip_hold
+
+    # the carry's bound, the pads held accelerated, the tilt
+    bound, lo, hi = quoted(page, r"the grip's use stays within (1/[\d.]+) of what the pads hold "
+                           r"\(the pads hold ([\d.]+)-([\d.]+) of their static friction")  # fmt: skip
+    assert bound == f"1/{grip_hold.CARRY_MARGIN}"
+    assert f"the pads hold {lo}-{hi} of what they hold at rest" in inspect.getsource(grip_hold)
+    (over,) = quoted(page, r"asks more than ([\d.]+) of the grip with the tilt \(`TILT_SLOWS_OVER`")
+    assert float(over) == grip_hold.TILT_SLOWS_OVER
+    (headroom,) = quoted(page, r"within that plus ([\d.]+), and the slower")
+    assert float(headroom) == grip_hold.TILT_HEADROOM
+    (held,) = quoted(page, r"would ask more than ([\d.]+) of the grip \(`RELEASE_HELD_MAX`")
+    assert float(held) == planner.RELEASE_HELD_MAX
+    without, with_ = quoted(page, r"a carry that asked ([\d.]+) without it asked ([\d.]+) with it")
+    assert f"asked {without} of it, {with_} with the tilt counted" in inspect.getsource(grip_hold)
+    # the tetrapack: held only below the brisk margin, carried slowly, not refused
+    t_g, old = quoted(page, r"the (\d+) g `o5_tetrapack`, refused before \(the pads hold it only "
+                      r"below the old ([\d.]+)x margin\)")  # fmt: skip
+    tetra = get_object("o5_tetrapack")
+    assert float(t_g) / 1000 == pytest.approx(tetra.mass)
+    assert float(old) == grip_limits.BRISK_CARRY_SAFETY
+    assert [s.brisk for s in holding_sides(params, tetra)] and not any(
+        s.brisk for s in holding_sides(params, tetra)
+    )
+    (no_longer,) = quoted(page, r"The ([\d.]+)x no longer refuses anything held by its faces")
+    assert float(no_longer) == grip_limits.BRISK_CARRY_SAFETY
+    # items held at points: the margin measured in the scene (ArmTuning's record of it)
+    margin, d_mm, s_g, held, carries, layout = quoted(
+        page,
+        r"`ArmTuning.point_hold_margin` = ([\d.]+): an (\d+) mm, (\d+) g sphere the pads hold "
+        r"with ([\d.]+) x its weight left them on all (\w+) of its carries of random layout (\d+)",
+    )
+    assert float(margin) == TUNING.point_hold_margin == ArmTuning().point_hold_margin
+    doc = inspect.getsource(ArmTuning)
+    assert f"an {d_mm} mm, {s_g} g sphere the" in doc and f"with {held} x its weight" in doc
+    assert f"all {carries} of its\n            carries of random layout {layout}," in doc
+
+
+def check_the_grip_page() -> None:
+    """The side choice, the carry's scaling and the refusals as docs/grip.md describes them
+    are the code's: its margins, the catalogue's items and the messages it gives."""
+    import dataclasses
+
+    from cell.catalogue import get_object, pad_width_m
+    from cell.model.objects import ObjectParams
+    from cell.params import load_params, scene_params_path
+
+    page, params = "docs/grip.md", load_params(scene_params_path())
+    _check_the_sides(page, params)
+    _check_the_carry(page, params)
+    # the refusals, each message the code's own
+    cube = ObjectParams("cube", 0.3, (0.25,) * 3, name="item0_cube")
+    rock = get_object("rock_000")
+    assert 1000 * pad_width_m(rock) < 1000 * params.ee.d
+    for obj in (
+        cube,
+        rock,
+        ObjectParams("cube", 0.3, (0.04,) * 3, name="cube"),
+        dataclasses.replace(get_object("cuboid_a"), mass=0.5),
+    ):
+        _quoted_message(page, _refusal(params, obj))
+    # the item held only slowly: placed, never thrown
+    from cell.arm.grip_side import holding_sides, throw_sides
+    from cell.errors import CannotGrip
+
+    tetra = get_object("o5_tetrapack")
+    with pytest.raises(CannotGrip) as err:
+        throw_sides(holding_sides(params, tetra), tetra)
+    _quoted_message(page, str(err.value))
