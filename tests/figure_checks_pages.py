@@ -106,20 +106,21 @@ _ROW = (
 
 
 def _check_parameters(page: str, m: re.Match, row: dict[str, Any]) -> None:
-    from cell.gap.scene_table import case_truths
+    from cell.gap.scene_table import case_truths, flat_params
 
     cell, at = m.group(5), m.start(5)
+    found_params = {e: flat_params(p) for e, p in row["params"].items()}
     truths, seen = case_truths(row), 0
     for p in re.finditer(
         r"(\w+)\.(\w+) (-?[\d.]+)(?: \((-?[\d.]+)\))?", cell.split(" proposal")[0]
     ):
         eff, key, found, truth = p.groups()
-        _as_written(found, row["params"][eff][key])
+        _as_written(found, found_params[eff][key])
         if truth is not None:
             _as_written(truth, truths[f"{eff}.{key}"])
         COVERED[page].extend((at + a, at + b) for a, b in (p.span(3), p.span(4)) if a >= 0)
         seen += 1
-    assert seen == sum(len(v) for v in row["params"].values()), row["case"]
+    assert seen == sum(len(v) for v in found_params.values()), row["case"]
     prop = re.search(r" proposal \((\d+) terms\): (.*) \+ …$", cell)
     if row["proposal"] is None:
         assert prop is None, row["case"]
@@ -217,12 +218,45 @@ def check_the_gap_scene_worlds() -> None:
     slide, rolls, hop = (_case(n)[0] for n in ("s:bounce-slide", "s:bounce-roll", "s:bounce-hop"))
     assert (float(mu), float(e)) == (slide["friction"], slide["restitution"])
     assert float(roll) == rolls["rolling_m"] and float(e_hop) == hop["restitution"]
-    s1, s2, lat = quoted(page, r"\| s = ([\d.]+); s = ([\d.]+) with (\d+) ms latency \|")
+    s1, s2, lat, s3, s4, lat2 = quoted(
+        page,
+        r"\| s = ([\d.]+); s = ([\d.]+) with (\d+) ms latency; s = ([\d.]+); s = ([\d.]+); a "
+        r"latency of (\d+) ms alone",
+    )
     assert float(s1) == _case("s:scale")[0]["scale"]
     t2 = _case("s:scale+latency")[0]
     assert float(s2) == t2["scale"] and float(lat) == 1000 * t2["latency_s"]
-    (side,) = quoted(page, r"\| a = ([\d.]+) m/s² across \|")
+    assert (float(s3), float(s4)) == (
+        _case("s:scale-1.02")[0]["scale"],
+        _case("s:scale-0.98")[0]["scale"],
+    )
+    assert float(lat2) == 1000 * _case("s:latency")[0]["latency_s"]
+    side, side_x = quoted(page, r"\| a = ([\d.]+) m/s² across; ([\d.]+) m/s² along −x \|")
     assert float(side) == _case("s:side-force")[0]["y_mps2"]
+    assert -float(side_x) == _case("s:side-force-x")[0]["x_mps2"]
+    yaw_k, speed_k = quoted(page, r"\| yaw_k ([\d.]+) rad/m; speed_k ([\d.]+) /m \|")
+    assert float(yaw_k) == _case("s:launch-yaw-stroke")[0]["yaw_k"]
+    assert float(speed_k) == _case("s:launch-speed-stroke")[0]["speed_k"]
+    sd2, mean2 = quoted(page, r"; sd ([\d.]+) m/s about ([\d.]+) m/s along x\)")
+    wide = _case("s:wind-throw-wide")[0]
+    assert (float(sd2), float(mean2)) == (wide["sd"], wide["x_mps"])
+    *factors, k = quoted(page, r"constant \(factors ([\d.]+), ([\d.]+) and ([\d.]+)\); one factor "
+                         r"per object; factor = k · stroke \(k (\d+) /m\)")  # fmt: skip
+    names = ("s:drag-const", "s:drag-low", "s:drag-high")
+    assert [float(f) for f in factors] == [_case(n)[0]["value"] for n in names]
+    assert float(k) == _case("s:drag-stroke")[0]["k"]
+    from cell.gap.check_scene import _JET_STRONG
+
+    w, core2, rad2, grow2 = quoted(page, r"a wide, strong jet \(w (\d+) m/s, 1 / \(1 \+ depth / "
+                                   r"([\d.]+) m\), radius ([\d.]+) m \+ ([\d.]+) · depth\)")  # fmt: skip
+    assert (float(w), float(core2), float(rad2)) == tuple(
+        _JET_STRONG[k] for k in ("w_mps", "core_m", "radius_m")
+    )
+    assert f"+ {grow2} * depth" in src
+    mu3, mu5 = quoted(page, r"blocks on a floor of μ ([\d.]+); one ball size \(sphere55\) "
+                      r"rolling; the bouncy floor at μ ([\d.]+) \|")  # fmt: skip
+    assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
+    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
     (rel,) = quoted(page, r"v\(t\) = w − w / \(1 \+ \(c/m\) w t\), within ([\d.]+) %\)")
     rels = re.findall(r"rel=([\d.e-]+)\)", (ROOT / "tests/test_gap_scene.py").read_text())
     assert float(rel) / 100 == pytest.approx(float(rels[0]))
@@ -243,6 +277,12 @@ def check_the_gap_scene_worlds() -> None:
     )
     assert f"rng.uniform({d_lo}, {d_hi}) if drone else rng.uniform({a_lo}, {a_hi})" in src
     assert f"rng.uniform(-{box}, {box})" in src
+    from cell.gap.check_other import PARAM_TOL
+    from cell.gap.laws import MIN_LEVELS
+
+    levels, tol = quoted(page, r"covariate takes at least (\d+) values in the log .*? every "
+                         r"object's value within (\d+) % of the world's")  # fmt: skip
+    assert int(levels) == MIN_LEVELS and float(tol) == 100 * PARAM_TOL
     (ratio,) = quoted(page, r"asks for the verdict's robust held-out RMSE A ≤ ([\d.]+) × that")
     assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
 
