@@ -100,26 +100,27 @@ def check_the_ur3_reach() -> None:
 
 # -- docs/gap_scene.md: the table ------------------------------------------------------------
 _ROW = (
-    r"\n\| (s:[\w+-]+) \| ([\w+]+) \| ([\w+]+) \| ([^|]+) \| ((?:[^|\\]|\\\|)+) \| ([\d.]+) "
+    r"\n\| (s:[\w+.-]+) \| ([\w+]+) \| ([\w+]+) \| ([^|]+) \| ((?:[^|\\]|\\\|)+) \| ([\d.]+) "
     r"\(F (\d+) mm\) \| (yes|no) \|(?=\n)"
 )
 
 
 def _check_parameters(page: str, m: re.Match, row: dict[str, Any]) -> None:
-    from cell.gap.scene_table import case_truths
+    from cell.gap.scene_table import case_truths, flat_params
 
     cell, at = m.group(5), m.start(5)
+    found_params = {e: flat_params(p) for e, p in row["params"].items()}
     truths, seen = case_truths(row), 0
     for p in re.finditer(
         r"(\w+)\.(\w+) (-?[\d.]+)(?: \((-?[\d.]+)\))?", cell.split(" proposal")[0]
     ):
         eff, key, found, truth = p.groups()
-        _as_written(found, row["params"][eff][key])
+        _as_written(found, found_params[eff][key])
         if truth is not None:
             _as_written(truth, truths[f"{eff}.{key}"])
         COVERED[page].extend((at + a, at + b) for a, b in (p.span(3), p.span(4)) if a >= 0)
         seen += 1
-    assert seen == sum(len(v) for v in row["params"].values()), row["case"]
+    assert seen == sum(len(v) for v in found_params.values()), row["case"]
     prop = re.search(r" proposal \((\d+) terms\): (.*) \+ …$", cell)
     if row["proposal"] is None:
         assert prop is None, row["case"]
@@ -197,7 +198,7 @@ def check_the_gap_scene_worlds() -> None:
 
     page = "docs/gap_scene.md"
     src = inspect.getsource(ws) + inspect.getsource(effect_scene)
-    (sd,) = quoted(page, r"steady; drawn throw to throw around a mean \(sd ([\d.]+) m/s\)")
+    (sd,) = quoted(page, r"steady; drawn throw to throw around a mean \(sd ([\d.]+) m/s;")
     assert float(sd) == _case("s:wind-throw")[0]["sd"]
     rpm0, core, radius, grow, lo, hi = quoted(
         page,
@@ -217,12 +218,45 @@ def check_the_gap_scene_worlds() -> None:
     slide, rolls, hop = (_case(n)[0] for n in ("s:bounce-slide", "s:bounce-roll", "s:bounce-hop"))
     assert (float(mu), float(e)) == (slide["friction"], slide["restitution"])
     assert float(roll) == rolls["rolling_m"] and float(e_hop) == hop["restitution"]
-    s1, s2, lat = quoted(page, r"\| s = ([\d.]+); s = ([\d.]+) with (\d+) ms latency \|")
+    s1, s2, lat, s3, s4, lat2 = quoted(
+        page,
+        r"\| s = ([\d.]+); s = ([\d.]+) with (\d+) ms latency; s = ([\d.]+); s = ([\d.]+); a "
+        r"latency of (\d+) ms alone",
+    )
     assert float(s1) == _case("s:scale")[0]["scale"]
     t2 = _case("s:scale+latency")[0]
     assert float(s2) == t2["scale"] and float(lat) == 1000 * t2["latency_s"]
-    (side,) = quoted(page, r"\| a = ([\d.]+) m/s² across \|")
+    assert (float(s3), float(s4)) == (
+        _case("s:scale-1.02")[0]["scale"],
+        _case("s:scale-0.98")[0]["scale"],
+    )
+    assert float(lat2) == 1000 * _case("s:latency")[0]["latency_s"]
+    side, side_x = quoted(page, r"\| a = ([\d.]+) m/s² across; ([\d.]+) m/s² along −x \|")
     assert float(side) == _case("s:side-force")[0]["y_mps2"]
+    assert -float(side_x) == _case("s:side-force-x")[0]["x_mps2"]
+    yaw_k, speed_k = quoted(page, r"\| yaw_k ([\d.]+) rad/m; speed_k ([\d.]+) /m \|")
+    assert float(yaw_k) == _case("s:launch-yaw-stroke")[0]["yaw_k"]
+    assert float(speed_k) == _case("s:launch-speed-stroke")[0]["speed_k"]
+    sd2, mean2 = quoted(page, r"; sd ([\d.]+) m/s about ([\d.]+) m/s along x\)")
+    wide = _case("s:wind-throw-wide")[0]
+    assert (float(sd2), float(mean2)) == (wide["sd"], wide["x_mps"])
+    *factors, k = quoted(page, r"constant \(factors ([\d.]+), ([\d.]+) and ([\d.]+)\); one factor "
+                         r"per object; factor = k · stroke \(k (\d+) /m\)")  # fmt: skip
+    names = ("s:drag-const", "s:drag-low", "s:drag-high")
+    assert [float(f) for f in factors] == [_case(n)[0]["value"] for n in names]
+    assert float(k) == _case("s:drag-stroke")[0]["k"]
+    from cell.gap.check_scene import _JET_STRONG
+
+    w, core2, rad2, grow2 = quoted(page, r"a wide, strong jet \(w (\d+) m/s, 1 / \(1 \+ depth / "
+                                   r"([\d.]+) m\), radius ([\d.]+) m \+ ([\d.]+) · depth\)")  # fmt: skip
+    assert (float(w), float(core2), float(rad2)) == tuple(
+        _JET_STRONG[k] for k in ("w_mps", "core_m", "radius_m")
+    )
+    assert f"+ {grow2} * depth" in src
+    mu3, mu5 = quoted(page, r"blocks on a floor of μ ([\d.]+); one ball size \(sphere55\) "
+                      r"rolling; the bouncy floor at μ ([\d.]+) \|")  # fmt: skip
+    assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
+    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
     (rel,) = quoted(page, r"v\(t\) = w − w / \(1 \+ \(c/m\) w t\), within ([\d.]+) %\)")
     rels = re.findall(r"rel=([\d.e-]+)\)", (ROOT / "tests/test_gap_scene.py").read_text())
     assert float(rel) / 100 == pytest.approx(float(rels[0]))
@@ -243,6 +277,12 @@ def check_the_gap_scene_worlds() -> None:
     )
     assert f"rng.uniform({d_lo}, {d_hi}) if drone else rng.uniform({a_lo}, {a_hi})" in src
     assert f"rng.uniform(-{box}, {box})" in src
+    from cell.gap.check_other import PARAM_TOL
+    from cell.gap.laws import MIN_LEVELS
+
+    levels, tol = quoted(page, r"covariate takes at least (\d+) values in the log .*? every "
+                         r"object's value within (\d+) % of the world's")  # fmt: skip
+    assert int(levels) == MIN_LEVELS and float(tol) == 100 * PARAM_TOL
     (ratio,) = quoted(page, r"asks for the verdict's robust held-out RMSE A ≤ ([\d.]+) × that")
     assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
 
@@ -313,40 +353,67 @@ def check_the_gap_scene_prose() -> None:
     assert f"<= {ratio} * camp.floor_m" in test
 
 
+def _term(row: dict[str, Any], pattern: str) -> float:
+    """A proposal's coefficient (the first term matching `pattern`, one group)."""
+    (value,) = re.findall(pattern, row["proposal"])
+    return float(value)
+
+
 def _check_what_passes(page: str, rows: dict[str, dict[str, Any]]) -> None:
-    (share,) = quoted(page, r"the effect-free world \(with and without (\d+) % outliers")
+    from cell.gap.check_other import PARAM_TOL
+
+    (share,) = quoted(page, r"drone throws, with (\d+) % outliers, all four")
     assert float(share) / 100 == _case_options("s:none+outliers")["outliers"]
+    for c in ("s:none", "s:none-drone", "s:none+outliers", "s:latency"):
+        assert rows[c]["passes"], c
     out = rows["s:none+outliers"]
     assert out["outliers_found"] == out["outliers_true"] == 4 and out["outliers_false"] == 0
-    lo, hi = quoted(page, r"with outliers: within (\d+)–(\d+) % per\s+component\)")
-    errs = [
-        e
-        for c in ("s:wind", "s:wind-throw", "s:wind+outliers")
-        for e in rows[c]["param_errors"].values()
-    ]
+    lo, hi = quoted(page, r"with outliers \(within (\d+)–(\d+) % per component\)")
+    winds = ("s:wind", "s:wind-throw", "s:wind+outliers", "s:wind-low")
+    errs = [e for c in winds for e in rows[c]["param_errors"].values()]
+    assert all(rows[c]["passes"] for c in winds)
     close(lo, 100 * min(errs), 0)
     close(hi, 100 * max(errs), 0)
-    f1, t1, f2, t2, tol, lat = quoted(
+    f1, tol, cube, sphere, f2 = quoted(
         page,
-        r"the tracker scale \(([\d.]+) for ([\d.]+) and ([\d.]+) for ([\d.]+), within the "
-        r"check's ([\d.]+) %, a (\d+) ms\s+latency",
+        r"drag at factors ([\d.]+) \(told per object, every object within (\d+) %: cube30 "
+        r"([\d.]+), sphere40 ([\d.]+)\) and ([\d.]+) \(with",
     )
-    for f, t, case in ((f1, t1, "s:scale"), (f2, t2, "s:scale+latency")):
-        _as_written(f, rows[case]["params"]["tracking_scale"]["scale_factor"])
-        assert float(t) == _case(case)[0]["scale"]
-    close(tol, 100 * load_json("docs/figures/gap_check_scene.json")["criteria"]["scale_tol"], 1)
-    assert float(lat) == 1000 * _case("s:scale+latency")[0]["latency_s"]
+    assert float(f1) == _case("s:drag-const")[0]["value"] and float(tol) == 100 * PARAM_TOL
+    per = rows["s:drag-const"]["params"]["drag_scale"]["per_object"]
+    _as_written(cube, per["cube30"])
+    _as_written(sphere, per["sphere40"])
+    assert float(f2) == _case("s:drag-high")[0]["value"] == _case("s:drag+outliers")[0]["value"]
+    scales = quoted(page, r"the tracker scale in five cases \(([\d.]+); ([\d.]+) with a latency; "
+                    r"([\d.]+); ([\d.]+); ([\d.]+) with outliers\), each within the check's ([\d.]+) %")  # fmt: skip
+    names = ("s:scale", "s:scale+latency", "s:scale-1.02", "s:scale-0.98", "s:scale+outliers")
+    for q, c in zip(scales[:5], names, strict=True):
+        assert float(q) == _case(c)[0]["scale"] and rows[c]["passes"]
+    doc = load_json("docs/figures/gap_check_scene.json")
+    close(scales[5], 100 * doc["criteria"]["scale_tol"], 1)
     hop = rows["s:bounce-hop"]
     found, measured = quoted(page, r"the bouncy floor \(1/μ ([\d.]+) against ([\d.]+) measured\)")
     _as_written(found, hop["params"]["bounce"]["inv_mu"])
     _as_written(measured, hop["world_truth"]["inv_mu"])
-    force, world = quoted(page, r"a force along\s+y of ([\d.]+) m/s², the world's ([\d.]+)\)")
-    (term,) = re.findall(r"force y \[m/s²\] = ([\d.]+)$", rows["s:side-force"]["proposal"])
-    _as_written(force, float(term))
-    assert float(world) == _case("s:side-force")[0]["y_mps2"]
+    fy, wy, fx, wx, yaw, wyaw = quoted(
+        page,
+        r"a force along y of ([\d.]+) m/s² \(the world's ([\d.]+)\), a force along x of "
+        r"(−[\d.]+) m/s² \((−[\d.]+)\), and a launch yaw error of ([\d.]+) rad per metre of "
+        r"stroke \(([\d.]+)\)",
+    )
+    _as_written(fy, _term(rows["s:side-force"], r"force y \[m/s²\] = ([\d.-]+)$"))
+    assert float(wy) == _case("s:side-force")[0]["y_mps2"]
+    _as_written(fx, _term(rows["s:side-force-x"], r"force x \[m/s²\] = ([\d.-]+)"))
+    assert float(wx.replace("−", "-")) == _case("s:side-force-x")[0]["x_mps2"]
+    _as_written(
+        yaw, _term(rows["s:launch-yaw-stroke"], r"azimuth error \[rad\] = ([\d.]+) · stroke")
+    )
+    assert float(wyaw) == _case("s:launch-yaw-stroke")[0]["yaw_k"]
 
 
 def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict) -> None:
+    from cell.model.effects import Wind
+
     every_obj = rows["s:wind-all-objects"]["params"]["wind"]
     fx, fy, tx, ty, lo, hi = quoted(
         page,
@@ -359,29 +426,30 @@ def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dic
     assert (float(tx), -float(ty)) == (eff["x_mps"], eff["y_mps"])
     close(lo, min(ratios.values()), 1)
     close(hi, max(ratios.values()), 1)
-    dc = rows["s:drag-const"]
-    a_f, k, cube, sphere = quoted(
+    across, up, wy, r1, r2, sd = quoted(
         page,
-        r"A ([\d.]+) F, but its law is\s+`factor = k · size_x_m` \((\d+) /m: ([\d.]+) for cube30, "
-        r"([\d.]+) for sphere40\)",
+        r"within ±(\d+) m/s across, ±(\d+) m/s up\)\. Along y the world's ([\d.]+) m/s .*? "
+        r"constants are ([\d.]+) and ([\d.]+) × the scene's\); the wind drawn throw to throw "
+        r"with an sd of ([\d.]+) m/s",
     )
-    close(a_f, dc["after_over_floor"], 2)
-    k_m = dc["params"]["drag_scale"]["k"]
-    _as_written(k, k_m)
-    from cell.sim.items import resolve_object
-
-    for q, name in ((cube, "cube30"), (sphere, "sphere40")):
-        _as_written(q, k_m * resolve_object(name)[0].size[0])
-    f1, r1, w1, f2, r2, w2 = quoted(
+    assert (float(across), float(up)) == (Wind.plausible[0][1], Wind.plausible[2][1])
+    assert float(wy) == _case("s:wind-y")[0]["y_mps"]
+    close(r1, ratios["cube30"], 2)
+    close(r2, ratios["sphere40"], 2)
+    assert float(sd) == _case("s:wind-throw-wide")[0]["sd"]
+    for c in ("s:wind-y", "s:wind-throw-wide"):
+        assert rows[c]["verdict"] == "unknown"
+    f, a_f, a, k = quoted(
         page,
-        r"the world's factor in the\s+model's terms is ([\d.]+) / ([\d.]+) = ([\d.]+) for cube30 "
-        r"and ([\d.]+) / ([\d.]+) = ([\d.]+) for sphere40",
+        r"`s:drag-low` \(factor ([\d.]+)\): named `drag_scale`, phase right, A ([\d.]+) F, .*? "
+        r"\(a ([\d.]+), k (−[\d.]+) /m\)",
     )
-    factor = _case("s:drag-const")[0]["value"]
-    for f, r, w, name in ((f1, r1, w1, "cube30"), (f2, r2, w2, "sphere40")):
-        assert float(f) == factor
-        close(r, ratios[name], 2)
-        close(w, factor / ratios[name], 1)
+    dl = rows["s:drag-low"]
+    assert float(f) == _case("s:drag-low")[0]["value"]
+    close(a_f, dl["after_over_floor"], 2)
+    _as_written(a, dl["params"]["drag_scale"]["a"])
+    _as_written(k, dl["params"]["drag_scale"]["k"])
+    assert rows["s:drag-stroke"]["verdict"] == "shape_stretch+stroke_offset"
     dw = rows["s:downwash"]
     base, floor, radius = quoted(
         page,
@@ -397,30 +465,50 @@ def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dic
                             r"repeats see\)")  # fmt: skip
     close(long_, 1000 * dw["baseline_m"], 0)
     close(repeats, 1000 * dw["tool_floor_m"], 0)
-    dww = rows["s:downwash+wind"]
-    fx, fy, tx, ty, ratio = quoted(
+    assert rows["s:none-drone"]["verdict"] == "none"
+    strong = rows["s:downwash-strong"]
+    base2, floor2 = quoted(page, r"\(baseline\s+(\d+) mm against a floor of (\d+) mm\)")
+    close(base2, 1000 * strong["baseline_m"], 0)
+    close(floor2, 1000 * strong["world_floor_m"], 0)
+    fx, fy, tx, ty, fx2, fy2, ratio = quoted(
         page,
-        r"the wind is found \(([\d.]+)/([\d.]+) for (\d+)/(\d+) m/s\) but A stays above\s+([\d.]+) ×",
+        r"the wind is found \(([\d.]+)/([\d.]+) for (\d+)/(\d+)\s+m/s with the narrow jet, "
+        r"([\d.]+)/([\d.]+) with the wide one\) but A stays above ([\d.]+) ×",
     )
-    _as_written(fx, dww["params"]["wind"]["x_mps"])
-    _as_written(fy, dww["params"]["wind"]["y_mps"])
-    w = _case("s:downwash+wind")[1]
-    assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
+    for (qx, qy), c in (((fx, fy), "s:downwash+wind"), ((fx2, fy2), "s:downwash-strong+wind")):
+        _as_written(qx, rows[c]["params"]["wind"]["x_mps"])
+        _as_written(qy, rows[c]["params"]["wind"]["y_mps"])
+        w = _case(c)[1]
+        assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
     assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
-    (mu,) = quoted(page, r"`s:bounce-slide` \(blocks on a μ ([\d.]+) floor\)")
-    assert float(mu) == _case("s:bounce-slide")[0]["friction"]
-    bs = rows["s:bounce-slide"]
-    tool, a = quoted(page, r"the tool's floor \(from repeats,\s+(\d+) mm\) does not contain it "
-                     r"and no named effect brings A \((\d+) mm\)")  # fmt: skip
-    close(tool, 1000 * bs["tool_floor_m"], 0)
-    close(a, 1000 * bs["after_robust_m"], 0)
-    br = rows["s:bounce-roll"]
-    found, measured, a_f = quoted(
-        page, r"\(1/μ ([\d.]+) against ([\d.]+) measured\) and phase, but A is ([\d.]+) × F"
+    b1, m1, b2, m2, mu5, b3, m3, t4, m4, mu3 = quoted(
+        page,
+        r"\(1/μ ([\d.]+)\s+against ([\d.]+) for balls, ([\d.]+) against ([\d.]+) at μ ([\d.]+), "
+        r"([\d.]+) against ([\d.]+) with\s+outliers, τ ([\d.]+) against ([\d.]+) for blocks at μ "
+        r"([\d.]+)\)",
     )
-    _as_written(found, br["params"]["bounce"]["inv_mu"])
-    _as_written(measured, br["world_truth"]["inv_mu"])
-    close(a_f, br["after_over_floor"], 2)
+    for (q, t), c in (((b1, m1), "s:bounce-roll"), ((b2, m2), "s:bounce-hop-mu05"),
+                      ((b3, m3), "s:bounce-hop+outliers")):  # fmt: skip
+        _as_written(q, rows[c]["params"]["bounce"]["inv_mu"])
+        _as_written(t, rows[c]["world_truth"]["inv_mu"])
+    _as_written(t4, rows["s:bounce-slide-mu03"]["params"]["bounce"]["tau_s"])
+    _as_written(m4, rows["s:bounce-slide-mu03"]["world_truth"]["tau_s"])
+    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
+    assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
+    (above,) = quoted(page, r"but A stays above ([\d.]+) × F: a\s+block that tumbles")
+    assert float(above) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+    mu, a, tool = quoted(page, r"Blocks on a\s+μ ([\d.]+) floor \(`s:bounce-slide`\) tumble most: A "
+                         r"(\d+) mm against the tool's floor of\s+(\d+) mm")  # fmt: skip
+    bs = rows["s:bounce-slide"]
+    assert float(mu) == _case("s:bounce-slide")[0]["friction"]
+    close(a, 1000 * bs["after_robust_m"], 0)
+    close(tool, 1000 * bs["tool_floor_m"], 0)
+    (one,) = quoted(page, r"\(`s:bounce-roll-one`\) comes nearest, A ([\d.]+) × F")
+    close(one, rows["s:bounce-roll-one"]["after_over_floor"], 2)
+    (sh,) = quoted(page, r"the bounce alone, its 1/μ\s+([\d.]+) absorbing the scale")
+    _as_written(sh, rows["s:scale+hop"]["params"]["bounce"]["inv_mu"])
+    (tau,) = quoted(page, r"`bounce` \(rolling, τ ([\d.]+) s\)")
+    _as_written(tau, rows["s:launch-speed-stroke"]["params"]["bounce"]["tau_s"])
 
 
 # -- docs/realtime.md ------------------------------------------------------------------------

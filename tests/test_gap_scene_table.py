@@ -82,3 +82,25 @@ def test_a_missing_file_is_refused(tmp_path: Path) -> None:
     r = _run(tmp_path / "none.json")
     assert r.returncode == 2 and r.stderr.startswith("cell: error: ")
     assert not (tmp_path / "none.json").exists()
+
+
+def test_a_per_object_law_is_shown_object_by_object() -> None:
+    row = {
+        "case": "s:drag-const",
+        "truth": "drag_scale",
+        "verdict": "drag_scale",
+        "phases": {"drag_scale": "flight"},
+        "params": {"drag_scale": {"common": 2.7836, "spread": 0.3166,
+                                  "per_object": {"sphere40": 3.16, "cube30": 2.7264}}},
+        "laws": {"drag_scale": "factor = a_object"},
+        "proposal": None,
+        "world_truth": {},
+        "after_over_floor": 0.8212,
+        "world_floor_m": 0.0519,
+        "passes": True,
+    }  # fmt: skip
+    assert scene_row(row) == (
+        "| s:drag-const | drag_scale | drag_scale | drag_scale: flight | drag_scale.common 2.78; "
+        "drag_scale.spread 0.317; drag_scale.sphere40 3.16; drag_scale.cube30 2.73 — factor = "
+        "a_object | 0.82 (F 52 mm) | yes |"
+    )

@@ -1,7 +1,8 @@
 """The Markdown table docs/gap_scene.md shows, made from the JSON that
 `cell gap check --worlds scene --json FILE` writes (one row per case).
 
-Parameters found are printed to 3 significant figures; a world's parameter in brackets
+Parameters found are printed to 3 significant figures (a per-object law's value for each
+object by the object's name); a world's parameter in brackets
 (the case's setting, or a bounce's as measured in the world, `world_truth`); A / world
 floor to 2 decimals and the floor F in mm; a proposal by its number of terms and its first
 two terms."""
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["scene_table", "scene_summary", "case_truths"]
+__all__ = ["scene_table", "scene_summary", "case_truths", "flat_params"]
 
 HEAD = (
     "| case | truth | verdict | phases | parameters found (truth) | A / world floor | passes |\n"
@@ -34,12 +35,21 @@ def case_truths(row: dict[str, Any]) -> dict[str, float]:
     return out
 
 
+def flat_params(params: dict[str, Any]) -> dict[str, float]:
+    """An effect's parameters with a per-object law's values one by one (`per_object`:
+    {object: value} becomes object: value)."""
+    out: dict[str, float] = {}
+    for k, v in params.items():
+        out.update(v if isinstance(v, dict) else {k: v})
+    return out
+
+
 def _params(row: dict[str, Any]) -> str:
     truths = case_truths(row)
     parts = []
     for eff, params in row["params"].items():
         items = []
-        for k, v in params.items():
+        for k, v in flat_params(params).items():
             key = f"{eff}.{k}"
             t = f" ({truths[key]:.3g})" if key in truths else ""
             items.append(f"{key} {v:.3g}{t}")
