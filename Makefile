@@ -26,7 +26,7 @@ lint: install
 	$(BIN)/mypy cell
 
 test: lint
-	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile tests
+	$(BIN)/python -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder tests
 
 bench: install
 	$(BIN)/cell bench

@@ -89,7 +89,7 @@ def test_constant_world_gets_no_extra_terms():
 
 
 def test_outliers_are_flagged_by_row_and_robust_error_is_reported():
-    prob, camp, table = _problem([], outliers=0.05)
+    prob, camp, table = _problem([], n=120, outliers=0.05)  # 6 outliers among 120 throws
     pre = flag(prob.residual(np.arange(len(prob))))
     true = np.zeros(len(prob), bool)
     true[list(camp.outliers)] = True
