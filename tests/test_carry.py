@@ -328,17 +328,16 @@ def test_a_carry_shaped_by_the_grip_is_sooner_and_holds_a_tall_box():
     """A 140 mm tall box hung from the pads and carried sideways (a place's carry): its
     couple binds, so the uniformly slowed path is slow all along; the path shaped by the
     grip (toppra with `grip_constraint`) slows only where the couple asks it. It is at
-    least 5 % sooner, its use of the grip (sampled densely, the tilt about y counted:
-    `carry_use`) is within the bound, and in the scene the box stays within 1 mm in the
-    pads (measured: 1.25 s against 1.36 s; 1.11 s before the carry counted the tilt, at
-    least 10 % sooner then; 0.01 mm, gripped 0.05 s after the arm stopped over it). Gripped at once as the arm
+    least 10 % sooner, its use of the grip (sampled densely) is within the bound, and in
+    the scene the box stays within 1 mm in the pads (measured: 1.11 s against 1.36 s,
+    0.01 mm, gripped 0.05 s after the arm stopped over it). Gripped at once as the arm
     stops, as the cell grips (no settle after the approach), the same carry moved it
     1.05 mm in the pads: within 2 mm, and held."""
     release = ((0.55, 0.3, 0.35), -math.pi / 2)
     _, _, use_u, t_uniform = _carry(0.45, CARRY_MARGIN, (0.05, 0.14), release, shape=False)
     held, drift, use, t_shaped = _carry(0.45, CARRY_MARGIN, (0.05, 0.14), release)
     assert use_u <= 1 / CARRY_MARGIN and use <= 1 / CARRY_MARGIN
-    assert t_shaped < 0.95 * t_uniform, (t_shaped, t_uniform)
+    assert t_shaped < 0.9 * t_uniform, (t_shaped, t_uniform)
     assert held and drift < 1e-3, drift
     held, drift, _, _ = _carry(0.45, CARRY_MARGIN, (0.05, 0.14), release, settle_s=0.0)
     assert held and drift < 2e-3, drift

@@ -35,14 +35,16 @@ item has no T_y (held at points) and keeps the first law.
 
 Where the tilt is counted: held still (`static_grip_use`; the arm's release elevation
 and swing route, `cell.arm.grip_limits.release_grip_use`), and in the carry's time
-scaling (`plan_carry`, `grip_use` with a margin: `carry_use`): the force-and-twist use
-within 1/margin, and the use with the tilt within 1/margin or, where the path held still
-already asks more (a level swing past the horizontal with a tall item's weight on a pad,
-which the routes check), within what it asks there. Counted against 1/margin alone, the
-demo's cuboid_b's level swing went at GENTLE_SCALE (1,505 -> 1,399 items per hour);
-left out, carries that asked 0.73 without the tilt and 1.23 with it dropped their items
-(issue 59). The toppra constraint (`grip_constraint`) bounds the force-and-twist law; its
-path is checked with the tilt and left for the uniform slow-down where it asks more.
+scaling only where it binds (`plan_carry`): a carry is timed within 1/margin of the
+force-and-twist use, and where it then asks more than the pads hold with the tilt
+(`tilt_use` over TILT_SLOWS_OVER), it is timed again keeping its use with the tilt
+(`carry_use`) within 1/margin or, where the path held still already asks more (a level
+swing past the horizontal with a tall item's weight on a pad, which the routes check),
+within what it asks there. Counted against 1/margin alone, the demo's cuboid_b's level
+swing went at GENTLE_SCALE (1,505 -> 1,399 items per hour); counted in every carry's
+timing, it slowed carries the pads held and changed the routes timed by them (the merge
+reverted at cf2d90b); left out, carries that asked 0.73 without the tilt and 1.23 with
+it dropped their items (issue 59).
 
 `plan_carry` finds the fastest toppra path through the waypoints whose use of the
 grip stays under that bound, evaluating a_c exactly from the joint state with Pinocchio
