@@ -177,8 +177,8 @@ def check_the_random_layouts() -> None:
             page, r"`dropped_while_carried` (\d+), `missed_bin` (\d+) \(by object"
         )
         assert (int(dropped), int(missed)) == (
-            bench["failures"]["dropped_while_carried"],
-            bench["failures"]["missed_bin"],
+            bench["failures"].get("dropped_while_carried", 0),
+            bench["failures"].get("missed_bin", 0),
         )
         n, last = quoted(page, r"draws (\d+) sort jobs \(`cell job random`, seeds 0–(\d+),")
         assert (int(n), int(last)) == (bench["layouts"], bench["layouts"] - 1)
@@ -432,7 +432,7 @@ EXEMPT: tuple[tuple[str, str, str], ...] = (
     ("*", r"ISO \d+", "a standard's number"),
     ("docs/gap_scene.md", r"/ 2g|1/μ|1 / \(1 \+|\(1 \+", "a formula's constants"),
     ("README.md", r"\(100\.0 %\)", "checked with its count (in_bin_rate)"),
-    ("docs/figures.md", r"interval 0\.945–0\.975", "checked (bench_sort_tune.json)"),
+    ("docs/figures.md", r"interval 0\.937–0\.969", "checked (bench_sort_tune.json)"),
 )
 
 
