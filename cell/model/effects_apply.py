@@ -105,47 +105,78 @@ def _flight_accel(
         return None
     decay = isinstance(dw, DownwashDecay)
     w_const = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float) if wind else np.zeros(3)
-    centre = batch.position[:, :2]
-    release_z = batch.position[:, 2]
+    per_throw: dict[str, np.ndarray] = {}
     if dw is not None:
         rpm = _permuted(rotor_rpm, permutation)
-        w_dw = dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
+        per_throw["w_dw"] = (
+            dw.speed_mps * (np.clip(rpm, 0.0, None) / DOWNWASH_REF_RPM) ** dw.exponent
+        )
+        per_throw["cx"], per_throw["cy"] = batch.position[:, 0], batch.position[:, 1]
+        per_throw["release_z"] = batch.position[:, 2]
     if sp is not None:
-        kl = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m], per unit C_L
-        radius = batch.size.max(axis=1) / 2
+        per_throw["kl"] = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m] per C_L
+        per_throw["radius"] = batch.size.max(axis=1) / 2
     if ds is not None:
         # the drag the nominal law does not have: (factor - 1) of it
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
+        per_throw["neg_k_extra"] = -k_extra
+    rows = _Rows(per_throw)
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
+        r = rows(idx)
         w = np.empty_like(p)
         w[:] = w_const
         if dw is not None:
-            rho = np.hypot(p[:, 0] - centre[idx, 0], p[:, 1] - centre[idx, 1])
+            rho = np.hypot(p[:, 0] - r["cx"], p[:, 1] - r["cy"])
             inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
             if decay:
-                depth = np.clip(release_z[idx] - p[:, 2], 0.0, None)
+                depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
                 inside = inside * np.exp(-depth / dw.depth_m)
-            w[:, 2] -= w_dw[idx] * inside
+            w[:, 2] -= r["w_dw"] * inside
+        if sp is None and ds is None:
+            return w, None
+        rel = v - w
+        speed = _norm(rel)
         extra = None
         if sp is not None:
-            rel = v - w
-            speed = np.maximum(np.linalg.norm(rel, axis=1), 1e-9)
+            speed_sp = np.maximum(speed, 1e-9)
             # normal to v in its vertical plane, pointing up for backspin
-            nz = 1.0 - (rel[:, 2] / speed) ** 2
-            n = -rel * (rel[:, 2] / speed**2)[:, None]
+            nz = 1.0 - (rel[:, 2] / speed_sp) ** 2
+            n = -rel * (rel[:, 2] / speed_sp**2)[:, None]
             n[:, 2] += 1.0
             n /= np.sqrt(np.maximum(nz, 1e-12))[:, None]
-            s_ratio = sp.spin_rad_s * radius[idx] / speed
+            s_ratio = sp.spin_rad_s * r["radius"] / speed_sp
             c_l = sp.lift_max * np.tanh(s_ratio / sp.lift_max)
-            extra = (kl[idx] * c_l * speed**2)[:, None] * n
+            extra = (r["kl"] * c_l * speed_sp**2)[:, None] * n
         if ds is not None:
-            rel = v - w
-            drag = -(k_extra[idx] * np.linalg.norm(rel, axis=1))[:, None] * rel
+            drag = (r["neg_k_extra"] * speed)[:, None] * rel
             extra = drag if extra is None else extra + drag
         return w, extra
 
     return accel
+
+
+class _Rows:
+    """Per-throw arrays taken at the rows of the last `idx` seen: the integrator passes the
+    same `idx` object (never changed in place) while its rows stay the same, so each
+    stage of each step does not take them again."""
+
+    def __init__(self, per_throw: dict[str, np.ndarray]) -> None:
+        self._all = per_throw
+        self._idx: np.ndarray | None = None
+        self._rows: dict[str, np.ndarray] = {}
+
+    def __call__(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        if idx is not self._idx:
+            self._rows = {name: a[idx] for name, a in self._all.items()}
+            self._idx = idx
+        return self._rows
+
+
+def _norm(x: np.ndarray) -> np.ndarray:
+    """|x| of each row of x (m, 3): `np.linalg.norm(x, axis=1)`'s arithmetic, without its
+    per-call checks."""
+    return np.sqrt(np.add.reduce(x * x, axis=1))
 
 
 def flight_accel(

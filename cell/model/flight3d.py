@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.model.integrate import hermite as _hermite
-from cell.model.integrate import plane_crossing, rk4_step
+from cell.model.integrate import plane_crossing
 from cell.model.params import G
 
 __all__ = ["Accel", "FlightResult", "acceleration", "column_fraction", "fly", "sample_path"]
@@ -65,15 +65,15 @@ class FlightResult:
 
 
 def _rates(
-    p: np.ndarray, v: np.ndarray, k: np.ndarray, idx: np.ndarray, accel: Accel | None
+    p: np.ndarray, v: np.ndarray, neg_k: np.ndarray, idx: np.ndarray, accel: Accel | None
 ) -> np.ndarray:
-    """dv/dt for rows idx."""
+    """dv/dt for rows idx; neg_k is -k of those rows [1/m]."""
     if accel is None:
         w, extra = None, None
     else:
         w, extra = accel(p, v, idx)
     rel = v if w is None else v - w
-    a = -k[:, None] * np.sqrt(np.einsum("ij,ij->i", rel, rel))[:, None] * rel
+    a = (neg_k * np.sqrt(np.einsum("ij,ij->i", rel, rel)))[:, None] * rel
     a[:, 2] -= G
     if extra is not None:
         a += extra
@@ -85,17 +85,32 @@ def acceleration(
 ) -> np.ndarray:
     """dv/dt [m/s², W] at these states (gravity, drag in the air flow, extra effects)."""
     idx = np.arange(position.shape[0])
-    return _rates(np.asarray(position, float), np.asarray(velocity, float), k, idx, accel)
+    neg_k = -np.asarray(k, float)
+    return _rates(np.asarray(position, float), np.asarray(velocity, float), neg_k, idx, accel)
 
 
 def _rk4(
-    p: np.ndarray, v: np.ndarray, k: np.ndarray, idx: np.ndarray, accel: Accel | None, h: float
+    p: np.ndarray, v: np.ndarray, neg_k: np.ndarray, idx: np.ndarray, accel: Accel | None, h: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    def rates(ps: list[np.ndarray], vs: list[np.ndarray]) -> list[np.ndarray]:
-        return [_rates(ps[0], vs[0], k, idx, accel)]
+    """One RK4 step of rows idx: `cell.model.integrate.rk4_step` written out for whole
+    (m, 3) vectors, the same arithmetic operation for operation (tests/test_flight3d.py)."""
+    half = 0.5 * h
+    a1 = _rates(p, v, neg_k, idx, accel)
+    v2 = v + half * a1
+    a2 = _rates(p + half * v, v2, neg_k, idx, accel)
+    v3 = v + half * a2
+    a3 = _rates(p + half * v2, v3, neg_k, idx, accel)
+    v4 = v + h * a3
+    a4 = _rates(p + h * v3, v4, neg_k, idx, accel)
+    sixth = h / 6
+    p_new = p + sixth * (v + 2 * v2 + 2 * v3 + v4)
+    v_new = v + sixth * (a1 + 2 * a2 + 2 * a3 + a4)
+    return p_new, v_new
 
-    (p1,), (v1,) = rk4_step(rates, [p], [v], h, reads_position=True)
-    return p1, v1
+
+# Rows whose flight is over stay in the batch (their steps cost little beside NumPy's
+# per-call overhead) until fewer than this share of the rows integrated still fly.
+_KEEP_SHARE = 0.5
 
 
 def fly(
@@ -125,30 +140,48 @@ def fly(
         The crossings.
     """
     n = position.shape[0]
+    t_start = np.broadcast_to(np.asarray(t0, float), (n,))
+    idx = np.arange(n)
+    p = np.array(position, float)
+    v = np.array(velocity, float)
+    neg_k = -np.broadcast_to(np.asarray(k, float), (n,))
+    lz = np.broadcast_to(np.asarray(land_z, float), (n,))
+    flying = np.ones(n, bool)
+    n_flying = n
+    crossed: list[tuple[np.ndarray, ...]] = []  # rows, the step's end states, plane, t
+    t = 0.0
+    while n_flying and t < t_max:
+        p1, v1 = _rk4(p, v, neg_k, idx, accel, step)
+        below = p1[:, 2] <= lz
+        cross = below & (p[:, 2] > lz) & flying
+        if cross.any():
+            rows = idx[cross]
+            states = (p[cross], p1[cross], v[cross], v1[cross])
+            crossed.append((rows, *states, lz[cross], np.full(rows.size, t)))
+        # over: crossed, or below the plane still falling (never lands)
+        flying &= ~(cross | (below & (v1[:, 2] < 0)))
+        n_flying = int(np.count_nonzero(flying))
+        t += step
+        if n_flying < _KEEP_SHARE * idx.size:
+            idx, p, v = idx[flying], p1[flying], v1[flying]
+            neg_k, lz, flying = neg_k[flying], lz[flying], flying[flying]
+        else:
+            p, v = p1, v1
+    return _crossings(n, crossed, t_start, step)
+
+
+def _crossings(
+    n: int, crossed: list[tuple[np.ndarray, ...]], t_start: np.ndarray, step: float
+) -> FlightResult:
+    """The crossings of the steps `fly` found crossing, located all at once."""
     out_p = np.full((n, 3), np.nan)
     out_v = np.full((n, 3), np.nan)
     out_t = np.full(n, np.nan)
-    t_start = np.broadcast_to(np.asarray(t0, float), (n,))
-    idx = np.arange(n)
-    p = np.asarray(position, float).copy()
-    v = np.asarray(velocity, float).copy()
-    kk = np.asarray(k, float)
-    lz = np.asarray(land_z, float)
-    t = 0.0
-    while idx.size and t < t_max:
-        p1, v1 = _rk4(p, v, kk[idx], idx, accel, step)
-        cross = (p[:, 2] > lz[idx]) & (p1[:, 2] <= lz[idx])
-        if np.any(cross):
-            c = cross
-            s, out_p[idx[c]], out_v[idx[c]] = plane_crossing(
-                p[c], p1[c], v[c], v1[c], step, lz[idx][c]
-            )
-            out_t[idx[c]] = t_start[idx[c]] + t + s * step
-        keep = ~cross & ~((p1[:, 2] <= lz[idx]) & (v1[:, 2] < 0))
-        idx, p, v = idx[keep], p1[keep], v1[keep]
-        t += step
-    landed = np.isfinite(out_t)
-    return FlightResult(position=out_p, velocity=out_v, t=out_t, landed=landed)
+    if crossed:
+        rows, p0, p1, v0, v1, lz, t = (np.concatenate(a) for a in zip(*crossed, strict=True))
+        s, out_p[rows], out_v[rows] = plane_crossing(p0, p1, v0, v1, step, lz)
+        out_t[rows] = t_start[rows] + t + s * step
+    return FlightResult(position=out_p, velocity=out_v, t=out_t, landed=np.isfinite(out_t))
 
 
 def sample_path(
@@ -177,15 +210,15 @@ def sample_path(
     out = np.full((n, m, 3), np.nan)
     t_end = np.nanmax(np.where(np.isfinite(t_rel), t_rel, -1.0), axis=1)
     idx = np.arange(n)[t_end >= 0]
-    p = np.asarray(position, float)[idx].copy()
-    v = np.asarray(velocity, float)[idx].copy()
-    kk = np.asarray(k, float)
+    p = np.asarray(position, float)[idx]
+    v = np.asarray(velocity, float)[idx]
+    neg_k = -np.broadcast_to(np.asarray(k, float), (n,))[idx]
+    tr, te = t_rel[idx], t_end[idx]
     t = 0.0
     while idx.size:
-        p1, v1 = _rk4(p, v, kk[idx], idx, accel, step)
-        tr = t_rel[idx]
+        p1, v1 = _rk4(p, v, neg_k, idx, accel, step)
         inside = (tr >= t) & (tr < t + step)
-        if np.any(inside):
+        if inside.any():
             rows, cols = np.nonzero(inside)
             s = (tr[rows, cols] - t) / step
             for j in range(3):
@@ -193,6 +226,10 @@ def sample_path(
                     p[rows, j], p1[rows, j], step * v[rows, j], step * v1[rows, j], s
                 )
         t += step
-        keep = t_end[idx] >= t
-        idx, p, v = idx[keep], p1[keep], v1[keep]
+        # rows past their last sample stay until fewer than the share go on
+        going = te >= t
+        if np.count_nonzero(going) < _KEEP_SHARE * idx.size:
+            idx, p, v, neg_k, tr, te = (a[going] for a in (idx, p1, v1, neg_k, tr, te))
+        else:
+            p, v = p1, v1
     return out

@@ -98,10 +98,6 @@ def flight_planar(
     Returns (distance, time, landed, vh_at_impact, vz_at_impact), each shape (n,).
     """
     n = z.shape[0]
-    out_h = np.full(n, np.nan)
-    out_t = np.full(n, np.nan)
-    out_vh = np.full(n, np.nan)
-    out_vz = np.full(n, np.nan)
     idx = np.arange(n)
     h_pos = np.zeros(n)
     t = 0.0
@@ -110,20 +106,17 @@ def flight_planar(
     vz = vz.copy()
     k = k.copy()
     lz = land_z.copy()
+    crossed: list[tuple[np.ndarray, ...]] = []  # the crossing steps, located at the end
     while idx.size and t < t_max:
         step = min(
             max_step, float(_DRAG_STEP_SCALE / max(np.max(k * np.sqrt(vh * vh + vz * vz)), 1e-9))
         )
         h1, z1, vh1, vz1 = rk4_planar(h_pos, z, vh, vz, k, step, np.sqrt)
         cross = (z > lz) & (z1 <= lz)
-        if np.any(cross):
+        if cross.any():
             c = cross
-            s = hermite_root(z[c], z1[c], step * vz[c], step * vz1[c], lz[c])
-            ids = idx[c]
-            out_h[ids] = hermite(h_pos[c], h1[c], step * vh[c], step * vh1[c], s)
-            out_t[ids] = t + s * step
-            out_vh[ids] = vh[c] + (vh1[c] - vh[c]) * s
-            out_vz[ids] = vz[c] + (vz1[c] - vz[c]) * s
+            ends = (h_pos[c], h1[c], z[c], z1[c], vh[c], vh1[c], vz[c], vz1[c], lz[c])
+            crossed.append((idx[c], *ends, np.full(ends[0].size, t), np.full(ends[0].size, step)))
         # drop crossed throws, and those below their plane still falling (never land)
         keep = ~cross & ~((z1 <= lz) & (vz1 < 0))
         t += step
@@ -132,5 +125,24 @@ def flight_planar(
             h_pos, z, vh, vz, k, lz = h1[keep], z1[keep], vh1[keep], vz1[keep], k[keep], lz[keep]
         else:
             h_pos, z, vh, vz = h1, z1, vh1, vz1
+    out_h, out_t, out_vh, out_vz = _crossings(n, crossed)
     landed = np.isfinite(out_t)
     return out_h, out_t, landed, out_vh, out_vz
+
+
+def _crossings(
+    n: int, crossed: list[tuple[np.ndarray, ...]]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(distance, time, vh, vz) at the crossings of the steps `flight_planar` found
+    crossing, located all at once (each row on its own step's interpolant)."""
+    out_h, out_t, out_vh, out_vz = (np.full(n, np.nan) for _ in range(4))
+    if crossed:
+        ids, h0, h1, z0, z1, vh0, vh1, vz0, vz1, lz, t, step = (
+            np.concatenate(a) for a in zip(*crossed, strict=True)
+        )
+        s = hermite_root(z0, z1, step * vz0, step * vz1, lz)
+        out_h[ids] = hermite(h0, h1, step * vh0, step * vh1, s)
+        out_t[ids] = t + s * step
+        out_vh[ids] = vh0 + (vh1 - vh0) * s
+        out_vz[ids] = vz0 + (vz1 - vz0) * s
+    return out_h, out_t, out_vh, out_vz
