@@ -1,6 +1,7 @@
 """The flight integrators and the flight effects' callback as they were before they were
 made faster (`cell.model.flight3d`, `cell.model.planar.flight_planar`,
-`cell.model.integrate`'s crossing and `cell.model.effects_apply` at f56b63f), kept frozen
+`cell.model.integrate`'s crossing, `cell.model.effects_apply` and
+`cell.gap.track_ode._simulate` at f56b63f), kept frozen
 for tests/test_flight_same.py to compare the fast ones against on random batches. Tests
 only; nothing in `cell` imports it."""
 
@@ -229,3 +230,56 @@ def flight_planar(z, vh, vz, k, land_z, max_step, t_max=30.0):  # type: ignore[n
         else:
             h_pos, z, vh, vz = h1, z1, vh1, vz1
     return out_h, out_t, np.isfinite(out_t), out_vh, out_vz
+
+
+TRACK_STEP_S = 0.01  # `cell.gap.track_ode.STEP_S`
+
+
+def _ode_acc(v: np.ndarray, th: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """v̇ for states v (n, P, 3) under parameters th (n, P, 12), drag constants k (n,)."""
+    w = np.zeros_like(v)
+    w[..., :2] = th[..., 10:12]
+    rel = v - w
+    kk = k[:, None, None] * np.exp(th[..., 9:10])
+    acc = th[..., 6:9] - kk * np.linalg.norm(rel, axis=-1, keepdims=True) * rel
+    acc[..., 2] -= G
+    return acc
+
+
+def track_simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Positions [m] at times tau (n, m) (NaN: no sample), shape (n, P, m, 3), of the
+    flights with parameters th (n, P, 12)."""
+    n, n_p, _ = th.shape
+    ok = np.isfinite(tau)
+    t_end = float(np.nanmax(tau)) if ok.any() else 0.0
+    n_steps = max(int(np.ceil(t_end / TRACK_STEP_S)), 1)
+    h = t_end / n_steps if t_end > 0 else TRACK_STEP_S
+    ti, si = np.nonzero(ok)
+    x = tau[ti, si] / h
+    node = np.minimum(np.floor(x).astype(int), n_steps - 1)
+    s = (x - node)[:, None, None]
+    order = np.argsort(node, kind="stable")
+    bounds = np.searchsorted(node[order], np.arange(n_steps + 1))
+    out = np.full((n, n_p, tau.shape[1], 3), np.nan)
+    p = th[..., 0:3].copy()
+    v = th[..., 3:6].copy()
+    for i in range(n_steps):
+        k1v = _ode_acc(v, th, k)
+        k2p, k2v = v + 0.5 * h * k1v, _ode_acc(v + 0.5 * h * k1v, th, k)
+        k3p, k3v = v + 0.5 * h * k2v, _ode_acc(v + 0.5 * h * k2v, th, k)
+        k4p, k4v = v + h * k3v, _ode_acc(v + h * k3v, th, k)
+        p1 = p + h / 6 * (v + 2 * k2p + 2 * k3p + k4p)
+        v1 = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        sel = order[bounds[i] : bounds[i + 1]]
+        if sel.size:
+            tt, ss, sv = ti[sel], si[sel], s[sel]
+            h00 = 2 * sv**3 - 3 * sv**2 + 1
+            h10 = sv**3 - 2 * sv**2 + sv
+            h01 = -2 * sv**3 + 3 * sv**2
+            h11 = sv**3 - sv**2
+            out[tt, :, ss] = h00 * p[tt] + h10 * h * v[tt] + h01 * p1[tt] + h11 * h * v1[tt]
+        p, v = p1, v1
+        if not np.all(np.isfinite(p)):
+            p = np.where(np.isfinite(p), p, 1e6)
+            v = np.where(np.isfinite(v), v, 0.0)
+    return out

@@ -137,3 +137,26 @@ def test_the_planar_flight_gives_the_landings_it_gave_before() -> None:
             assert np.array_equal(got[2], want[2]) and (n < 9 or 0 < got[2].sum() < n)
             for a, b in zip(got, want, strict=True):
                 _close(np.asarray(a, float), np.asarray(b, float))
+
+
+def test_the_track_fits_flights_are_the_ones_before() -> None:
+    from cell.gap.track_ode import _simulate
+
+    rng = np.random.default_rng(12)
+    n, n_p, m = 23, 4, 30
+    th = np.concatenate(
+        [
+            rng.uniform(-1.0, 1.0, (n, n_p, 3)),  # p0 [m]
+            rng.uniform(-4.0, 4.0, (n, n_p, 3)),  # v0 [m/s]
+            rng.normal(0.0, 0.5, (n, n_p, 3)),  # a [m/s²]
+            rng.normal(0.0, 0.3, (n, n_p, 1)),  # λ
+            rng.normal(0.0, 2.0, (n, n_p, 2)),  # w [m/s]
+        ],
+        axis=-1,
+    )
+    k = rng.uniform(0.0, 0.2, n)
+    tau = np.sort(rng.uniform(0.0, 0.9, (n, m)), axis=1)
+    tau[rng.random((n, m)) < 0.2] = np.nan
+    got = _simulate(th, k, tau)
+    assert np.isfinite(got).sum() > 0.7 * got.size
+    _close(got, before.track_simulate(th, k, tau))

@@ -23,6 +23,7 @@ tracks identify it). λ and w carry weak priors (1 cm of misfit per e-fold of dr
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,14 +65,22 @@ class OdeFit:
     converged: np.ndarray
 
 
-def _acc(v: np.ndarray, th: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """v̇ for states v (n, P, 3) under parameters th (n, P, 12), drag constants k (n,)."""
-    w = np.zeros_like(v)
+def _acc(th: np.ndarray, k: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """v̇ as a function of the states v (n, P, 3) under parameters th (n, P, 12), drag
+    constants k (n,): the wind, drag factor and extra acceleration, the same at every
+    state of the flight, taken from th once."""
+    w = np.zeros(th.shape[:-1] + (3,))
     w[..., :2] = th[..., 10:12]
-    rel = v - w
     kk = k[:, None, None] * np.exp(th[..., 9:10])
-    acc = th[..., 6:9] - kk * np.linalg.norm(rel, axis=-1, keepdims=True) * rel
-    acc[..., 2] -= G
+    extra = th[..., 6:9]
+
+    def acc(v: np.ndarray) -> np.ndarray:
+        rel = v - w
+        # |rel|: np.linalg.norm's arithmetic without its per-call checks
+        out = extra - kk * np.sqrt(np.add.reduce(rel * rel, axis=-1, keepdims=True)) * rel
+        out[..., 2] -= G
+        return out
+
     return acc
 
 
@@ -92,11 +101,12 @@ def _simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
     out = np.full((n, n_p, tau.shape[1], 3), np.nan)
     p = th[..., 0:3].copy()
     v = th[..., 3:6].copy()
+    acc = _acc(th, k)
     for i in range(n_steps):
-        k1v = _acc(v, th, k)
-        k2p, k2v = v + 0.5 * h * k1v, _acc(v + 0.5 * h * k1v, th, k)
-        k3p, k3v = v + 0.5 * h * k2v, _acc(v + 0.5 * h * k2v, th, k)
-        k4p, k4v = v + h * k3v, _acc(v + h * k3v, th, k)
+        k1v = acc(v)
+        k2p, k2v = v + 0.5 * h * k1v, acc(v + 0.5 * h * k1v)
+        k3p, k3v = v + 0.5 * h * k2v, acc(v + 0.5 * h * k2v)
+        k4p, k4v = v + h * k3v, acc(v + h * k3v)
         p1 = p + h / 6 * (v + 2 * k2p + 2 * k3p + k4p)
         v1 = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         sel = order[bounds[i] : bounds[i + 1]]
