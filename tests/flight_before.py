@@ -1,7 +1,7 @@
 """The flight integrators and the flight effects' callback as they were before they were
 made faster (`cell.model.flight3d`, `cell.model.planar.flight_planar`,
-`cell.model.integrate`'s crossing, `cell.model.effects_apply` and
-`cell.gap.track_ode._simulate` at f56b63f), kept frozen
+`cell.model.integrate`'s crossing, `cell.model.effects_apply`, `cell.gap.track_ode._simulate`
+and `cell.gap.world_laws._accel` at f56b63f), kept frozen
 for tests/test_flight_same.py to compare the fast ones against on random batches. Tests
 only; nothing in `cell` imports it."""
 
@@ -283,3 +283,36 @@ def track_simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray
             p = np.where(np.isfinite(p), p, 1e6)
             v = np.where(np.isfinite(v), v, 0.0)
     return out
+
+
+WORLD_REF_RPM = 5000.0  # `cell.gap.world_laws.REF_RPM`
+
+
+def _law(laws: list[dict[str, Any]], name: str) -> dict[str, Any] | None:
+    return next((w for w in laws if w["law"] == name), None)
+
+
+def world_accel(batch: ThrowBatch, laws: list[dict[str, Any]], rpm: np.ndarray) -> Any:
+    """`cell.gap.world_laws._accel`: the other implementation's air flow."""
+    jet = _law(laws, "jet")
+    breeze = _law(laws, "breeze")
+    if jet is None and breeze is None:
+        return None
+    centre = batch.position.copy()
+    w0 = np.zeros(len(batch))
+    if jet is not None:
+        w0 = jet["w_mps"] * (np.clip(rpm, 0, None) / WORLD_REF_RPM) ** jet["p"]
+    flow = np.zeros(3)
+    if breeze is not None:
+        flow[:2] = breeze["x_mps"], breeze["y_mps"]
+
+    def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
+        w = np.broadcast_to(flow, p.shape).copy()
+        if jet is not None:
+            rho2 = (p[:, 0] - centre[idx, 0]) ** 2 + (p[:, 1] - centre[idx, 1]) ** 2
+            depth = np.clip(centre[idx, 2] - p[:, 2], 0.0, None)
+            prof = np.exp(-rho2 / jet["radius_m"] ** 2) * np.exp(-depth / jet["depth_m"])
+            w[:, 2] -= w0[idx] * prof
+        return w, None
+
+    return accel

@@ -160,3 +160,21 @@ def test_the_track_fits_flights_are_the_ones_before() -> None:
     got = _simulate(th, k, tau)
     assert np.isfinite(got).sum() > 0.7 * got.size
     _close(got, before.track_simulate(th, k, tau))
+
+
+def test_the_other_implementations_air_flow_flies_as_before() -> None:
+    from cell.gap.world_laws import _accel
+
+    n = 120
+    b = _batch(13, n)
+    rpm = np.random.default_rng(14).uniform(0.0, 9000.0, n)
+    p1, v1 = launch_state(b, EE)
+    k = drag_constant(b.shape, b.mass, b.size)
+    jet = {"law": "jet", "w_mps": 6.0, "p": 1.3, "radius_m": 0.5, "depth_m": 1.5}
+    breeze = {"law": "breeze", "x_mps": 1.0, "y_mps": -0.6}
+    for laws in ([jet], [breeze], [jet, breeze]):
+        new = fly(p1, v1, k, b.land_z, accel=_accel(b, laws, rpm), step=0.004)
+        old = before.fly(p1, v1, k, b.land_z, accel=before.world_accel(b, laws, rpm), step=0.004)
+        assert np.array_equal(new.landed, old[3]) and new.landed.sum() > n // 2
+        _close(new.position, old[0])
+        _close(new.t, old[2])

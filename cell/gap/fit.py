@@ -153,11 +153,19 @@ def _refit(
     j = jac_all[rows]
     r = r_all[rows]
     cost = float(r @ r)
+    # the misses at each x tried: a step clipped to a bound (or halved onto one) can try
+    # the same x again, and so can the second iteration from an accepted step
+    tried: dict[bytes, np.ndarray] = {}
     for _ in range(2):
         step = np.linalg.lstsq(j, -r, rcond=1e-8)[0]
         for _ in range(4):
             x_new = np.clip(x + step, lo, hi)
-            r_new = prob.residual(train, _unpack(classes, x_new, scale), permute=permute).ravel()
+            key = x_new.tobytes()
+            if key not in tried:
+                tried[key] = prob.residual(
+                    train, _unpack(classes, x_new, scale), permute=permute
+                ).ravel()
+            r_new = tried[key]
             c_new = float(r_new @ r_new)
             if c_new <= cost:
                 x, r, cost = x_new, r_new, c_new

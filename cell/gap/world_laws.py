@@ -32,7 +32,7 @@ import numpy as np
 
 from cell.gap.world import other_launch, throw_records
 from cell.log.csvio import ThrowTable
-from cell.model.flight3d import fly, sample_path
+from cell.model.flight3d import Rows, fly, sample_path
 from cell.model.params import DEFAULT_EE, EndEffectorParams, G
 from cell.model.throw import ThrowBatch, drag_constant, launch_state
 
@@ -95,13 +95,16 @@ def _accel(batch: ThrowBatch, laws: list[dict[str, Any]], rpm: np.ndarray) -> An
     if breeze is not None:
         flow[:2] = breeze["x_mps"], breeze["y_mps"]
 
+    rows = Rows({"cx": centre[:, 0], "cy": centre[:, 1], "cz": centre[:, 2], "w0": w0})
+
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
         w = np.broadcast_to(flow, p.shape).copy()
         if jet is not None:
-            rho2 = (p[:, 0] - centre[idx, 0]) ** 2 + (p[:, 1] - centre[idx, 1]) ** 2
-            depth = np.clip(centre[idx, 2] - p[:, 2], 0.0, None)
+            r = rows(idx)
+            rho2 = (p[:, 0] - r["cx"]) ** 2 + (p[:, 1] - r["cy"]) ** 2
+            depth = np.maximum(r["cz"] - p[:, 2], 0.0)
             prof = np.exp(-rho2 / jet["radius_m"] ** 2) * np.exp(-depth / jet["depth_m"])
-            w[:, 2] -= w0[idx] * prof
+            w[:, 2] -= r["w0"] * prof
         return w, None
 
     return accel

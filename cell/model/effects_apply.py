@@ -32,7 +32,7 @@ from cell.model.effects import (
     _find,
     effects_from_mapping,
 )
-from cell.model.flight3d import column_fraction, fly
+from cell.model.flight3d import Rows, column_fraction, fly
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import (
     Landing,
@@ -120,7 +120,7 @@ def _flight_accel(
         # the drag the nominal law does not have: (factor - 1) of it
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
         per_throw["neg_k_extra"] = -k_extra
-    rows = _Rows(per_throw)
+    rows = Rows(per_throw)
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
         r = rows(idx)
@@ -154,23 +154,6 @@ def _flight_accel(
         return w, extra
 
     return accel
-
-
-class _Rows:
-    """Per-throw arrays taken at the rows of the last `idx` seen: the integrator passes the
-    same `idx` object (never changed in place) while its rows stay the same, so each
-    stage of each step does not take them again."""
-
-    def __init__(self, per_throw: dict[str, np.ndarray]) -> None:
-        self._all = per_throw
-        self._idx: np.ndarray | None = None
-        self._rows: dict[str, np.ndarray] = {}
-
-    def __call__(self, idx: np.ndarray) -> dict[str, np.ndarray]:
-        if idx is not self._idx:
-            self._rows = {name: a[idx] for name, a in self._all.items()}
-            self._idx = idx
-        return self._rows
 
 
 def _norm(x: np.ndarray) -> np.ndarray:

@@ -25,7 +25,15 @@ from cell.model.integrate import hermite as _hermite
 from cell.model.integrate import plane_crossing
 from cell.model.params import G
 
-__all__ = ["Accel", "FlightResult", "acceleration", "column_fraction", "fly", "sample_path"]
+__all__ = [
+    "Accel",
+    "FlightResult",
+    "Rows",
+    "acceleration",
+    "column_fraction",
+    "fly",
+    "sample_path",
+]
 
 # acc(p, v, idx) -> (air velocity (m, 3) or None, extra acceleration (m, 3) or None);
 # idx are the indices (into the batch) of the rows in p and v.
@@ -45,6 +53,27 @@ def column_fraction(rho: np.ndarray, radius: np.ndarray | float, edge: float) ->
         edge: width of its smooth edge [m].
     """
     return 0.5 * (1.0 + np.tanh((radius - rho) / edge))
+
+
+class Rows:
+    """Per-throw arrays taken at the rows of the last `idx` an `Accel` was handed.
+
+    `fly` and `sample_path` pass the same `idx` object (never changed in place) while
+    the rows they integrate stay the same, so a callback that reads its per-throw
+    arrays through this takes them once per set of rows, not at every stage of every step.
+    """
+
+    def __init__(self, per_throw: dict[str, np.ndarray]) -> None:
+        self._all = per_throw
+        self._idx: np.ndarray | None = None
+        self._rows: dict[str, np.ndarray] = {}
+
+    def __call__(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """{name: array[idx]} of the arrays given."""
+        if idx is not self._idx:
+            self._rows = {name: a[idx] for name, a in self._all.items()}
+            self._idx = idx
+        return self._rows
 
 
 @dataclass(frozen=True)
