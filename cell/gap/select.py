@@ -24,7 +24,7 @@ from cell.gap.stats import bootstrap_cut
 from cell.gap.tracks import phase_evidence
 from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
 
-__all__ = ["Selection", "refusal", "at_bound", "public", "effect_class"]
+__all__ = ["Selection", "refusal", "at_bound", "public", "effect_class", "member_rank_of"]
 
 VERDICT_RATIO = 1.30  # A ≤ this × F: explained
 MIN_CUT = 0.10  # an effect must cut this share of what is left
@@ -114,6 +114,23 @@ def at_bound(eff: Effect) -> list[str]:
         ) > BOUND_TOL * span:
             out.append(name)
     return out
+
+
+def member_rank_of(
+    cls: type[Effect], sc: Score, family: tuple[type[Effect], ...]
+) -> tuple[bool, float]:
+    """How a family member's score ranks among its family's (lower is better): stretched
+    (at a bound or implausible) last, then by held-out RMSE [m], raised by the law
+    choice's TERM_PENALTY per term a member adds to another member of the family
+    (`Effect.extends`): the added term must pay for itself on held-out throws."""
+    from cell.gap.laws import TERM_PENALTY
+
+    eff = sc.full.effects[-1]
+    stretched = bool(at_bound(eff) or eff.implausible())
+    extra = 0
+    if cls.extends is not None and cls.extends in family:
+        extra = len(cls.bounds) - len(cls.extends.bounds)
+    return stretched, sc.heldout_rmse_m * (1.0 + TERM_PENALTY * extra)
 
 
 def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
@@ -299,6 +316,7 @@ class Selection:
             # every law of the partner's family: the member that stood for it alone was
             # chosen on misses the chosen effects no longer leave
             best: Score | None = None
+            best_rank = (True, np.inf)
             for member in FAMILIES.get(sc.names[-1], (effect_class(sc.names[-1]),)):
                 classes = [effect_class(nm, self.members) for nm in have] + [member]
                 own = sc.full.x[len(self.prefix) :]
@@ -307,8 +325,9 @@ class Selection:
                 warm = np.concatenate([last.full.x, own])
                 self.tick("+".join(public(classes_names(classes))))
                 combo = score_set(self.prob, classes, warm=warm)
-                if best is None or combo.heldout_rmse_m < best.heldout_rmse_m:
-                    best = combo
+                rank = member_rank_of(member, combo, FAMILIES.get(member.name, (member,)))
+                if best is None or rank < best_rank:
+                    best, best_rank = combo, rank
             assert best is not None
             self.scores["+".join(public(best.names))] = best
             combos.append(best)
