@@ -132,9 +132,7 @@ def _score_members(
     identified band law, if any).
 
     The member that predicts held-out throws best stands for its effect; one at a bound
-    or implausible only when every member is, and one that adds terms to another member
-    (`extends`) only when its held-out RMSE raised by TERM_PENALTY per added term is
-    lower (`member_rank_of`).
+    or implausible only when every member is (`member_rank_of`).
 
     Returns:
         (each effect's score, the member standing for it, and for families of several
@@ -154,7 +152,7 @@ def _score_members(
             sc = score_set(prob, prefix + [cls], warm=warm)
             if len(family) > 1:
                 laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
-            rank = member_rank_of(cls, sc, family)
+            rank = member_rank_of(sc)
             if cls.name not in scores or rank < member_rank[cls.name]:
                 scores[cls.name] = sc
                 members[cls.name] = cls

@@ -116,21 +116,13 @@ def at_bound(eff: Effect) -> list[str]:
     return out
 
 
-def member_rank_of(
-    cls: type[Effect], sc: Score, family: tuple[type[Effect], ...]
-) -> tuple[bool, float]:
+def member_rank_of(sc: Score) -> tuple[bool, float]:
     """How a family member's score ranks among its family's (lower is better): stretched
-    (at a bound or implausible) last, then by held-out RMSE [m], raised by the law
-    choice's TERM_PENALTY per term a member adds to another member of the family
-    (`Effect.extends`): the added term must pay for itself on held-out throws."""
-    from cell.gap.laws import TERM_PENALTY
-
+    (at a bound or implausible) last, then by held-out RMSE [m]. A member with a term
+    more (the wind's vertical part) stands for the effect only where that term predicts
+    held-out throws better and stays within its plausible range."""
     eff = sc.full.effects[-1]
-    stretched = bool(at_bound(eff) or eff.implausible())
-    extra = 0
-    if cls.extends is not None and cls.extends in family:
-        extra = len(cls.bounds) - len(cls.extends.bounds)
-    return stretched, sc.heldout_rmse_m * (1.0 + TERM_PENALTY * extra)
+    return bool(at_bound(eff) or eff.implausible()), sc.heldout_rmse_m
 
 
 def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
@@ -325,7 +317,7 @@ class Selection:
                 warm = np.concatenate([last.full.x, own])
                 self.tick("+".join(public(classes_names(classes))))
                 combo = score_set(self.prob, classes, warm=warm)
-                rank = member_rank_of(member, combo, FAMILIES.get(member.name, (member,)))
+                rank = member_rank_of(combo)
                 if best is None or rank < best_rank:
                     best, best_rank = combo, rank
             assert best is not None

@@ -25,8 +25,7 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 An effect is a family of laws (`FAMILIES`): its members share the name and the phase and
 differ in how the effect grows (the diagnosis picks the member that predicts held-out
 throws best). Besides its bounds, each effect has a plausible range (`plausible`): a value
-no real cell has (a 2 m/s updraught indoors) is outside it. A member may add terms to
-another member of its family (`extends`: the wind's vertical part to the level wind).
+no real cell has (a 2 m/s updraught indoors) is outside it.
 
 `predict_with_effects` evaluates a batch with any set of effects; launch
 effects reuse `predict_landing`'s push overrides, flight effects use the 3-D
@@ -89,8 +88,6 @@ class Effect:
     law: ClassVar[str] = ""  # the member of the effect's family of laws
     # plausible range of each parameter (None: the bounds): what a real cell can have
     plausible: ClassVar[tuple[tuple[float, float], ...] | None] = None
-    # the member of the same family this one adds terms to (None: no such member)
-    extends: ClassVar[type[Effect] | None] = None
 
     def vector(self) -> np.ndarray:
         """The parameters as an array, in field order."""
@@ -252,8 +249,8 @@ WIND_UP_MPS = 1.0
 @dataclass(frozen=True)
 class WindLevel(Effect):
     """A steady horizontal air flow in the cell (world frame): the wind without its
-    vertical part, the member the diagnosis tries first (`Wind` adds the vertical part as
-    a term that must pay for itself)."""
+    vertical part (`Wind` adds it as a term, chosen where it predicts held-out throws
+    better and stays within its plausible range)."""
 
     name: ClassVar[str] = "wind"
     phase: ClassVar[str] = "flight"
@@ -284,8 +281,6 @@ class Wind(Effect):
         (-WIND_ACROSS_MPS, WIND_ACROSS_MPS),
     ) * 2 + ((-WIND_UP_MPS, WIND_UP_MPS),)
     law: ClassVar[str] = "with vertical"
-    # the level wind plus one term (z_mps): chosen over it only when that term pays
-    extends: ClassVar[type[Effect] | None] = WindLevel
     x_mps: float = 0.0
     y_mps: float = 0.0
     z_mps: float = 0.0
