@@ -223,8 +223,8 @@ def _diagnosed(table: ThrowTable) -> dict:
 
 
 def test_a_level_wind_is_given_no_vertical_part():
-    """A wind across the cell (this world has no vertical air) is the level member: the
-    vertical part does not pay for its term on held-out throws."""
+    """A wind across the cell (this world has no vertical air) is the level member: a
+    vertical part does not predict held-out throws better."""
     _, _, table = _problem([{"kind": "wind", "form": "const", "x_mps": -1.5, "y_mps": 2.0}])
     rep = _diagnosed(table)
     v = rep["verdict"]
@@ -236,7 +236,7 @@ def test_a_level_wind_is_given_no_vertical_part():
 
 def test_a_wind_with_a_vertical_part_is_given_it():
     """The same throws landed by the model with air sinking at 0.7 m/s beside the wind
-    across (a vertical part within the plausible 1 m/s): the vertical term pays."""
+    across (a vertical part within the plausible 1 m/s): the member with it stands."""
     from cell.model.effects import Wind
 
     prob, camp, _ = _problem([])
