@@ -369,7 +369,7 @@ def _check_what_passes(page: str, rows: dict[str, dict[str, Any]]) -> None:
     out = rows["s:none+outliers"]
     assert out["outliers_found"] == out["outliers_true"] == 4 and out["outliers_false"] == 0
     lo, hi = quoted(page, r"with outliers \(within (\d+)–(\d+) % per component\)")
-    winds = ("s:wind", "s:wind-throw", "s:wind+outliers", "s:wind-low")
+    winds = ("s:wind", "s:wind-throw", "s:wind+outliers", "s:wind-low", "s:wind-y")
     errs = [e for c in winds for e in rows[c]["param_errors"].values()]
     assert all(rows[c]["passes"] for c in winds)
     close(lo, 100 * min(errs), 0)
@@ -401,9 +401,12 @@ def _check_what_passes(page: str, rows: dict[str, dict[str, Any]]) -> None:
         r"(−[\d.]+) m/s² \((−[\d.]+)\), and a launch yaw error of ([\d.]+) rad per metre of "
         r"stroke \(([\d.]+)\)",
     )
-    _as_written(fy, _term(rows["s:side-force"], r"force y \[m/s²\] = ([\d.-]+)$"))
+    _as_written(fy, _term(rows["s:side-force"], r"force y \[m/s²\] = ([\d.-]+)(?: \+|$)"))
+    assert rows["s:wind+scale"]["passes"]
     assert float(wy) == _case("s:side-force")[0]["y_mps2"]
     _as_written(fx, _term(rows["s:side-force-x"], r"force x \[m/s²\] = ([\d.-]+)"))
+    for c in ("s:side-force-x", "s:launch-yaw-stroke"):
+        assert " + " not in rows[c]["proposal"], c  # one term
     assert float(wx.replace("−", "-")) == _case("s:side-force-x")[0]["x_mps2"]
     _as_written(
         yaw, _term(rows["s:launch-yaw-stroke"], r"azimuth error \[rad\] = ([\d.]+) · stroke")
@@ -426,29 +429,38 @@ def _check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dic
     assert (float(tx), -float(ty)) == (eff["x_mps"], eff["y_mps"])
     close(lo, min(ratios.values()), 1)
     close(hi, max(ratios.values()), 1)
-    across, up, wy, r1, r2, sd = quoted(
+    across, up, wy, found_y = quoted(
         page,
-        r"within ±(\d+) m/s across, ±(\d+) m/s up\)\. Along y the world's ([\d.]+) m/s .*? "
-        r"constants are ([\d.]+) and ([\d.]+) × the scene's\); the wind drawn throw to throw "
-        r"with an sd of ([\d.]+) m/s",
+        r"\(within ±(\d+) m/s across, ±(\d+) m/s up\), which refused `s:wind-y`: the world's "
+        r"([\d.]+) m/s along y, fitted at ([\d.]+) m/s, passes now",
     )
-    assert (float(across), float(up)) == (Wind.plausible[0][1], Wind.plausible[2][1])
+    assert (float(across), float(up)) == (3, 1)  # the old box, as the page tells it
     assert float(wy) == _case("s:wind-y")[0]["y_mps"]
-    close(r1, ratios["cube30"], 2)
-    close(r2, ratios["sphere40"], 2)
-    assert float(sd) == _case("s:wind-throw-wide")[0]["sd"]
-    for c in ("s:wind-y", "s:wind-throw-wide"):
-        assert rows[c]["verdict"] == "unknown"
-    f, a_f, a, k = quoted(
+    _as_written(found_y, rows["s:wind-y"]["params"]["wind"]["y_mps"])
+    assert rows["s:wind-y"]["passes"]
+    six, one = quoted(page, r"within (\d+) m/s across and (\d+) m/s up or down")
+    assert (float(six), float(one)) == (Wind.plausible[0][1], Wind.plausible[2][1])
+    sd, mean, fx, a_f = quoted(
         page,
-        r"`s:drag-low` \(factor ([\d.]+)\): named `drag_scale`, phase right, A ([\d.]+) F, .*? "
-        r"\(a ([\d.]+), k (−[\d.]+) /m\)",
+        r"`s:wind-throw-wide` \(drawn throw to throw with an sd of ([\d.]+) m/s about ([\d.]+) "
+        r"m/s\s+along x\): named `wind` by its level member, phase right, but x ([\d.]+) m/s, "
+        r"A ([\d.]+) F",
+    )
+    wide = rows["s:wind-throw-wide"]
+    assert (float(sd), float(mean)) == (_case("s:wind-throw-wide")[0]["sd"],
+                                        _case("s:wind-throw-wide")[0]["x_mps"])  # fmt: skip
+    assert wide["verdict"] == "wind" and wide["laws"] == {"wind": "level"}
+    _as_written(fx, wide["params"]["wind"]["x_mps"])
+    close(a_f, wide["after_over_floor"], 2)
+    f, factor, a, k = quoted(
+        page,
+        r"`s:drag-low` \(factor ([\d.]+)\) is the constant now \(([\d.]+)\): the law it was "
+        r"given,\s+`factor = a \+ k · stroke_m` \(a ([\d.]+), k (−[\d.]+) /m\)",
     )
     dl = rows["s:drag-low"]
-    assert float(f) == _case("s:drag-low")[0]["value"]
-    close(a_f, dl["after_over_floor"], 2)
-    _as_written(a, dl["params"]["drag_scale"]["a"])
-    _as_written(k, dl["params"]["drag_scale"]["k"])
+    assert float(f) == _case("s:drag-low")[0]["value"] and dl["passes"] and not dl["laws"]
+    _as_written(factor, dl["params"]["drag_scale"]["factor"])
+    assert (a, k) == ("0.793", "−8.77")  # the table before, as the page tells it
     assert rows["s:drag-stroke"]["verdict"] == "shape_stretch+stroke_offset"
     dw = rows["s:downwash"]
     base, floor, radius = quoted(

@@ -159,3 +159,92 @@ def test_other_world_cases_cover_the_issue():
     assert sum(c["truth"] == "unknown" for c in cases) >= 3
     assert "o:downwash+wind" in OTHER_CASES
     assert main(["gap", "check", "--worlds", "other", "--truths", "o:gremlins"]) == 2
+
+
+def test_a_law_that_runs_a_throw_out_of_its_effects_range_is_not_chosen():
+    """The scene's `s:drag-low` (a constant factor 0.4) was given factor = 0.79 − 8.77 ·
+    stroke: on its strokes (35–102 mm) that law runs below the plausible 0.25 and through
+    the bound 0.1, where the world's drag is never negative."""
+    from cell.gap.laws import law_class, law_range, law_stretched, per_object_class
+    from cell.model.effects import DragScale
+
+    prob, _, _ = _problem([], n=60)
+    s = prob.batch.stroke
+    lin = law_class(DragScale, "stroke_m", True)
+    bad = lin(a=0.79, k=-8.77)
+    lo, hi = law_range(bad, prob.batch)
+    assert lo == pytest.approx(0.79 - 8.77 * s.max()) and hi == pytest.approx(0.79 - 8.77 * s.min())
+    assert law_stretched(bad, prob.batch)
+    assert not law_stretched(lin(a=1.2, k=4.0), prob.batch)  # 1.3–1.7 over the strokes
+    assert law_stretched(law_class(DragScale, "stroke_m", False)(k=50.0), prob.batch)  # > 4
+    per = per_object_class(DragScale, prob)
+    n_obj = len(per.object_ids)  # type: ignore[attr-defined]
+    assert not law_stretched(per(*np.linspace(0.5, 3.0, n_obj)), prob.batch)
+    assert law_stretched(per(*([1.0] * (n_obj - 1) + [4.5])), prob.batch)
+
+
+def test_the_proposal_library_leaves_out_collinear_terms():
+    from cell.gap.propose import COLLINEAR_TOL, covariates, independent
+
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(60, 3))
+    near = 2 * a[:, 0] - a[:, 1] + 0.1 * COLLINEAR_TOL * rng.normal(size=60)
+    lib = np.c_[a, near, rng.normal(size=60), np.zeros(60)]
+    assert independent(lib).tolist() == [True, True, True, False, True, False]
+    # a log of two objects: their mass and size take two values each, so only the
+    # constant and the stroke enter the library
+    prob, _, _ = _problem([], n=120)
+    assert covariates(prob) == ["1", "stroke_m", "mass_kg", "size_x_m"]
+    two = build_problem(_two_objects(prob.table), DEFAULT_EE, seed=0)
+    assert covariates(two) == ["1", "stroke_m"]
+
+
+def _two_objects(table: ThrowTable, pair: tuple[str, str] = ("cube30", "sphere40")) -> ThrowTable:
+    return table.take(np.flatnonzero(np.isin(table.text("object_id"), pair)))
+
+
+def test_a_side_force_on_two_objects_is_proposed_in_one_readable_term():
+    """With two objects (mass and size collinear) the proposal was 14–16 terms with
+    coefficients of 1e4–1e9 in mass and size; it names the force now."""
+    _, camp, table = _problem([{"kind": "side_force", "form": "const", "x_mps2": 0.0,
+                                "y_mps2": 0.6}], n=400)  # fmt: skip
+    prob = build_problem(_two_objects(table), DEFAULT_EE, seed=0)
+    prop, _ = propose(prob, (), camp.floor_m)
+    top = prop["terms"][0]
+    assert top["term"] == "force y [m/s²] = k", prop["law"]
+    assert top["k"] == pytest.approx(0.6, rel=0.15)
+    assert all(abs(t["k"]) < 100 for t in prop["terms"]), prop["law"]
+    assert not any("mass_kg" in t["term"] or "size_x_m" in t["term"] for t in prop["terms"])
+
+
+def _diagnosed(table: ThrowTable) -> dict:
+    d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
+    return d.report
+
+
+def test_a_level_wind_is_given_no_vertical_part():
+    """A wind across the cell (this world has no vertical air) is the level member: a
+    vertical part does not predict held-out throws better."""
+    _, _, table = _problem([{"kind": "wind", "form": "const", "x_mps": -1.5, "y_mps": 2.0}])
+    rep = _diagnosed(table)
+    v = rep["verdict"]
+    assert v["effects"] == ["wind"] and v["laws"] == {"wind": "level"}, v
+    assert v["params"]["wind"] == pytest.approx({"x_mps": -1.5, "y_mps": 2.0}, abs=0.3)
+    by = {c["effect"]: c for c in rep["candidates"]}
+    assert set(by["wind"]["laws_heldout_rmse_m"]) == {"level", "with vertical"}
+
+
+def test_a_wind_with_a_vertical_part_is_given_it():
+    """The same throws landed by the model with air sinking at 0.7 m/s beside the wind
+    across (a vertical part within the plausible 1 m/s): the member with it stands."""
+    from cell.model.effects import Wind
+
+    prob, camp, _ = _problem([])
+    wind = Wind(-1.5, 2.0, -0.7)
+    land = prob.landing(np.arange(len(prob)), (wind,))
+    xy = np.c_[land.x, land.y] + np.random.default_rng(4).normal(0, 0.012, (len(prob), 2))
+    recs = [{**r, "landed_x_m": float(p[0]), "landed_y_m": float(p[1])}
+            for r, p in zip(camp.records, xy, strict=True)]  # fmt: skip
+    v = _diagnosed(ThrowTable.from_records(recs))["verdict"]
+    assert v["effects"] == ["wind"] and v["laws"] == {"wind": "with vertical"}, v
+    assert v["params"]["wind"]["z_mps"] == pytest.approx(-0.7, abs=0.15)

@@ -20,6 +20,7 @@ from cell.model.effects import (
     Spin,
     TrackingScale,
     Wind,
+    WindLevel,
     effects_from_mapping,
 )
 from cell.model.effects_apply import predict_with_effects
@@ -69,8 +70,10 @@ def test_tracks_refuse_a_flight_effect_for_a_launch_gap(yaw_run: tuple) -> None:
 
 def test_bound_and_plausibility_refusal(yaw_run: tuple) -> None:
     # unit level: implausible values and bounds
-    assert "implausible" in (refusal(Wind(5.0, 0.0, 0.0), None) or "")
+    assert "implausible" in (refusal(Wind(7.0, 0.0, 0.0), None) or "")
+    assert "implausible" in (refusal(Wind(1.0, 0.0, 1.5), None) or "")  # air rising indoors
     assert refusal(Wind(1.0, -0.5, 0.1), None) is None
+    assert refusal(WindLevel(5.0, -2.0), None) is None  # a fan's jet across the cell
     assert "bound" in (refusal(Spin(600.0, 0.4), None) or "")
     assert "bound" in (refusal(Spin(50.0, 1.0), None) or "")
     assert "implausible" in (refusal(TrackingScale(1.4), None) or "")

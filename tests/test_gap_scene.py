@@ -152,3 +152,18 @@ def test_a_constant_told_per_object_is_judged_object_by_object():
     law["per_object"]["sphere40"] = 3.3
     assert not _params_ok(expect, {"drag_scale": law})[0]
     assert not _params_ok(expect, {"drag_scale": {"k": 82.0}})[0]  # a law in a covariate
+
+
+def test_a_case_named_alone_is_its_table_row():
+    """`--truths` reruns a row of the table: a case's seeds do not depend on which cases
+    run with it (they were drawn in the order of the cases asked for)."""
+    from cell.gap.check_other import other_cases
+    from cell.gap.check_scene import scene_cases
+
+    for every, alone in ((scene_cases, ("s:wind-y", "s:drag-low")),
+                         (other_cases, ("o:wind", "o:side-force"))):  # fmt: skip
+        table = {c["name"]: c for c in every()}
+        for c in every(alone):
+            assert (c["world_seed"], c["seed"]) == (
+                table[c["name"]]["world_seed"], table[c["name"]]["seed"])  # fmt: skip
+        assert len({c["world_seed"] for c in table.values()}) == len(table)

@@ -204,11 +204,14 @@ def scene_cases(names: tuple[str, ...] | None = None, *, n: int = 80, seed: int 
                 ) -> list[dict[str, Any]]:  # fmt: skip
     """The cases as plain dicts (each with its own world seed)."""
     rng = np.random.default_rng(seed + 5757)
+    # seeds drawn over every case in table order: a case named alone is the table's row
+    seeds = {name: (int(rng.integers(2**31)), seed + i) for i, name in enumerate(SCENE_CASES)}
     out = []
-    for i, name in enumerate(names or tuple(SCENE_CASES)):
+    for name in names or tuple(SCENE_CASES):
         effects, truth, phases, expect, opts = SCENE_CASES[name]
-        out.append({"name": name, "n": n, "world_seed": int(rng.integers(2**31)),
-                    "seed": seed + i, "effects": effects, "truth": truth, "phases": phases,
+        world_seed, case_seed = seeds[name]
+        out.append({"name": name, "n": n, "world_seed": world_seed,
+                    "seed": case_seed, "effects": effects, "truth": truth, "phases": phases,
                     "expect": expect, "options": opts})  # fmt: skip
     return out
 

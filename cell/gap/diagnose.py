@@ -48,6 +48,7 @@ from cell.gap.select import (
     VERDICT_RATIO,
     Selection,
     at_bound,
+    member_rank_of,
     public,
     refusal,
 )
@@ -131,7 +132,7 @@ def _score_members(
     identified band law, if any).
 
     The member that predicts held-out throws best stands for its effect; one at a bound
-    or implausible only when every member is.
+    or implausible only when every member is (`member_rank_of`).
 
     Returns:
         (each effect's score, the member standing for it, and for families of several
@@ -151,8 +152,7 @@ def _score_members(
             sc = score_set(prob, prefix + [cls], warm=warm)
             if len(family) > 1:
                 laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
-            stretched = bool(at_bound(sc.full.effects[-1]) or sc.full.effects[-1].implausible())
-            rank = (stretched, sc.heldout_rmse_m)
+            rank = member_rank_of(sc)
             if cls.name not in scores or rank < member_rank[cls.name]:
                 scores[cls.name] = sc
                 members[cls.name] = cls

@@ -16,7 +16,9 @@ value per throw (an array), which the model's effect code evaluates unchanged. T
 diagnosis picks the form by held-out evidence with a penalty for each extra term
 (`choose_law`): a form replaces the constant only when its held-out RMSE, raised by
 TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
-interval above zero. A covariate form is tried only where the covariate takes at least
+interval above zero; a form that gives any logged throw a value outside the effect's
+plausible range (or at a bound) is stretched and not chosen (`law_stretched`), as a
+constant there is refused. A covariate form is tried only where the covariate takes at least
 MIN_LEVELS distinct values in the log: on two values (a log of two objects, say) a law in
 the mass, one in the size and one per object are the same two numbers, so the difference
 is the per-object form's, which pays for its second term.
@@ -35,7 +37,7 @@ from cell.model.effects import Effect
 from cell.model.throw import ThrowBatch
 
 __all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_text", "levels", "TERM_PENALTY",
-           "choose_law"]  # fmt: skip
+           "choose_law", "law_range", "law_stretched"]  # fmt: skip
 
 TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
@@ -206,6 +208,33 @@ def _warm(cls: type[Effect], p: float, cov_mean: float) -> np.ndarray:
     return np.array([p / max(cov_mean, 1e-9)]) / sc
 
 
+def law_range(eff: Effect, batch: ThrowBatch) -> tuple[float, float]:
+    """The smallest and largest value a law's parameter takes over a batch's throws, as
+    the law gives it (before the base effect's bounds clip it)."""
+    if getattr(type(eff), "covariate", None) == "object_id":
+        base: type[Effect] = eff.law_base  # type: ignore[attr-defined]
+        v = np.asarray(getattr(eff.per_throw(batch), base.param_names()[0]), dtype=float)
+    else:
+        read, _ = COVARIATES[eff.covariate]  # type: ignore[attr-defined]
+        a = eff.a if eff.intercept else 0.0  # type: ignore[attr-defined]
+        v = a + eff.k * np.asarray(read(batch), float)  # type: ignore[attr-defined]
+    return float(np.min(v)), float(np.max(v))
+
+
+def law_stretched(eff: Effect, batch: ThrowBatch) -> bool:
+    """Whether a law gives any logged throw a value no real cell has: outside its base
+    effect's plausible range, or within BOUND_TOL of a bound (`cell.gap.select`'s rule
+    for a constant, applied throw by throw: a law that runs out of its range is one
+    stretched to mimic something else)."""
+    from cell.gap.select import BOUND_TOL
+
+    base: type[Effect] = eff.law_base  # type: ignore[attr-defined]
+    (blo, bhi), tol = base.bounds[0], BOUND_TOL * (base.bounds[0][1] - base.bounds[0][0])
+    plo, phi = (base.plausible or base.bounds)[0]
+    lo, hi = law_range(eff, batch)
+    return bool(lo < max(plo, blo + tol) or hi > min(phi, bhi - tol))
+
+
 def choose_law(
     prob: GapProblem,
     score: Score,
@@ -216,8 +245,9 @@ def choose_law(
     Every one-parameter effect of LAW_BASES in the set (at its constant form) is refitted
     with each covariate form (the others kept at their form, warm-started from the set's
     solution) and scored held-out; a form replaces the constant when its held-out RMSE,
-    raised by TERM_PENALTY per extra term, is the lowest and its cut over the constant
-    has a bootstrap interval above zero.
+    raised by TERM_PENALTY per extra term, is the lowest, its cut over the constant
+    has a bootstrap interval above zero, and it keeps every logged throw's value within
+    the effect's plausible range and off its bounds (`law_stretched`).
 
     Returns:
         (the set's score with the chosen forms; per effect, each form's held-out RMSE [m]).
@@ -265,7 +295,7 @@ def choose_law(
             sc = score_set(prob, cls_j, warm=warm)
             rows[form.law] = sc.heldout_rmse_m
             val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - 1))
-            if val >= pick_val:
+            if val >= pick_val or law_stretched(sc.full.effects[j], prob.batch):
                 continue
             _, lo, _ = bootstrap_cut(best.heldout, sc.heldout, seed=prob.seed + 3)
             if lo > 0:

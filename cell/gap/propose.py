@@ -14,6 +14,13 @@ landing is linear in its coefficient θ near θ = 0:
 | flight | up ∝ v² | θ·|v|² upwards |
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
 
+A covariate enters the library only where it takes at least `cell.gap.laws.MIN_LEVELS`
+values in the log (with two objects, terms in their mass, their size and the constant
+are three names for two numbers), and a term whose sensitivity is less than
+COLLINEAR_TOL independent of the terms before it (in the table's order) is left out
+(`collinear_left_out`): collinear terms otherwise take coefficients of 1e4 and more, of
+opposite signs, that say nothing a person could test.
+
 Each term's landing sensitivity J_j (n, 2) is taken by finite differences of the model
 with the effects already joined; the misses they leave, r, are regressed on the
 library by sequentially thresholded least squares (SINDy): fit, zero the terms whose
@@ -44,12 +51,41 @@ COVS = {"1": None, "stroke_m": "stroke", "mass_kg": "mass", "size_x_m": "width"}
 H_ANGLE = 1e-3
 H_SPEED = 1e-3
 H_ACC = 0.05
+COLLINEAR_TOL = 0.01  # a term less than this share independent of the terms before it is out
 
 
 def _cov(prob: GapProblem, name: str) -> np.ndarray:
     b = prob.batch
     return {"1": np.ones(len(b)), "stroke_m": b.stroke, "mass_kg": b.mass,
             "size_x_m": b.size[:, 0]}[name]  # fmt: skip
+
+
+def covariates(prob: GapProblem) -> list[str]:
+    """The library's covariates on this log: the constant, and each covariate that takes
+    at least MIN_LEVELS values (on two values, a log of two objects, a term in the mass,
+    one in the size and the constant are two numbers shared by three terms)."""
+    from cell.gap.laws import MIN_LEVELS, levels
+
+    return ["1"] + [c for c in COVS if c != "1" and levels(prob.batch, c) >= MIN_LEVELS]
+
+
+def independent(a: np.ndarray, tol: float = COLLINEAR_TOL) -> np.ndarray:
+    """Which columns of a (m, p) to keep: in order, a column is left out when the part of
+    it the kept columns before it do not explain is under `tol` of its size (each kept
+    column then raises the library's condition number by at most about 1 / tol)."""
+    keep = np.zeros(a.shape[1], bool)
+    basis = np.zeros((a.shape[0], 0))
+    for j in range(a.shape[1]):
+        col = a[:, j]
+        size = float(np.linalg.norm(col))
+        if size <= 0:
+            continue
+        rest = col - basis @ (basis.T @ col)
+        left = float(np.linalg.norm(rest))
+        if left >= tol * size:
+            keep[j] = True
+            basis = np.c_[basis, rest / left]
+    return keep
 
 
 def _turn(v: np.ndarray, vb: np.ndarray, d_el: np.ndarray, d_az: np.ndarray) -> np.ndarray:
@@ -95,7 +131,7 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
         cols.append(np.nan_to_num((xy - x0) / h))
 
     zero = np.zeros(len(b))
-    for c in COVS:
+    for c in covariates(prob):
         cv = _cov(prob, c)
         tail = "" if c == "1" else f" · {c}"
         rel = v1 - b.base_velocity
@@ -174,6 +210,11 @@ def propose(
     r = np.nan_to_num(prob.residual(idx, effects))
     terms, jac = library(prob, effects)
     a_all = jac.reshape(2 * n, -1)  # rows: throw-major (x, y)
+    # terms the ones before them explain (collinear on this log) are left out
+    free = independent(a_all[np.repeat(keep, 2)])
+    left_out = [t["term"] for t, f in zip(terms, free, strict=True) if not f]
+    terms = [t for t, f in zip(terms, free, strict=True) if f]
+    a_all = a_all[:, free]
     y_all = r.reshape(-1)
     rows_keep = np.repeat(keep, 2)
     a, y = a_all[rows_keep], y_all[rows_keep]
@@ -203,7 +244,8 @@ def propose(
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
         return {"law": None, "terms": [], "heldout_rmse_before_m": base_rmse,
-                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0}, miss  # fmt: skip
+                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0,
+                "collinear_left_out": left_out}, miss  # fmt: skip
     e = y - a @ th
     s2 = float(e @ e) / max(y.size - on.size, 1)
     cov = s2 * np.linalg.pinv(a[:, on].T @ a[:, on])
@@ -228,4 +270,5 @@ def propose(
         "heldout_rmse_after_m": ho,
         "shrink_pct": 100.0 * (1.0 - ho / base_rmse) if base_rmse > 0 else 0.0,
         "within_floor": bool(ho <= 1.3 * floor_m),
+        "collinear_left_out": left_out,
     }, miss

@@ -24,7 +24,7 @@ from cell.gap.stats import bootstrap_cut
 from cell.gap.tracks import phase_evidence
 from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
 
-__all__ = ["Selection", "refusal", "at_bound", "public", "effect_class"]
+__all__ = ["Selection", "refusal", "at_bound", "public", "effect_class", "member_rank_of"]
 
 VERDICT_RATIO = 1.30  # A ≤ this × F: explained
 MIN_CUT = 0.10  # an effect must cut this share of what is left
@@ -114,6 +114,15 @@ def at_bound(eff: Effect) -> list[str]:
         ) > BOUND_TOL * span:
             out.append(name)
     return out
+
+
+def member_rank_of(sc: Score) -> tuple[bool, float]:
+    """How a family member's score ranks among its family's (lower is better): stretched
+    (at a bound or implausible) last, then by held-out RMSE [m]. A member with a term
+    more (the wind's vertical part) stands for the effect only where that term predicts
+    held-out throws better and stays within its plausible range."""
+    eff = sc.full.effects[-1]
+    return bool(at_bound(eff) or eff.implausible()), sc.heldout_rmse_m
 
 
 def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
@@ -299,6 +308,7 @@ class Selection:
             # every law of the partner's family: the member that stood for it alone was
             # chosen on misses the chosen effects no longer leave
             best: Score | None = None
+            best_rank = (True, np.inf)
             for member in FAMILIES.get(sc.names[-1], (effect_class(sc.names[-1]),)):
                 classes = [effect_class(nm, self.members) for nm in have] + [member]
                 own = sc.full.x[len(self.prefix) :]
@@ -307,8 +317,9 @@ class Selection:
                 warm = np.concatenate([last.full.x, own])
                 self.tick("+".join(public(classes_names(classes))))
                 combo = score_set(self.prob, classes, warm=warm)
-                if best is None or combo.heldout_rmse_m < best.heldout_rmse_m:
-                    best = combo
+                rank = member_rank_of(combo)
+                if best is None or rank < best_rank:
+                    best, best_rank = combo, rank
             assert best is not None
             self.scores["+".join(public(best.names))] = best
             combos.append(best)

@@ -29,6 +29,7 @@ from cell.model.effects import (
     StrokeOffset,
     TrackingScale,
     Wind,
+    WindLevel,
     _find,
     effects_from_mapping,
 )
@@ -97,7 +98,7 @@ def _flight_accel(
     rotor_rpm: np.ndarray,
     permutation: np.ndarray | None,
 ) -> Any:
-    wind = _find(effects, Wind)
+    wind = _find(effects, Wind) or _find(effects, WindLevel)
     dw = _find(effects, Downwash) or _find(effects, DownwashDecay)
     sp = _find(effects, Spin)
     ds = _find(effects, DragScale)
