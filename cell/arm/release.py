@@ -126,10 +126,13 @@ class ReleaseChoice(ArmBase):
         best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
         soonest = math.inf if beat is None else beat
         pruned = False
+        timed, most = 0, self.tuning.release_timed_max
         for low, order, roll, q_rel, over, t_approach in sorted(found, key=lambda c: c[:2]):
             if low >= soonest:
                 pruned = True
                 break  # nor can any after it
+            if most and timed >= most:
+                break  # the soonest-bounded ones timed: the rest are not (`release_timed_max`)
             self._frame = (a, roll)
             try:
                 way = self._swing(over[1], q_rel, plan, (obj, stroke)) if level else []
@@ -137,6 +140,7 @@ class ReleaseChoice(ArmBase):
             except (IKFailed, TrajectoryError):
                 continue
             t = t_cycle + self.tuning.approach_weight * t_approach
+            timed += 1
             slips = level and not self._swing_holds(
                 [over[1], *way, q_rel], (obj, stroke), plan.elevation_rad
             )
