@@ -37,19 +37,22 @@ def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
     o.close()
 
 
-def _decide(o: Orchestrator, k: int, exhaustive: bool) -> tuple[Any, list[tuple[float, float]]]:
-    """Item k's decision, the arm at rest where it is; and (bound, cycle timed) [s] of
-    every candidate the planner timed. `exhaustive`: every IK solved afresh, no
-    candidate left out."""
+def _decide(
+    o: Orchestrator, k: int, exhaustive: bool
+) -> tuple[Any, list[tuple[float, float, float]]]:
+    """Item k's decision, the arm at rest where it is; and (bound, tighter bound, cycle
+    timed) [s] of every candidate the planner timed (`_cycle_bound_s`, `_way_bound_s`).
+    `exhaustive`: every IK solved afresh, no candidate left out."""
     spec = o.job.expanded_items()[k]
     o.present(k, spec.obj)
-    timed: list[tuple[float, float]] = []
-    cycle, bound = o._static_cycle_s, o._cycle_bound_s
+    timed: list[tuple[float, float, float]] = []
+    cycle, bound, way_bound = o._static_cycle_s, o._cycle_bound_s, o._way_bound_s
 
     def watched(obj: Any, plan: Any, stroke: float, q_rel: Any, over: Any = None) -> float:
         t = cycle(obj, plan, stroke, q_rel, over)
-        q_pick = (over or o.over_item(o._presented, stroke, obj))[0]
-        timed.append((bound(q_pick, q_rel), t))
+        over = over or o.over_item(o._presented, stroke, obj)
+        back = o._approach_s(q_rel, over, stroke, obj)
+        timed.append((bound(over[0], q_rel), way_bound(over[0], q_rel, back, 0.0), t))
         return t
 
     o._static_cycle_s = watched  # type: ignore[method-assign]
@@ -60,10 +63,11 @@ def _decide(o: Orchestrator, k: int, exhaustive: bool) -> tuple[Any, list[tuple[
     if exhaustive:
         o._release_ik = lambda robot, pose, seed=None: solve_ik(robot, pose, seed)  # type: ignore[method-assign]
         o._cycle_bound_s = lambda q_pick, q_rel: -math.inf  # type: ignore[method-assign]
+        o._way_bound_s = lambda *a: -math.inf  # type: ignore[method-assign]
     try:
         d = o.decide(k, spec.obj, o.job.bin(spec.bin))
     finally:
-        for name in ("_static_cycle_s", "_release_ik", "_cycle_bound_s"):
+        for name in ("_static_cycle_s", "_release_ik", "_cycle_bound_s", "_way_bound_s"):
             o.__dict__.pop(name, None)
         o.tuning = kept
         o.scene.remove_item(o._presented)
@@ -81,8 +85,9 @@ def test_the_cheaper_search_chooses_as_the_exhaustive_one(orchestrator: Any, k: 
     np.testing.assert_allclose(fast.state.q_release, full.state.q_release, atol=1e-12)
     # fewer cycles timed, never more
     assert len(timed_fast) <= len(timed_full), (timed_fast, timed_full)
-    for b, t in timed_full:
+    for b, tight, t in timed_full:
         assert b <= t, timed_full  # a lower bound on every cycle the planner times
+        assert b <= tight <= t, timed_full  # and the tighter one between the two
 
 
 def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: Any) -> None:
