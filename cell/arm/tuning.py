@@ -84,8 +84,11 @@ class ArmTuning:
             (0: every one whose bound can beat the soonest timed). Timing a candidate
             (toppra's carries) is half of a throw's decision; the soonest release was the
             soonest-bounded candidate in 43 of the demo's 66 searches, among the first
-            three in 63 (docs/HISTORY.md, 2026-11-29, decision-changing; measured on tune
-            layouts 0-3 against every candidate timed).
+            three in 57 of 66. On tune layouts 0-3 against every candidate timed: 130 ->
+            131 of 136 in their bins, 1,533 -> 1,551 items per hour (the demo, not a tune
+            layout: 1,525 -> 1,505); the decisions' CPU on the demo 29.5 -> 22.7 s, p95
+            3.72 -> 2.12 s an item with `ik_give_up` (docs/HISTORY.md, 2026-11-29,
+            decision-changing).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
