@@ -3,6 +3,8 @@ decision, and a hash of the items' results to check that a speedup decides the s
 
     PYTHONPATH=$PWD python examples/plan_time.py tasks/bins.yaml 8   # the demo's first 8 items
     PYTHONPATH=$PWD python examples/plan_time.py 0 5                 # tune layout 0's first 5
+    PYTHONPATH=$PWD python examples/plan_time.py tasks/bins.yaml 0 release_timed_max=0
+        # the whole demo with a constant of `cell.arm.tuning.ArmTuning` set otherwise
 
 Prints one JSON object: the run's items, in_bin, sim_s, items/h (simulated and real time),
 plan_s's p95/median/max/sum [s] (wall), decide_cpu_p95/sum [s] (`time.process_time`
@@ -14,6 +16,7 @@ docs/realtime.md's table was measured with it.
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import hashlib
 import json
@@ -25,12 +28,13 @@ import numpy as np
 import yaml
 from threadpoolctl import threadpool_limits
 
+from cell.arm.tuning import TUNING
 from cell.jobgen import random_job
 from cell.jobs import load_job, parse_job
 from cell.orchestrator import Orchestrator
 
 
-def main(what: str, n: int) -> dict[str, object]:
+def main(what: str, n: int, tuning: dict[str, object] | None = None) -> dict[str, object]:
     if what.endswith(".yaml"):
         job = load_job(what)
     else:  # a random layout's seed (Panda), as `cell bench sort` draws it
@@ -38,7 +42,9 @@ def main(what: str, n: int) -> dict[str, object]:
         job = parse_job(yaml.safe_dump(doc, sort_keys=False), f"<random layout {what}>")
     if n:
         job = dataclasses.replace(job, max_items=n)
-    orch = Orchestrator(job, session="plan-time")
+    orch = Orchestrator(
+        job, session="plan-time", tuning=dataclasses.replace(TUNING, **(tuning or {}))
+    )
     dec_cpu: list[float] = []
     decide = orch.decide
 
@@ -83,4 +89,6 @@ def main(what: str, n: int) -> dict[str, object]:
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 0)))
+    # name=value: an ArmTuning constant, its value a Python literal (None, 3, (6, 30.0))
+    over = {k: ast.literal_eval(v) for k, v in (a.split("=", 1) for a in sys.argv[3:])}
+    print(json.dumps(main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 0, over)))

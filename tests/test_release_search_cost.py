@@ -37,30 +37,39 @@ def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
     o.close()
 
 
-def _decide(o: Orchestrator, k: int, exhaustive: bool) -> tuple[Any, list[tuple[float, float]]]:
-    """Item k's decision, the arm at rest where it is; and (bound, cycle timed) [s] of
-    every candidate the planner timed. `exhaustive`: every IK solved afresh, no
-    candidate left out."""
+def _decide(
+    o: Orchestrator, k: int, exhaustive: bool
+) -> tuple[Any, list[tuple[float, float, float]]]:
+    """Item k's decision, the arm at rest where it is; and (bound, tighter bound, cycle
+    timed) [s] of every candidate the planner timed (`_cycle_bound_s`, `_way_bound_s`).
+    `exhaustive`: every IK solved afresh, no candidate left out."""
     spec = o.job.expanded_items()[k]
     o.present(k, spec.obj)
-    timed: list[tuple[float, float]] = []
-    cycle, bound = o._static_cycle_s, o._cycle_bound_s
+    timed: list[tuple[float, float, float]] = []
+    cycle, bound, way_bound = o._static_cycle_s, o._cycle_bound_s, o._way_bound_s
 
     def watched(obj: Any, plan: Any, stroke: float, q_rel: Any, over: Any = None) -> float:
         t = cycle(obj, plan, stroke, q_rel, over)
-        q_pick = (over or o.over_item(o._presented, stroke, obj))[0]
-        timed.append((bound(q_pick, q_rel), t))
+        over = over or o.over_item(o._presented, stroke, obj)
+        back = o._approach_s(q_rel, over, stroke, obj)
+        timed.append((bound(over[0], q_rel), way_bound(over[0], q_rel, back, 0.0), t))
         return t
 
     o._static_cycle_s = watched  # type: ignore[method-assign]
+    kept = o.tuning
+    # every candidate under the bound timed: the pruning alone (`release_timed_max`, which
+    # may change the choice, is `test_the_search_times_only_the_soonest_bounded`'s)
+    o.tuning = dataclasses.replace(kept, release_timed_max=0)
     if exhaustive:
         o._release_ik = lambda robot, pose, seed=None: solve_ik(robot, pose, seed)  # type: ignore[method-assign]
         o._cycle_bound_s = lambda q_pick, q_rel: -math.inf  # type: ignore[method-assign]
+        o._way_bound_s = lambda *a: -math.inf  # type: ignore[method-assign]
     try:
         d = o.decide(k, spec.obj, o.job.bin(spec.bin))
     finally:
-        for name in ("_static_cycle_s", "_release_ik", "_cycle_bound_s"):
+        for name in ("_static_cycle_s", "_release_ik", "_cycle_bound_s", "_way_bound_s"):
             o.__dict__.pop(name, None)
+        o.tuning = kept
         o.scene.remove_item(o._presented)
     return d, timed
 
@@ -76,8 +85,9 @@ def test_the_cheaper_search_chooses_as_the_exhaustive_one(orchestrator: Any, k: 
     np.testing.assert_allclose(fast.state.q_release, full.state.q_release, atol=1e-12)
     # fewer cycles timed, never more
     assert len(timed_fast) <= len(timed_full), (timed_fast, timed_full)
-    for b, t in timed_full:
+    for b, tight, t in timed_full:
         assert b <= t, timed_full  # a lower bound on every cycle the planner times
+        assert b <= tight <= t, timed_full  # and the tighter one between the two
 
 
 def test_the_bound_is_under_ruckigs_moves_and_is_its_closed_form(orchestrator: Any) -> None:
@@ -168,3 +178,49 @@ def test_a_release_that_cannot_beat_another_bounds_plan_is_not_timed(orchestrato
     pruned = dataclasses.replace(first, cost=none[0])
     assert soonest_of([first, pruned]) is first
     assert o._beat([first, pruned]) == full[0][1]
+
+
+def test_the_search_times_only_the_soonest_bounded(orchestrator: Any) -> None:
+    """`release_timed_max` k: of the candidates the full search times (soonest bound
+    first), only the first k are; with k = 1 the release is the soonest-bounded
+    candidate's, with its own timed estimate, whatever the others' would be; with k at
+    least the number the full search times, the same choice as it."""
+    o = orchestrator
+    spec = o.job.expanded_items()[1]
+    o.present(1, spec.obj)
+    kept_tuning, kept_frame = o.tuning, o._frame
+    cycle = o._static_cycle_s
+    timed: list[tuple[Any, float]] = []
+
+    def watched(obj: Any, plan: Any, stroke: float, q_rel: Any, over: Any = None) -> float:
+        timed.append((np.array(q_rel), cycle(obj, plan, stroke, q_rel, over)))
+        return timed[-1][1]
+
+    try:
+        d = o.decide(1, spec.obj, o.job.bin(spec.bin))
+        plan, stroke = d.plan, d.stroke_m
+        centre = np.array([plan.x_m, plan.y_m, plan.z_m])
+        tcp = o._tcp_for_item_centre(centre, plan.elevation_rad, plan.azimuth_rad, stroke, spec.obj)
+        o._static_cycle_s = watched  # type: ignore[method-assign]
+
+        def search(k: int) -> Any:
+            timed.clear()
+            o.tuning = dataclasses.replace(kept_tuning, release_timed_max=k)
+            return o._release_search(tcp, plan, stroke, spec.obj, None)
+
+        full = search(0)
+        every = list(timed)
+        assert full is not None and len(every) >= 2  # a choice among several
+        one = search(1)
+        assert len(timed) == 1 and one is not None
+        np.testing.assert_array_equal(one[1], every[0][0])  # the soonest-bounded
+        approach = one[0][1] - every[0][1]  # the approach's weighted share, the same for both
+        assert approach >= 0.0
+        assert one[0][1] >= full[0][1]  # never sooner than the full search's choice
+        same = search(len(every))
+        assert same is not None and same[0] == full[0]
+        np.testing.assert_array_equal(same[1], full[1])
+    finally:
+        o.__dict__.pop("_static_cycle_s", None)
+        o.tuning, o._frame = kept_tuning, kept_frame
+        o.scene.remove_item(o._presented)

@@ -184,3 +184,22 @@ def test_a_vertical_release_leaves_the_roll_free():
     res = solve_release_ik(robot, p, -math.pi / 2, 0.0, robot.home)
     free = solve_ik(robot, ReleasePose.from_angles(p, -math.pi / 2, 0.0), robot.home)
     assert np.allclose(res.q, free.q)
+
+
+def test_a_search_gives_up_where_its_first_seeds_are_all_far_off():
+    """`give_up` (seeds, score): a pose 2 m out is missed by over 0.8 m from every seed, so
+    the search stops after that many seeds, unpolished, with the same kind of error; a pose
+    in reach (an FK pose) is solved as without it: its first seed converges."""
+    robot = load_robot("panda")
+    far = ReleasePose.from_angles((2.0, 0.0, 0.5), 0.3, 0.0)
+    with pytest.raises(IKFailed, match="after 4 seeds") as info:
+        solve_ik(robot, far, give_up=(4, 20.0))
+    assert info.value.position_error_m > 0.8  # the Panda is at least 0.8 m short of 2 m
+    with pytest.raises(IKFailed, match="after 31 seeds"):
+        solve_ik(robot, far)  # without it: home (the current one) and 30 random seeds
+    for q, pose in fk_poses(robot, 5, seed=7):
+        a = solve_ik(robot, pose, q, give_up=(2, 20.0))
+        b = solve_ik(robot, pose, q)
+        np.testing.assert_array_equal(a.q, b.q)
+        ep, ea = independent_errors(robot, a.q, pose)
+        assert ep <= POSITION_TOL_M and ea <= AXIS_TOL_RAD

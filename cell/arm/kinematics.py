@@ -65,7 +65,8 @@ class Kinematics(ArmBase):
         (`decide` clears it): the same pose from the same seed is the same solution, or
         the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
         writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
-        more is not searched again from another seed either (`_release_ik`)."""
+        more is not searched again from another seed either (`_release_ik`), and the
+        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`)."""
         from cell.robot.ik import IKNoSolution, solve_ik
 
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
@@ -75,7 +76,8 @@ class Kinematics(ArmBase):
             found = self._ik_memo.get(where)
         if found is None:
             try:
-                found = solve_ik(self.robot, pose, seed)
+                give_up = self.tuning.ik_give_up if reach else None
+                found = solve_ik(self.robot, pose, seed, give_up=give_up)
             except IKNoSolution as exc:
                 found = exc
                 if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:

@@ -126,17 +126,26 @@ class ReleaseChoice(ArmBase):
         best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
         soonest = math.inf if beat is None else beat
         pruned = False
+        timed, most = 0, self.tuning.release_timed_max
         for low, order, roll, q_rel, over, t_approach in sorted(found, key=lambda c: c[:2]):
             if low >= soonest:
                 pruned = True
                 break  # nor can any after it
+            if most and timed >= most:
+                break  # the soonest-bounded ones timed: the rest are not (`release_timed_max`)
             self._frame = (a, roll)
             try:
+                if best is not None and not best[0][0][0]:
+                    back = self._approach_s(q_rel, over, stroke, obj)  # as `_static_cycle_s`
+                    if self._way_bound_s(over[0], q_rel, back, t_approach) > best[0][0][1]:
+                        timed += 1  # cannot beat the best: as if timed (`_way_bound_s`)
+                        continue
                 way = self._swing(over[1], q_rel, plan, (obj, stroke)) if level else []
                 t_cycle = self._static_cycle_s(obj, plan, stroke, q_rel, over)
             except (IKFailed, TrajectoryError):
                 continue
             t = t_cycle + self.tuning.approach_weight * t_approach
+            timed += 1
             slips = level and not self._swing_holds(
                 [over[1], *way, q_rel], (obj, stroke), plan.elevation_rad
             )
@@ -203,15 +212,36 @@ class ReleaseChoice(ArmBase):
         """A lower bound [s] on `_static_cycle_s` for the release q_rel [rad] of the item
         picked at q_pick [rad]: each way, from rest to rest, no joint can be quicker than
         at its full velocity and acceleration limits along the straight line (the
-        bang-bang time; the carry's and the approach's limits are these or a fraction of
-        them, their routes no shorter), plus the settle at the release and the push."""
+        bang-bang time, `_one_way_bound_s`; the carry's and the approach's limits are
+        these or a fraction of them, their routes no shorter), plus the settle at the
+        release and the push."""
         from cell.robot.moving_release import COAST_S
 
+        return 2.0 * self._one_way_bound_s(q_pick, q_rel) + self.tuning.settle_s + COAST_S
+
+    def _one_way_bound_s(self, q_pick: np.ndarray, q_rel: np.ndarray) -> float:
+        """The bang-bang time [s] from rest at q_pick to rest at q_rel [rad] of the
+        slowest joint at its full velocity and acceleration limits (`_cycle_bound_s`)."""
         lim = self.robot.limits
         v, a = lim.velocity * (1 + 1e-3), lim.acceleration * (1 + 1e-3)
         d = np.abs(np.asarray(q_rel, float) - np.asarray(q_pick, float))
         t = np.where(d <= v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
-        return 2.0 * float(np.max(t)) + self.tuning.settle_s + COAST_S
+        return float(np.max(t))
+
+    def _way_bound_s(
+        self, q_pick: np.ndarray, q_rel: np.ndarray, back_s: float, approach_s: float
+    ) -> float:
+        """A lower bound [s] on `_release_search`'s estimate for the release q_rel [rad] of
+        the item picked at q_pick [rad], tighter than `_cycle_bound_s`'s: the carry's
+        bang-bang bound (`_one_way_bound_s`), the settle and the push, and the way back
+        as `_static_cycle_s` times it (`back_s` [s], `_approach_s`, remembered through the
+        decision), plus APPROACH_WEIGHT of the approach from where the arm is
+        (`approach_s` [s]). A candidate whose bound is over the best estimate timed
+        cannot be chosen, and is not timed (tests/test_release_search_cost.py)."""
+        from cell.robot.moving_release import COAST_S
+
+        carry = self._one_way_bound_s(q_pick, q_rel) + self.tuning.settle_s + COAST_S
+        return carry + back_s + self.tuning.approach_weight * approach_s
 
     def _static_carry(
         self,

@@ -58,6 +58,15 @@ class ArmTuning:
         ik_out_of_reach_m: [m] a release pose IK's whole search misses by this much is out
             of reach from any seed: 5 x POSITION_TOL_M (the demo: 207 -> 81 failed searches,
             nothing chosen changed).
+        ik_give_up: (seeds, score): with the release search, a release pose none of whose
+            first `seeds` IK seeds came within `score` (position error / 1 mm + angle error
+            / 0.5°) is given up as out of reach, unpolished (`solve_ik`'s `give_up`; None:
+            all 32 seeds and the polish). Chosen by counting, seed by seed, every release
+            IK search of the demo (2,685) and of tune layout 1's first 12 items (UR5,
+            1,435): no search that found a solution had its first 6 seeds all over 30
+            (30 mm or 15°), and the rule leaves out 10 % and 23 % of their descents; the
+            failed searches' best seeds end at 3-40 (docs/HISTORY.md, 2026-11-29,
+            decision-changing).
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -70,6 +79,16 @@ class ArmTuning:
             where it is a release's cycle estimate counts (random layouts 0 and 3: counted
             in full, layout 0 kept a branch 0.8 s slower a cycle; left out, layout 3's UR5
             alternated wrist rolls, 0.4-0.6 s a pick).
+        release_timed_max: with the release search, at most this many of a search's
+            candidates are timed as the cell makes the cycle, soonest lower bound first
+            (0: every one whose bound can beat the soonest timed). Timing a candidate
+            (toppra's carries) is half of a throw's decision; the soonest release was the
+            soonest-bounded candidate in 43 of the demo's 66 searches, among the first
+            three in 57 of 66. On tune layouts 0-3 against every candidate timed: 130 ->
+            131 of 136 in their bins, 1,533 -> 1,551 items per hour (the demo, not a tune
+            layout: 1,525 -> 1,505); the decisions' CPU on the demo 29.5 -> 22.7 s, p95
+            3.72 -> 2.12 s an item with `ik_give_up` (docs/HISTORY.md, 2026-11-29,
+            decision-changing).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
@@ -126,12 +145,14 @@ class ArmTuning:
     grip_use_tie: float = 0.02
     swing_max_detour: float = 2.5
     ik_out_of_reach_m: float = 5e-3
+    ik_give_up: tuple[int, float] | None = (6, 30.0)
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
     )
     release_box_shrinks: tuple[float, ...] = (0.75, 0.9)
     approach_weight: float = 0.25
+    release_timed_max: int = 3
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10

@@ -119,12 +119,27 @@ def _near_current(
 
 
 def _search_seeds(
-    robot: Robot, d: _Descent, seeds: Iterator[np.ndarray], solutions: int
+    robot: Robot,
+    d: _Descent,
+    seeds: Iterator[np.ndarray],
+    solutions: int,
+    give_up: tuple[int, float] | None = None,
 ) -> _Search:
     """Descend from each seed in turn; stop at once if the first converges, else once
-    `solutions` seeds have."""
+    `solutions` seeds have. `give_up` (seeds, score): stop too once that many seeds have
+    been tried, none has converged and none came within that score (`_descend`'s:
+    position error / tolerance + angle error / tolerance) of the pose; the search is then
+    marked as given up (`_Search.gave_up`)."""
     s = _Search(best=(math.inf, math.inf, math.inf, d.q_cur))
     for seed in seeds:
+        if (
+            give_up is not None
+            and s.tried >= give_up[0]
+            and not s.found
+            and min(e[0] for e in s.ends) > give_up[1]
+        ):
+            s.gave_up = True
+            break
         s.tried += 1
         seed_best = _descend(robot, d, seed, s)
         s.ends.append(seed_best)
@@ -183,6 +198,7 @@ def solve_ik(
     null_gain: float = 0.05,
     polish: int = 3,
     rng: np.random.Generator | None = None,
+    give_up: tuple[int, float] | None = None,
 ) -> IKResult:
     """Joint configuration that puts the grip centre at a release pose.
 
@@ -207,6 +223,10 @@ def solve_ik(
         polish: if no seed converges, this many of the closest attempts are refined with a
             bounded trust-region least-squares solve (scipy) before giving up.
         rng: random generator for the random seeds (a fixed seed if None: repeatable).
+        give_up: (seeds, score): where that many seeds have been tried, none converged
+            and none came within that score of the pose (position error / tol_position_m
+            + angle error / tol_axis_rad), the pose is taken as out of reach: no more
+            seeds and no polish (None: every seed).
 
     Uses `robot.data` as scratch space: one Robot per thread.
 
@@ -223,8 +243,9 @@ def solve_ik(
     )
     q_cur = _current_configuration(robot, q_current)
     d = _Descent.of(pose, q_cur, tol_position_m, tol_axis_rad, max_iterations, damping, null_gain)
-    s = _search_seeds(robot, d, _seeds(robot, q_cur, pose.position, random_seeds, rng), solutions)
-    if not s.found and polish > 0:
+    seeds = _seeds(robot, q_cur, pose.position, random_seeds, rng)
+    s = _search_seeds(robot, d, seeds, solutions, give_up)
+    if not s.found and polish > 0 and not s.gave_up:
         _polish_ends(robot, d, s, polish)
     if not s.found:
         raise _no_solution(d, s)

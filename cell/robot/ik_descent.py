@@ -155,6 +155,8 @@ class _Search:
         ends: each seed's best (score, q) of its descent.
         iterations: DLS iterations spent.
         tried: seeds started.
+        gave_up: the search stopped early, every seed so far far off (`solve_ik`'s
+            `give_up`).
     """
 
     best: _Best
@@ -162,6 +164,7 @@ class _Search:
     ends: list[tuple[float, np.ndarray]] = field(default_factory=list)
     iterations: int = 0
     tried: int = 0
+    gave_up: bool = False
 
 
 def _orientation_error(d: _Descent, r: np.ndarray) -> tuple[np.ndarray, float, float]:
