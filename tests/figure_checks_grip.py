@@ -115,6 +115,44 @@ def _check_the_carry(page: str, params: Any) -> None:
     assert f"all {carries} of its\n            carries of random layout {layout}," in doc
 
 
+def _check_the_slow_holds(page: str, params: Any) -> None:
+    """The tetrapack placed at the shortest stroke; a sphere carried at it where the
+    pads' measured hold leaves its carry no room."""
+    from cell.arm.grip_limits import carry_safety, grip_force_n, mesh_grip, point_hold_use
+    from cell.arm.tuning import TUNING
+    from cell.catalogue import get_object
+    from cell.model.objects import ObjectParams
+    from cell.model.params import G
+    from cell.robot import grip_hold
+
+    tetra, short = get_object("o5_tetrapack"), params.ee.stroke_min
+    s_pick, use_pick, bound, s_short, use_short = quoted(
+        page,
+        r"At (\d+) mm the tetrapack's weight alone asks ([\d.]+) of the grip, nearly all of "
+        r"the carry's bound ([\d.]+),.*? At (\d+) mm its weight asks ([\d.]+)\.",
+    )
+    assert float(s_pick) / 1000 == pytest.approx(TUNING.pick_stroke_m)
+    assert float(s_short) / 1000 == pytest.approx(short)
+    close(use_pick, tetra.mass * G / grip_force_n(params, tetra, TUNING.pick_stroke_m), 2)
+    close(use_short, tetra.mass * G / grip_force_n(params, tetra, short), 2)
+    close(bound, 1.0 / grip_hold.CARRY_MARGIN, 2)
+    groups = quoted(
+        page,
+        r"A sphere is thrown at strokes up to where the grip model holds ([\d.]+) x its weight.*?pull it out "
+        r"at less than the model's force: ([\d.]+) of it for the (\d+) mm, (\d+) g sphere of "
+        r"random layout (\d+) .*?asks more than (1/[\d.]+) at the throw's stroke.*?thrown at "
+        r"(\d+) mm, where its weight asks ([\d.]+) of the measured hold.*?carried at (\d+) mm",
+    )
+    margin, ratio, d_mm, m_g, layout, margin2, s_mm, use, s_carry = groups
+    sphere = ObjectParams("sphere", float(m_g) / 1000, (float(d_mm) / 1000,) * 3)
+    assert float(margin) == float(margin2[2:]) == carry_safety(sphere)
+    close(ratio, mesh_grip(params, sphere)[0], 2)
+    close(use, point_hold_use(params, sphere, float(s_mm) / 1000), 2)
+    assert float(s_carry) / 1000 == pytest.approx(short)
+    test = inspect.getsource(__import__("tests.test_point_held_carry").test_point_held_carry)
+    assert f"random layout {layout}, UR5" in test and f"a {s_mm} mm stroke" in test
+
+
 def check_the_grip_page() -> None:
     """The side choice, the carry's scaling and the refusals as docs/grip.md describes them
     are the code's: its margins, the catalogue's items and the messages it gives."""
@@ -127,6 +165,7 @@ def check_the_grip_page() -> None:
     page, params = "docs/grip.md", load_params(scene_params_path())
     _check_the_sides(page, params)
     _check_the_carry(page, params)
+    _check_the_slow_holds(page, params)
     # the refusals, each message the code's own
     cube = ObjectParams("cube", 0.3, (0.25,) * 3, name="item0_cube")
     rock = get_object("rock_000")

@@ -170,6 +170,23 @@ def mesh_grip(params: ModelParams, obj: ObjectParams) -> tuple[float, float]:
     return min(ratios), min(arms, default=0.0)
 
 
+def point_hold_use(params: ModelParams, obj: ObjectParams, stroke_m: float) -> float:
+    """The share of what the scene's pads hold a sphere with at stroke L_s [m] that its
+    weight asks held still: m g over the grip model's force times the least ratio the
+    grip probe measures against it (`mesh_grip`, at PROBE_STROKES_M; a 72 mm sphere is
+    pulled out of the pads at 0.91-0.93 of the model's force, where they meet it at
+    their edges below its equator). A carry of an item held at points keeps its use
+    within 1/`carry_safety`; where the weight alone asks more, no carry at that stroke
+    does (`GripUse._carry_stroke`)."""
+    from cell.model.params import G
+
+    force = grip_force_n(params, obj, stroke_m)
+    if force <= 0.0:
+        return math.inf
+    ratio, _ = mesh_grip(params, obj)
+    return obj.mass * G / (ratio * force)
+
+
 def grip_stroke_limit(params: ModelParams, obj: ObjectParams) -> float:
     """The longest stroke [m] the pads hold `obj` at (cell.model.grip), gripped across its
     first size (`cell.arm.grip_side` turns the item to grip it across another).
@@ -415,13 +432,34 @@ class GripUse(ArmBase):
         throw's stroke they had left the pads as the swing passed horizontal (on layout 3
         their tilt about y reached 1.02-1.06 of what the pads resist while the carry's law
         used its whole bound). A kinematic pick only: a physical pick grips the item as it
-        lay, where the probe's and the model's figures do not hold."""
+        lay, where the probe's and the model's figures do not hold.
+
+        A sphere is carried at the shortest stroke as well where, at the throw's, its
+        weight alone asks more than its carry may of the pads' hold as the scene measures
+        it (`point_hold_use`): then no carry at that stroke keeps within its bound, and
+        it went at GENTLE_SCALE. Two 72 mm, 102 g spheres thrown at 97 mm (weight 0.60 of
+        the model's force, 0.65 of the measured, over 1/1.6) left the pads 0.6 s into
+        such a carry on random layout 3 (UR5, issue 59)."""
         from cell.robot.carry import CARRY_MARGIN
 
         short = max(self.params.ee.stroke_min, self.ee.band.ee.stroke_min)
         if self.pick_mode == "physical" or d.action != "throw" or d.moving or d.plan is None:
             return d.stroke_m
-        if d.stroke_m <= short or carry_hold(self.params, obj, d.stroke_m).torque_nm <= 0.0:
+        if d.stroke_m <= short:
+            return d.stroke_m
+        if obj.shape == "sphere" and point_hold_use(self.params, obj, d.stroke_m) > 1.0 / (
+            carry_safety(obj, self.tuning)
+        ):
+            log.info(
+                "%s: its weight asks more than 1/%.2f of the pads' measured hold at the "
+                "%.3f m stroke: carried at %.3f m, wound back at the release",
+                obj.name or obj.shape,
+                carry_safety(obj, self.tuning),
+                d.stroke_m,
+                short,
+            )
+            return short
+        if carry_hold(self.params, obj, d.stroke_m).torque_nm <= 0.0:
             return d.stroke_m  # held at points (a sphere, a mesh): `_swing_static` leaves it
         level = self._level_swing_use((obj, d.stroke_m), d.plan.elevation_rad)
         if level <= 1.0 / CARRY_MARGIN + self._over_bound(obj):

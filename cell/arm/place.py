@@ -153,10 +153,11 @@ class Place(ArmBase):
         spec = sc.bin_spec(target.id)
         r_item = max(obj.size[0], obj.size[1]) / 2
         r_grip = max(r_item, self._grip_reach_m())
-        held = [
-            (np.asarray(sc.item_position(it), float)[:2], max(it.obj.size) / 2)
-            for it in sc.kept_items(target.id)
-        ]
+        held = []  # footprints as the circles that hold them (`place_spots`)
+        for it in sc.kept_items(target.id):
+            lo, hi = sc.item_aabb(it)
+            held.append((((lo + hi) / 2)[:2], float(np.hypot(*(hi - lo)[:2])) / 2))
+        r_foot = float(np.hypot(obj.size[0], obj.size[1])) / 2
 
         r_housing = sc.geometry.housing_radius_m
 
@@ -167,7 +168,7 @@ class Place(ArmBase):
                 r = max(r, r_housing)
             walls = min(spec.size_xy[0] / 2 - x, spec.size_xy[1] / 2 - y) - r
             items = min(
-                (float(np.linalg.norm(p[:2] - c)) - rc - r_item for c, rc in held), default=1.0
+                (float(np.linalg.norm(p[:2] - c)) - rc - r_foot for c, rc in held), default=1.0
             )
             return float(min(walls, items))
 

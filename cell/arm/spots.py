@@ -62,16 +62,25 @@ def place_spots(
         InvalidInput: no such bin.
     """
     spec = plant.bin_spec(bin_id)
-    held = [(plant.item_position(it), max(it.obj.size) / 2) for it in plant.kept_items(bin_id)]
+    # each footprint as the circle that holds it, whatever way it is turned: an item
+    # resting in the bin, its bounding box's (as `throw_spot`); the one set down, half its
+    # footprint's diagonal. With half the largest side each, a 220 g tetrapack (63 x 40 x
+    # 110 mm) set down beside another, lying, met it on the way down and left the pads
+    # (issue 59)
+    held, tops = [], []
+    for it in plant.kept_items(bin_id):
+        lo, hi = plant.item_aabb(it)
+        held.append(((lo + hi) / 2, float(np.hypot(*(hi - lo)[:2])) / 2))
+        tops.append(float(hi[2]))
     wall = margin_m if wall_margin_m is None else wall_margin_m
-    r_new = max(obj.size[0], obj.size[1]) / 2
+    r_new = float(np.hypot(obj.size[0], obj.size[1])) / 2
     out = []
-    for (x, y), room in clear_spots(spec, obj, held, margin_m, wall, grid):
+    for (x, y), room in clear_spots(spec, obj, held, margin_m, wall, grid, r_new_m=r_new):
         z = spec.wall
         if room < margin_m:  # crowded: on top of what lies under it
-            for p, r in held:
+            for (p, r), top in zip(held, tops, strict=True):
                 if np.hypot(x - p[0], y - p[1]) < r + r_new + margin_m:
-                    z = max(z, p[2] + r)
+                    z = max(z, top)
         out.append((x, y, float(z)))
     return out
 
@@ -140,13 +149,15 @@ def clear_spots(
     wall_m: float,
     grid: int,
     source_xy: Sequence[float] | None = None,
+    r_new_m: float | None = None,
 ) -> list[tuple[tuple[float, float], float]]:
     """The grid points of a bin's floor, each with its room [m] from every (centre,
     radius) in `held`, best first: those with `margin_m` of room, nearest the centre
     first (of points as near, the farthest from `source_xy`, if given), then the
     others, most room first. Points keep half the item's footprint plus `wall_m` from
-    the walls."""
-    r_new = max(obj.size[0], obj.size[1]) / 2
+    the walls (`r_new_m`: the radius [m] of its footprint's circle; default half its
+    larger side)."""
+    r_new = max(obj.size[0], obj.size[1]) / 2 if r_new_m is None else r_new_m
     hx = max(spec.size_xy[0] / 2 - r_new - wall_m, 0.0)
     hy = max(spec.size_xy[1] / 2 - r_new - wall_m, 0.0)
     c, s = np.cos(spec.yaw), np.sin(spec.yaw)
