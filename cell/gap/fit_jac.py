@@ -27,11 +27,15 @@ from cell.gap.problem import GapProblem
 from cell.model.effects import (
     BandDamping,
     BandMass,
+    Downwash,
+    DownwashDecay,
     DragScale,
     Effect,
     ReleasePitch,
     ShapeStretch,
+    Spin,
     StrokeOffset,
+    Wind,
 )
 
 __all__ = ["STACKABLE", "forward_steps", "stackable", "stacked_jacobian", "stacked_misses"]
@@ -45,6 +49,10 @@ STACKABLE: tuple[type[Effect], ...] = (
     StrokeOffset,
     ReleasePitch,
     DragScale,
+    Wind,
+    Downwash,
+    DownwashDecay,
+    Spin,
 )
 
 
