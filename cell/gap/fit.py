@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from cell.gap.fit_jac import stackable, stacked_jacobian
+from cell.gap.fit_jac import misses_many, refit_folds, stackable, stacked_jacobian
 from cell.gap.problem import GapProblem, rmse
 from cell.model.effects import Effect
 
@@ -204,11 +204,19 @@ def score_set(
     full, r_all, jac = fit_set(prob, classes, np.arange(n), x0=warm, permute=permute, max_nfev=cap)
     sq = np.zeros(n)
     schemes = 0
+    together = stackable(classes, permute)  # the folds refitted and predicted in lockstep
     for folds in prob.folds.values():
         r = np.zeros((n, 2))
-        for train, test in folds:
-            x = _refit(prob, classes, train, full.x, r_all, jac, permute)
-            r[test] = prob.residual(test, _unpack(classes, x, scale), permute=permute)
+        if together:
+            lo, hi = _layout(classes)[1:3]
+            xs = refit_folds(prob, classes, [t for t, _ in folds], full.x, r_all, jac, (lo, hi))
+            got = misses_many(prob, classes, [t for _, t in folds], np.array(xs), scale)
+            for (_, test), r_test in zip(folds, got, strict=True):
+                r[test] = r_test.reshape(-1, 2)
+        else:
+            for train, test in folds:
+                x = _refit(prob, classes, train, full.x, r_all, jac, permute)
+                r[test] = prob.residual(test, _unpack(classes, x, scale), permute=permute)
         sq += np.sum(r * r, axis=1)
         schemes += 1
     sq /= max(schemes, 1)

@@ -38,7 +38,8 @@ from cell.model.effects import (
     Wind,
 )
 
-__all__ = ["STACKABLE", "forward_steps", "stackable", "stacked_jacobian", "stacked_misses"]
+__all__ = ["STACKABLE", "forward_steps", "misses_many", "refit_folds", "stackable", "stacked_jacobian",
+           "stacked_misses"]  # fmt: skip
 
 # effects whose parameters enter the launch or the flight elementwise (a per-row array
 # gives each row the arithmetic of its own scalar)
@@ -93,10 +94,11 @@ def forward_steps(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, rel_step: float
 
 
 def _stacked_effects(
-    classes: list[type[Effect]], xs: np.ndarray, scale: np.ndarray, m: int
+    classes: list[type[Effect]], xs: np.ndarray, scale: np.ndarray, counts: np.ndarray
 ) -> list[Effect]:
     """The effects with one value per stacked row: parameter vectors xs (k, p) (scaled),
-    each repeated over the m rows of its copy; clipped to the bounds as `fit._unpack`."""
+    each repeated over the counts[i] rows of its copy; clipped to the bounds as
+    `fit._unpack`."""
     vals = xs * scale
     out: list[Effect] = []
     i = 0
@@ -107,10 +109,26 @@ def _stacked_effects(
         v = np.clip(vals[:, i : i + n], lo, hi)
         e = object.__new__(c)
         for j, f in enumerate(fields(c)):  # type: ignore[arg-type]
-            object.__setattr__(e, f.name, np.repeat(v[:, j], m))
+            object.__setattr__(e, f.name, np.repeat(v[:, j], counts))
         out.append(e)
         i += n
     return out
+
+
+def misses_many(
+    prob: GapProblem,
+    classes: list[type[Effect]],
+    sets: list[np.ndarray],
+    xs: np.ndarray,
+    scale: np.ndarray,
+) -> list[np.ndarray]:
+    """The residual vectors (2 m_i,) of throws sets[i] at parameter vector xs[i] (scaled),
+    all from one prediction of the sets stacked."""
+    sets = [np.asarray(t) for t in sets]
+    counts = np.array([t.size for t in sets])
+    effs = _stacked_effects(classes, np.asarray(xs, float), scale, counts)
+    r = np.asarray(prob.residual(np.concatenate(sets), effs))
+    return [a.ravel() for a in np.split(r, np.cumsum(counts)[:-1])]
 
 
 def stacked_misses(
@@ -122,11 +140,7 @@ def stacked_misses(
 ) -> np.ndarray:
     """The residual vectors (k, 2m) of the training throws at each parameter vector of xs
     (k, p), from one prediction of the throws stacked k times."""
-    train = np.asarray(train)
-    k, m = xs.shape[0], train.size
-    effs = _stacked_effects(classes, xs, scale, m)
-    r = prob.residual(np.tile(train, k), effs)
-    return np.asarray(r).reshape(k, 2 * m)
+    return np.stack(misses_many(prob, classes, [np.asarray(train)] * xs.shape[0], xs, scale))
 
 
 def stacked_jacobian(
@@ -154,3 +168,61 @@ def stacked_jacobian(
         return np.asarray(((r[1:] - r[0]) / dx[:, None]).T)
 
     return jac
+
+
+def refit_folds(
+    prob: GapProblem,
+    classes: list[type[Effect]],
+    trains: list[np.ndarray],
+    x: np.ndarray,
+    r_all: np.ndarray,
+    jac_all: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray],
+) -> list[np.ndarray]:
+    """`fit._refit` of every fold at once: the folds step in lockstep and the parameter
+    vectors they try in a round are predicted in one stacked call; each fold's arithmetic
+    is its own, so each result is bitwise `fit._refit`'s."""
+    scale = np.concatenate([np.asarray(c.scale, float) for c in classes])
+    lo, hi = bounds
+    st = []
+    for train in trains:
+        rows = np.stack([2 * train, 2 * train + 1], axis=1).ravel()
+        r = r_all[rows]
+        st.append({"j": jac_all[rows], "r": r, "cost": float(r @ r), "x": x, "it": 0,
+                   "tried": {}, "step": None, "half": 0})  # fmt: skip
+    while True:
+        todo: dict[int, np.ndarray] = {}
+        for f, s in enumerate(st):
+            if s["it"] == 2:
+                continue
+            if s["step"] is None:
+                s["step"], s["half"] = np.linalg.lstsq(s["j"], -s["r"], rcond=1e-8)[0], 0
+            x_new = np.clip(s["x"] + s["step"], lo, hi)
+            s["x_new"] = x_new
+            if x_new.tobytes() not in s["tried"]:
+                todo[f] = x_new
+        if not any(s["it"] < 2 for s in st):
+            return [s["x"] for s in st]
+        if todo:
+            got = misses_many(
+                prob, classes, [trains[f] for f in todo], np.array(list(todo.values())), scale
+            )
+            for f, r_new in zip(todo, got, strict=True):
+                st[f]["tried"][todo[f].tobytes()] = r_new
+        for s in st:
+            if s["it"] < 2:
+                _advance(s)
+
+
+def _advance(s: dict) -> None:
+    """One trial of a fold's refit: accept x_new if it does not raise the cost, else halve
+    the step (after four trials the iteration ends without a step)."""
+    r_new = s["tried"][s["x_new"].tobytes()]
+    c_new = float(r_new @ r_new)
+    if c_new <= s["cost"]:
+        s["x"], s["r"], s["cost"] = s["x_new"], r_new, c_new
+        s["it"], s["step"] = s["it"] + 1, None
+        return
+    s["step"], s["half"] = 0.5 * s["step"], s["half"] + 1
+    if s["half"] == 4:
+        s["it"], s["step"] = s["it"] + 1, None
