@@ -105,8 +105,10 @@ def _flight_accel(
     if wind is None and dw is None and sp is None and ds is None:
         return None
     decay = isinstance(dw, DownwashDecay)
-    w_const = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float) if wind else np.zeros(3)
-    per_throw: dict[str, np.ndarray] = {}
+    par = _params(wind, dw, sp)
+    # a parameter given one value per throw (a fit's stacked Jacobian, cell/gap/fit_jac.py)
+    # is read at the rows integrated, like the per-throw arrays
+    per_throw = {k: v for k, v in par.items() if np.ndim(v) == (2 if k == "w" else 1)}
     if dw is not None:
         rpm = _permuted(rotor_rpm, permutation)
         per_throw["w_dw"] = (
@@ -116,7 +118,7 @@ def _flight_accel(
         per_throw["release_z"] = batch.position[:, 2]
     if sp is not None:
         per_throw["kl"] = aero_factor_kg_per_m(1.0, _area(batch)) / batch.mass  # [1/m] per C_L
-        per_throw["radius"] = batch.size.max(axis=1) / 2
+        per_throw["size_radius"] = batch.size.max(axis=1) / 2
     if ds is not None:
         # the drag the nominal law does not have: (factor - 1) of it
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
@@ -124,15 +126,15 @@ def _flight_accel(
     rows = Rows(per_throw)
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
-        r = rows(idx)
+        r = {**par, **rows(idx)}
         w = np.empty_like(p)
-        w[:] = w_const
+        w[:] = r["w"]
         if dw is not None:
             rho = np.hypot(p[:, 0] - r["cx"], p[:, 1] - r["cy"])
-            inside = column_fraction(rho, dw.radius_m, DOWNWASH_EDGE_M)
+            inside = column_fraction(rho, r["radius"], DOWNWASH_EDGE_M)
             if decay:
                 depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
-                inside = inside * np.exp(-depth / dw.depth_m)
+                inside = inside * np.exp(-depth / r["depth"])
             w[:, 2] -= r["w_dw"] * inside
         if sp is None and ds is None:
             return w, None
@@ -146,8 +148,8 @@ def _flight_accel(
             n = -rel * (rel[:, 2] / speed_sp**2)[:, None]
             n[:, 2] += 1.0
             n /= np.sqrt(np.maximum(nz, 1e-12))[:, None]
-            s_ratio = sp.spin_rad_s * r["radius"] / speed_sp
-            c_l = sp.lift_max * np.tanh(s_ratio / sp.lift_max)
+            s_ratio = r["spin"] * r["size_radius"] / speed_sp
+            c_l = r["lift_max"] * np.tanh(s_ratio / r["lift_max"])
             extra = (r["kl"] * c_l * speed_sp**2)[:, None] * n
         if ds is not None:
             drag = (r["neg_k_extra"] * speed)[:, None] * rel
@@ -155,6 +157,20 @@ def _flight_accel(
         return w, extra
 
     return accel
+
+
+def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
+    """The flight effects' parameters the callback reads: each a scalar, or one value per
+    throw (n,) (the air velocity (3,) or (n, 3))."""
+    w = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float).T if wind else np.zeros(3)
+    par: dict[str, Any] = {"w": w}
+    if dw is not None:
+        par["radius"] = dw.radius_m
+        if isinstance(dw, DownwashDecay):
+            par["depth"] = dw.depth_m
+    if sp is not None:
+        par["spin"], par["lift_max"] = sp.spin_rad_s, sp.lift_max
+    return par
 
 
 def _norm(x: np.ndarray) -> np.ndarray:
