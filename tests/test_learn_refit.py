@@ -170,12 +170,15 @@ def test_a_second_learn_run_refits_from_the_first_and_lands_closer(
     saved = tmp_path / "refitted.yaml"
     before = bad.read_bytes()
 
-    assert main(["run", str(job), "--db", str(db), "--learn", "--json", str(out1)]) in (0, 4)
+    # the release search and the turn are not what is checked here: off, for speed
+    fast = ["--no-cycle-search", "--no-turn-release"]
+    assert main(["run", str(job), "--db", str(db), "--learn", "--json", str(out1)] + fast) in (0, 4)
     err1 = capsys.readouterr().err
     assert "no throw store" in err1
     code = main(
         ["run", str(job), "--db", str(db), "--learn", "--json", str(out2)]
         + ["--learn-save", str(saved)]
+        + fast
     )
     assert code == 0
     err2 = capsys.readouterr().err
