@@ -29,7 +29,6 @@ items:
   - {object: cube50, count: 1, bin: left}
   - {object: cube50, count: 1, bin: front}
   - {object: cube50, count: 1, bin: left}
-  - {object: cube50, count: 1, bin: front}
 seed: 0
 """
 
@@ -113,7 +112,7 @@ def test_the_cli_names_the_valid_orders(tmp_path):
 
 
 def test_picks_for_one_bin_are_alike_in_the_scene():
-    """Four cubes, to two bins 82° apart round the base, in the scene: every one lands in
+    """Three cubes, to two bins 82° apart round the base, in the scene: every one lands in
     its bin in either order. Taken alternately, the picks wander along the Panda's
     redundancy (each solved from the last release, at the other bin: joints 1 and 3 turn
     against each other: 0.75-3.3 rad from one pick to the next when measured); taken bin by
@@ -142,7 +141,7 @@ def test_picks_for_one_bin_are_alike_in_the_scene():
         finally:
             orch.close()
         bins = [r.target_bin for r in res]
-        assert bins == (["left", "front"] * 2 if order == "job" else ["left"] * 2 + ["front"] * 2)
+        assert bins == (["left", "front", "left"] if order == "job" else ["left"] * 2 + ["front"])
         assert all(r.in_bin for r in res), [(r.target_bin, r.failure) for r in res]
         gaps[order] = [
             float(np.max(np.abs(b - a))) for a, b in zip(picks[:-1], picks[1:], strict=True)
