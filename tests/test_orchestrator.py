@@ -97,7 +97,9 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path):
     job.write_text(JOB % "  - {object: cube50, count: 20, bin: far}")
     db = tmp_path / "log.sqlite"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "cell", "run", str(job), "--db", str(db)],
+        # the release search and the turn are not what is checked: off, for speed
+        [sys.executable, "-m", "cell", "run", str(job), "--db", str(db)]
+        + ["--no-cycle-search", "--no-turn-release"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -186,7 +188,8 @@ def test_a_hardware_fault_mid_run_stops_the_run_with_torque_off(tmp_path, monkey
     job = tmp_path / "job.yaml"
     job.write_text(JOB % "  - {object: cube50, bin: far}\n  - {object: cyl70, bin: far, count: 3}")
     db = tmp_path / "log.sqlite"
-    code = main(["run", str(job), "--ee", "dynamixel", "--emulate", "--db", str(db)])
+    fast = ["--no-cycle-search", "--no-turn-release"]  # not what is checked: off, for speed
+    code = main(["run", str(job), "--ee", "dynamixel", "--emulate", "--db", str(db)] + fast)
     err = capsys.readouterr().err
     assert code == 3, err
     assert "hardware fault" in err and "overload" in err and "Traceback" not in err
