@@ -43,7 +43,8 @@ def orch(tmp_path: Path) -> Iterator[Orchestrator]:
         "  - {shape: cuboid, mass_kg: 0.04, size_m: [0.03, 0.05, 0.06], bin: near}"
     )
     job = parse_job(JOB % items, str(tmp_path / "job.yaml"))
-    o = Orchestrator(job, session="pick", pick="physical")
+    # the pick is checked, not the release search or the turn: both off, for speed
+    o = Orchestrator(job, session="pick", pick="physical", cycle_search=False, turn_release=False)
     yield o
     o.close()
 
