@@ -37,8 +37,12 @@ def test_a_run_whose_items_all_fail_sorts_nothing_and_exits_non_zero(tmp_path):
     assert s["results"][0]["failure"] == "ik"
 
 
+# the accounting is checked, not the release search or the turn: both off, for speed
+FAST = {"cycle_search": False, "turn_release": False}
+
+
 def test_cycles_add_up_to_the_whole_run_and_only_sorted_items_count():
-    orch = Orchestrator(parse_job(MIXED, "mixed.yaml"))
+    orch = Orchestrator(parse_job(MIXED, "mixed.yaml"), **FAST)
     t_start = orch.scene.t
     try:
         s = orch.run()
@@ -67,12 +71,12 @@ def test_the_next_pick_starts_while_a_thrown_item_flies_and_scores_the_same():
     all the same, so each item comes to rest where it does when the loop waits for it
     (`run_item`), and the run takes less time than waiting would."""
     job = parse_job(THROWS, "throws.yaml")
-    orch = Orchestrator(job)
+    orch = Orchestrator(job, **FAST)
     try:
         overlapped = orch.run()
     finally:
         orch.close()
-    orch = Orchestrator(job)
+    orch = Orchestrator(job, **FAST)
     try:
         waited = [orch.run_item(i, spec) for i, spec in enumerate(job.expanded_items())]
     finally:
