@@ -216,11 +216,8 @@ def check_the_headline(tune: dict) -> None:
         "README.md", r"The `test` layouts make\s+([\d,]+) items per hour against a goal of 1,500"
     )
     assert num(rate_h) == round(bench["items_per_hour"])
-    (kind,) = quoted(
-        "README.md", r"On the `test` layouts one placed (\w+) was\s+dropped while carried"
-    )
-    assert bench["failures"].get("dropped_while_carried", 0) == 1
-    assert bench["failures_by_object"]["dropped_while_carried"] == {f"o5_{kind}": 1}
+    (dropped,) = quoted("README.md", r"(No) item was dropped while carried on the\s+`test` layouts")
+    assert bench["failures"].get("dropped_while_carried", 0) == 0
     slowest = [lay for lay in bench["per_layout"] if lay["slowest_item"] == "o5_tetrapack"]
     (n_slowest,) = quoted("README.md", r"a placed tetrapack is the slowest item of (\w+) layouts")
     assert n_slowest == {1: "one", 2: "two", 3: "three", 4: "four"}.get(len(slowest))
