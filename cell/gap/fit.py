@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from scipy.optimize import least_squares
 
-from cell.gap.fit_jac import misses_many, refit_folds, stackable, stacked_jacobian
+from cell.gap.fit_jac import clipped_blocks, misses_many, refit_folds, stackable, stacked_jacobian
 from cell.gap.problem import GapProblem, rmse
 from cell.model.effects import Effect
 
@@ -62,16 +62,7 @@ def _layout(classes: list[type[Effect]]) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 def _unpack(classes: list[type[Effect]], x: np.ndarray, scale: np.ndarray) -> tuple[Effect, ...]:
-    out = []
-    i = 0
-    vals = np.asarray(x) * scale
-    for c in classes:
-        m = len(c.bounds)
-        lo = np.array([b[0] for b in c.bounds])
-        hi = np.array([b[1] for b in c.bounds])
-        out.append(c.from_vector(np.clip(vals[i : i + m], lo, hi)))
-        i += m
-    return tuple(out)
+    return tuple(c.from_vector(v) for c, v in clipped_blocks(classes, np.asarray(x) * scale))
 
 
 def fit_set(

@@ -18,7 +18,7 @@ keeps scipy's own differences.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import fields
 
 import numpy as np
@@ -38,7 +38,7 @@ from cell.model.effects import (
     Wind,
 )
 
-__all__ = ["STACKABLE", "forward_steps", "misses_many", "refit_folds", "stackable", "stacked_jacobian",
+__all__ = ["STACKABLE", "clipped_blocks", "forward_steps", "misses_many", "refit_folds", "stackable", "stacked_jacobian",
            "stacked_misses"]  # fmt: skip
 
 # effects whose parameters enter the launch or the flight elementwise (a per-row array
@@ -93,25 +93,32 @@ def forward_steps(x: np.ndarray, lo: np.ndarray, hi: np.ndarray, rel_step: float
     return np.asarray(out)
 
 
+def clipped_blocks(
+    classes: list[type[Effect]], vals: np.ndarray
+) -> Iterator[tuple[type[Effect], np.ndarray]]:
+    """Each class with its block of the parameter values (unscaled; along the last axis of
+    vals, one vector (p,) or many (k, p)), clipped to the class's bounds."""
+    i = 0
+    for c in classes:
+        n = len(c.bounds)
+        lo = np.array([b[0] for b in c.bounds])
+        hi = np.array([b[1] for b in c.bounds])
+        yield c, np.clip(vals[..., i : i + n], lo, hi)
+        i += n
+
+
 def _stacked_effects(
     classes: list[type[Effect]], xs: np.ndarray, scale: np.ndarray, counts: np.ndarray
 ) -> list[Effect]:
     """The effects with one value per stacked row: parameter vectors xs (k, p) (scaled),
     each repeated over the counts[i] rows of its copy; clipped to the bounds as
     `fit._unpack`."""
-    vals = xs * scale
     out: list[Effect] = []
-    i = 0
-    for c in classes:
-        n = len(c.bounds)
-        lo = np.array([b[0] for b in c.bounds])
-        hi = np.array([b[1] for b in c.bounds])
-        v = np.clip(vals[:, i : i + n], lo, hi)
+    for c, v in clipped_blocks(classes, xs * scale):
         e = object.__new__(c)
         for j, f in enumerate(fields(c)):  # type: ignore[arg-type]
             object.__setattr__(e, f.name, np.repeat(v[:, j], counts))
         out.append(e)
-        i += n
     return out
 
 
