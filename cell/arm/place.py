@@ -12,7 +12,7 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.joints import GRIP_DOWN, spline_within_limits
-from cell.arm.spots import place_spots
+from cell.arm.spots import footprint_radius, kept_circles, place_spots
 from cell.decision import Decision
 from cell.errors import (
     IKFailed,
@@ -153,11 +153,9 @@ class Place(ArmBase):
         spec = sc.bin_spec(target.id)
         r_item = max(obj.size[0], obj.size[1]) / 2
         r_grip = max(r_item, self._grip_reach_m())
-        held = []  # footprints as the circles that hold them (`place_spots`)
-        for it in sc.kept_items(target.id):
-            lo, hi = sc.item_aabb(it)
-            held.append((((lo + hi) / 2)[:2], float(np.hypot(*(hi - lo)[:2])) / 2))
-        r_foot = float(np.hypot(obj.size[0], obj.size[1])) / 2
+        # footprints as the circles that hold them (`place_spots`)
+        held = [(c[:2], r) for c, r, _ in kept_circles(sc, target.id)]
+        r_foot = footprint_radius(obj)
 
         r_housing = sc.geometry.housing_radius_m
 

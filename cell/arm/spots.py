@@ -19,12 +19,31 @@ __all__ = [
     "THROW_CLEARANCE_M",
     "THROW_WALL_MARGIN_M",
     "clear_spots",
+    "footprint_radius",
+    "kept_circles",
     "place_spots",
     "throw_spot",
 ]
 
 THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item the bin holds (throw_spot)
 THROW_WALL_MARGIN_M = 0.03  # [m] a throw's aim from a wall when it is moved (throw_spot)
+
+
+def kept_circles(plant: Any, bin_id: str) -> list[tuple[np.ndarray, float, float]]:
+    """The items at rest in a bin, each as the circle that holds its footprint however it
+    lies: its bounding box's centre [m, W] (3,), the half diagonal of its horizontal
+    extent [m] and its top's height [m]."""
+    out = []
+    for it in plant.kept_items(bin_id):
+        lo, hi = plant.item_aabb(it)
+        out.append(((lo + hi) / 2, float(np.hypot(*(hi - lo)[:2])) / 2, float(hi[2])))
+    return out
+
+
+def footprint_radius(obj: ObjectParams) -> float:
+    """The radius [m] of the circle that holds an item's footprint (its first two sizes)
+    however it is turned about the vertical: half the footprint's diagonal."""
+    return float(np.hypot(obj.size[0], obj.size[1])) / 2
 
 
 def place_spots(
@@ -67,13 +86,11 @@ def place_spots(
     # footprint's diagonal. With half the largest side each, a 220 g tetrapack (63 x 40 x
     # 110 mm) set down beside another, lying, met it on the way down and left the pads
     # (issue 59)
-    held, tops = [], []
-    for it in plant.kept_items(bin_id):
-        lo, hi = plant.item_aabb(it)
-        held.append(((lo + hi) / 2, float(np.hypot(*(hi - lo)[:2])) / 2))
-        tops.append(float(hi[2]))
+    kept = kept_circles(plant, bin_id)
+    held = [(c, r) for c, r, _ in kept]
+    tops = [top for _, _, top in kept]
     wall = margin_m if wall_margin_m is None else wall_margin_m
-    r_new = float(np.hypot(obj.size[0], obj.size[1])) / 2
+    r_new = footprint_radius(obj)
     out = []
     for (x, y), room in clear_spots(spec, obj, held, margin_m, wall, grid, r_new_m=r_new):
         z = spec.wall
@@ -130,10 +147,7 @@ def throw_spot(
         InvalidInput: no such bin.
     """
     spec = plant.bin_spec(bin_id)
-    held = []
-    for it in plant.kept_items(bin_id):
-        lo, hi = plant.item_aabb(it)
-        held.append(((lo + hi) / 2, float(np.hypot(*(hi - lo)[:2])) / 2))
+    held = [(c, r) for c, r, _ in kept_circles(plant, bin_id)]
     if not held:
         return float(spec.center_xy[0]), float(spec.center_xy[1])
     source = plant.robot_base_xyz[:2] if source_xy is None else source_xy
