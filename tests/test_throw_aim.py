@@ -11,6 +11,7 @@ import pytest
 from cell.arm.spots import THROW_CLEARANCE_M, THROW_WALL_MARGIN_M, throw_spot
 from cell.catalogue import get_object
 from cell.jobs import parse_job
+from cell.log.store import ThrowStore
 from cell.model.objects import ObjectParams
 from cell.orchestrator import Orchestrator
 from cell.sim import BinSpec, CellScene
@@ -135,21 +136,33 @@ seed: 16
 
 def test_the_cell_throws_clear_of_a_bottle_lying_across_a_low_bin(tmp_path, monkeypatch):
     """Random layout 16's bin_5 (Panda) with a bottle lying across its centre, as one
-    thrown there came to rest: the cylinders are thrown at a point clear of it, land
+    thrown there came to rest: the cylinders are thrown at a point clear of it, cross
+    the rim plane clear of the bottle's footprint (as the throw log records them),
     within a few centimetres of that point, and stay in the bin."""
     monkeypatch.chdir(tmp_path)
-    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="aim")
+    store = ThrowStore(tmp_path / "aim.sqlite")
+    o = Orchestrator(parse_job(JOB, str(tmp_path / "job.yaml")), session="aim", store=store)
     try:
         sc = o.scene
         q = (0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4))
         bottle = sc.spawn_item("o6_bottle", position=(0.02, 1.40, 0.045), orientation=q)
         sc.watch_until_rest(bottle)
         sc.keep(bottle)
+        lo, hi = (np.asarray(v) for v in sc.client.getAABB(bottle.body))
         spot = throw_spot(sc, "bin_5", get_object("cyl60"))
         assert math.dist(spot, (0.023, 1.379)) > 0.05  # moved off the centre
         summary = o.run()
+        log = store.table(session="aim")
     finally:
         o.close()
+        store.close()
     rows = [(r.action, r.failure, r.in_bin) for r in summary.results]
     assert rows == [("throw", "", True)] * 2, rows
     assert all(r.landing_error_m < 0.05 for r in summary.results)
+    # the rim-plane crossings the log holds lie outside the bottle's footprint, widened
+    # by the cylinder's radius (aimed at the centre, they would fall on the bottle)
+    r_cyl = max(get_object("cyl60").size[:2]) / 2
+    assert len(log) == 2
+    for x, y in zip(log.num("landed_x_m"), log.num("landed_y_m"), strict=True):
+        inside = lo[0] - r_cyl < x < hi[0] + r_cyl and lo[1] - r_cyl < y < hi[1] + r_cyl
+        assert not inside, ((x, y), (lo[:2], hi[:2]))
