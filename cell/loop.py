@@ -327,20 +327,21 @@ class ItemLoop:
         """Open the latch at once; the item in flight is scored and recorded once it rests
         (the score returned)."""
         released_at = self.plant.item_position(item)
+        # the point the throw was for: the bin's centre, or one clear of what it holds
+        bx, by = target.position[:2] if d.goal_xy is None else d.goal_xy
+        aim = (bx, by, target.rim_height)
         if self.observer is not None and not d.moving:
             self.observer.on_release(
-                base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at
+                base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at, aim
             )
         at = self.platform.release(d)
         if at is not None:
             released_at = at
         if self.observer is not None and d.moving:
             self.observer.on_release(
-                base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at
+                base["index"], d.plan, d.model_obj, d.ee_params, d.stroke_m, released_at, aim
             )
         t_release = self.plant.t
-        # the point the throw was for: the bin's centre, or one clear of what it holds
-        bx, by = target.position[:2] if d.goal_xy is None else d.goal_xy
         pf = self.platform
 
         def score(out: Any) -> tuple[ItemResult, Any]:

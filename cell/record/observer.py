@@ -32,7 +32,14 @@ class RunObserver(Protocol):
     def on_scene(self, scene: Any, job: Any) -> None: ...
     def on_item_start(self, index: int, obj: Any, target: Any, item: Any) -> None: ...
     def on_release(
-        self, index: int, plan: Any, model_obj: Any, ee: Any, stroke_m: float, point: Any
+        self,
+        index: int,
+        plan: Any,
+        model_obj: Any,
+        ee: Any,
+        stroke_m: float,
+        point: Any,
+        aim_xyz: Any,
     ) -> None: ...
     def on_flight(self, index: int, outcome: Any, landing_xyz: Any) -> None: ...
     def on_item_done(self, result: Any) -> None: ...
@@ -59,6 +66,7 @@ class SceneRecorder:
         self._items: dict[int, tuple[int, str]] = {}  # body -> (index, object id)
         self._index: int | None = None
         self._landing: Any = None
+        self._aims: dict[int, Any] = {}  # item → the point its throw was for [m, W]
         self._step: Any = None
 
     # -- RunObserver -----------------------------------------------------------
@@ -100,9 +108,18 @@ class SceneRecorder:
         self._sample()
 
     def on_release(
-        self, index: int, plan: Any, model_obj: Any, ee: Any, stroke_m: float, point: Any
+        self,
+        index: int,
+        plan: Any,
+        model_obj: Any,
+        ee: Any,
+        stroke_m: float,
+        point: Any,
+        aim_xyz: Any,
     ) -> None:
-        """The planned release (and the model's flight) just before the latch opens."""
+        """The planned release (and the model's flight) just before the latch opens;
+        aim_xyz is the point of the target's rim plane the throw is for [m, W]."""
+        self._aims[index] = aim_xyz
         from cell.errors import CellError
         from cell.model.throw import throw_axis
         from cell.record.flight import predicted_flight
@@ -125,7 +142,8 @@ class SceneRecorder:
         """Score the item; the recording stops following it (a bin keeps its body)."""
         d = result if isinstance(result, dict) else result.__dict__
         self.run.rec.flush_samples(item=d["index"])
-        self.run.item_done(d, self.scene.t, self._landing)
+        aim = self._aims.pop(d["index"], None)
+        self.run.item_done(d, self.scene.t, self._landing, aim_xyz=aim)
         self._landing = None
         for body, (i, oid) in list(self._items.items()):
             if i == d["index"]:

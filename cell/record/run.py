@@ -7,7 +7,8 @@ Entities (world frame W, z up, metres):
 - `world/release/<nnn>`: the planned release point and throw axis;
 - `world/flight/<nnn>/predicted`, `.../observed`: the model's and the scene's flights;
 - `world/landing/<nnn>`: where the item crossed the target's rim plane (a place: where it
-  rests), beside `world/landing/<nnn>/target` (the bin centre at rim height);
+  rests), beside `world/landing/<nnn>/target` (the point it was for: a throw's aim, the bin
+  centre at rim height for a place);
 - `items/landing_error_m`, `items/stroke_m`, `items/cycle_time_s`: one sample per item;
 - `log`: one text entry per item (its failure reason, if any).
 
@@ -196,6 +197,8 @@ class RunRecording:
         result: Mapping[str, Any],
         sim_time_s: float,
         landing_xyz: Sequence[float] | None = None,
+        *,
+        aim_xyz: Sequence[float] | None = None,
     ) -> None:
         """An item's outcome (as `ItemResult.as_dict` / `cell run --json` results).
 
@@ -205,6 +208,10 @@ class RunRecording:
             sim_time_s: simulated time when it is scored [s].
             landing_xyz: the landing point [m, W] (throw: the rim-plane crossing;
                 place: the rest point), None when there is none.
+            aim_xyz: a throw's aim [m, W]: the point of the target's rim plane it was
+                for, from which its landing error is measured (the bin's centre, or a
+                point clear of what the bin holds); None: the bin's centre at rim
+                height, as a place's error is measured.
         """
         r = self.rec
         i = int(result["index"])
@@ -221,10 +228,12 @@ class RunRecording:
                 radii=0.015,
             )
         b = self.bins.get(str(result["target_bin"]))
-        if b is not None:
+        if aim_xyz is None and b is not None:
+            aim_xyz = (*b["center_xy"], b["rim_height"])
+        if aim_xyz is not None:
             r.points(
                 f"world/landing/{i:03d}/target",
-                [(*b["center_xy"], b["rim_height"])],
+                [tuple(float(v) for v in aim_xyz)],
                 colors=[GREY],
                 radii=0.01,
             )
@@ -237,7 +246,7 @@ class RunRecording:
             r.text(
                 "log",
                 f"item {i} ({result['object_id']}) missed bin {result['target_bin']}: "
-                f"in {result.get('bin_id') or 'no bin'}, {err:.3f} m from its centre",
+                f"in {result.get('bin_id') or 'no bin'}, {err:.3f} m from its aim",
                 "WARN",
             )
         else:
