@@ -55,18 +55,21 @@ def _strip(layouts):
 
 def _bench_sort(tmp_path, tag, capsys, *extra):
     """`cell bench sort` on 4 test-set layouts of 1 item each: its figures without the
-    wall time, and each layout's result (--out) as JSON text without its wall time."""
+    wall time, and each layout's result (--out) as JSON text without its wall time. Seeds
+    1004-1007 (arms panda, ur5 in turn): 14.5 CPU-s of layouts in a warm process against
+    20 for 1000-1003, the cheapest four in a row of seeds 1000-1009."""
     from cell.cli import main
 
     out = tmp_path / tag
-    argv = ["bench", "sort", "--layouts", "4", "--robots", "panda,ur5", "--max-items", "1"]
+    argv = ["bench", "sort", "--layouts", "4", "--seed", "1004", "--robots", "panda,ur5"]
+    argv += ["--max-items", "1"]
     assert main([*argv, "--json", "--out", str(out), *extra]) == 0
     figures = json.loads(capsys.readouterr().out)
     from cell.results import WALL_CLOCK_KEYS
 
     for k in WALL_CLOCK_KEYS:
         figures.pop(k, None)
-    layouts = [json.loads((out / f"layout_{s}.json").read_text()) for s in range(1000, 1004)]
+    layouts = [json.loads((out / f"layout_{s}.json").read_text()) for s in range(1004, 1008)]
     return json.dumps(figures, sort_keys=True), _strip(layouts)
 
 
@@ -78,7 +81,7 @@ def test_cli_bench_sort_on_two_workers_equals_the_serial_run(local_ray, tmp_path
     assert serial[1] == on_ray[1]  # every layout, item for item, to the last digit
     assert serial[0] == on_ray[0]
     figures = json.loads(serial[0])
-    assert figures["set"] == "test" and figures["seeds"] == [1000, 1003]
+    assert figures["set"] == "test" and figures["seeds"] == [1004, 1007]
     assert figures["items"] == 4 and figures["layouts"] == 4
 
 

@@ -109,8 +109,10 @@ def test_fitted_law_reproduces_held_out_heavy_and_wide_items_in_the_scene():
     from cell.workflows.calibrate import calibrate_table
     from cell.workflows.campaign import adhoc_plan, campaign_plan, run_campaign, throw_once
 
-    table = run_campaign(campaign_plan(56, seed=11))
-    adhoc = run_campaign(adhoc_plan(64, seed=11))
+    # 40 + 48 throws (56 + 64 before: σ 0.025 either way, held-out RMS 0.022 against the
+    # bound 0.039; the law without its width term gives 0.053)
+    table = run_campaign(campaign_plan(40, seed=11))
+    adhoc = run_campaign(adhoc_plan(48, seed=11))
     res, _, _, rule = calibrate_table(
         table, adhoc=adhoc, release_m=DEFAULT_GEOMETRY.end_stop_m, max_iter=8
     )
