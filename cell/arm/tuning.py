@@ -88,7 +88,15 @@ class ArmTuning:
             131 of 136 in their bins, 1,533 -> 1,551 items per hour (the demo, not a tune
             layout: 1,525 -> 1,505); the decisions' CPU on the demo 29.5 -> 22.7 s, p95
             3.72 -> 2.12 s an item with `ik_give_up` (docs/HISTORY.md, 2026-11-29,
-            decision-changing).
+            decision-changing). Then 3 -> 1 with `release_rank_way`: the demo's decisions'
+            CPU p95 2.14 -> 1.19 s an item, 1,515 -> 1,506 items per hour, 24/24 in their
+            bins; tune layouts 0-3 in docs/HISTORY.md (2026-11-29, branch plan5).
+        release_rank_way: with the release search, candidates are ranked (and left out)
+            by `_way_bound_s`, the way back to the pick as the cycle times it, instead of
+            twice the carry's bang-bang bound (`_cycle_bound_s`): a lower bound no looser,
+            for one more approach planned a candidate. Counted over the demo's 64
+            searches with every candidate timed, the soonest was first by it in 41,
+            first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
