@@ -160,7 +160,7 @@ class ArmTuning:
     )
     release_box_shrinks: tuple[float, ...] = (0.75, 0.9)
     approach_weight: float = 0.25
-    release_timed_max: int = 1
+    release_timed_max: int = 2
     release_rank_way: bool = True
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
