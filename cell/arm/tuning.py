@@ -88,9 +88,11 @@ class ArmTuning:
             131 of 136 in their bins, 1,533 -> 1,551 items per hour (the demo, not a tune
             layout: 1,525 -> 1,505); the decisions' CPU on the demo 29.5 -> 22.7 s, p95
             3.72 -> 2.12 s an item with `ik_give_up` (docs/HISTORY.md, 2026-11-29,
-            decision-changing). Then 3 -> 1 with `release_rank_way`: the demo's decisions'
-            CPU p95 2.14 -> 1.19 s an item, 1,515 -> 1,506 items per hour, 24/24 in their
-            bins; tune layouts 0-3 in docs/HISTORY.md (2026-11-29, branch plan5).
+            decision-changing). Then 3 -> 2 with `release_rank_way`: the demo's decisions'
+            CPU p95 2.14 -> 1.45 s an item (1.11 s with 1), 1,515 -> 1,506 items per hour,
+            24/24 in their bins; tune layouts 0-3 134 -> 135 of 136 in their bins, 1,581
+            -> 1,598 items per hour (with 1: 133, 1,552, three layouts of four slower)
+            (docs/HISTORY.md, 2026-11-29, branch plan5).
         release_rank_way: with the release search, candidates are ranked (and left out)
             by `_way_bound_s`, the way back to the pick as the cycle times it, instead of
             twice the carry's bang-bang bound (`_cycle_bound_s`): a lower bound no looser,
