@@ -224,3 +224,32 @@ def test_the_search_times_only_the_soonest_bounded(orchestrator: Any) -> None:
         o.__dict__.pop("_static_cycle_s", None)
         o.tuning, o._frame = kept_tuning, kept_frame
         o.scene.remove_item(o._presented)
+
+
+def test_the_rank_bound_is_the_way_bound_and_no_looser(orchestrator: Any) -> None:
+    """`_rank_bound_s`: with `release_rank_way` the way bound (the way back to the pick
+    planned as `_static_cycle_s` plans it), never under the bang-bang rank it replaced,
+    never over the cycle `_static_cycle_s` times; without it, the bang-bang rank."""
+    o = orchestrator
+    spec = o.job.expanded_items()[0]
+    o.present(0, spec.obj)
+    kept_tuning, kept_frame = o.tuning, o._frame
+    try:
+        d = o.decide(0, spec.obj, o.job.bin(spec.bin))
+        plan, stroke, q_rel = d.plan, d.stroke_m, d.state.q_release
+        o._frame = o._pick_frame(plan, q_rel)
+        over = o.over_item(o._presented, stroke, spec.obj)
+        w = kept_tuning.approach_weight
+        o.tuning = dataclasses.replace(kept_tuning, release_rank_way=True)
+        way = o._rank_bound_s(q_rel, over, (stroke, spec.obj), 0.4)
+        back = o._approach_s(q_rel, over, stroke, spec.obj)
+        assert way == o._way_bound_s(over[0], q_rel, back, 0.4)
+        o.tuning = dataclasses.replace(kept_tuning, release_rank_way=False)
+        bang = o._rank_bound_s(q_rel, over, (stroke, spec.obj), 0.4)
+        assert bang == o._cycle_bound_s(over[0], q_rel) + w * 0.4
+        assert bang <= way + 1e-12
+        timed = o._static_cycle_s(spec.obj, plan, stroke, q_rel, over)
+        assert way <= timed + w * 0.4 + 1e-9
+    finally:
+        o.tuning, o._frame = kept_tuning, kept_frame
+        o.scene.remove_item(o._presented)

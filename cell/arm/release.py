@@ -121,7 +121,10 @@ class ReleaseChoice(ArmBase):
                 if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
                     continue
                 mine.append(q_rel)
-                low = self._cycle_bound_s(over[0], q_rel) + self.tuning.approach_weight * t_approach
+                try:
+                    low = self._rank_bound_s(q_rel, over, (stroke, obj), t_approach)
+                except (IKFailed, TrajectoryError):
+                    continue  # no way back to the pick: it could not be timed either
                 found.append((low, len(found), roll, q_rel, over, t_approach))
         best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
         soonest = math.inf if beat is None else beat
@@ -207,6 +210,24 @@ class ReleaseChoice(ArmBase):
             )
             out.append(((slips, t), q_rel))
         return out
+
+    def _rank_bound_s(
+        self,
+        q_rel: np.ndarray,
+        over: tuple[np.ndarray, np.ndarray],
+        held: tuple[float, ObjectParams],
+        approach_s: float,
+    ) -> float:
+        """The lower bound [s] `_release_search` ranks the release q_rel [rad] by, the pick
+        and the lift `over` (the grip in the frame `self._frame`), the item `held` (stroke
+        [m], object), the approach from where the arm is `approach_s` [s]: with
+        `ArmTuning.release_rank_way`, `_way_bound_s` (the way back as the cycle times it:
+        TrajectoryError or IKFailed where there is none, as `_static_cycle_s` would raise),
+        else `_cycle_bound_s`, each plus APPROACH_WEIGHT of the approach."""
+        if not self.tuning.release_rank_way:
+            return self._cycle_bound_s(over[0], q_rel) + self.tuning.approach_weight * approach_s
+        back = self._approach_s(q_rel, over, held[0], held[1])
+        return self._way_bound_s(over[0], q_rel, back, approach_s)
 
     def _cycle_bound_s(self, q_pick: np.ndarray, q_rel: np.ndarray) -> float:
         """A lower bound [s] on `_static_cycle_s` for the release q_rel [rad] of the item

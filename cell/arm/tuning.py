@@ -88,7 +88,17 @@ class ArmTuning:
             131 of 136 in their bins, 1,533 -> 1,551 items per hour (the demo, not a tune
             layout: 1,525 -> 1,505); the decisions' CPU on the demo 29.5 -> 22.7 s, p95
             3.72 -> 2.12 s an item with `ik_give_up` (docs/HISTORY.md, 2026-11-29,
-            decision-changing).
+            decision-changing). Then 3 -> 2 with `release_rank_way`: the demo's decisions'
+            CPU p95 2.14 -> 1.45 s an item (1.11 s with 1), 1,515 -> 1,506 items per hour,
+            24/24 in their bins; tune layouts 0-3 134 -> 135 of 136 in their bins, 1,581
+            -> 1,598 items per hour (with 1: 133, 1,552, three layouts of four slower)
+            (docs/HISTORY.md, 2026-11-29, branch plan5).
+        release_rank_way: with the release search, candidates are ranked (and left out)
+            by `_way_bound_s`, the way back to the pick as the cycle times it, instead of
+            twice the carry's bang-bang bound (`_cycle_bound_s`): a lower bound no looser,
+            for one more approach planned a candidate. Counted over the demo's 64
+            searches with every candidate timed, the soonest was first by it in 41,
+            first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
@@ -152,7 +162,8 @@ class ArmTuning:
     )
     release_box_shrinks: tuple[float, ...] = (0.75, 0.9)
     approach_weight: float = 0.25
-    release_timed_max: int = 3
+    release_timed_max: int = 2
+    release_rank_way: bool = True
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10
