@@ -108,3 +108,17 @@ def test_a_shard_picked_by_contact_is_gripped_across_its_66_mm_side_and_landed()
     result, rows = _run("object: shard_661, bin: far", pick="physical")
     assert result.action == "throw" and result.in_bin, (result.failure, result.reason)
     assert rows and rows[0]["size_x_m"] == pytest.approx(0.066, abs=1e-3)
+
+
+def test_the_tetrapack_thrown_is_refused_with_the_side_tried() -> None:
+    """Held only carried slowly, the tetrapack is never thrown (`throw_sides`); the
+    message names the width it is held across and the margin a throw's carry needs."""
+    from cell.arm.grip_side import throw_sides
+
+    params = load_params(scene_params_path())
+    tetra = get_object("o5_tetrapack")
+    with pytest.raises(CannotGrip) as err:
+        throw_sides(holding_sides(params, tetra), tetra)
+    msg = str(err.value)
+    assert "63 mm across the pads" in msg and "1.6 x its weight" in msg
+    assert "place it in a bin within place reach" in msg

@@ -27,7 +27,7 @@ from dataclasses import replace as dc_replace
 from typing import Any
 
 from cell.arm.base import ArmBase
-from cell.arm.grip_limits import grip_refusal, grip_strokes
+from cell.arm.grip_limits import BRISK_CARRY_SAFETY, grip_refusal, grip_strokes
 from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
@@ -129,9 +129,12 @@ def throw_sides(sides: list[GripSide], obj: ObjectParams) -> list[GripSide]:
     brisk = [s for s in sides if s.brisk]
     if not brisk:
         name = obj.name or obj.shape
+        widths = " and ".join(f"{s.width_m * 1000:.0f} mm" for s in sides)
         raise CannotGrip(
-            f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly, too heavy for a "
-            "throw's carry: place it in a bin within place reach, or sort it by hand"
+            f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly ({widths} across "
+            f"the pads: they hold under {BRISK_CARRY_SAFETY} x its weight at every stroke), "
+            "too heavy for a throw's carry: place it in a bin within place reach, or sort "
+            "it by hand"
         )
     return brisk
 
