@@ -71,6 +71,25 @@ def _check_the_sides(page: str, params: Any) -> None:
     assert [1000 * s.width_m for s in holding_sides(params, box)] == [pytest.approx(float(taken))]
 
 
+def _check_the_mesh_sides(page: str, params: Any) -> None:
+    """A mesh's two widths where the pads meet it (`pad_width_m`, the second turned)."""
+    from cell.arm.grip_side import holding_sides, turned
+    from cell.catalogue import get_object, pad_width_m
+
+    r0, s0, d, r1, s1 = quoted(
+        page,
+        r"`rock_000` is (\d+) mm where the pads meet its\s+first side and `shard_661` (\d+) mm, "
+        r"under the band's (\d+) mm anchor spacing:.*?across their second sides \((\d+) and "
+        r"(\d+) mm\)",
+    )
+    assert float(d) / 1000 == pytest.approx(params.ee.d)
+    for name, first, second in (("rock_000", r0, r1), ("shard_661", s0, s1)):
+        obj = get_object(name)
+        close(first, 1000 * pad_width_m(obj), 0)
+        close(second, 1000 * pad_width_m(turned(obj)), 0)
+        assert [s.brisk for s in holding_sides(params, obj)] == [True]
+
+
 def _check_the_carry(page: str, params: Any) -> None:
     """The carry's bound and tilt, the tetrapack, the items held at points."""
     from cell.arm import grip_limits, planner
@@ -158,7 +177,7 @@ def check_the_grip_page() -> None:
     are the code's: its margins, the catalogue's items and the messages it gives."""
     import dataclasses
 
-    from cell.catalogue import get_object, pad_width_m
+    from cell.catalogue import get_object
     from cell.model.objects import ObjectParams
     from cell.params import load_params, scene_params_path
 
@@ -168,11 +187,11 @@ def check_the_grip_page() -> None:
     _check_the_slow_holds(page, params)
     # the refusals, each message the code's own
     cube = ObjectParams("cube", 0.3, (0.25,) * 3, name="item0_cube")
-    rock = get_object("rock_000")
-    assert 1000 * pad_width_m(rock) < 1000 * params.ee.d
+    thin = ObjectParams("cylinder", 0.05, (0.018, 0.018, 0.06), name="thin")
+    _check_the_mesh_sides(page, params)
     for obj in (
         cube,
-        rock,
+        thin,
         ObjectParams("cube", 0.3, (0.04,) * 3, name="cube"),
         dataclasses.replace(get_object("cuboid_a"), mass=0.5),
     ):
