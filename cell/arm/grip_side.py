@@ -102,9 +102,7 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
             found.append(GripSide(yaw, side, s_max, brisk))
         else:
             tried.append(grip_refusal(params, side))
-    if found and found[0].yaw_rad == 0.0 and found[0].brisk:
-        found = found[:1]  # across its first size, as the cell always gripped it
-    elif any(s.brisk for s in found):
+    if any(s.brisk for s in found):
         found = [s for s in found if s.brisk]
     if not found:
         name = obj.name or obj.shape
@@ -152,8 +150,11 @@ class GripSideChoice(ArmBase):
         best: tuple[GripSide, Any] | None = None
         err: Exception | None = None
         for side in sides:
+            beat = None  # the first side's estimate: a later side's release that cannot
+            if best is not None and best[1].cost is not None and not best[1].cost[0]:
+                beat = best[1].cost[1]  # beat it is not timed (`Planner._plan`)
             try:
-                choice = self._plan(side.obj, target, index, side.stroke_max_m)
+                choice = self._plan(side.obj, target, index, side.stroke_max_m, beat)
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
                 continue
