@@ -10,13 +10,12 @@ wide every way the pads meet them: one side. A mesh is met across its first size
 turned a quarter turn, its second (its width across the pads comes from its vertices where
 the pads meet them, `cell.catalogue.pad_width_m`).
 
-The sides kept (`holding_sides`): the first size alone where the pads hold it briskly
-across it (every item the cell sorted before is gripped as it was); else the other side
-where it holds briskly; else the sides held only slowly. A place takes the first kept (a
-place's cycle does not depend on the side); a throw, only of an item held briskly
-(`throw_sides`), is planned across each kept and takes the one with the shorter cycle
-estimate (`GripSideChoice._throw_side`). Where no side
-holds, `CannotGrip` says what each side held.
+The sides kept (`holding_sides`): those the pads hold briskly, the first size first; else
+those held only slowly. A place takes the first kept (a place's cycle does not depend on
+the side); a throw, only of an item held briskly (`throw_sides`), is planned across the
+first kept and then across each other with the first's cycle estimate to beat, and takes
+another only where its estimate is the shorter (`GripSideChoice._throw_side`). Where no
+side holds, `CannotGrip` says what each side held.
 """
 
 from __future__ import annotations
@@ -79,17 +78,14 @@ def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
 
 
 def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
-    """The sides of `obj` the pads hold (`grip_sides`, in that order): its first size
-    alone where the pads hold it briskly across it (BRISK_CARRY_SAFETY x its weight: every
-    item the cell sorted before is gripped, planned and carried as it was); else the other
-    sides they hold briskly, where there are any; else those they hold only within the
-    carry's bound (carried slowly). cuboid_a is held across 30 mm only carried slowly,
-    across 50 mm briskly: the cell grips it across 50 mm (with both compared by the cycle
-    estimate, the physical pick took the 30 mm side).
+    """The sides of `obj` the pads hold (`grip_sides`, in that order): those they hold
+    briskly (BRISK_CARRY_SAFETY x its weight), where there are any; else those they hold
+    only within the carry's bound (carried slowly). cuboid_a is held across 30 mm only
+    carried slowly, across 50 mm briskly: it is offered 50 mm alone.
 
-    Offered both sides of every box whenever both held briskly, the cell had turned boxes
-    it sorted well across their first size and their throws changed with it (the merge
-    reverted at cf2d90b, docs/HISTORY.md).
+    The merge reverted at cf2d90b (docs/HISTORY.md) offered both sides so too and planned
+    each in full; now the second's releases that cannot beat the first's estimate are not
+    timed (`GripSideChoice._throw_side`), and a tie keeps the first size.
 
     Raises:
         CannotGrip: no side holds; the message names each side tried (its width in mm)
