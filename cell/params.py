@@ -55,15 +55,34 @@ class ModelParams:
 
     def model_object(self, obj: ObjectParams) -> ObjectParams:
         """The η_o the planner uses for `obj`: the identified one when the file has
-        it, else `obj` with the mass rule's effective mass (its own extents)."""
+        it, else `obj` with the mass rule's effective mass (its own extents). An object
+        gripped a quarter turn round (`cell.arm.grip_side.turned`: its catalogue sizes x
+        and y swapped) is modelled so: the identified one turned the same way (cuboid_a,
+        identified as 30 x 50 mm, is thrown across 50 mm)."""
         if obj.name and obj.name in self.objects:
-            return self.objects[obj.name]
+            known = self.objects[obj.name]
+            if _turned_from_catalogue(obj):
+                sx, sy, sz = known.size
+                return replace(known, size=(sy, sx, sz))
+            return known
         if self.mass_rule is None:
             return obj
         kappa, m_b = self.mass_rule[0], self.mass_rule[1]
         beta = self.mass_rule[2] if len(self.mass_rule) > 2 else 0.0
         m_eff = kappa * (obj.mass + m_b) ** 0.5 * (obj.width / WIDTH_REF_M) ** beta
         return replace(obj, mass=float(m_eff))
+
+
+def _turned_from_catalogue(obj: ObjectParams) -> bool:
+    """Is `obj` its catalogue entry with sizes x and y swapped (gripped a quarter turn
+    round, `cell.arm.grip_side.turned`)?"""
+    from cell.catalogue import catalogue
+
+    entry = catalogue().get(obj.name)
+    if entry is None:
+        return False
+    sx, sy, sz = entry.params.size
+    return sx != sy and obj.size == (sy, sx, sz)
 
 
 MAX_FILE_MASS_KG = 1000.0  # [kg] an object of a parameter file: beyond is a typo (1e300)

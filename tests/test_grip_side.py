@@ -141,17 +141,19 @@ def test_the_tetrapack_is_not_thrown_and_the_job_says_to_place_it() -> None:
     assert "tetra.yaml, line 8" in str(err.value) and "held only carried slowly" in str(err.value)
     box = ObjectParams("cuboid", 0.05, (0.04, 0.07, 0.06), name="box")
     kept = throw_sides(holding_sides(params, box), box)
-    assert [(s.yaw_rad, s.width_m) for s in kept] == [(0.0, 0.04)]
+    assert [(s.yaw_rad, s.width_m) for s in kept] == [(0.0, 0.04), (math.pi / 2, 0.07)]
 
 
-def test_a_box_held_briskly_across_its_first_size_is_gripped_across_it_alone() -> None:
-    """Where the pads hold a box briskly across its first size, that side alone is offered
-    (as the cell always gripped it), though its other side holds briskly too; across the
-    other side only where the first does not hold briskly (cuboid_a, above)."""
+def test_a_box_held_briskly_both_ways_offers_both_sides_first_size_first() -> None:
+    """Where the pads hold a box briskly across both sizes, both are offered, its first
+    size first (a throw keeps the other only where its cycle estimate is sooner,
+    `GripSideChoice._throw_side`); across the other side alone where the first does not
+    hold briskly (cuboid_a, above)."""
     params = load_params(scene_params_path())
     box = ObjectParams("cuboid", 0.05, (0.04, 0.07, 0.06), name="box")
     assert grip_strokes(params, box)[1] and grip_strokes(params, turned(box))[1]
-    assert [(s.yaw_rad, s.width_m) for s in holding_sides(params, box)] == [(0.0, 0.04)]
+    sides = holding_sides(params, box)
+    assert [(s.yaw_rad, s.width_m) for s in sides] == [(0.0, 0.04), (math.pi / 2, 0.07)]
 
 
 TALL = "shape: cuboid, mass_kg: 0.15, size_m: [0.065, 0.065, 0.2], bin: far"

@@ -9,13 +9,12 @@ swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sph
 wide every way the pads meet them: one side. A mesh is gripped across its first size only
 (its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
 
-The sides kept (`holding_sides`): the first size alone where the pads hold it briskly
-across it (every item the cell sorted before is gripped as it was); else the other side
-where it holds briskly; else the sides held only slowly. A place takes the first kept (a
-place's cycle does not depend on the side); a throw, only of an item held briskly
-(`throw_sides`), is planned across each kept and takes the one with the shorter cycle
-estimate (`GripSideChoice._throw_side`). Where no side
-holds, `CannotGrip` says what each side held.
+The sides kept (`holding_sides`): those the pads hold briskly, the first size first; else
+those held only slowly. A place takes the first kept (a place's cycle does not depend on
+the side); a throw, only of an item held briskly (`throw_sides`), is planned across the
+first kept and then across each other with the first's cycle estimate to beat, and takes
+another only where its estimate is the shorter (`GripSideChoice._throw_side`). Where no
+side holds, `CannotGrip` says what each side held.
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from dataclasses import replace as dc_replace
 from typing import Any
 
 from cell.arm.base import ArmBase
-from cell.arm.grip_limits import grip_refusal, grip_strokes
+from cell.arm.grip_limits import BRISK_CARRY_SAFETY, grip_refusal, grip_strokes
 from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
@@ -74,17 +73,14 @@ def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
 
 
 def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
-    """The sides of `obj` the pads hold (`grip_sides`, in that order): its first size
-    alone where the pads hold it briskly across it (BRISK_CARRY_SAFETY x its weight: every
-    item the cell sorted before is gripped, planned and carried as it was); else the other
-    sides they hold briskly, where there are any; else those they hold only within the
-    carry's bound (carried slowly). cuboid_a is held across 30 mm only carried slowly,
-    across 50 mm briskly: the cell grips it across 50 mm (with both compared by the cycle
-    estimate, the physical pick took the 30 mm side).
+    """The sides of `obj` the pads hold (`grip_sides`, in that order): those they hold
+    briskly (BRISK_CARRY_SAFETY x its weight), where there are any; else those they hold
+    only within the carry's bound (carried slowly). cuboid_a is held across 30 mm only
+    carried slowly, across 50 mm briskly: it is offered 50 mm alone.
 
-    Offered both sides of every box whenever both held briskly, the cell had turned boxes
-    it sorted well across their first size and their throws changed with it (the merge
-    reverted at cf2d90b, docs/HISTORY.md).
+    The merge reverted at cf2d90b (docs/HISTORY.md) offered both sides so too and planned
+    each in full; now the second's releases that cannot beat the first's estimate are not
+    timed (`GripSideChoice._throw_side`), and a tie keeps the first size.
 
     Raises:
         CannotGrip: no side holds; the message names each side tried (its width in mm)
@@ -97,9 +93,7 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
             found.append(GripSide(yaw, side, s_max, brisk))
         else:
             tried.append(grip_refusal(params, side))
-    if found and found[0].yaw_rad == 0.0 and found[0].brisk:
-        found = found[:1]  # across its first size, as the cell always gripped it
-    elif any(s.brisk for s in found):
+    if any(s.brisk for s in found):
         found = [s for s in found if s.brisk]
     if not found:
         name = obj.name or obj.shape
@@ -124,9 +118,12 @@ def throw_sides(sides: list[GripSide], obj: ObjectParams) -> list[GripSide]:
     brisk = [s for s in sides if s.brisk]
     if not brisk:
         name = obj.name or obj.shape
+        widths = " and ".join(f"{s.width_m * 1000:.0f} mm" for s in sides)
         raise CannotGrip(
-            f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly, too heavy for a "
-            "throw's carry: place it in a bin within place reach, or sort it by hand"
+            f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly ({widths} across "
+            f"the pads: they hold under {BRISK_CARRY_SAFETY} x its weight at every stroke), "
+            "too heavy for a throw's carry: place it in a bin within place reach, or sort "
+            "it by hand"
         )
     return brisk
 
@@ -144,8 +141,11 @@ class GripSideChoice(ArmBase):
         best: tuple[GripSide, Any] | None = None
         err: Exception | None = None
         for side in sides:
+            beat = None  # the first side's estimate: a later side's release that cannot
+            if best is not None and best[1].cost is not None and not best[1].cost[0]:
+                beat = best[1].cost[1]  # beat it is not timed (`Planner._plan`)
             try:
-                choice = self._plan(side.obj, target, index, side.stroke_max_m)
+                choice = self._plan(side.obj, target, index, side.stroke_max_m, beat)
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
                 continue

@@ -96,7 +96,12 @@ class Planner(ArmBase):
     """The throw planner (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
     def _plan(
-        self, obj: ObjectParams, target: Any, index: int, stroke_max_m: float = math.inf
+        self,
+        obj: ObjectParams,
+        target: Any,
+        index: int,
+        stroke_max_m: float = math.inf,
+        beat: float | None = None,
     ) -> ThrowChoice:
         """The throw to a bin whose release pose the arm reaches: its plan, the learned
         ΔL_s, the release configuration and the goal; or UnreachableTarget / IKFailed.
@@ -104,7 +109,10 @@ class Planner(ArmBase):
         With `turn_release`, planned twice (`_plan_facing`): with the arm facing the bin at
         the release, and turned from it toward the pick station (`_facing_toward_station`),
         the throw axis still on the bin; the one whose cycle estimate (`_release_q`) is the
-        shorter is kept, the first where there is no estimate to compare.
+        shorter is kept, the first where there is no estimate to compare. `beat` [s]: a
+        cycle estimate the caller already has (another grip side's throw,
+        `GripSideChoice._throw_side`): a release that cannot beat it is not timed, and
+        where none can, the plan's estimate is (False, ∞).
         """
         # the bin's centre, or a point of it clear of what the bin holds: the same for
         # every bounds tried (the scene does not move meanwhile)
@@ -115,7 +123,13 @@ class Planner(ArmBase):
         for facing in (None,) if turned is None else (None, turned):
             try:
                 r = self._plan_facing(
-                    obj, goal, target, index, stroke_max_m, facing, self._to_beat(best)
+                    obj,
+                    goal,
+                    target,
+                    index,
+                    stroke_max_m,
+                    facing,
+                    _sooner_beat(self._to_beat(best), beat),
                 )
             except (UnreachableTarget, IKFailed) as exc:
                 err = err or exc
