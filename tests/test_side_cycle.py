@@ -53,3 +53,29 @@ def test_the_throw_takes_the_side_with_the_shorter_full_estimate(orchestrator: A
     assert d.gripped == sides[expected].obj
     # the second side planned against the first's estimate: the same, or "cannot beat it"
     assert pruned.cost == full[1] or (pruned.cost == (False, math.inf) and full[1] >= full[0])
+
+
+def test_a_side_held_only_at_the_shortest_stroke_is_passed_over_for_the_other(
+    orchestrator: Any,
+) -> None:
+    """A 95 g box 39 x 43 x 70 mm (drawn by a random layout): across 39 mm the pads hold it
+    briskly only at the shortest stroke, which leaves a throw no stroke to choose; across
+    43 mm up to 63 mm. The throw is planned across the 43 mm side; it was refused whole
+    (CannotGrip from the first side's plan) when the sides were first compared."""
+    from cell.model.objects import ObjectParams
+
+    o = orchestrator
+    obj = ObjectParams("cuboid", 0.0954, (0.0393, 0.0434, 0.07))
+    sides = throw_sides(holding_sides(o.params, obj), obj)
+    # the grip model's own figures: the first side's strokes are the shortest alone
+    assert sides[0].stroke_max_m == pytest.approx(o.params.ee.stroke_min)
+    assert sides[1].stroke_max_m > o.params.ee.stroke_min + 0.02
+    target = o.job.bin("far")
+    o.present(0, obj)
+    try:
+        d = o.decide(0, obj, target)
+    finally:
+        o.scene.remove_item(o._presented)
+    assert d.state.grip_yaw_rad == pytest.approx(math.pi / 2)
+    assert d.gripped == sides[1].obj
+    assert o.params.ee.stroke_min < d.stroke_m <= sides[1].stroke_max_m + 1e-9

@@ -136,8 +136,10 @@ class GripSideChoice(ArmBase):
         """(the side, its `ThrowChoice`) of those that hold whose throw to `target` the
         planner finds with the shortest cycle estimate (`Planner._plan`'s cost: first
         whether it asks more of the grip than it holds, then the estimate); the first
-        side found where an estimate is missing. UnreachableTarget or IKFailed (the first
-        side's) where no side's throw is found."""
+        side found where an estimate is missing. A side the pads hold briskly only at the
+        shortest stroke leaves no throw to plan (`grip_limits.grip_bounds`' CannotGrip):
+        it is passed over for the others. UnreachableTarget, IKFailed or CannotGrip (the
+        first side's) where no side's throw is found."""
         best: tuple[GripSide, Any] | None = None
         err: Exception | None = None
         for side in sides:
@@ -146,7 +148,7 @@ class GripSideChoice(ArmBase):
                 beat = best[1].cost[1]  # beat it is not timed (`Planner._plan`)
             try:
                 choice = self._plan(side.obj, target, index, side.stroke_max_m, beat)
-            except (UnreachableTarget, IKFailed) as exc:
+            except (UnreachableTarget, IKFailed, CannotGrip) as exc:
                 err = err or exc
                 continue
             if best is None:
