@@ -41,6 +41,7 @@ from cell.arm.pick import Pick
 from cell.arm.place import Place
 from cell.arm.planner import Planner
 from cell.arm.release import ReleaseChoice
+from cell.arm.release_moving import MovingRelease
 from cell.arm.routes import Routes
 from cell.arm.state import ArmState
 from cell.arm.tuning import TUNING, ArmTuning
@@ -101,6 +102,7 @@ class Orchestrator(
     Place,
     Planner,
     ReleaseChoice,
+    MovingRelease,
     GripUse,
     GripSideChoice,
     Flywheel,
