@@ -183,14 +183,16 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
     return pick
 
 
-def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec]) -> BinSpec:
+def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> BinSpec:
     """One bin, checked against the robot base and the bins before it.
 
     Args:
         c: the checker.
         bn: the bin's node.
         fp: its field path (bins[i]).
-        bins: the bins already read.
+        bins: the valid bins already read.
+        ids: the ids the bins before it give, valid or not (a bin whose other field is
+            wrong still holds its id).
 
     Raises:
         JobError: a missing or invalid field, a repeated id, a bin too close to the robot
@@ -205,7 +207,7 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec]) -> BinSpec:
                 f"missing '{req}' (a bin needs id, position_m [x, y], size_m [x, y], rim_height_m)",
             )
     bid = c.text(b["id"], f"{fp}.id")
-    if any(x.id == bid for x in bins):
+    if bid in ids:
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
@@ -243,7 +245,7 @@ def _bins(c: Checker, top: dict[str, Node], errors: Errors) -> tuple[list[BinSpe
     bins: list[BinSpec] = []
     ids: list[str] = []
     for i, bn in enumerate(bins_node.value):
-        b = errors.run(_bin, c, bn, f"bins[{i}]", bins)
+        b = errors.run(_bin, c, bn, f"bins[{i}]", bins, ids)
         if b is not None:
             bins.append(b)
         given = bn.value.get("id") if isinstance(bn.value, dict) else None

@@ -97,3 +97,16 @@ items:
     msg = str(err.value)
     assert "[1, 2] must be a number" in msg and "rim_height_m" in msg, msg
     assert not re.search(r"object at 0x", msg)
+
+
+def test_a_bin_id_used_twice_is_named_even_when_its_first_bin_is_wrong():
+    """A bin with a bad field still holds its id: a second bin with that id is the second error."""
+    text = GOOD.replace("rim_height_m: 0.12", "rim_height_m: -1").replace("id: far", "id: near")
+    with pytest.raises(JobError) as exc:
+        parse_job(text, "j.yaml")
+    lines = str(exc.value).splitlines()
+    assert lines[0] == "j.yaml: 3 errors:", lines
+    assert any("line 2, bins[0].rim_height_m" in ln for ln in lines)
+    assert any("line 3, bins[1].id: bin id 'near' is used twice" in ln for ln in lines)
+    # the item sent to the bin renamed away is told the bins there are
+    assert any("line 5, items[0].bin: 'far' is not valid; choose one of near" in ln for ln in lines)
