@@ -99,6 +99,11 @@ class ArmTuning:
             for one more approach planned a candidate. Counted over the demo's 64
             searches with every candidate timed, the soonest was first by it in 41,
             first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
+        release_lower_room_s: [s] with the release search, the lower release bounds
+            (release_fallbacks) are searched after a plan in the cell's bounds only where
+            that plan's carry is at least this much slower than its lower bound (the
+            arm's limits: `Planner._lower_bounds_wanted`), or it has no estimate that
+            holds (None: always, as before). PLACEHOLDER
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
@@ -164,6 +169,7 @@ class ArmTuning:
     approach_weight: float = 0.25
     release_timed_max: int = 2
     release_rank_way: bool = True
+    release_lower_room_s: float | None = 0.5
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10
