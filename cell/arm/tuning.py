@@ -67,6 +67,13 @@ class ArmTuning:
             (30 mm or 15°), and the rule leaves out 10 % and 23 % of their descents; the
             failed searches' best seeds end at 3-40 (docs/HISTORY.md, 2026-11-29,
             decision-changing).
+        ik_reach_kept: with the release search, a release pose missed by ik_out_of_reach_m
+            or more (from the seeds ik_give_up leaves) is kept as out of reach for the
+            rest of the run, not only the decision (`Kinematics._solve_ik`): the same pose
+            (position, axis and roll, bit for bit) recurs in a later item's plan where
+            the same object is thrown to the same spot, and its search differs there only
+            in its first seed (where the arm is; home and the random seeds are the same).
+            PLACEHOLDER2
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -161,6 +168,7 @@ class ArmTuning:
     swing_max_detour: float = 2.5
     ik_out_of_reach_m: float = 5e-3
     ik_give_up: tuple[int, float] | None = (6, 30.0)
+    ik_reach_kept: bool = True
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
