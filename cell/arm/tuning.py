@@ -73,7 +73,9 @@ class ArmTuning:
             (position, axis and roll, bit for bit) recurs in a later item's plan where
             the same object is thrown to the same spot, and its search differs there only
             in its first seed (where the arm is; home and the random seeds are the same).
-            PLACEHOLDER2
+            The same decisions on the demo and tune layout 0's first 14 items; on the demo
+            the second and third sphere40's and duck's failed searches 0.14-0.19 s ->
+            0.02-0.05 s of CPU (docs/HISTORY.md, 2026-11-29, fifth round).
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -110,7 +112,13 @@ class ArmTuning:
             (release_fallbacks) are searched after a plan in the cell's bounds only where
             that plan's carry is at least this much slower than its lower bound (the
             arm's limits: `Planner._lower_bounds_wanted`), or it has no estimate that
-            holds (None: always, as before). PLACEHOLDER
+            holds (None: always, as before). With every bounds searched, the lower ones
+            took 13.0 of the demo's 18.1 s of release searches and were sooner in 1 of 18
+            throws (0.06 s, at a room of 0.13 s); where they were sooner by 0.16-0.53 s
+            (tune layouts 0 and 3) the room was 0.43-1.0 s. The demo's decisions' CPU
+            18.9 -> 11.5 s, 1,506 -> 1,499 items per hour; tune layouts 0-3 132 -> 131
+            of 136 in their bins (within main's interval), 1,553 -> 1,548 items per hour
+            (docs/HISTORY.md, 2026-11-29, fifth round).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
