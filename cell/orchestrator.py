@@ -239,19 +239,24 @@ class Orchestrator(
         # IK solved and approaches timed since the decision began (`_solve_ik`,
         # `_approach_s`; `decide` clears them)
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
+        # release poses out of reach, kept across decisions (`_solve_ik`, `ik_reach_kept`)
+        self._out_of_reach: dict[tuple[bytes, ...], Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
-        """Probe the grip of each kind of mesh item the job holds once, as the job is
-        loaded (`mesh_grip`: the scene's grip probe, remembered per object and stroke),
-        not in the first such item's planning (1.7 s of CPU time a kind here): a cell
-        measures what it will handle before it starts. The same probe, the same hold."""
+        """Probe the grip of each kind of mesh or sphere item the job holds once, as the
+        job is loaded (`mesh_grip`: the scene's grip probe, remembered per object and
+        stroke), not in the first such item's planning (1.7 s of CPU time a kind here; a
+        sphere's hold is measured for `point_hold_use`, 1.2-2.7 s in the first sphere's
+        decision of each kind on the demo and on tune layout 0): a cell measures what it
+        will handle before it starts. The same probe, the same hold."""
         from cell.arm.grip_limits import mesh_grip
 
-        for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape == "mesh"):
+        probed = ("mesh", "sphere")
+        for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape in probed):
             mesh_grip(self.params, obj)
 
     def _check_job(self) -> None:

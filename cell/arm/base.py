@@ -62,6 +62,7 @@ class ArmBase:
     _index: int
     _placing: bool
     _ik_memo: dict[tuple[bytes, ...], Any]
+    _out_of_reach: dict[tuple[bytes, ...], Any]
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]

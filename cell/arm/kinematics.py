@@ -17,6 +17,10 @@ from cell.model.objects import ObjectParams
 
 log = logging.getLogger(__name__)
 
+# the most release poses `Kinematics._solve_ik` keeps as out of reach across decisions
+# (`ArmTuning.ik_reach_kept`); the record is cleared when full
+OUT_OF_REACH_KEPT_MAX = 4096
+
 
 def roll_of(robot: Any, q: np.ndarray, elevation: float, azimuth: float) -> float:
     """The roll (0 or π) of `robot`'s release configuration q [rad] for a throw axis at
@@ -66,14 +70,22 @@ class Kinematics(ArmBase):
         the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
         writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
         more is not searched again from another seed either (`_release_ik`), and the
-        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`)."""
+        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`).
+        With `ArmTuning.ik_reach_kept`, such a pose is kept as out of reach across
+        decisions too (`_out_of_reach`, the robot's: the same pose, exactly, is not
+        searched again in a later item's plan, from any seed)."""
         from cell.robot.ik import IKNoSolution, solve_ik
 
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
         found = self._ik_memo.get(key)
+        kept = reach and self.tuning.ik_reach_kept
+        # the verdict's terms: a search with other give-up or reach constants is another
+        rule = (*where, repr((self.tuning.ik_give_up, self.tuning.ik_out_of_reach_m)).encode())
         if found is None and reach:
             found = self._ik_memo.get(where)
+            if found is None and kept:
+                found = self._out_of_reach.get(rule)
         if found is None:
             try:
                 give_up = self.tuning.ik_give_up if reach else None
@@ -82,6 +94,10 @@ class Kinematics(ArmBase):
                 found = exc
                 if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:
                     self._ik_memo[where] = exc
+                    if kept:
+                        if len(self._out_of_reach) >= OUT_OF_REACH_KEPT_MAX:
+                            self._out_of_reach.clear()  # bounded: a long job's poses
+                        self._out_of_reach[rule] = exc
             self._ik_memo[key] = found
         if isinstance(found, Exception):
             raise found

@@ -56,6 +56,10 @@ class ThrowChoice:
             `_plan` has set it.
         held: the pads hold the item still at the release, at the throw's stroke
             (`Planner._held_at_release`).
+        room_s: [s] the release's cycle estimate less its lower bound (the carry's
+            bang-bang bound, the settle, the push, the way back and the approach's share:
+            `ReleaseChoice._way_bound_s`), how much slower than the arm's limits the carry
+            is; None where no release was timed (`Planner._lower_bounds_wanted`).
     """
 
     cost: tuple[bool, float] | None
@@ -67,6 +71,7 @@ class ThrowChoice:
     model_obj: ObjectParams
     goal: np.ndarray | None = None
     held: bool = True
+    room_s: float | None = None
 
 
 def _sooner_beat(a: float | None, b: float | None) -> float | None:
@@ -230,7 +235,7 @@ class Planner(ArmBase):
         for tier in (ordinary, shrunk):
             found: list[ThrowChoice] = []
             for bounds in tier:
-                if found and (tier is shrunk or not self.cycle_search):
+                if found and (tier is shrunk or not self._lower_bounds_wanted(found[0])):
                     break  # the first reached is kept
                 try:
                     found.append(
@@ -249,6 +254,24 @@ class Planner(ArmBase):
                 return self._soonest_release(obj, found)
         assert err is not None
         raise err
+
+    def _lower_bounds_wanted(self, first: ThrowChoice) -> bool:
+        """Are the lower release bounds (RELEASE_FALLBACKS) searched after `first`, the
+        plan in the cell's bounds (`_plan_facing`)? Only with `cycle_search`, and with
+        `ArmTuning.release_lower_room_s` only where `first` leaves room for a lower
+        release to be sooner: its carry at least that much slower than the arm's limits
+        let it be (`ThrowChoice.room_s`, a carry the grip holds back, as random layout
+        11's eggs: 8.6 s a cycle in the cell's bounds, 2.48 s released lower), or no
+        estimate that holds to compare with. On the demo the lower bounds took 72 % of
+        the release searches' CPU and were sooner in 1 of 18 throws, by 0.06 s
+        (docs/HISTORY.md, 2026-11-29, fifth round)."""
+        if not self.cycle_search:
+            return False
+        most = self.tuning.release_lower_room_s
+        if most is None or first.room_s is None or first.cost is None:
+            return True
+        slips, t = first.cost
+        return slips or not first.held or not math.isfinite(t) or first.room_s >= most
 
     def _plan_in(
         self,
@@ -286,7 +309,10 @@ class Planner(ArmBase):
                     break
                 continue
             held = self._held_at_release(obj, stroke, plan.elevation_rad)
-            return ThrowChoice(cost, plan, delta, q_release, bounds, aim, model_obj, held=held)
+            room = self._release_room_s
+            return ThrowChoice(
+                cost, plan, delta, q_release, bounds, aim, model_obj, held=held, room_s=room
+            )
         assert err is not None
         raise err
 

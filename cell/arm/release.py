@@ -24,6 +24,10 @@ log = logging.getLogger(__name__)
 class ReleaseChoice(ArmBase):
     """The release's configuration and cycle (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
+    # [s] the chosen release's cycle estimate less its lower bound (`_release_search`), set
+    # by each `_release_q`; None where no candidate was timed (`Planner._plan_in` keeps it)
+    _release_room_s: float | None = None
+
     def _release_q(
         self,
         tcp: np.ndarray,
@@ -54,6 +58,7 @@ class ReleaseChoice(ArmBase):
 
         e, a = plan.elevation_rad, plan.azimuth_rad
         best: tuple[tuple[bool, float], np.ndarray] | None = None
+        self._release_room_s = None
         if self._presented is not None and self.pick_mode != "physical" and abs(math.cos(e)) > 1e-6:
             kept = self._frame
             try:
@@ -121,7 +126,7 @@ class ReleaseChoice(ArmBase):
                 except (IKFailed, TrajectoryError):
                     continue  # no way back to the pick: it could not be timed either
                 found.append((low, len(found), roll, q_rel, over, t_approach))
-        best: tuple[tuple[tuple[bool, float], int], np.ndarray] | None = None
+        best: tuple[tuple[tuple[bool, float], int], np.ndarray, float] | None = None
         soonest = math.inf if beat is None else beat
         pruned = False
         timed, most = 0, self.tuning.release_timed_max
@@ -149,10 +154,11 @@ class ReleaseChoice(ArmBase):
             )
             log.debug("release roll %.2f rad: (slips, cycle estimate) (%s, %.3f)", roll, slips, t)
             if best is None or ((slips, t), order) < best[0]:
-                best = (((slips, t), order), q_rel)
+                best = (((slips, t), order), q_rel, t - low)
             if not slips:
                 soonest = min(soonest, t)
         if best is not None:
+            self._release_room_s = best[2]
             return best[0][0], best[1]
         if pruned:
             return (False, math.inf), found[0][3]

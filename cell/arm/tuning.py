@@ -67,6 +67,15 @@ class ArmTuning:
             (30 mm or 15°), and the rule leaves out 10 % and 23 % of their descents; the
             failed searches' best seeds end at 3-40 (docs/HISTORY.md, 2026-11-29,
             decision-changing).
+        ik_reach_kept: with the release search, a release pose missed by ik_out_of_reach_m
+            or more (from the seeds ik_give_up leaves) is kept as out of reach for the
+            rest of the run, not only the decision (`Kinematics._solve_ik`): the same pose
+            (position, axis and roll, bit for bit) recurs in a later item's plan where
+            the same object is thrown to the same spot, and its search differs there only
+            in its first seed (where the arm is; home and the random seeds are the same).
+            The same decisions on the demo and tune layout 0's first 14 items; on the demo
+            the second and third sphere40's and duck's failed searches 0.14-0.19 s ->
+            0.02-0.05 s of CPU (docs/HISTORY.md, 2026-11-29, fifth round).
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -99,6 +108,17 @@ class ArmTuning:
             for one more approach planned a candidate. Counted over the demo's 64
             searches with every candidate timed, the soonest was first by it in 41,
             first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
+        release_lower_room_s: [s] with the release search, the lower release bounds
+            (release_fallbacks) are searched after a plan in the cell's bounds only where
+            that plan's carry is at least this much slower than its lower bound (the
+            arm's limits: `Planner._lower_bounds_wanted`), or it has no estimate that
+            holds (None: always, as before). With every bounds searched, the lower ones
+            took 13.0 of the demo's 18.1 s of release searches and were sooner in 1 of 18
+            throws (0.06 s, at a room of 0.13 s); where they were sooner by 0.16-0.53 s
+            (tune layouts 0 and 3) the room was 0.43-1.0 s. The demo's decisions' CPU
+            18.9 -> 11.5 s, 1,506 -> 1,499 items per hour; tune layouts 0-3 132 -> 131
+            of 136 in their bins (within main's interval), 1,553 -> 1,548 items per hour
+            (docs/HISTORY.md, 2026-11-29, fifth round).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
@@ -156,6 +176,7 @@ class ArmTuning:
     swing_max_detour: float = 2.5
     ik_out_of_reach_m: float = 5e-3
     ik_give_up: tuple[int, float] | None = (6, 30.0)
+    ik_reach_kept: bool = True
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
@@ -164,6 +185,7 @@ class ArmTuning:
     approach_weight: float = 0.25
     release_timed_max: int = 2
     release_rank_way: bool = True
+    release_lower_room_s: float | None = 0.5
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10
