@@ -245,13 +245,15 @@ class Orchestrator(
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
-        """Probe the grip of each kind of mesh item the job holds once, as the job is
-        loaded (`mesh_grip`: the scene's grip probe, remembered per object and stroke),
+        """Probe the grip of each kind of mesh item the run will handle once, as the job
+        is loaded (`mesh_grip`: the scene's grip probe, remembered per object and stroke),
         not in the first such item's planning (1.7 s of CPU time a kind here): a cell
-        measures what it will handle before it starts. The same probe, the same hold."""
+        measures what it will handle before it starts. The same probe, the same hold;
+        none for the kinds limits.max_items leaves unsorted."""
         from cell.arm.grip_limits import mesh_grip
 
-        for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape == "mesh"):
+        handled = self.job.expanded_items()
+        for obj in dict.fromkeys(s.obj for s in handled if s.obj.shape == "mesh"):
             mesh_grip(self.params, obj)
 
     def _check_job(self) -> None:
