@@ -139,3 +139,24 @@ def test_the_arms_meshes_are_loaded_for_a_picture_where_it_stands():
         assert [cl.getJointState(sc.arm, j)[0] for j in sc.arm_joints] == pytest.approx(q)
         again = cl.getLinkState(sc.arm, sc._flange, computeForwardKinematics=True)[4]
         assert again == pytest.approx(flange, abs=1e-9)
+
+
+def test_each_scene_keeps_its_own_client_and_a_closed_one_is_closed():
+    # the client keeps each function it binds to its physics server (cell.sim.scene_build):
+    # two scenes at once still each read their own bodies, a closed one reads none
+    import pybullet
+
+    a = CellScene(robot=None, bins=[BIN], pick_station_height=0.2)
+    b = CellScene(robot=None, bins=[BIN], pick_station_height=0.5)
+    try:
+        for _ in range(2):  # the bound functions used again
+            za = a.client.getBasePositionAndOrientation(a.pick_station)[0][2]
+            zb = b.client.getBasePositionAndOrientation(b.pick_station)[0][2]
+            assert (za, zb) == pytest.approx((0.1, 0.25))
+        n = b.client.getNumBodies()
+        a.close()
+        with pytest.raises(pybullet.error):
+            a.client.getNumBodies()
+        assert b.client.getNumBodies() == n
+    finally:
+        b.close()

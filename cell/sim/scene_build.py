@@ -3,6 +3,7 @@ the arm's (see `cell.sim.scene`)."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -45,8 +46,26 @@ def connect(gui: bool) -> tuple[Any, str]:
             from pybullet_utils.bullet_client import BulletClient
         except ImportError:
             raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
-        client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        client = _client_class(BulletClient)(
+            connection_mode=pybullet.GUI if gui else pybullet.DIRECT
+        )
     return client, pybullet_data.getDataPath()
+
+
+@functools.cache
+def _client_class(base: type) -> type:
+    """pybullet_utils' BulletClient that keeps each function it binds to its client:
+    BulletClient builds a new functools.partial at every call (`__getattr__`), three
+    million times in a scene test's throws; the same functions, the same client id."""
+
+    class Client(base):  # type: ignore[valid-type,misc]
+        def __getattr__(self, name: str) -> Any:
+            attribute = super().__getattr__(name)
+            if name != "disconnect" and isinstance(attribute, functools.partial):
+                self.__dict__[name] = attribute
+            return attribute
+
+    return Client
 
 
 def pick_station_body(cl: Any, xy: tuple[float, float], height: float) -> int:
