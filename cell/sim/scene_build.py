@@ -54,14 +54,15 @@ def connect(gui: bool) -> tuple[Any, str]:
 
 @functools.cache
 def _client_class(base: type) -> type:
-    """pybullet_utils' BulletClient that keeps each function it binds to its client:
-    BulletClient builds a new functools.partial at every call (`__getattr__`), three
-    million times in a scene test's throws; the same functions, the same client id."""
+    """pybullet_utils' BulletClient that keeps each function it binds to its client (and
+    each constant it reads): BulletClient builds a new functools.partial at every call
+    (`__getattr__`), three million times in a scene test's throws; the same functions,
+    the same client id."""
 
     class Client(base):  # type: ignore[valid-type,misc]
         def __getattr__(self, name: str) -> Any:
             attribute = super().__getattr__(name)
-            if name != "disconnect" and isinstance(attribute, functools.partial):
+            if name != "disconnect":  # a bound function, or one of pybullet's constants
                 self.__dict__[name] = attribute
             return attribute
 
