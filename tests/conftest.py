@@ -13,7 +13,20 @@ runs in its place by name.
 
 from __future__ import annotations
 
+import os
+
 import pytest
+from threadpoolctl import threadpool_limits
+
+# One BLAS thread in each test process and the processes it starts (the `cell` CLI in a
+# subprocess, Ray's workers take OMP_NUM_THREADS=1 themselves): `make test`'s two workers
+# on two cores each woke two OpenBLAS threads for every small solve (toppra's splines: a
+# 3 x 3 `scipy.linalg.solve` took 8 ms of CPU, 0.05 ms on one thread), which spin while the
+# other worker holds the core: tests/test_tall_item.py 14.9 -> 10.0 CPU-s. A layout gives
+# the same numbers on one thread (`cell bench sort` runs each so, cell/bench/bench_sort.py).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+threadpool_limits(limits=1)
 
 # slow first, from `pytest -n 2 --dist loadfile --durations=0 tests` (per-file sums): the
 # twenty slowest files of the idle run from a fresh clone at f147689 (2026-11-29), with the
