@@ -247,16 +247,18 @@ class Orchestrator(
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
-        """Probe the grip of each kind of mesh or sphere item the job holds once, as the
-        job is loaded (`mesh_grip`: the scene's grip probe, remembered per object and
+        """Probe the grip of each kind of mesh or sphere item the run will handle once, as
+        the job is loaded (`mesh_grip`: the scene's grip probe, remembered per object and
         stroke), not in the first such item's planning (1.7 s of CPU time a kind here; a
         sphere's hold is measured for `point_hold_use`, 1.2-2.7 s in the first sphere's
         decision of each kind on the demo and on tune layout 0): a cell measures what it
-        will handle before it starts. The same probe, the same hold."""
+        will handle before it starts. The same probe, the same hold; none for the kinds
+        limits.max_items leaves unsorted."""
         from cell.arm.grip_limits import mesh_grip
 
         probed = ("mesh", "sphere")
-        for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape in probed):
+        handled = self.job.expanded_items()
+        for obj in dict.fromkeys(s.obj for s in handled if s.obj.shape in probed):
             mesh_grip(self.params, obj)
 
     def _check_job(self) -> None:

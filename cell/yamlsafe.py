@@ -10,6 +10,9 @@ than MAX_NODES values is refused before a single node is composed.
 
 from __future__ import annotations
 
+import copy
+import threading
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +26,12 @@ __all__ = ["MAX_BYTES", "MAX_DEPTH", "MAX_NODES", "check_yaml", "read_yaml_text"
 MAX_BYTES = 1_000_000  # [B] a sort job of thousands of lines is ~100 kB
 MAX_DEPTH = 32  # nesting of mappings and sequences
 MAX_NODES = 200_000  # scalars, mappings and sequences in one file
+# the values of the last texts read (each at most _MEMO_BYTES), handed out as copies: the
+# same mount and parameter files are read again by every scene, arm and layout
+_MEMO: OrderedDict[str, Any] = OrderedDict()
+_MEMO_TEXTS = 32
+_MEMO_BYTES = 64_000
+_MEMO_LOCK = threading.Lock()
 
 
 def check_yaml(text: str, path: str) -> None:
@@ -89,13 +98,28 @@ def read_yaml_text(path: str | Path, what: str) -> str:
 
 
 def safe_load(text: str, path: str) -> Any:
-    """`yaml.safe_load` of text that passed `check_yaml`.
+    """`yaml.safe_load` of text that passed `check_yaml`. A text read before gives a copy
+    of what it gave then (the same value: YAML's safe loader depends on the text alone);
+    one that failed is checked again, so its error names this `path`.
 
     Raises:
         InvalidInput: as `check_yaml`.
     """
+    with _MEMO_LOCK:
+        known = _MEMO.get(text, _MEMO)
+        if known is not _MEMO:
+            _MEMO.move_to_end(text)
+    if known is not _MEMO:
+        return copy.deepcopy(known)
     check_yaml(text, path)
     try:
-        return yaml.safe_load(text)
+        value = yaml.safe_load(text)
     except (yaml.YAMLError, RecursionError, OverflowError) as exc:
         raise InvalidInput(f"{path}: not valid YAML ({exc})") from None
+    if len(text) <= _MEMO_BYTES:
+        kept = copy.deepcopy(value)
+        with _MEMO_LOCK:
+            _MEMO[text] = kept
+            if len(_MEMO) > _MEMO_TEXTS:
+                _MEMO.popitem(last=False)
+    return value

@@ -93,6 +93,13 @@ def test_snapshot_writes_a_picture_of_the_cell(tmp_path):
     img = np.asarray(Image.open(path))
     assert img.shape == (120, 160, 3)
     assert img.std() > 10  # not a blank frame
+    # the arm is drawn (a DIRECT scene loads its meshes only for a picture): the same cell
+    # without it differs where the arm stands
+    with CellScene(robot=None, bins=[BIN]) as sc:
+        sc.spawn_item("cube50")
+        bare = sc.render(width=160, height=120)
+    differs = np.abs(img.astype(float) - bare.astype(float)).max(axis=2) > 30
+    assert differs.sum() > 200, differs.sum()
 
 
 def test_a_new_item_goes_on_the_station_not_onto_an_item_flying_over_it(scene):
@@ -112,3 +119,44 @@ def test_a_new_item_goes_on_the_station_not_onto_an_item_flying_over_it(scene):
     stacked = scene.spawn_item("cube30")
     z_stacked = scene.client.getBasePositionAndOrientation(stacked.body)[0][2]
     assert z_stacked > top + resting.obj.size[2]  # on top of the resting one
+
+
+def test_the_arms_meshes_are_loaded_for_a_picture_where_it_stands():
+    # a DIRECT scene builds the arm without its visual meshes (they change no physics);
+    # show_arm loads them, the arm at the joint positions it had
+    with CellScene(bins=[BIN]) as sc:
+        cl = sc.client
+
+        def meshes() -> list[str]:
+            return [v[4].decode() for v in cl.getVisualShapeData(sc.arm) if v[4]]
+
+        assert not any(m.endswith(".dae") for m in meshes())
+        q = [v + 0.2 for v in sc.ready_q]
+        sc.set_arm(q, teleport=True)
+        flange = cl.getLinkState(sc.arm, sc._flange, computeForwardKinematics=True)[4]
+        sc.show_arm()
+        assert sum(m.endswith(".dae") for m in meshes()) >= 8  # the Panda's visual meshes
+        assert [cl.getJointState(sc.arm, j)[0] for j in sc.arm_joints] == pytest.approx(q)
+        again = cl.getLinkState(sc.arm, sc._flange, computeForwardKinematics=True)[4]
+        assert again == pytest.approx(flange, abs=1e-9)
+
+
+def test_each_scene_keeps_its_own_client_and_a_closed_one_is_closed():
+    # the client keeps each function it binds to its physics server (cell.sim.scene_build):
+    # two scenes at once still each read their own bodies, a closed one reads none
+    import pybullet
+
+    a = CellScene(robot=None, bins=[BIN], pick_station_height=0.2)
+    b = CellScene(robot=None, bins=[BIN], pick_station_height=0.5)
+    try:
+        for _ in range(2):  # the bound functions used again
+            za = a.client.getBasePositionAndOrientation(a.pick_station)[0][2]
+            zb = b.client.getBasePositionAndOrientation(b.pick_station)[0][2]
+            assert (za, zb) == pytest.approx((0.1, 0.25))
+        n = b.client.getNumBodies()
+        a.close()
+        with pytest.raises(pybullet.error):
+            a.client.getNumBodies()
+        assert b.client.getNumBodies() == n
+    finally:
+        b.close()

@@ -98,3 +98,21 @@ def test_the_cli_names_the_bomb_without_a_traceback(tmp_path: Path, capsys) -> N
     assert main(["run", str(f), "--no-log"]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"cell: error: {f}, line 2: YAML aliases") and "Traceback" not in err
+
+
+def test_a_text_read_again_gives_a_fresh_equal_value_and_a_bad_one_names_each_file() -> None:
+    # safe_load keeps the values of texts it read (the mount files every scene reads):
+    # a caller changing what it got changes nothing the next caller gets
+    import yaml
+
+    from cell.yamlsafe import safe_load
+
+    text = "arm: panda\nhome: [0.0, -0.5, 0.0]\nnested: {a: [1, 2], b: 2026-11-29}\n"
+    for name in ("a.yaml", "b.yaml", "c.yaml"):
+        got = safe_load(text, name)
+        assert got == yaml.safe_load(text)
+        got["home"].append(9.0)
+        got["nested"]["a"].clear()
+    for name in ("d.yaml", "e.yaml"):  # a refused text is checked, and named, each time
+        with pytest.raises(InvalidInput, match=f"^{name}, line 2: YAML aliases"):
+            safe_load("a: &x [1]\nb: *x\n", name)

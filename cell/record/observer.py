@@ -80,6 +80,7 @@ class SceneRecorder:
         station = dict(center_xy=scene.pick_station_xy, height=scene.pick_station_height)
         self.run.scene(bins, station)
         if scene.arm is not None:
+            scene.show_arm()  # its meshes, drawn in the recording
             self._add_body(scene.arm, "world/arm")
         self._add_body(scene.ee_body, "world/end_effector")
         step = scene.step

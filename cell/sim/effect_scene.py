@@ -6,17 +6,26 @@ It is part of the plant: nothing above it talks to PyBullet."""
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
 import numpy as np
 
+from cell.model.objects import ObjectParams
 from cell.sim.scene import CellScene
 
 __all__ = ["RHO", "STATION_XY", "EffectScene"]
 
 RHO = 1.225  # [kg/m³] air density of this world
 STATION_XY = (-8.0, -8.0)  # [m] the pick station, far from every flight
+
+
+@functools.lru_cache(maxsize=256)
+def _cd_area(obj: ObjectParams) -> tuple[float, float]:
+    """An object's drag coefficient and mean projected area [m²] (`ObjectParams.cd`,
+    `.area`, which compute it anew each call: once per item and physics step here)."""
+    return obj.cd, obj.area
 
 
 class EffectScene(CellScene):
@@ -73,7 +82,8 @@ class EffectScene(CellScene):
                 pos, _ = cl.getBasePositionAndOrientation(it.body)
                 v = np.asarray(cl.getBaseVelocity(it.body)[0])
                 rel = v - self.air(np.asarray(pos))
-                c_f = self.drag_factor * 0.5 * RHO * it.obj.cd * it.obj.area  # [kg/m]
+                cd, area = _cd_area(it.obj)
+                c_f = self.drag_factor * 0.5 * RHO * cd * area  # [kg/m]
                 f = -c_f * np.linalg.norm(rel) * rel + it.drag_c * np.linalg.norm(v) * v
                 f = f + it.obj.mass * self.side_mps2
                 if np.any(f != 0.0):

@@ -142,9 +142,12 @@ class CellScene:
         self.robot = robot
         self.robot_base_xyz = tuple(float(v) for v in robot_base_xyz)  # [m, W]
         self.ready_q: tuple[float, ...] = ()
+        # the arm's visual shapes only where they are seen: in the GUI, or once a picture
+        # or a recording asks for them (`show_arm`); they change no step of the physics
+        self._arm_visuals = gui
         if robot is not None:
             self.arm, self.arm_joints, self._flange, self.ready_q = load_arm(
-                cl, robot, robot_base_xyz
+                cl, robot, robot_base_xyz, visuals=gui
             )
             self.set_arm(self.ready_q, teleport=True)
 
@@ -444,8 +447,27 @@ class CellScene:
         return watch.outcome_if_settled(self, item, timeout_s=timeout_s)
 
     # -- output ----------------------------------------------------------------
+    def show_arm(self) -> None:
+        """Give the arm its visual shapes if the scene was built without them (DIRECT):
+        the arm is loaded again with them, at the joint positions it has now (a new
+        body id in `arm`). The arm is kinematic and collides with nothing, so this
+        changes no step of the physics."""
+        if self.arm is None or self._arm_visuals or self.robot is None:
+            return
+        cl = self.client
+        q = [cl.getJointState(self.arm, j)[0] for j in self.arm_joints]
+        cl.removeBody(self.arm)
+        x, y, z = self.robot_base_xyz
+        self.arm, self.arm_joints, self._flange, _ = load_arm(
+            cl, self.robot, (x, y, z), visuals=True
+        )
+        for j, v in zip(self.arm_joints, q, strict=True):
+            cl.resetJointState(self.arm, j, float(v))
+        self._arm_visuals = True
+
     def render(self, **camera: Any) -> np.ndarray:
         """The scene as an RGB image (h, w, 3), headless; camera keywords as `snapshot.render`."""
+        self.show_arm()
         return snapshot_png.render(self.client, **camera)
 
     def snapshot(self, path: str | Path, **camera: Any) -> Path:

@@ -3,6 +3,7 @@ the arm's (see `cell.sim.scene`)."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -45,8 +46,27 @@ def connect(gui: bool) -> tuple[Any, str]:
             from pybullet_utils.bullet_client import BulletClient
         except ImportError:
             raise MissingDependency("the scene needs pybullet: pip install pybullet") from None
-        client = BulletClient(connection_mode=pybullet.GUI if gui else pybullet.DIRECT)
+        client = _client_class(BulletClient)(
+            connection_mode=pybullet.GUI if gui else pybullet.DIRECT
+        )
     return client, pybullet_data.getDataPath()
+
+
+@functools.cache
+def _client_class(base: type) -> type:
+    """pybullet_utils' BulletClient that keeps each function it binds to its client (and
+    each constant it reads): BulletClient builds a new functools.partial at every call
+    (`__getattr__`), three million times in a scene test's throws; the same functions,
+    the same client id."""
+
+    class Client(base):  # type: ignore[valid-type,misc]
+        def __getattr__(self, name: str) -> Any:
+            attribute = super().__getattr__(name)
+            if name != "disconnect":  # a bound function, or one of pybullet's constants
+                self.__dict__[name] = attribute
+            return attribute
+
+    return Client
 
 
 def pick_station_body(cl: Any, xy: tuple[float, float], height: float) -> int:
@@ -87,12 +107,14 @@ def load_end_effector(cl: Any) -> tuple[int, EEGeometry]:
 
 
 def load_arm(
-    cl: Any, robot: str, base_xyz: tuple[float, float, float]
+    cl: Any, robot: str, base_xyz: tuple[float, float, float], *, visuals: bool = True
 ) -> tuple[int, list[int], int, tuple[float, ...]]:
     """The arm from the composite URDF Pinocchio plans with (robots/<arm>_throwing):
     kinematic and collision-free; its end-effector links are hidden, and the
     physically driven end-effector body follows its `ee_base` link, so the mount
-    (flange offset and yaw) is the mount file's, as in the planner's model.
+    (flange offset and yaw) is the mount file's, as in the planner's model. Without
+    `visuals` its visual shapes are not loaded (the Panda's Collada meshes: 0.3 s of
+    CPU a scene), which only a picture of the scene needs (`CellScene.show_arm`).
 
     Returns:
         (the arm's body, its joints' indices, `ee_base`'s link index, the ready
@@ -102,12 +124,15 @@ def load_arm(
 
     spec = load_mount(robot)
     with quiet_c_output(keep_stderr=True):
-        arm = int(cl.loadURDF(str(composite_urdf(robot)), list(base_xyz), useFixedBase=True))
+        flags = 0 if visuals else cl.URDF_IGNORE_VISUAL_SHAPES
+        arm = int(
+            cl.loadURDF(str(composite_urdf(robot)), list(base_xyz), useFixedBase=True, flags=flags)
+        )
     joints = {cl.getJointInfo(arm, j)[1].decode(): j for j in range(cl.getNumJoints(arm))}
     links = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
     for j in range(-1, cl.getNumJoints(arm)):
         cl.setCollisionFilterGroupMask(arm, j, 0, 0)  # kinematic, collision-free
-    for name, j in links.items():
+    for name, j in links.items() if visuals else ():
         if name.startswith("ee_"):  # drawn by the driven end-effector body instead
             cl.changeVisualShape(arm, j, rgbaColor=[0, 0, 0, 0])
     return (
