@@ -542,7 +542,7 @@ def test_the_grip_constraints_coefficients_are_toppras_own():
         q1 = np.clip(q0 + rng.uniform(-1, 1, rb.dof), rb.limits.lower, rb.limits.upper)
         path = spline_path([q0, (q0 + q1) / 2 + 0.1, q1], rb.limits.lower, rb.limits.upper)
         grid = np.linspace(0.0, 1.0, 137)
-        ours = c.compute_constraint_params(path, grid)
+        ours = c.colloc_params(path, grid)
         toppras = constraint.SecondOrderConstraint.compute_constraint_params(c, path, grid)
         assert len(ours) == len(toppras)
         for a, b in zip(ours, toppras, strict=True):

@@ -24,14 +24,8 @@ def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
     """
     import toppra.constraint as constraint
 
-    dirs, cover = _sphere_directions()
-    rows = [np.r_[hold.mass_kg * d / (cover * hold.force_n), sg] for d in dirs for sg in (1, -1)]
-    coef = np.array(rows)
-    if hold.torque_nm > 0.0:
-        coef[:, 3] /= hold.torque_nm
-    else:
-        coef[:, 3] *= 1e6  # [1/(N·m)]: no couple, no turn (a stiff stand-in for τ_x = 0)
-    g = np.full(len(rows), bound)
+    coef = _coefficients(hold.mass_kg, hold.force_n, hold.torque_nm)
+    g = np.full(len(coef), bound)
 
     def inv_dyn_many(qs: np.ndarray, dqs: np.ndarray, ddqs: np.ndarray) -> np.ndarray:
         f, alpha, _ = item_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
@@ -51,13 +45,50 @@ def grip_constraint(robot: Robot, hold: GripHold, bound: float) -> Any:
     )
 
 
+@functools.lru_cache(maxsize=64)
+def _coefficients(mass_kg: float, force_n: float, torque_nm: float) -> np.ndarray:
+    """The polytope's rows (m n_k / (c F), σ / T) for every direction n_k of
+    `_sphere_directions` and σ = +1, −1 in turn, shape (2 × 128, 4); read-only, shared by
+    every carry of the same hold. Each entry is computed by the same operations, in the
+    same order, as row by row (`np.r_` per direction and sign, as before 2026-11-29:
+    3.4 ms a carry shaped by the grip), so the constraint is the same bit for bit
+    (tests/test_grip_constraint_rows.py)."""
+    dirs, cover = _sphere_directions()
+    half = mass_kg * dirs / (cover * force_n)
+    coef = np.empty((2 * len(dirs), 4))
+    coef[:, :3] = np.repeat(half, 2, axis=0)
+    coef[:, 3] = np.tile([1.0, -1.0], len(dirs))
+    if torque_nm > 0.0:
+        coef[:, 3] /= torque_nm
+    else:
+        coef[:, 3] *= 1e6  # [1/(N·m)]: no couple, no turn (a stiff stand-in for τ_x = 0)
+    coef.setflags(write=False)
+    return coef
+
+
+@functools.cache
+def _identity(n: int) -> np.ndarray:
+    """The n × n identity, read-only (`GripConstraint.compute_constraint_params`)."""
+    eye = np.eye(n)
+    eye.setflags(write=False)
+    return eye
+
+
 @functools.cache
 def _grip_constraint_class() -> type:
     """toppra's SecondOrderConstraint with its coefficients computed over all grid points
     at once (`inv_dyn_many`), where toppra calls the inverse dynamics once a grid point
     (three times over): the same a, b, c (tests/test_carry.py), a third of the time of a
     carry's planning shaped by the grip before (toppra 0.6's
-    `compute_constraint_params`, whose discretisation this keeps)."""
+    `compute_constraint_params`, whose discretisation this keeps).
+
+    Handed to toppra's seidel solver already multiplied out (`compute_constraint_params`,
+    `identical`): the solver's set-up copied a constraint whose F differs by grid point
+    into its arrays one number at a time through Python, 256 rows × 2 × 3 a grid point,
+    20 ms of a carry's 49 ms shaped by the grip; given F a, F b, F c per grid point
+    (`np.dot`, as the solver computes them) and F the identity, which it multiplies
+    through exactly, it fills the same arrays, bit for bit, in 5 ms
+    (tests/test_grip_constraint_rows.py: the same trajectories)."""
     import toppra.constraint as constraint
     from toppra.constraint.linear_constraint import canlinear_colloc_to_interpolate
 
@@ -65,8 +96,11 @@ def _grip_constraint_class() -> type:
         def __init__(self, *args: Any, inv_dyn_many: Any, **kw: Any) -> None:
             super().__init__(*args, **kw)
             self.inv_dyn_many = inv_dyn_many
+            self.identical = True  # F: the identity (`compute_constraint_params`)
 
-        def compute_constraint_params(self, path: Any, gridpoints: np.ndarray) -> Any:
+        def colloc_params(self, path: Any, gridpoints: np.ndarray) -> Any:
+            """toppra's own (a, b, c, F, g, ubound, xbound) of the interpolation scheme,
+            F and g a grid point each (SecondOrderConstraint's)."""
             if path.dof != self.dof:
                 raise ValueError(f"constraint dof {self.dof} is not the path's {path.dof}")
             p_vec = path(gridpoints)
@@ -81,5 +115,18 @@ def _grip_constraint_class() -> type:
             return canlinear_colloc_to_interpolate(
                 a_vec, b_vec, c_vec, f_vec, g_vec, None, None, gridpoints
             )
+
+        def compute_constraint_params(self, path: Any, gridpoints: np.ndarray, *_: Any) -> Any:
+            """`colloc_params` multiplied out a grid point at a time, F_i a_i, F_i b_i,
+            F_i c_i (each `np.dot`, as the seidel solver computes them for a constraint
+            not `identical`), with F the identity and g the same at every grid point (the
+            bound), as toppra takes an `identical` constraint."""
+            a, b, c, f, g, ubound, xbound = self.colloc_params(path, gridpoints)
+            if not np.all(g == g[0]):
+                raise ValueError("the grip constraint's bound differs along the path")
+            fa = np.array([np.dot(f[i], a[i]) for i in range(len(a))])
+            fb = np.array([np.dot(f[i], b[i]) for i in range(len(b))])
+            fc = np.array([np.dot(f[i], c[i]) for i in range(len(c))])
+            return fa, fb, fc, _identity(fa.shape[1]), g[0], ubound, xbound
 
     return GripConstraint

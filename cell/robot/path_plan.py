@@ -147,6 +147,9 @@ def plan_path(
             [pc_vel, pc_acc, *constraints],
             path,
             gridpoints=grid,
+            # the solver toppra would choose (its first available), named: choosing it
+            # looks for the others' packages on every call (0.5 ms a plan)
+            solver_wrapper="seidel",
             parametrizer="ParametrizeConstAccel",
         )
         raw = inst.compute_trajectory(0.0, 0.0)
