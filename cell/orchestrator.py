@@ -252,7 +252,12 @@ class Orchestrator(
         from cell.arm.grip_limits import mesh_grip
 
         for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape == "mesh"):
-            mesh_grip(self.params, obj)
+            try:  # each side it may be gripped across (`_check_job` refuses the rest)
+                sides = holding_sides(self.params, obj)
+            except CannotGrip:
+                continue
+            for side in sides:
+                mesh_grip(self.params, side.obj)
 
     def _check_job(self) -> None:
         """Refuse the job before it starts if an item cannot be gripped or its bin is
