@@ -390,7 +390,8 @@ class Orchestrator(
             st.q_lift = self._pick(obj, item, d.stroke_m, *heading, side_yaw=yaw)
             self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
         else:
-            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m, yaw)
+            heading = self._carry_heading(d.plan, st.target, st.q_release)
+            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m, yaw, heading)
         self.effector.grasp(d.stroke_m)  # held in the plant already: the hardware winds
         stroke = self._carry_stroke(obj, d)
         if stroke != d.stroke_m:  # the item held, the carriage draws it up off the station
