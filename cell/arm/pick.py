@@ -36,13 +36,16 @@ class Pick(ArmBase):
         (PyBulletEndEffector.grasp) seated as the physical pick would take it as it lies
         (`_lying_seat`), across the side `side_yaw` [rad] from its x (`cell.arm.grip_side`;
         `obj`: the item as gripped); returns the lift configuration."""
+        # as it lies before the grip comes down round it (the pads, passing through it
+        # here, would knock a small item over): at rest, as the physical pick's descent
+        # waits for it (a mesh set 1 mm over the station rests within 15 ms)
+        self._wait_at_rest(item)
+        seat = self._lying_seat(obj, item, stroke, toward, side_yaw)
         q_pick, q_lift = self.over_item(item, stroke, obj)
         q0, t0 = self.q, self.scene.t
         if not self._approach(item, stroke, obj, q_pick):
             self.move([q_lift, q_pick])
         self._time_floor(q0, t0)
-        self._wait_at_rest(item)  # as the physical pick's descent waits for it
-        seat = self._lying_seat(obj, item, stroke, toward, side_yaw)
         self.ee.grasp(stroke, item, yaw_rad=side_yaw, seat=seat)
         # the physical pick's short lift (`_lift_check`): the item, held as it lay, turns
         # in the pads to where its weight leaves it before it is carried (shard_661: 10 mm
