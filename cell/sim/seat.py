@@ -23,7 +23,7 @@ import numpy as np
 
 from cell.model.objects import ObjectParams
 
-__all__ = ["SEAT_GAP_M", "item_vertices", "lying_seat"]
+__all__ = ["SEAT_GAP_M", "item_vertices", "lying_seat", "seated_rise_m"]
 
 SEAT_GAP_M = 5e-4  # [m] the item's nearest point off the carriage's face as it is seated
 _RING = 24  # points on a cylinder's rim, per rim; a sphere's meridians
@@ -67,6 +67,7 @@ def lying_seat(
     stroke_m: float,
     pad_half_width_m: float,
     pad_length_m: float,
+    tip_clearance_m: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The item's seat in the grip as the pads take it as it lies: (its centre [m] and
     rotation matrix (3, 3) in the end-effector's frame E, E's origin the carriage's
@@ -81,13 +82,29 @@ def lying_seat(
         stroke_m: L_s [m]: the carriage's face at E's z = L_s.
         pad_half_width_m: [m] the pads' half width along E's y.
         pad_length_m: [m] the pads' length along E's z from the carriage's face.
+        tip_clearance_m: [m] the physical pick's descent stops with the pads' tips this
+            far short of the item's far side (the station it rests on): an item shorter
+            than the pads along the axis is held off the carriage's face (None: on it).
     """
     seat = np.asarray(grip_frame, float).T @ np.asarray(rot_item, float)
     v = item_vertices(obj) @ seat.T  # the surface in E, about the item's centre
     v_face = float(v[:, 2].min()) - SEAT_GAP_M  # the carriage's face, item-centred [m]
+    if tip_clearance_m is not None:
+        v_face = min(v_face, float(v[:, 2].max()) - pad_length_m - tip_clearance_m)
     lo, hi = _hull_extent_x(v, pad_half_width_m, v_face + pad_length_m)
     centre = np.array([-(lo + hi) / 2, 0.0, stroke_m - v_face])
     return centre, seat, (hi - lo) / 2
+
+
+def seated_rise_m(obj: ObjectParams, rot_item: np.ndarray, seat: np.ndarray) -> float:
+    """How far [m] the item's centre rises as it is turned from how it lies (`rot_item`
+    [W]) to its seat (rotation `seat` in E) in a grip pointing straight down, its lowest
+    point kept SEAT_GAP_M over where it lay (the station's top): where the kinematic pick
+    puts it, so that the turn does not sink it into the station."""
+    v = item_vertices(obj)
+    below = float((v @ np.asarray(rot_item, float).T)[:, 2].min())  # lowest, as it lay
+    # in a grip pointing down E's z is the world's -z: its lowest point is E's farthest
+    return SEAT_GAP_M + float((v @ np.asarray(seat, float).T)[:, 2].max()) + below
 
 
 def _hull_extent_x(v: np.ndarray, half_width: float, z_top: float) -> tuple[float, float]:
