@@ -252,12 +252,7 @@ class Orchestrator(
         from cell.arm.grip_limits import mesh_grip
 
         for obj in dict.fromkeys(s.obj for s in self.job.items if s.obj.shape == "mesh"):
-            try:  # each side it may be gripped across (`_check_job` refuses the rest)
-                sides = holding_sides(self.params, obj)
-            except CannotGrip:
-                continue
-            for side in sides:
-                mesh_grip(self.params, side.obj)
+            mesh_grip(self.params, obj)
 
     def _check_job(self) -> None:
         """Refuse the job before it starts if an item cannot be gripped or its bin is
@@ -390,8 +385,7 @@ class Orchestrator(
             st.q_lift = self._pick(obj, item, d.stroke_m, *heading, side_yaw=yaw)
             self._frame = None  # gripped as the item lay: its own heading (_carry_heading)
         else:
-            heading = self._carry_heading(d.plan, st.target, st.q_release)
-            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m, yaw, heading)
+            st.q_lift = self._pick_kinematic(obj, item, d.stroke_m, yaw)
         self.effector.grasp(d.stroke_m)  # held in the plant already: the hardware winds
         stroke = self._carry_stroke(obj, d)
         if stroke != d.stroke_m:  # the item held, the carriage draws it up off the station

@@ -72,22 +72,33 @@ def _check_the_sides(page: str, params: Any) -> None:
 
 
 def _check_the_mesh_sides(page: str, params: Any) -> None:
-    """A mesh's two widths where the pads meet it (`pad_width_m`, the second turned)."""
-    from cell.arm.grip_side import holding_sides, turned
-    from cell.catalogue import get_object, pad_width_m
+    """A mesh's width where the pads meet its first side (`pad_width_m`) and its second
+    (computed here from the vertices: its extent along y within the pads' strip about x),
+    and the shard's height."""
+    import numpy as np
 
-    r0, s0, d, r1, s1 = quoted(
+    from cell.arm.grip_side import holding_sides
+    from cell.catalogue import catalogue, get_object, mesh_vertices, pad_width_m
+    from cell.errors import CannotGrip
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+    r0, s0, d, r1, s1, h = quoted(
         page,
-        r"`rock_000` is (\d+) mm where the pads meet its\s+first side and `shard_661` (\d+) mm, "
-        r"under the band's (\d+) mm anchor spacing:.*?across their second sides \((\d+) and "
-        r"(\d+) mm\)",
+        r"`rock_000` is (\d+) mm where the pads meet it and\s+`shard_661` (\d+) mm, under the "
+        r"band's (\d+) mm anchor spacing:.*?Their second side \((\d+) and (\d+) mm across.*?"
+        r"standing on\s+its (\d+) mm edge",
     )
     assert float(d) / 1000 == pytest.approx(params.ee.d)
     for name, first, second in (("rock_000", r0, r1), ("shard_661", s0, s1)):
         obj = get_object(name)
         close(first, 1000 * pad_width_m(obj), 0)
-        close(second, 1000 * pad_width_m(turned(obj)), 0)
-        assert [s.brisk for s in holding_sides(params, obj)] == [True]
+        entry = catalogue()[name]
+        v = mesh_vertices(entry.params.mesh, entry.mesh_scale)
+        strip = v[np.abs(v[:, 0]) <= DEFAULT_GEOMETRY.pad_half_width_m]
+        close(second, 1000 * float(np.ptp(strip[:, 1])), 0)
+        with pytest.raises(CannotGrip):
+            holding_sides(params, obj)
+    close(h, 1000 * get_object("shard_661").size[2], 0)
 
 
 def _check_the_carry(page: str, params: Any) -> None:
@@ -183,12 +194,12 @@ def check_the_grip_page() -> None:
 
     page, params = "docs/grip.md", load_params(scene_params_path())
     _check_the_sides(page, params)
+    _check_the_mesh_sides(page, params)
     _check_the_carry(page, params)
     _check_the_slow_holds(page, params)
     # the refusals, each message the code's own
     cube = ObjectParams("cube", 0.3, (0.25,) * 3, name="item0_cube")
     thin = ObjectParams("cylinder", 0.05, (0.018, 0.018, 0.06), name="thin")
-    _check_the_mesh_sides(page, params)
     for obj in (
         cube,
         thin,

@@ -47,10 +47,9 @@ def test_a_release_on_the_move_from_the_pick_leaves_the_item_on_the_station(
         obj = job.items[0].obj
         item = o.present(0, obj)
         p_item = o.scene.item_position(item)
-        q_pick, _ = o.over_item(item, STROKE_M, obj)
-        # gripping; the kinematic pick ends its short lift (`Pick._pick_kinematic`) 30 mm up
-        q_lift = o._pick_kinematic(obj, item, STROKE_M)
-        o.move([q_lift] if from_lift else [q_pick])  # from the lift, or back at the pick
+        q_lift = o._pick_kinematic(obj, item, STROKE_M)  # the arm at the pick, gripping
+        if from_lift:
+            o.move([q_lift])
         centre = p_item + np.array([0.0, 0.0, UP_M])
         tcp = o._tcp_for_item_centre(centre, ELEVATION_RAD, AZIMUTH_RAD, STROKE_M, obj)
         q_rel = o._ik_gripped(tcp, ELEVATION_RAD, AZIMUTH_RAD, o.q)

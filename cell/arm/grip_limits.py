@@ -408,6 +408,13 @@ class GripUse(ArmBase):
         turn = w * h.lever_m / h.torque_nm if h.torque_nm > 0 else math.inf
         return w / h.force_n + turn > 1.0 / CARRY_MARGIN
 
+    def _seated_as_probed(self) -> bool:
+        """Is the item carried seated in the pads as the grip probe seats it (`carry_hold`)?
+        A kinematic pick seats it so; a physical pick grips it where the pads meet it as it
+        lay: the probe's figures do not hold there (a teddy gripped so left the pads on a
+        place's carry at them, once with each arm)."""
+        return self.pick_mode != "physical"
+
     def _carry_stroke(self, obj: ObjectParams, d: Decision) -> float:
         """The stroke [m] the item is carried at: the throw's, or the shortest, where the
         band closes the pads hardest, for a static throw whose twist-free swing at the

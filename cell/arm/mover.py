@@ -190,9 +190,9 @@ class Mover(ArmBase):
         from cell.robot.carry import CARRY_MARGIN, plan_carry
 
         obj, stroke = carried or (self._carried[0], self._grip_stroke)
-        # either pick holds a mesh as it lay (`cell.sim.seat`), not as the grip probe
-        # seats it: the probe's figures are not its hold (`carry_hold`)
-        hold = carry_hold(self.params, obj, stroke, placing=self._placing)
+        hold = carry_hold(
+            self.params, obj, stroke, probed=self._seated_as_probed(), placing=self._placing
+        )
         tie = self._over_bound(obj)
         gentle = obj.shape == "mesh" and hold.torque_nm > 0.0 and not self._placing
         margin = carry_safety(obj, self.tuning) if obj.shape == "sphere" else CARRY_MARGIN

@@ -25,99 +25,21 @@ class Pick(ArmBase):
     """The pick (a part of the arm; `cell.orchestrator.Orchestrator`)."""
 
     def _pick_kinematic(
-        self,
-        obj: ObjectParams,
-        item: Any,
-        stroke: float,
-        side_yaw: float = 0.0,
-        toward: tuple[float, bool] = (0.0, False),
+        self, obj: ObjectParams, item: Any, stroke: float, side_yaw: float = 0.0
     ) -> np.ndarray:
         """The kinematic pick: the grip over the item, which is moved into it
-        (PyBulletEndEffector.grasp) seated as the physical pick would take it as it lies
-        (`_lying_seat`), across the side `side_yaw` [rad] from its x (`cell.arm.grip_side`;
-        `obj`: the item as gripped); returns the lift configuration."""
-        # as it lies before the grip comes down round it (the pads, passing through it
-        # here, would knock a small item over): on the station and at rest, as the
-        # physical pick's descent waits for it (a mesh set 1 mm over it rests within 15 ms)
-        self._settle(item)
-        seat = self._lying_seat(obj, item, stroke, toward, side_yaw)
-        q_pick, q_lift = self._over_seat(item, stroke, obj, seat)
+        (PyBulletEndEffector.grasp) turned `side_yaw` [rad] about the grip's axis (the
+        side it is gripped across, `cell.arm.grip_side`; `obj`: the item as gripped);
+        returns the lift configuration."""
+        q_pick, q_lift = self.over_item(item, stroke, obj)
         q0, t0 = self.q, self.scene.t
         if not self._approach(item, stroke, obj, q_pick):
             self.move([q_lift, q_pick])
         self._time_floor(q0, t0)
-        self.ee.grasp(stroke, item, yaw_rad=side_yaw, seat=seat)
-        # the physical pick's short lift (`_lift_check`): the item, held as it lay, turns
-        # in the pads to where its weight leaves it before it is carried (shard_661: 10 mm
-        # across and 0.13 rad more tilted than where the pads closed)
-        p_up = self.scene.item_position(item) + np.array([0.0, 0.0, self.tuning.lift_check_m])
-        tcp = self._tcp_for_item_centre(p_up, *GRIP_DOWN, stroke, obj)
-        self._straight(self.ik_frame(tcp, q_pick), self.tuning.lift_check_s, smooth=True)
-        self._run_for(0.05)
+        self.ee.grasp(stroke, item, yaw_rad=side_yaw)
         self._carried = (obj, stroke)  # the item and its throw's stroke: what routes are for
         self._grip_stroke = stroke  # where the carriage holds it now (`_carry_stroke`)
         return q_lift
-
-    def _over_seat(
-        self,
-        item: Any,
-        stroke: float,
-        obj: ObjectParams,
-        seat: tuple[np.ndarray, np.ndarray, float],
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(pick, lift) configurations of the grip pointing down over the item, the pick
-        holding it in its seat (`_lying_seat`) over where it lay, its lowest point on the
-        station's top (`cell.sim.seat.seated_rise_m`); `over_item` for an item seated
-        as the grip model has it (its centre stroke + half its height out along the axis)."""
-        from cell.sim.seat import seated_rise_m
-
-        p, rot = self._item_pose(item)
-        centre, turn, _ = seat
-        rise = seated_rise_m(item.obj, rot, turn)
-        # the grip model's centre for the E that holds the item's centre `rise` over p
-        aim = p + np.array([0.0, 0.0, rise + centre[2] - stroke - obj.size[2] / 2])
-        q_pick = self.ik_frame(self._tcp_for_item_centre(aim, *GRIP_DOWN, stroke, obj))
-        return q_pick, self._lift_q(aim, stroke, obj, q_pick)
-
-    def _settle(self, item: Any, timeout_s: float = 1.0) -> None:
-        """Step until the item touches something (a mesh is set 1 mm over the station, at
-        rest as it starts to fall), then until it rests (`_wait_at_rest`), `timeout_s` [s]
-        at most each."""
-        sc = self.scene
-        t_end = sc.t + timeout_s
-        while sc.t < t_end and not sc.client.getContactPoints(bodyA=item.body):
-            sc.step()
-        self._wait_at_rest(item, timeout_s)
-
-    def _lying_seat(
-        self,
-        obj: ObjectParams,
-        item: Any,
-        stroke: float,
-        toward: tuple[float, bool],
-        side_yaw: float,
-    ) -> tuple[np.ndarray, np.ndarray, float]:
-        """Where the physical pick would hold the item as it lies now (`cell.sim.seat`):
-        gripped along the axis and across the side `_grip_plan` chooses for it (`toward`:
-        the carry's heading, `_carry_heading`), the pads opened as `_pick_once` opens them."""
-        from cell.catalogue import pad_width_m
-        from cell.frames import axis_frame
-        from cell.sim.seat import lying_seat
-
-        geo = self.scene.geometry
-        opening = min(pad_width_m(obj) / 2 + self.tuning.finger_clearance_m, geo.finger_open_m)
-        _, elevation, azimuth, rolls, _ = self._grip_plan(obj, item, *toward, opening, side_yaw)
-        _, rot = self._item_pose(item)
-        frame = axis_frame(elevation, azimuth, rolls[0])
-        return lying_seat(
-            item.obj,
-            rot,
-            frame,
-            stroke,
-            geo.pad_half_width_m,
-            geo.pad_length_m,
-            self.tuning.pad_tip_clearance_m,
-        )
 
     def _approach(self, item: Any, stroke: float, obj: ObjectParams, q_pick: np.ndarray) -> bool:
         """The empty arm to the pick without stopping over it (`_approach_plan`); False

@@ -28,11 +28,9 @@ import numpy as np
 from cell.catalogue import pad_width_m
 from cell.endeffector.base import EndEffector, EndEffectorStatus
 from cell.errors import GraspLost, InvalidInput, InvalidParameter
-from cell.frames import quat_from_matrix
 from cell.model.params import G
 from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT, BandReading
 from cell.sim.items import Item
-from cell.sim.seat import SEAT_GAP_M
 
 __all__ = ["PLACE_DROP_M", "PLACE_SPEED_MPS", "PyBulletEndEffector"]
 
@@ -235,19 +233,10 @@ class PyBulletEndEffector(EndEffector):
         self.item = None
 
     # -- the interface ---------------------------------------------------------
-    def grasp(
-        self,
-        stroke_m: float,
-        item: Item | None = None,
-        yaw_rad: float = 0.0,
-        seat: tuple[np.ndarray, np.ndarray, float] | None = None,
-    ) -> None:
+    def grasp(self, stroke_m: float, item: Item | None = None, yaw_rad: float = 0.0) -> None:
         """Take `item` (default: the one on the pick station) into the grip at stroke L_s [m],
         turned `yaw_rad` [rad] about the grip's axis (0: its size x across the pads; π/2:
-        its size y, `cell.arm.grip_side`). `seat`: where in the grip instead (its centre
-        [m] and rotation matrix in E, the pads' opening [m] on it: `cell.sim.seat.lying_seat`,
-        as the pads take it as it lies); else its body frame is E's turned `yaw_rad`, its
-        box on the carriage.
+        its size y, `cell.arm.grip_side`).
 
         Raises:
             InvalidParameter: stroke out of range.
@@ -260,17 +249,12 @@ class PyBulletEndEffector(EndEffector):
         sc, cl = self.scene, self.scene.client
         sc.set_timestep(sc.dt_s)
         self.grip_yaw_rad = float(yaw_rad)
-        half = self.across(it)[0] / 2 if seat is None else seat[2]
-        self.band.reset(stroke_m, half + 0.003)
+        self.band.reset(stroke_m, self.across(it)[0] / 2 + 0.003)
         self.band.fingers_closing = False
         e_pos, e_orn = cl.getBasePositionAndOrientation(sc.ee_body)
-        if seat is None:
-            where = [0.0, 0.0, stroke_m + it.obj.size[2] / 2 + SEAT_GAP_M]
-            turn = [0.0, 0.0, math.sin(yaw_rad / 2), math.cos(yaw_rad / 2)]
-        else:
-            where = [float(c) for c in seat[0]]
-            turn = quat_from_matrix(seat[1])
-        pos, orn = cl.multiplyTransforms(e_pos, e_orn, where, turn)
+        centre = stroke_m + it.obj.size[2] / 2 + 5e-4
+        turn = [0.0, 0.0, math.sin(yaw_rad / 2), math.cos(yaw_rad / 2)]
+        pos, orn = cl.multiplyTransforms(e_pos, e_orn, [0, 0, centre], turn)
         cl.resetBasePositionAndOrientation(it.body, pos, orn)
         # While the fingers close, the item is seated on the hoop, as the approach
         # presses the hoop onto the item resting on the station; then friction holds it.
@@ -281,7 +265,7 @@ class PyBulletEndEffector(EndEffector):
             -1,
             cl.JOINT_FIXED,
             [0, 0, 0],
-            [where[0], where[1], where[2] - stroke_m],
+            [0, 0, centre - stroke_m],
             [0, 0, 0],
             parentFrameOrientation=turn,  # the item turned in the grip as set above
         )
