@@ -120,8 +120,31 @@ class Planner(ArmBase):
         where none can, the plan's estimate is (False, ∞).
         """
         # the bin's centre, or a point of it clear of what the bin holds: the same for
-        # every bounds tried (the scene does not move meanwhile)
-        goal = (*throw_spot(self.scene, target.id, obj), target.rim_height)
+        # every bounds tried (the scene does not move meanwhile). A point moved off the
+        # centre may lie beyond the reach the job's check proved (it planned onto the
+        # centre, `check_sortable`): then the centre (test layout 1002, Panda: a cuboid's
+        # spot 21 mm beyond it failed `unreachable`)
+        spot = throw_spot(self.scene, target.id, obj)
+        centre = (float(target.position[0]), float(target.position[1]))
+        try:
+            return self._plan_to((*spot, target.rim_height), obj, target, index, stroke_max_m, beat)
+        except UnreachableTarget as exc:
+            if np.allclose(spot, centre, atol=1e-9):
+                raise
+            log.info("the throw spot in %s is out of reach (%s): the bin's centre", target.id, exc)
+        goal = (*centre, target.rim_height)
+        return self._plan_to(goal, obj, target, index, stroke_max_m, beat)
+
+    def _plan_to(
+        self,
+        goal: tuple[float, float, float],
+        obj: ObjectParams,
+        target: Any,
+        index: int,
+        stroke_max_m: float,
+        beat: float | None,
+    ) -> ThrowChoice:
+        """`_plan` to the point `goal` [m, W] of the bin's rim plane."""
         err: CellError | None = None
         best: ThrowChoice | None = None
         turned = self._facing_toward_station(target)
