@@ -56,8 +56,8 @@ class ModelParams:
     def model_object(self, obj: ObjectParams) -> ObjectParams:
         """The η_o the planner uses for `obj`: the identified one when the file has
         it, else `obj` with the mass rule's effective mass (its own extents). An object
-        gripped a quarter turn round (`cell.arm.grip_side.turned`: its catalogue sizes x
-        and y swapped) is modelled so: the identified one turned the same way (cuboid_a,
+        gripped a quarter turn round (`ObjectParams.turned`: its catalogue sizes x and y
+        swapped) is modelled so: the identified one turned the same way (cuboid_a,
         identified as 30 x 50 mm, is thrown across 50 mm)."""
         if obj.name and obj.name in self.objects:
             known = self.objects[obj.name]
@@ -74,15 +74,14 @@ class ModelParams:
 
 
 def _turned_from_catalogue(obj: ObjectParams) -> bool:
-    """Is `obj` its catalogue entry with sizes x and y swapped (gripped a quarter turn
-    round, `cell.arm.grip_side.turned`)?"""
+    """Is `obj` its catalogue entry gripped a quarter turn round (`ObjectParams.turned`)?"""
     from cell.catalogue import catalogue
 
     entry = catalogue().get(obj.name)
     if entry is None:
         return False
-    sx, sy, sz = entry.params.size
-    return sx != sy and obj.size == (sy, sx, sz)
+    sx, sy, _ = entry.params.size
+    return sx != sy and obj.size == entry.params.turned().size
 
 
 MAX_FILE_MASS_KG = 1000.0  # [kg] an object of a parameter file: beyond is a typo (1e300)

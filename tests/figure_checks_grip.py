@@ -33,7 +33,7 @@ def _refusal(params: Any, obj: Any) -> str:
 def _check_the_sides(page: str, params: Any) -> None:
     """How the side is chosen: the margins, cuboid_a's sides, the thin box."""
     from cell.arm import grip_limits
-    from cell.arm.grip_side import holding_sides, turned
+    from cell.arm.grip_side import holding_sides
     from cell.catalogue import get_object
     from cell.model.grip import grip_friction, holding_mass_kg
     from cell.model.objects import ObjectParams
@@ -58,7 +58,7 @@ def _check_the_sides(page: str, params: Any) -> None:
     mu = grip_friction(obj, GEO.pad_length_m)
     close(ask, obj.mass / holding_mass_kg(params.ee, params.ee.stroke_min, obj.width, mu), 2)
     assert grip_limits.grip_strokes(params, obj)[1] is False
-    assert grip_limits.grip_strokes(params, turned(obj)) == (
+    assert grip_limits.grip_strokes(params, obj.turned()) == (
         pytest.approx(params.ee.stroke_max),
         True,
     )

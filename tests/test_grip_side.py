@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from cell.arm.grip_limits import carry_hold, grip_strokes
-from cell.arm.grip_side import holding_sides, throw_sides, turned
+from cell.arm.grip_side import holding_sides, throw_sides
 from cell.arm.tuning import TUNING
 from cell.catalogue import get_object
 from cell.errors import CannotGrip, JobError
@@ -67,7 +67,6 @@ def test_cuboid_a_is_held_briskly_only_across_its_50_mm_side() -> None:
     for brisk carries, under the carry's 1/1.35); across 50 mm briskly, up to the longest
     stroke: the cell grips it across 50 mm."""
     from cell.arm.grip_limits import BRISK_CARRY_SAFETY, grip_strokes
-    from cell.arm.grip_side import turned
 
     params = load_params(scene_params_path())
     obj = get_object("cuboid_a")
@@ -80,7 +79,7 @@ def test_cuboid_a_is_held_briskly_only_across_its_50_mm_side() -> None:
     s_narrow, brisk = grip_strokes(params, obj)
     assert s_narrow is not None and not brisk
     assert 0.63 * BRISK_CARRY_SAFETY > 1.0 > 0.63 * CARRY_MARGIN
-    assert grip_strokes(params, turned(obj)) == (pytest.approx(params.ee.stroke_max), True)
+    assert grip_strokes(params, obj.turned()) == (pytest.approx(params.ee.stroke_max), True)
 
 
 def test_a_250_mm_cube_is_refused_and_not_told_to_turn() -> None:
@@ -151,7 +150,7 @@ def test_a_box_held_briskly_both_ways_offers_both_sides_first_size_first() -> No
     hold briskly (cuboid_a, above)."""
     params = load_params(scene_params_path())
     box = ObjectParams("cuboid", 0.05, (0.04, 0.07, 0.06), name="box")
-    assert grip_strokes(params, box)[1] and grip_strokes(params, turned(box))[1]
+    assert grip_strokes(params, box)[1] and grip_strokes(params, box.turned())[1]
     sides = holding_sides(params, box)
     assert [(s.yaw_rad, s.width_m) for s in sides] == [(0.0, 0.04), (math.pi / 2, 0.07)]
 

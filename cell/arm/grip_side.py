@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from dataclasses import replace as dc_replace
 from typing import Any
 
 from cell.arm.base import ArmBase
@@ -30,7 +29,7 @@ from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
-__all__ = ["GripSide", "GripSideChoice", "grip_sides", "holding_sides", "throw_sides", "turned"]
+__all__ = ["GripSide", "GripSideChoice", "grip_sides", "holding_sides", "throw_sides"]
 
 
 @dataclass(frozen=True)
@@ -57,18 +56,11 @@ class GripSide:
         return self.obj.width
 
 
-def turned(obj: ObjectParams) -> ObjectParams:
-    """`obj` as the pads grip it a quarter turn about the vertical: sizes x and y swapped
-    (its inertia, computed from its sizes, with them)."""
-    sx, sy, sz = obj.size
-    return dc_replace(obj, size=(sy, sx, sz))
-
-
 def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
     """The sides the pads can meet `obj` across from its resting pose: (the grip's yaw
     [rad] from the item's x axis, the item as gripped), the first size first."""
     if obj.shape == "cuboid" and not math.isclose(obj.size[0], obj.size[1], abs_tol=1e-9):
-        return [(0.0, obj), (math.pi / 2, turned(obj))]
+        return [(0.0, obj), (math.pi / 2, obj.turned())]
     return [(0.0, obj)]
 
 

@@ -8,7 +8,7 @@ the throw axis. All SI.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -125,6 +125,12 @@ class ObjectParams:
     def width(self) -> float:
         """Grip width a = size_x [m]."""
         return self.size[0]
+
+    def turned(self) -> ObjectParams:
+        """The object as the pads grip it a quarter turn about its vertical axis: sizes x
+        and y swapped (its inertia, computed from its sizes, with them)."""
+        sx, sy, sz = self.size
+        return replace(self, size=(sy, sx, sz))
 
     @property
     def inertia(self) -> np.ndarray:
