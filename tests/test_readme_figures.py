@@ -91,6 +91,13 @@ def check_the_demo_table() -> None:
     close(p95, run["plan_s_p95"], 2)
     assert num(realtime) == round(run["items_per_hour_realtime"])
     assert num(rate) == round(run["items_per_hour"])
+    plain = load_json("docs/figures/run_plain.json")
+    p95, rate = quoted(
+        "README.md",
+        r"([\d.]+) s with `--no-cycle-search --no-turn-release` \(([\d,]+) items per hour\)",
+    )
+    close(p95, plain["plan_s_p95"], 2)
+    assert num(rate) == round(plain["items_per_hour"])
     ur10, ur3 = load_json("docs/figures/run_ur10.json"), load_json("docs/figures/run_ur3.json")
     got = quoted(
         "README.md",
@@ -212,6 +219,14 @@ def check_the_headline(tune: dict) -> None:
     assert num(rate_h_tune) == round(tune["items_per_hour"])
     (floor,) = quoted("README.md", r"\(a floor for the cell's poses\) \| ([\d,]+) items per hour")
     assert num(floor) == round(bench["floor_items_per_hour"])
+    p95, realtime, rate_h = quoted(
+        "README.md",
+        r"planning per item on the `test` layouts \(goal p95 ≤ 0.5 s: missed\) \| p95 ([\d.]+) s; "
+        r"([\d,]+) items per hour in real time against ([\d,]+) simulated",
+    )
+    close(p95, bench["plan_s_p95"], 2)
+    assert num(realtime) == round(bench["items_per_hour_realtime"])
+    assert num(rate_h) == round(bench["items_per_hour"])
     (rate_h,) = quoted(
         "README.md", r"The `test` layouts make\s+([\d,]+) items per hour against a goal of 1,500"
     )
