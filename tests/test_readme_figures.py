@@ -83,14 +83,7 @@ def check_the_demo_table() -> None:
         assert int(cores) == run["cores"]
         (realtime,) = quoted(page, r"real-time items/h +([\d,]+) \(planning overlapped")
         assert num(realtime) == round(run["items_per_hour_realtime"])
-    p95, realtime, rate = quoted(
-        "README.md",
-        r"planning per item on the demo \(goal p95 ≤ 0.5 s: missed\) \| p95 ([\d.]+) s; "
-        r"([\d,]+) items per hour in real time against ([\d,]+) simulated",
-    )
-    close(p95, run["plan_s_p95"], 2)
-    assert num(realtime) == round(run["items_per_hour_realtime"])
-    assert num(rate) == round(run["items_per_hour"])
+    check_the_planning_row("the demo", run)
     plain = load_json("docs/figures/run_plain.json")
     p95, rate = quoted(
         "README.md",
@@ -134,6 +127,18 @@ def check_the_demo_table() -> None:
     close(cycle, run["mean_cycle_time_s"], 2)
     assert num(rate) == round(run["items_per_hour"])
     assert int(wall) == round(run["wall_time_s"])
+
+
+def check_the_planning_row(what: str, fig: dict) -> None:
+    """The README's row "planning per item on WHAT": p95, real-time and simulated rate."""
+    p95, realtime, rate = quoted(
+        "README.md",
+        rf"planning per item on {what} \(goal p95 ≤ 0.5 s: missed\) \| "
+        r"p95 ([\d.]+) s; ([\d,]+) items per hour in real time against ([\d,]+) simulated",
+    )
+    close(p95, fig["plan_s_p95"], 2)
+    assert num(realtime) == round(fig["items_per_hour_realtime"])
+    assert num(rate) == round(fig["items_per_hour"])
 
 
 def check_the_demo_variants() -> None:
@@ -219,14 +224,7 @@ def check_the_headline(tune: dict) -> None:
     assert num(rate_h_tune) == round(tune["items_per_hour"])
     (floor,) = quoted("README.md", r"\(a floor for the cell's poses\) \| ([\d,]+) items per hour")
     assert num(floor) == round(bench["floor_items_per_hour"])
-    p95, realtime, rate_h = quoted(
-        "README.md",
-        r"planning per item on the `test` layouts \(goal p95 ≤ 0.5 s: missed\) \| p95 ([\d.]+) s; "
-        r"([\d,]+) items per hour in real time against ([\d,]+) simulated",
-    )
-    close(p95, bench["plan_s_p95"], 2)
-    assert num(realtime) == round(bench["items_per_hour_realtime"])
-    assert num(rate_h) == round(bench["items_per_hour"])
+    check_the_planning_row("the `test` layouts", bench)
     (rate_h,) = quoted(
         "README.md", r"The `test` layouts make\s+([\d,]+) items per hour against a goal of 1,500"
     )
