@@ -11,10 +11,14 @@ the polish) fails too; and the lift it refuses on the UR3 demo is out of reach.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
 
+from cell.errors import IKFailed
+from cell.jobs import load_job
+from cell.orchestrator import Orchestrator
 from cell.robot.ik import AXIS_TOL_RAD, POSITION_TOL_M, IKNoSolution, ReleasePose, solve_ik
 from cell.robot.model import load_robot
 from cell.robot.reach_bound import bound_of, reach_bound
@@ -77,3 +81,49 @@ def test_the_ur3_lift_over_the_station_is_refused_and_unsolved() -> None:
         solve_ik(robot, pose, np.asarray(robot.home, float))
     lower = np.array([0.32, -0.22, 0.283])  # half as high: not refused
     assert not bound.refuses(lower, pose.axis, POSITION_TOL_M, AXIS_TOL_RAD)
+
+
+def _lift_both_ways(o: Any, p_item: np.ndarray, q_pick: np.ndarray) -> tuple[Any, Any, int]:
+    """`_lift_q`'s answer (a configuration or the IKFailed's text) with the bound and
+    without (IK run at every height), and how many heights the bound refused."""
+    obj, stroke = o.job.items[0].obj, 0.081
+    refused = [0]
+    real = o._beyond_reach
+
+    def counted(tcp: np.ndarray) -> bool:
+        no = bool(real(tcp))
+        refused[0] += no
+        return no
+
+    answers = []
+    for check in (counted, lambda tcp: False):
+        o._ik_memo.clear()
+        o._beyond_reach = check
+        try:
+            answers.append(o._lift_q(p_item, stroke, obj, q_pick).tobytes())
+        except IKFailed as exc:
+            answers.append(str(exc))
+        finally:
+            del o._beyond_reach
+    return answers[0], answers[1], refused[0]
+
+
+def test_the_lift_is_the_one_ik_at_every_height_gives() -> None:
+    """On the UR3 demo's station: the same lift with the bound as without it, where it
+    skips the highest lift; and the same error where no lift is found at all."""
+    o = Orchestrator(load_job("tasks/bins_ur3.yaml"), session="reach-bound")
+    try:
+        obj = o.job.items[0].obj
+        for roll in (0.0, math.pi):
+            o._frame = (0.0, roll)
+            p_item = np.array([0.32, -0.22, 0.225])
+            tcp = o._tcp_for_item_centre(p_item, -math.pi / 2, 0.0, 0.081, obj)
+            q_pick = o.ik_frame(tcp)
+            with_bound, without, refused = _lift_both_ways(o, p_item, q_pick)
+            assert refused >= 1 and with_bound == without
+        far = np.array([0.45, -0.3, 0.5])  # every lift beyond the UR3, the pick too
+        with_bound, without, refused = _lift_both_ways(o, far, np.asarray(o.robot.home, float))
+        assert refused == 3 and isinstance(without, str) and with_bound == without
+    finally:
+        o._frame = None
+        o.close()
