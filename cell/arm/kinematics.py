@@ -125,7 +125,19 @@ class Kinematics(ArmBase):
                 return self._solve_ik(pose, q0).q
             except IKFailed:
                 log.info("no IK at the gripped roll at %s: the roll is left to the solver", tcp)
-        return solve_release_ik(self.robot, tcp, elevation, azimuth, q0).q
+        return solve_release_ik(self.robot, tcp, elevation, azimuth, q0, self._gripped_ik).q
+
+    def _gripped_ik(self, robot: Any, pose: Any, seed: np.ndarray | None = None) -> Any:
+        """`solve_ik(robot, pose, seed)` for `_ik_gripped`'s free roll, remembered until the
+        next decision (`_solve_ik` without `reach`: every seed, as `solve_ik` searches). A
+        release search asks for the same pick and lift once per release bounds and roll:
+        on the UR3 demo, a lift out of reach was searched from every seed 336 times (26 s
+        of its 58 s of release searches), the same poses from the same seeds."""
+        from cell.robot.ik import solve_ik
+
+        if robot is not self.robot:
+            return solve_ik(robot, pose, seed)
+        return self._solve_ik(pose, seed)
 
     def _pick_frame(self, plan: Any, q_release: Any) -> tuple[float, float] | None:
         """(azimuth, roll) [rad] of the grip pointing down that the release's frame (at the
@@ -169,11 +181,16 @@ class Kinematics(ArmBase):
         item, and 0.15 m more can be out of the arm's reach, or only reached on another
         branch, a swing of the whole arm away."""
         err: IKFailed | None = None
+        refused: np.ndarray | None = None  # the first lift out of reach, its IK not run
         far: list[tuple[float, np.ndarray]] = []  # (joint gap from the pick, lift)
         for up in (self.tuning.lift_m, self.tuning.lift_m / 2, self.tuning.lift_m / 4):
-            lift = p_item + np.array([0, 0, up])
+            tcp = self._tcp_for_item_centre(p_item + np.array([0, 0, up]), *GRIP_DOWN, stroke, obj)
+            if self._beyond_reach(tcp):  # IK would fail there: its error only if needed
+                if err is None and refused is None:
+                    refused = tcp
+                continue
             try:
-                q = self.ik_frame(self._tcp_for_item_centre(lift, *GRIP_DOWN, stroke, obj), q_pick)
+                q = self.ik_frame(tcp, q_pick)
             except IKFailed as exc:
                 err = err or exc
                 continue
@@ -186,8 +203,26 @@ class Kinematics(ArmBase):
                 "no lift over the pick within %.1f rad of its joints", self.tuning.lift_max_dq_rad
             )
             return min(far, key=lambda gq: gq[0])[1]
+        if refused is not None:  # the error IK gives there, as if it had been searched first
+            self.ik_frame(refused, q_pick)
         assert err is not None
         raise err
+
+    def _beyond_reach(self, tcp: np.ndarray) -> bool:
+        """Whether no configuration points the grip down at `tcp` [m, W] within IK's
+        tolerances at any roll (`cell.robot.reach_bound`: sound, so `ik_frame` would fail
+        there from every seed). On the UR3 demo the lift LIFT_M over the pick station is
+        out of reach: searched in full at both rolls and then at a free roll, in every
+        release search's pick (4 failed searches an item's release bounds and roll)."""
+        from cell.robot.ik import AXIS_TOL_RAD, POSITION_TOL_M, ReleasePose
+        from cell.robot.reach_bound import bound_of
+
+        bound = bound_of(self.robot)
+        if bound is None:
+            return False
+        az = 0.0 if self._frame is None else self._frame[0]
+        axis = ReleasePose.from_angles(tcp, -math.pi / 2, az).axis
+        return bound.refuses(tcp, axis, POSITION_TOL_M, AXIS_TOL_RAD)
 
     def _ik_grip(
         self, centre: np.ndarray, stroke: float, obj: ObjectParams, axes: tuple[float, float, float]

@@ -1,0 +1,84 @@
+"""The grip pointing down at a free roll (`Kinematics._ik_gripped`'s fallback, through
+`_gripped_ik`) remembered until the next decision, as the gripped roll's IK already was.
+
+Independent checks: what it returns is what `solve_release_ik` with `solve_ik` itself
+(every seed, the polish) returns from the same seed, bit for bit, in reach and out of it
+(the same best residual); the same pose from the same seed is not searched twice in one
+decision; after `decide`'s clearing, it is searched afresh.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cell.jobs import load_job
+from cell.orchestrator import Orchestrator
+from cell.robot import ik
+from cell.robot.ik import IKNoSolution, solve_release_ik
+
+
+@pytest.fixture(scope="module")
+def orchestrator() -> Any:
+    o = Orchestrator(load_job("tasks/bins_ur3.yaml"), session="gripped-ik")
+    yield o
+    o.close()
+
+
+def _counted(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    calls = [0]
+    real = ik.solve_ik
+
+    def counting(*args: Any, **kwargs: Any) -> Any:
+        calls[0] += 1
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ik, "solve_ik", counting)
+    return calls
+
+
+def test_in_reach_the_same_solution_searched_once(
+    orchestrator: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    o = orchestrator
+    o._ik_memo.clear()
+    o._frame = None  # no gripped roll: the free roll at once
+    seed = np.asarray(o.robot.home, float)
+    tcp = o.robot.tcp_pose(seed)[0] + np.array([0.02, -0.03, -0.05])
+    fresh = solve_release_ik(o.robot, tcp, -math.pi / 2, 0.0, seed)
+    calls = _counted(monkeypatch)
+    first = o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
+    n = calls[0]
+    again = o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
+    assert n >= 1 and calls[0] == n  # the second time, nothing searched
+    assert first.tobytes() == fresh.q.tobytes() and again is first
+    o._ik_memo.clear()  # as `decide` does: searched afresh, the same answer
+    assert o._ik_gripped(tcp, -math.pi / 2, 0.0, seed).tobytes() == fresh.q.tobytes()
+    assert calls[0] == 2 * n
+
+
+def test_out_of_reach_the_same_verdict_searched_once(
+    orchestrator: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    o = orchestrator
+    o._ik_memo.clear()
+    o._frame = (0.0, 0.0)  # the gripped roll first, then the free roll: both out of reach
+    seed = np.asarray(o.robot.home, float)
+    tcp = np.array([0.35, -0.2, 0.95])  # 0.95 m up, the grip down: beyond the UR3
+    with pytest.raises(IKNoSolution) as fresh:
+        solve_release_ik(o.robot, tcp, -math.pi / 2, 0.0, seed)
+    calls = _counted(monkeypatch)
+    with pytest.raises(IKNoSolution) as first:
+        o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
+    n = calls[0]
+    with pytest.raises(IKNoSolution) as again:
+        o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
+    assert n == 2 and calls[0] == n  # gripped roll + free roll, then nothing
+    assert again.value is first.value
+    assert first.value.position_error_m == fresh.value.position_error_m
+    assert str(first.value) == str(fresh.value)
+    o._frame = None
+    o._ik_memo.clear()
