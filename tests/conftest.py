@@ -57,3 +57,30 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     rank = {name: k for k, name in enumerate(SLOW_FILES)}
     # a stable sort on the file alone: each file's tests stay together and in their order
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+
+
+class Calls:
+    """How many times a counted function was called since the last `reset`."""
+
+    def __init__(self) -> None:
+        self.n = 0
+
+    def reset(self) -> None:
+        self.n = 0
+
+
+@pytest.fixture
+def ik_solve_calls(monkeypatch: pytest.MonkeyPatch) -> Calls:
+    """`cell.robot.ik.solve_ik` counted while the real solver runs: for tests that a pose
+    searched once is not searched again (`reset` before the calls to count)."""
+    from cell.robot import ik
+
+    calls = Calls()
+    real = ik.solve_ik
+
+    def counting(*args: object, **kwargs: object) -> object:
+        calls.n += 1
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(ik, "solve_ik", counting)
+    return calls

@@ -17,7 +17,6 @@ import pytest
 
 from cell.jobs import load_job
 from cell.orchestrator import Orchestrator
-from cell.robot import ik
 from cell.robot.ik import IKNoSolution, solve_release_ik
 
 
@@ -28,40 +27,27 @@ def orchestrator() -> Any:
     o.close()
 
 
-def _counted(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    calls = [0]
-    real = ik.solve_ik
-
-    def counting(*args: Any, **kwargs: Any) -> Any:
-        calls[0] += 1
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(ik, "solve_ik", counting)
-    return calls
-
-
-def test_in_reach_the_same_solution_searched_once(
-    orchestrator: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_in_reach_the_same_solution_searched_once(orchestrator: Any, ik_solve_calls: Any) -> None:
     o = orchestrator
     o._ik_memo.clear()
     o._frame = None  # no gripped roll: the free roll at once
     seed = np.asarray(o.robot.home, float)
     tcp = o.robot.tcp_pose(seed)[0] + np.array([0.02, -0.03, -0.05])
     fresh = solve_release_ik(o.robot, tcp, -math.pi / 2, 0.0, seed)
-    calls = _counted(monkeypatch)
+    calls = ik_solve_calls
+    calls.reset()
     first = o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
-    n = calls[0]
+    n = calls.n
     again = o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
-    assert n >= 1 and calls[0] == n  # the second time, nothing searched
+    assert n >= 1 and calls.n == n  # the second time, nothing searched
     assert first.tobytes() == fresh.q.tobytes() and again is first
     o._ik_memo.clear()  # as `decide` does: searched afresh, the same answer
     assert o._ik_gripped(tcp, -math.pi / 2, 0.0, seed).tobytes() == fresh.q.tobytes()
-    assert calls[0] == 2 * n
+    assert calls.n == 2 * n
 
 
 def test_out_of_reach_the_same_verdict_searched_once(
-    orchestrator: Any, monkeypatch: pytest.MonkeyPatch
+    orchestrator: Any, ik_solve_calls: Any
 ) -> None:
     o = orchestrator
     o._ik_memo.clear()
@@ -70,13 +56,14 @@ def test_out_of_reach_the_same_verdict_searched_once(
     tcp = np.array([0.35, -0.2, 0.95])  # 0.95 m up, the grip down: beyond the UR3
     with pytest.raises(IKNoSolution) as fresh:
         solve_release_ik(o.robot, tcp, -math.pi / 2, 0.0, seed)
-    calls = _counted(monkeypatch)
+    calls = ik_solve_calls
+    calls.reset()
     with pytest.raises(IKNoSolution) as first:
         o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
-    n = calls[0]
+    n = calls.n
     with pytest.raises(IKNoSolution) as again:
         o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
-    assert n == 2 and calls[0] == n  # gripped roll + free roll, then nothing
+    assert n == 2 and calls.n == n  # gripped roll + free roll, then nothing
     assert again.value is first.value
     assert first.value.position_error_m == fresh.value.position_error_m
     assert str(first.value) == str(fresh.value)

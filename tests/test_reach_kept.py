@@ -97,36 +97,25 @@ def _decide(o: Orchestrator, k: int) -> Any:
         o.scene.remove_item(o._presented)
 
 
-def test_a_decision_with_poses_kept_is_the_same(
-    orchestrator: Any, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_calls: Any) -> None:
     """Items 2 and 3 (the same cube to the same bin): the second decided with what the
     first kept out of reach, and again with nothing kept, the rule off: fewer IK searches,
     the same decision."""
-    from cell.robot import ik
-
     o = orchestrator
     kept = o.tuning
-    calls = [0]
-    solve = ik.solve_ik
-
-    def counted(*a: Any, **kw: Any) -> Any:
-        calls[0] += 1
-        return solve(*a, **kw)
-
-    monkeypatch.setattr(ik, "solve_ik", counted)
+    calls = ik_solve_calls
     o._out_of_reach.clear()
     try:
         _decide(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach
-        calls[0] = 0
+        calls.reset()
         with_kept = _decide(o, 3)
-        n_kept = calls[0]
+        n_kept = calls.n
         o._out_of_reach.clear()
         o.tuning = dataclasses.replace(kept, ik_reach_kept=False)
-        calls[0] = 0
+        calls.reset()
         without = _decide(o, 3)
-        assert n_kept < calls[0]  # the poses kept were not searched again
+        assert n_kept < calls.n  # the poses kept were not searched again
     finally:
         o.tuning = kept
     assert with_kept.plan == without.plan

@@ -31,7 +31,7 @@ import numpy as np
 
 from cell.errors import InvalidInput
 from cell.model.objects import ObjectParams
-from cell.model.params import DEFAULT_EE, EndEffectorParams, G
+from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.sim import scene_arm, station, watch
 from cell.sim import snapshot as snapshot_png
 from cell.sim.band import BandDrive
@@ -49,11 +49,14 @@ from cell.sim.frames import (
 )
 from cell.sim.items import Item, spawn_item
 from cell.sim.scene_build import (
+    build_floor,
     check_settings,
     connect,
     load_arm,
     load_end_effector,
+    mount_constraint,
     pick_station_body,
+    reload_arm_with_visuals,
 )
 from cell.sim.settle import Outcome, Tracker
 
@@ -110,11 +113,7 @@ class CellScene:
         self.dt_s = dt_s
         self.launch_dt_s = launch_dt_s
         self._dt_now = dt_s
-        cl.setGravity(0, 0, -G)
-        cl.setPhysicsEngineParameter(fixedTimeStep=dt_s, numSolverIterations=60)
-        cl.setAdditionalSearchPath(data_path)
-        self.floor = int(cl.loadURDF("plane.urdf"))
-        cl.changeDynamics(self.floor, -1, lateralFriction=0.6, restitution=0.1)
+        self.floor = build_floor(cl, data_path, dt_s)
         self.t = 0.0
         # the wall time [s] spent stepping the physics and setting the arm along its
         # moves (`step`, `set_arm`): the item loop's planning time is the rest (`plan_s`)
@@ -127,10 +126,7 @@ class CellScene:
         self.pick_station = pick_station_body(cl, pick_station_xy, pick_station_height)
         self.ee_body, self.geometry = load_end_effector(cl)
         self.band = BandDrive(cl, self.ee_body, band, self.geometry)
-        self._mount = cl.createConstraint(
-            self.ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0]
-        )
-        cl.changeConstraint(self._mount, maxForce=MOUNT_FORCE_N)
+        self._mount = mount_constraint(cl, self.ee_body)
         self._mount_pose: tuple[list[float], list[float]] = ([0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0])
         self._arm_motion: Callable[[float], Sequence[float]] | None = None
         self.items: list[Item] = []
@@ -172,12 +168,7 @@ class CellScene:
         t0 = time.perf_counter()
         self._stepping += 1
         try:
-            cl = self.client
-            for j, v in zip(self.arm_joints, q, strict=True):
-                cl.resetJointState(self.arm, j, float(v))
-            st = cl.getLinkState(self.arm, self._flange, computeForwardKinematics=True)
-            # E, the base plate's face, lies FLANGE_TO_EE_M along ee_base's z
-            pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
+            pos, orn = scene_arm.pose_arm(self.client, self.arm, self.arm_joints, self._flange, q)
             self.hold_ee(pos, orn, teleport=teleport)
         finally:
             self._count_wall(t0)
@@ -220,12 +211,8 @@ class CellScene:
         if teleport:
             scene_arm.teleport_ee(self, pos, orn)
         self._mount_pose = (pos, orn)
-        cl.changeConstraint(
-            self._mount,
-            jointChildPivot=pos,
-            jointChildFrameOrientation=orn,
-            maxForce=MOUNT_FORCE_N,
-        )
+        cl.changeConstraint(self._mount, jointChildPivot=pos, jointChildFrameOrientation=orn,
+                            maxForce=MOUNT_FORCE_N)  # fmt: skip
 
     def ee_collides_with_station(self, collide: bool) -> None:
         """Let the end-effector collide with the pick station (the physical pick), or not
@@ -454,15 +441,10 @@ class CellScene:
         changes no step of the physics."""
         if self.arm is None or self._arm_visuals or self.robot is None:
             return
-        cl = self.client
-        q = [cl.getJointState(self.arm, j)[0] for j in self.arm_joints]
-        cl.removeBody(self.arm)
         x, y, z = self.robot_base_xyz
-        self.arm, self.arm_joints, self._flange, _ = load_arm(
-            cl, self.robot, (x, y, z), visuals=True
+        self.arm, self.arm_joints, self._flange = reload_arm_with_visuals(
+            self.client, self.robot, (x, y, z), self.arm, self.arm_joints
         )
-        for j, v in zip(self.arm_joints, q, strict=True):
-            cl.resetJointState(self.arm, j, float(v))
         self._arm_visuals = True
 
     def render(self, **camera: Any) -> np.ndarray:

@@ -4,13 +4,13 @@ what it holds, refreshing the pads' contacts, and E's pose for setting an item d
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
-from cell.sim.frames import quat_from_matrix, release_orientation
+from cell.sim.frames import FLANGE_TO_EE_M, quat_from_matrix, release_orientation
 from cell.sim.items import Item
 from cell.sim.mechanism import EEGeometry
 
@@ -44,6 +44,19 @@ def follow(scene: CellScene, q_samples: Sequence[Sequence[float]], dt_s: float) 
             scene.set_arm(q_prev + (q_next - q_prev) * k / n)
             scene.step()
         q_prev = q_next
+
+
+def pose_arm(
+    cl: Any, arm: int, joints: Sequence[int], flange: int, q: Sequence[float]
+) -> tuple[Sequence[float], Sequence[float]]:
+    """Set the kinematic arm's joint positions q [rad] and return where its mount holds the
+    end-effector frame E: position [m, W] and quaternion (x, y, z, w). E, the base plate's
+    face, lies FLANGE_TO_EE_M along the `ee_base` link's z."""
+    for j, v in zip(joints, q, strict=True):
+        cl.resetJointState(arm, j, float(v))
+    st = cl.getLinkState(arm, flange, computeForwardKinematics=True)
+    pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
+    return pos, orn
 
 
 def teleport_ee(scene: CellScene, pos: list[float], orn: list[float]) -> None:

@@ -8,8 +8,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from cell.errors import InvalidParameter, MissingDependency
+from cell.model.params import G
 from cell.sim.band import BAND_JOINT, FINGER_LEFT, FINGER_RIGHT
 from cell.sim.bins import BinSpec
+from cell.sim.frames import MOUNT_FORCE_N
 from cell.sim.mechanism import DRIVEN_JOINTS, EEGeometry, load_ee_geometry
 from cell.sim.quiet import quiet_c_output
 
@@ -141,3 +143,41 @@ def load_arm(
         links["ee_base"],
         tuple(float(v) for v in spec.home),
     )
+
+
+def reload_arm_with_visuals(
+    cl: Any, robot: str, base_xyz: tuple[float, float, float], arm: int, joints: list[int]
+) -> tuple[int, list[int], int]:
+    """The arm loaded again with its visual shapes, at the joint positions [rad] `arm` has
+    now (`CellScene.show_arm`): the arm is kinematic and collides with nothing, so this
+    changes no step of the physics.
+
+    Returns:
+        (the new arm body, its joints' indices, `ee_base`'s link index).
+    """
+    q = [cl.getJointState(arm, j)[0] for j in joints]
+    cl.removeBody(arm)
+    new_arm, new_joints, flange, _ = load_arm(cl, robot, base_xyz, visuals=True)
+    for j, v in zip(new_joints, q, strict=True):
+        cl.resetJointState(new_arm, j, float(v))
+    return new_arm, new_joints, flange
+
+
+def build_floor(cl: Any, data_path: str, dt_s: float) -> int:
+    """Gravity, the physics step [s] and the floor plane (z = 0, W); returns its body."""
+    cl.setGravity(0, 0, -G)
+    cl.setPhysicsEngineParameter(fixedTimeStep=dt_s, numSolverIterations=60)
+    cl.setAdditionalSearchPath(data_path)
+    floor = int(cl.loadURDF("plane.urdf"))
+    cl.changeDynamics(floor, -1, lateralFriction=0.6, restitution=0.1)
+    return floor
+
+
+def mount_constraint(cl: Any, ee_body: int) -> int:
+    """The fixed constraint that holds the end-effector frame E at its mount pose (its
+    target follows the arm's flange, `CellScene.hold_ee`); returns its id."""
+    c = int(
+        cl.createConstraint(ee_body, -1, -1, -1, cl.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1.0])
+    )
+    cl.changeConstraint(c, maxForce=MOUNT_FORCE_N)
+    return c
