@@ -5,12 +5,14 @@ its flange link and the end-effector's pose on the flange. The composite is the 
 with everything below the flange removed (the Panda's own hand), the end-effector's links
 and joints appended, a fixed joint `ee_mount_joint` from the flange to `ee_base`, and every
 `package://example-robot-data/` mesh URI rewritten to an absolute path, so that Pinocchio
-and PyBullet both load it without a package search path.
+and PyBullet both load it without a package search path. A continuous joint of the arm
+becomes a revolute one over ±2π rad (`CONTINUOUS_RANGE_RAD`).
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import tempfile
 import xml.etree.ElementTree as ET
@@ -67,6 +69,37 @@ def _descendants(root: ET.Element, link: str) -> tuple[set[str], set[str]]:
     return links, joints
 
 
+CONTINUOUS_RANGE_RAD = 2.0 * math.pi
+"""A continuous joint of the arm is planned as a revolute one over [-2π, 2π] rad: every
+angle twice, so a move may turn either way and unwind."""
+
+
+def _bounded_continuous(arm: ET.Element, spec: MountSpec) -> None:
+    """Make the arm's continuous joints revolute over ±CONTINUOUS_RANGE_RAD (the Kinova
+    Jaco's joints 1, 4 and 6, say): Pinocchio gives a continuous joint two position values
+    (cos, sin), and the planner, its IK and its time scaling take one angle per joint. The
+    URDF's velocity and effort limits are kept.
+
+    Raises:
+        InvalidParameter: a continuous arm joint without a velocity limit in its URDF.
+    """
+    for joint in arm.findall("joint"):
+        name = joint.get("name", "")
+        if joint.get("type") != "continuous" or name not in spec.arm_joints:
+            continue
+        lim = joint.find("limit")
+        if lim is None or lim.get("velocity") is None:
+            raise InvalidParameter(
+                f"{spec.path}: field 'arm_urdf': the continuous joint {name!r} of "
+                f"{spec.arm_urdf} has no velocity limit (<limit velocity=...>), which the "
+                "cell's time scaling needs"
+            )
+        joint.set("type", "revolute")
+        lim.set("lower", repr(-CONTINUOUS_RANGE_RAD))
+        lim.set("upper", repr(CONTINUOUS_RANGE_RAD))
+        lim.set("effort", lim.get("effort", "0"))
+
+
 def composite_urdf_text(robot: str) -> str:
     """The composite URDF (arm + end-effector) as text.
 
@@ -91,6 +124,7 @@ def composite_urdf_text(robot: str) -> str:
                 el.tag == "joint" and el.get("name") in drop_joints
             ):
                 arm.remove(el)
+    _bounded_continuous(arm, spec)
     # Transmissions and simulator plug-ins are for ROS controllers; neither loader needs them.
     for el in list(arm):
         if el.tag in ("transmission", "gazebo"):

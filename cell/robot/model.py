@@ -70,10 +70,16 @@ class Robot:
         if not self.model.existFrame(TCP_FRAME):
             raise InvalidInput(f"{self.urdf}: no frame {TCP_FRAME!r}")
         self.tcp_frame = int(self.model.getFrameId(TCP_FRAME))
-        if list(self.model.names)[1:] != list(spec.arm_joints) or self.model.nq != self.model.nv:
+        multi = [
+            n
+            for n, jm in zip(self.model.names[1:], self.model.joints[1:], strict=True)
+            if jm.nq != 1
+        ]
+        if list(self.model.names)[1:] != list(spec.arm_joints) or multi:
             raise InvalidInput(
                 f"{self.urdf}: the reduced model's joints {list(self.model.names)[1:]} are not "
-                f"the mount's arm_joints {list(spec.arm_joints)} in order, each with one DoF"
+                f"the mount's arm_joints {list(spec.arm_joints)} in order, each with one "
+                f"position value (revolute or prismatic; not so: {multi or 'none'})"
             )
         acc = np.array(spec.acceleration_limits, dtype=float)
         jerk = np.array(spec.jerk_limits, dtype=float)

@@ -344,13 +344,16 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
 
 def _check_home(spec: MountSpec, root: ET.Element) -> None:
     """InvalidParameter naming the mount file when `home` is outside a joint's position
-    limits in the URDF (a continuous joint has none)."""
+    limits in the URDF (a continuous joint's are ±2π, as the cell plans it)."""
     joints = {j.get("name", ""): j for j in root.findall("joint")}
     for name, q in zip(spec.arm_joints, spec.home, strict=True):
         lim = joints[name].find("limit")
-        if joints[name].get("type") == "continuous" or lim is None:
+        if joints[name].get("type") == "continuous":
+            lo, hi = -2.0 * math.pi, 2.0 * math.pi  # planned so: cell.robot.composite
+        elif lim is None:
             continue
-        lo, hi = float(lim.get("lower", "0")), float(lim.get("upper", "0"))
+        else:
+            lo, hi = float(lim.get("lower", "0")), float(lim.get("upper", "0"))
         if not lo - 1e-9 <= q <= hi + 1e-9:
             raise InvalidParameter(
                 f"{spec.path}: field 'home': {q} rad for {name} is outside its range "
