@@ -127,10 +127,17 @@ def _missed(miss: float) -> str:
     return "farther than any configuration reaches"
 
 
-def _out(reach: float) -> str:
-    """How far out the grip pointing down reaches at a height, in words."""
+def _out(reach: float, here_m: float) -> str:
+    """How far out the grip pointing down reaches at a height, in words; `here_m` is how
+    far out the pose missed lies [m]: nearer than `reach`, the gap is an inner one (the
+    joints' limits keep the grip from pointing down that close to the base)."""
     if reach <= 0.0:
         return "the arm's grip pointing down does not get there at that height"
+    if here_m < reach - 0.01:
+        return (
+            f"the arm's grip pointing down reaches about {reach:.2f} m out at that height, "
+            "but not this near the base (its joints' limits)"
+        )
     return f"the arm's grip pointing down reaches about {reach:.2f} m out at that height"
 
 
@@ -176,13 +183,15 @@ def reach_problems(
         if miss == 0.0:
             continue
         reach = _reach_m(robot, pick, z)
+        r_pick = math.hypot(pick[0], pick[1])
         out.append(
             f"{where.get('pick_station', where.get('cell', '?'))}, pick_station.position_m: "
             f"the {robot.name} arm does not reach the pick station at {_fmt(pick)} m "
             f"({what}: the grip pointing down with its TCP at {_fmt(tcp)} m, "
             f"{_missed(miss)}); the station's centre is "
-            f"{math.hypot(pick[0], pick[1]):.2f} m from the base and {_out(reach)}: move "
-            "the station within that, or choose another arm"
+            f"{r_pick:.2f} m from the base and "
+            f"{_out(reach, r_pick)}: move the station "
+            f"{'farther out' if r_pick < reach - 0.01 else 'within that'}, or choose another arm"
         )
         break
     return out + place_problems(robot, bins, items, placed, where)
@@ -208,13 +217,13 @@ def place_problems(
         if miss == 0.0:
             continue
         reach = _reach_m(robot, xy, float(tcp[2]))
+        r_bin = math.hypot(xy[0], xy[1])
         out.append(
             f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
             f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
             f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
-            f"{_out(reach)}): "
-            "move the bin "
-            "closer, or have its items thrown (policy: auto with limits.place_reach_m below "
+            f"{_out(reach, r_bin)}): "
+            f"move the bin {'farther out' if r_bin < reach - 0.01 else 'closer'}, or have its items thrown (policy: auto with limits.place_reach_m below "
             f"{math.hypot(*b.position):.2f} m)"
         )
     return out

@@ -122,3 +122,31 @@ def test_a_continuous_joint_without_a_velocity_limit_is_refused(
     monkeypatch.setattr(mount_mod, "example_robot_data_dir", lambda: erd)
     with pytest.raises(InvalidParameter, match="j2s6s200_joint_4.*velocity"):
         composite_urdf_text(str(jaco))
+
+
+def test_a_station_inside_the_arms_inner_gap_is_told_to_move_out(tmp_path: Path) -> None:
+    """The Jaco's grip points down 0.5 m out at the station's height (above) but not
+    0.40 m out 0.30 m aside (its joints 2, 3 and 5 have limits): the job is refused up
+    front, the message saying farther out, not "within" a reach the station is inside."""
+    from cell.errors import JobError
+    from cell.jobs import load_job
+
+    (tmp_path / "jaco").mkdir()
+    (tmp_path / "jaco" / "mount.yaml").write_text(JACO)
+    job = tmp_path / "job.yaml"
+    job.write_text(
+        "cell: {mount: jaco/mount.yaml}\n"
+        "bins:\n"
+        "  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}\n"
+        "pick_station: {position_m: [0.40, -0.30, 0.20]}\n"
+        "items:\n"
+        "  - {object: cube50, count: 1, bin: far}\n"
+    )
+    with pytest.raises(JobError) as err:
+        load_job(job)
+    msg = str(err.value)
+    assert "pick_station.position_m" in msg and "farther out" in msg, msg
+    assert "within that" not in msg
+    ok = job.read_text().replace("[0.40, -0.30, 0.20]", "[0.50, -0.30, 0.20]")
+    job.write_text(ok)
+    assert len(load_job(job).bins) == 1  # 0.50 m out: accepted
