@@ -6,8 +6,9 @@ about the vertical before the pads close. A box (a cuboid whose horizontal sizes
 is met across its first size (its x, the catalogue's "across the band") or, the grip
 turned a quarter turn, across its second: the item as gripped then has those two sizes
 swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sphere are as
-wide every way the pads meet them: one side. A mesh is gripped across its first size only
-(its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
+wide every way the pads meet them: one side. A mesh is met across its first size or,
+turned a quarter turn, its second (its width across the pads comes from its vertices where
+the pads meet them, `cell.catalogue.pad_width_m`).
 
 The sides kept (`holding_sides`): those the pads hold briskly, the first size first; else
 those held only slowly. A place takes the first kept (a place's cycle does not depend on
@@ -58,8 +59,12 @@ class GripSide:
 
 def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
     """The sides the pads can meet `obj` across from its resting pose: (the grip's yaw
-    [rad] from the item's x axis, the item as gripped), the first size first."""
-    if obj.shape == "cuboid" and not math.isclose(obj.size[0], obj.size[1], abs_tol=1e-9):
+    [rad] from the item's x axis, the item as gripped), the first size first. A box's
+    two horizontal sizes; a mesh's two horizontal widths, each where the pads meet it
+    (`cell.catalogue.pad_width_m`: the probe's strip across the grip, turned a quarter
+    turn for the second, `cell.catalogue.mesh_turn`): rock_000 is 16 mm across its first
+    (narrower than the band closes on) and 64 mm across its second."""
+    if obj.shape in ("cuboid", "mesh") and not math.isclose(obj.size[0], obj.size[1], abs_tol=1e-9):
         return [(0.0, obj), (math.pi / 2, obj.turned())]
     return [(0.0, obj)]
 

@@ -1,0 +1,110 @@
+"""A mesh's second side (`cell.arm.grip_side.grip_sides`, `cell.catalogue.mesh_turn`):
+a rock or a shard the pads cannot hold across its first width (narrower than the band's
+anchor spacing where the pads meet it) is gripped a quarter turn round, across the width
+its vertices give there, and thrown into its bin; the grip probe measures it so turned.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from cell.arm.grip_side import grip_sides, holding_sides
+from cell.catalogue import catalogue, get_object, mesh_turn, mesh_vertices, pad_width_m
+from cell.errors import CannotGrip
+from cell.jobs import parse_job
+from cell.orchestrator import Orchestrator
+from cell.params import load_params, scene_params_path
+from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+JOB = """
+cell: {robot: panda}
+pick_station: {position_m: [0.45, -0.40, 0.20]}
+bins:
+  - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
+  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {%s}
+seed: 0
+"""
+
+
+def _strip_width(name: str, across: int) -> float:
+    """The mesh's extent [m] along catalogue axis `across` within the pads' strip about
+    the other horizontal axis, computed here from the vertices on their own."""
+    entry = catalogue()[name]
+    v = mesh_vertices(entry.params.mesh, entry.mesh_scale)
+    along = 1 - across
+    strip = v[np.abs(v[:, along]) <= DEFAULT_GEOMETRY.pad_half_width_m]
+    return float(strip[:, across].max() - strip[:, across].min())
+
+
+@pytest.mark.parametrize("name", ["rock_000", "shard_661"])
+def test_a_flat_mesh_is_held_across_its_second_side_only(name: str) -> None:
+    params = load_params(scene_params_path())
+    obj = get_object(name)
+    assert len(grip_sides(obj)) == 2
+    # the first width is under the band's anchor spacing: the pads do not close on it
+    assert pad_width_m(obj) == pytest.approx(_strip_width(name, 0))
+    assert pad_width_m(obj) <= params.ee.d
+    sides = holding_sides(params, obj)
+    assert [s.yaw_rad for s in sides] == [pytest.approx(math.pi / 2)]
+    side = sides[0].obj
+    assert side.size == (obj.size[1], obj.size[0], obj.size[2])
+    assert mesh_turn(side) == (obj, pytest.approx(math.pi / 2))
+    assert mesh_turn(obj) == (obj, 0.0)
+    assert pad_width_m(side) == pytest.approx(_strip_width(name, 1))
+    assert pad_width_m(side) > 3 * pad_width_m(obj)
+
+
+def test_a_mesh_too_heavy_across_both_sides_names_both() -> None:
+    params = load_params(scene_params_path())
+    heavy = dataclasses.replace(get_object("rock_000"), mass=1.0)
+    with pytest.raises(CannotGrip) as err:
+        holding_sides(params, heavy)
+    msg = str(err.value)
+    assert "either side" in msg and "16 mm across" in msg and "64 mm across" in msg
+
+
+def test_the_duck_keeps_its_first_side() -> None:
+    """A mesh the pads hold briskly across its first width is gripped across it, as
+    before (`holding_sides`)."""
+    params = load_params(scene_params_path())
+    duck = get_object("duck")
+    assert [s.yaw_rad for s in holding_sides(params, duck)] == [0.0]
+    assert duck.turned().turned() == duck
+
+
+def _run(item: str, **options: Any) -> tuple[Any, list[dict[str, Any]]]:
+    rows: list[dict[str, Any]] = []
+
+    class Store:
+        def append(self, row: dict[str, Any], **_: Any) -> None:
+            rows.append(row)
+
+    orch = Orchestrator(parse_job(JOB % item, "mesh.yaml"), store=Store(), **options)
+    try:
+        return orch.run().results[0], rows
+    finally:
+        orch.close()
+
+
+def test_a_rock_is_gripped_across_its_second_side_and_thrown_into_its_bin() -> None:
+    """rock_000, refused before (16 mm where the pads met it), is gripped across its 64 mm
+    side, thrown 1.4 m and lands in its bin; the throw log records it as gripped."""
+    result, rows = _run("object: rock_000, bin: far")
+    assert result.action == "throw" and result.in_bin, (result.failure, result.reason)
+    assert rows and rows[0]["size_x_m"] == pytest.approx(0.064, abs=1e-3)
+
+
+def test_a_shard_picked_by_contact_is_gripped_across_its_66_mm_side_and_landed() -> None:
+    """The physical pick rolls the grip so the pads close across the shard's second side
+    as it lies (`Pick._grip_axes(side_yaw=...)`): 14 mm across its first, where the band
+    does not close the pads."""
+    result, rows = _run("object: shard_661, bin: far", pick="physical")
+    assert result.action == "throw" and result.in_bin, (result.failure, result.reason)
+    assert rows and rows[0]["size_x_m"] == pytest.approx(0.066, abs=1e-3)
