@@ -1,8 +1,9 @@
 """A mesh's second side (`cell.arm.grip_side.grip_sides`, `cell.catalogue.mesh_turn`):
 a rock the pads cannot hold across its first width (narrower than the band's anchor
 spacing where the pads meet it) is gripped a quarter turn round, across the width its
-vertices give there, and thrown into its bin by either pick; the grip probe measures it
-so turned. It is offered only where the mesh rests on the station as its catalogue frame
+vertices give there, thrown into its bin by the kinematic pick and gripped so by the
+physical pick (which misses with any flat mesh: the strict xfail below); the grip probe
+measures it so turned. It is offered only where the mesh rests on the station as its catalogue frame
 has it (`mesh_side_refusal`, `cell.sim.rest`): the shard, which tips over, is refused.
 """
 
