@@ -8,6 +8,7 @@ vertices. The catalogue is a sorted registry of frozen `CatalogueEntry`s.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -23,6 +24,7 @@ __all__ = [
     "catalogue",
     "get_object",
     "mesh_path",
+    "mesh_turn",
     "mesh_vertices",
     "pad_width_m",
 ]
@@ -129,12 +131,27 @@ def get_object(name: str) -> ObjectParams:
     return cat[name].params
 
 
+def mesh_turn(obj: ObjectParams) -> tuple[ObjectParams, float]:
+    """(the catalogue's object, the grip's turn [rad] about its vertical) of a mesh item
+    as gripped: a mesh gripped a quarter turn round (`cell.arm.grip_side.turned`) has
+    its catalogue sizes x and y swapped, and its vertices lie as the catalogue has them,
+    so it is the catalogue's object turned π/2. Anything else: (obj, 0)."""
+    entry = catalogue().get(obj.name or "")
+    if obj.shape != "mesh" or entry is None or obj.mesh != entry.params.mesh:
+        return obj, 0.0
+    sx, sy, sz = entry.params.size
+    if obj.size != entry.params.size and obj.size == (sy, sx, sz):
+        return entry.params, math.pi / 2
+    return obj, 0.0
+
+
 def pad_width_m(obj: ObjectParams, pad_half_width_m: float | None = None) -> float:
     """The width [m] the pads close to on an object: its extent along x within the
     pads' strip |y| ≤ pad half width (default: the end-effector description's pads,
     cell.sim.mechanism). A box's or cylinder's is its size_x; a mesh's can be far less
     (a flat rock 48 mm wide is 16 mm thick where the pads meet it: the pads in the scene
-    close to 19 mm on it)."""
+    close to 19 mm on it). A mesh gripped a quarter turn round (`mesh_turn`): its extent
+    along the catalogue's y within the strip |x| ≤ pad half width (that rock: 64 mm)."""
     entry = catalogue().get(obj.name or "")
     if obj.shape != "mesh" or entry is None or not obj.mesh:
         return obj.width
@@ -143,5 +160,6 @@ def pad_width_m(obj: ObjectParams, pad_half_width_m: float | None = None) -> flo
 
         pad_half_width_m = DEFAULT_GEOMETRY.pad_half_width_m
     v = mesh_vertices(obj.mesh, entry.mesh_scale)
-    strip = v[np.abs(v[:, 1]) <= pad_half_width_m]
-    return float(np.ptp(strip[:, 0])) if len(strip) >= 3 else obj.width
+    across, along = (1, 0) if mesh_turn(obj)[1] else (0, 1)
+    strip = v[np.abs(v[:, along]) <= pad_half_width_m]
+    return float(np.ptp(strip[:, across])) if len(strip) >= 3 else obj.width

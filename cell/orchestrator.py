@@ -259,7 +259,15 @@ class Orchestrator(
         probed = ("mesh", "sphere")
         handled = self.job.expanded_items()
         for obj in dict.fromkeys(s.obj for s in handled if s.obj.shape in probed):
-            mesh_grip(self.params, obj)
+            if obj.shape != "mesh":
+                mesh_grip(self.params, obj)
+                continue
+            try:  # each side it may be gripped across (`_check_job` refuses the rest)
+                sides = holding_sides(self.params, obj)
+            except CannotGrip:
+                continue
+            for side in sides:
+                mesh_grip(self.params, side.obj)
 
     def _check_job(self) -> None:
         """Refuse the job before it starts if an item cannot be gripped or its bin is

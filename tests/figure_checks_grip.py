@@ -74,19 +74,22 @@ def _check_the_sides(page: str, params: Any) -> None:
 def _check_the_mesh_sides(page: str, params: Any) -> None:
     """A mesh's width where the pads meet its first side (`pad_width_m`) and its second
     (computed here from the vertices: its extent along y within the pads' strip about x),
-    and the shard's height."""
+    how the rock and the shard rest (`rest_shift`) against the pads' half width, the
+    shard's height, and the egg's two widths."""
+    import math
+
     import numpy as np
 
-    from cell.arm.grip_side import holding_sides
+    from cell.arm.grip_side import MESH_SAME_WIDTH_M, grip_sides, holding_sides
     from cell.catalogue import catalogue, get_object, mesh_vertices, pad_width_m
     from cell.errors import CannotGrip
     from cell.sim.mechanism import DEFAULT_GEOMETRY
+    from cell.sim.rest import rest_shift
 
-    r0, s0, d, r1, s1, h = quoted(
+    r0, s0, d, r1, s1 = quoted(
         page,
-        r"`rock_000` is (\d+) mm where the pads meet it and\s+`shard_661` (\d+) mm, under the "
-        r"band's (\d+) mm anchor spacing:.*?Their second side \((\d+) and (\d+) mm across.*?"
-        r"standing on\s+its (\d+) mm edge",
+        r"`rock_000` is (\d+) mm where the pads meet it and `shard_661` (\d+) mm, under the "
+        r"band's (\d+) mm anchor spacing; their second side is (\d+) and (\d+) mm across",
     )
     assert float(d) / 1000 == pytest.approx(params.ee.d)
     for name, first, second in (("rock_000", r0, r1), ("shard_661", s0, s1)):
@@ -96,9 +99,29 @@ def _check_the_mesh_sides(page: str, params: Any) -> None:
         v = mesh_vertices(entry.params.mesh, entry.mesh_scale)
         strip = v[np.abs(v[:, 0]) <= DEFAULT_GEOMETRY.pad_half_width_m]
         close(second, 1000 * float(np.ptp(strip[:, 1])), 0)
-        with pytest.raises(CannotGrip):
-            holding_sides(params, obj)
-    close(h, 1000 * get_object("shard_661").size[2], 0)
+    half, rock, side, h, tilt, shift = quoted(
+        page,
+        r"no more than the pads' half width, (\d+) mm .*?`rock_000` rests level \(([\d.]+) "
+        r"mm\): it is gripped across its (\d+) mm side. `shard_661`, standing on its (\d+) mm "
+        r"edge in its catalogue frame, tips (\d+) deg over \(its surface moves (\d+) mm\)",
+    )
+    close(half, 1000 * DEFAULT_GEOMETRY.pad_half_width_m, 0)
+    rock_obj, shard = get_object("rock_000"), get_object("shard_661")
+    close(rock, 1000 * rest_shift(rock_obj).shift_m, 1)
+    assert [round(1000 * s.width_m) for s in holding_sides(params, rock_obj)] == [int(side)]
+    close(h, 1000 * shard.size[2], 0)
+    close(tilt, math.degrees(rest_shift(shard).tilt_rad), 0)
+    close(shift, 1000 * rest_shift(shard).shift_m, 0)
+    with pytest.raises(CannotGrip):
+        holding_sides(params, shard)
+    same, e0, e1 = quoted(
+        page, r"within (\d+) mm \(the egg: ([\d.]+) and ([\d.]+) mm, its\s+facets\)"
+    )
+    close(same, 1000 * MESH_SAME_WIDTH_M, 0)
+    egg = get_object("o7_egg")
+    close(e0, 1000 * pad_width_m(egg), 1)
+    close(e1, 1000 * pad_width_m(egg.turned()), 1)
+    assert len(grip_sides(egg)) == 1
 
 
 def _check_the_carry(page: str, params: Any) -> None:
@@ -207,6 +230,8 @@ def check_the_grip_page() -> None:
         dataclasses.replace(get_object("cuboid_a"), mass=0.5),
     ):
         _quoted_message(page, _refusal(params, obj))
+    # a mesh whose other side is not offered, both sides named
+    _quoted_message(page, _refusal(params, get_object("shard_661")))
     # the item held only slowly: placed, never thrown
     from cell.arm.grip_side import holding_sides, throw_sides
     from cell.errors import CannotGrip

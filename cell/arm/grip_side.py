@@ -6,8 +6,9 @@ about the vertical before the pads close. A box (a cuboid whose horizontal sizes
 is met across its first size (its x, the catalogue's "across the band") or, the grip
 turned a quarter turn, across its second: the item as gripped then has those two sizes
 swapped (`turned`), its inertia with them. A cube, an upright cylinder and a sphere are as
-wide every way the pads meet them: one side. A mesh is gripped across its first size only
-(its width across the pads comes from its vertices, `cell.catalogue.pad_width_m`).
+wide every way the pads meet them: one side. A mesh is met across its first size or,
+turned a quarter turn, its second (its width across the pads comes from its vertices where
+the pads meet them, `cell.catalogue.pad_width_m`).
 
 The sides kept (`holding_sides`): those the pads hold briskly, the first size first; else
 those held only slowly. A place takes the first kept (a place's cycle does not depend on
@@ -29,7 +30,16 @@ from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
-__all__ = ["GripSide", "GripSideChoice", "grip_sides", "holding_sides", "throw_sides"]
+MESH_SAME_WIDTH_M = 1e-3  # [m] a mesh's two widths within this are one side
+
+__all__ = [
+    "GripSide",
+    "GripSideChoice",
+    "grip_sides",
+    "holding_sides",
+    "mesh_side_refusal",
+    "throw_sides",
+]
 
 
 @dataclass(frozen=True)
@@ -58,10 +68,51 @@ class GripSide:
 
 def grip_sides(obj: ObjectParams) -> list[tuple[float, ObjectParams]]:
     """The sides the pads can meet `obj` across from its resting pose: (the grip's yaw
-    [rad] from the item's x axis, the item as gripped), the first size first."""
+    [rad] from the item's x axis, the item as gripped), the first size first. A box's
+    two horizontal sizes; a mesh's two horizontal widths, each where the pads meet it
+    (`cell.catalogue.pad_width_m`: the probe's strip across the grip, turned a quarter
+    turn for the second, `cell.catalogue.mesh_turn`): rock_000 is 16 mm across its first
+    (narrower than the band closes on) and 64 mm across its second."""
     if obj.shape == "cuboid" and not math.isclose(obj.size[0], obj.size[1], abs_tol=1e-9):
         return [(0.0, obj), (math.pi / 2, obj.turned())]
+    if obj.shape == "mesh":
+        from cell.catalogue import pad_width_m
+
+        other = obj.turned()
+        # a mesh round about its vertical (the egg: 42.9 and 43.0 mm, its facets) is as
+        # wide both ways, as an upright cylinder: one side
+        if not math.isclose(pad_width_m(obj), pad_width_m(other), abs_tol=MESH_SAME_WIDTH_M):
+            return [(0.0, obj), (math.pi / 2, other)]
     return [(0.0, obj)]
+
+
+def mesh_side_refusal(obj: ObjectParams, side: ObjectParams) -> str:
+    """Why a mesh's second side (`side`, `obj` gripped a quarter turn round) is not
+    offered, "" where it is. The throw model, the grip probe and the kinematic pick have
+    a mesh seated in the grip in its catalogue frame; the physical pick holds it as it
+    lies. The two agree only where it rests as the catalogue frame has it: its surface,
+    tilted as it rests (`cell.sim.rest.rest_shift`), moves no more than the pads' half
+    width, the strip across which they meet it (its width across the pads,
+    `cell.catalogue.pad_width_m`, is that strip's). rock_000 rests level (0.0 mm):
+    offered; shard_661, standing on its 40 mm edge in its catalogue frame, tips 22° over
+    (13.2 mm, over the pads' 12 mm): not offered. A mesh's first side is offered as
+    before (main's rule; the duck and the teddy rest tipped too)."""
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+    from cell.sim.rest import rest_shift
+
+    if obj.shape != "mesh":
+        return ""
+    rest = rest_shift(obj)
+    half = DEFAULT_GEOMETRY.pad_half_width_m
+    if rest.shift_m <= half:
+        return ""
+    return (
+        f"{side.width * 1000:.0f} mm across its other side, not offered: it rests on the "
+        f"station tipped {math.degrees(rest.tilt_rad):.0f} deg from its catalogue frame "
+        f"(its surface moves up to {rest.shift_m * 1000:.0f} mm, more than the pads' half "
+        f"width {half * 1000:.0f} mm), where the throw model and the grip probe have it "
+        "seated as the catalogue frame has it"
+    )
 
 
 def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
@@ -80,6 +131,10 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
     """
     found, tried = [], []
     for yaw, side in grip_sides(obj):
+        unseated = mesh_side_refusal(obj, side) if yaw else ""
+        if unseated:
+            tried.append(unseated)
+            continue
         s_max, brisk = grip_strokes(params, side)
         if s_max is not None:
             found.append(GripSide(yaw, side, s_max, brisk))

@@ -100,6 +100,7 @@ def grasped_in_scene(
     `elevation_rad` (and `roll_rad` about it), grips `obj` at stroke L_s [m]: yields
     (the scene, the item, a function giving the item's pose in the end-effector's frame
     now: position [m] and quaternion x y z w, the end-effector)."""
+    from cell.catalogue import mesh_turn
     from cell.endeffector.pybullet_backend import PyBulletEndEffector
     from cell.sim.frames import ee_pose_for_item_centre
     from cell.sim.scene import CellScene
@@ -111,8 +112,11 @@ def grasped_in_scene(
             (0.0, 0.0, 0.7), elevation_rad, 0.0, stroke_m, obj, roll_rad
         )
         sc.hold_ee(pos, orn, teleport=True)
-        item = sc.spawn_item(obj)
-        ee.grasp(stroke_m, item)
+        # a mesh gripped a quarter turn round: its body as the catalogue has it, the grip
+        # turned about its vertical (`cell.catalogue.mesh_turn`)
+        body_obj, yaw = mesh_turn(obj)
+        item = sc.spawn_item(body_obj)
+        ee.grasp(stroke_m, item, yaw_rad=yaw)
 
         def relative() -> tuple[np.ndarray, tuple[float, ...]]:
             e_p, e_o = cl.getBasePositionAndOrientation(sc.ee_body)
