@@ -204,3 +204,16 @@ def test_a_tumbling_block_scatters_between_repeats_the_launch_barely_does():
     sd_cross = np.sqrt(repeat_var(plan, cross, use))
     assert sd_cross < 0.005  # [m] the jitter's own scatter: a few mm
     assert sd_rest > 0.02 and sd_rest > 5 * sd_cross, (sd_rest, sd_cross)
+
+
+def test_the_repeats_tool_refuses_what_it_cannot_measure(capsys: pytest.CaptureFixture) -> None:
+    """`python -m cell.gap.scene_repeats`: an unknown case, a case without a bounce or a
+    jitter out of range is a `cell: error:` line and exit 2, before any throw."""
+    from cell.gap.scene_repeats import main
+
+    assert main(["s:gremlins"]) == 2
+    assert main(["s:bounce-slide", "--jitter", "0.5"]) == 2
+    assert main(["s:bounce-slide", "--jitters", "a,b"]) == 2
+    assert main(["s:wind"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("cell: error:") == 4 and "not a case with a bounce" in err
