@@ -69,6 +69,7 @@ figures: install
 	$(BIN)/cell gap check --worlds other --n 240 --workers 2 --json $(FIG)/gap_check_other.json
 	$(BIN)/cell gap check --worlds scene --n 80 --workers 2 --json $(FIG)/gap_check_scene.json
 	$(BIN)/python examples/11_gap_scene_table.py $(FIG)/gap_check_scene.json > $(TMP)/gap_scene_table.md
+	$(BIN)/python -m cell.gap.scene_repeats s:bounce-slide s:bounce-slide-mu03 s:bounce-hop s:bounce-hop-mu05 s:bounce-roll s:bounce-roll-one --jitters 0.0001,0.01 --json $(FIG)/gap_scene_repeats.json > /dev/null
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
 	$(BIN)/cell bench sort --set test --layouts 20 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json

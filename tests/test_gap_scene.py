@@ -167,3 +167,53 @@ def test_a_case_named_alone_is_its_table_row():
             assert (c["world_seed"], c["seed"]) == (
                 table[c["name"]]["world_seed"], table[c["name"]]["seed"])  # fmt: skip
         assert len({c["world_seed"] for c in table.values()}) == len(table)
+
+
+def test_repeat_variance_is_the_pooled_spread_about_each_configuration():
+    """Two configurations thrown twice and three times: Σ|x − mean_g|² / Σ(n_g − 1), by
+    hand: (2 · 0.1² + 0.1² + 0.1²) / (1 + 2) = 0.04 / 3."""
+    from cell.gap.world_scene import draw_plan, repeat_var
+
+    a, b = draw_plan(2, np.random.default_rng(0), repeats=1)
+    plan = [a, b, a, b, b]
+    xy = np.array([[1.0, 0.0], [2.0, 2.1], [1.2, 0.0], [2.0, 2.0], [2.0, 1.9]])
+    assert repeat_var(plan, xy, np.ones(5, bool)) == pytest.approx(0.04 / 3)
+    # a configuration without its repeat (row 3 left out) adds nothing
+    use = np.array([True, True, False, True, True])
+    assert repeat_var(plan, xy, use) == pytest.approx(0.02 / 2)
+    assert np.isnan(repeat_var(plan, xy, np.array([True, True, False, False, False])))
+
+
+def test_a_tumbling_block_scatters_between_repeats_the_launch_barely_does():
+    """PyBullet repeats a throw to the bit; the world's launcher does not (stroke jitter
+    0.1 %). Blocks on a floor of μ 1.0 come to rest far apart on repeats whose crossings
+    of the landing plane differ by millimetres: the bounce's scatter is chaotic, and the
+    world's floor of a bounce (F² = F0² + max(0, V_effect − V_none)) contains it."""
+    from cell.gap.world_scene import draw_plan, repeat_var, throw_plan
+
+    bounce = [{"kind": "bounce", "form": "contact", "restitution": 0.05, "friction": 1.0}]
+    plan = draw_plan(24, np.random.default_rng(3), repeats=4, objects=("cube30", "cube50"))
+    same, _, _ = throw_plan(plan, bounce, 5, jitter_rel=0.0)
+    again, _, _ = throw_plan(plan, bounce, 6, jitter_rel=0.0)
+    assert np.array_equal(same, again)  # the same throws, to the bit
+    assert repeat_var(plan, same, np.ones(len(plan), bool)) == 0.0
+    rest, _, _ = throw_plan(plan, bounce, 5)
+    cross, _, _ = throw_plan(plan, [], 5)
+    use = np.all(np.isfinite(rest), axis=1) & np.all(np.isfinite(cross), axis=1)
+    sd_rest = np.sqrt(repeat_var(plan, rest, use))
+    sd_cross = np.sqrt(repeat_var(plan, cross, use))
+    assert sd_cross < 0.005  # [m] the jitter's own scatter: a few mm
+    assert sd_rest > 0.02 and sd_rest > 5 * sd_cross, (sd_rest, sd_cross)
+
+
+def test_the_repeats_tool_refuses_what_it_cannot_measure(capsys: pytest.CaptureFixture) -> None:
+    """`python -m cell.gap.scene_repeats`: an unknown case, a case without a bounce or a
+    jitter out of range is a `cell: error:` line and exit 2, before any throw."""
+    from cell.gap.scene_repeats import main
+
+    assert main(["s:gremlins"]) == 2
+    assert main(["s:bounce-slide", "--jitter", "0.5"]) == 2
+    assert main(["s:bounce-slide", "--jitters", "a,b"]) == 2
+    assert main(["s:wind"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("cell: error:") == 4 and "not a case with a bounce" in err

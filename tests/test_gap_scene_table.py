@@ -104,3 +104,17 @@ def test_a_per_object_law_is_shown_object_by_object() -> None:
         "drag_scale.spread 0.317; drag_scale.sphere40 3.16; drag_scale.cube30 2.73 — factor = "
         "a_object | 0.82 (F 52 mm) | yes |"
     )
+
+
+def test_a_floor_raised_by_the_effects_own_scatter_shows_its_effect_free_part() -> None:
+    """F0 (the effect-free throws' floor) is shown where the effect's repeat scatter raises
+    F by a millimetre or more: a tumbling block's, not a wind's."""
+    row = {
+        "case": "s:bounce-slide", "truth": "bounce", "verdict": "bounce",
+        "phases": {"bounce": "landing"}, "params": {}, "laws": {}, "world_truth": {},
+        "after_over_floor": 1.1, "world_floor_m": 0.0837, "world_floor0_m": 0.0363,
+        "passes": True,
+    }  # fmt: skip
+    assert scene_row(row).endswith("| 1.10 (F 84 mm, F0 36) | yes |")
+    row.update(world_floor_m=0.0425, world_floor0_m=0.0421)
+    assert scene_row(row).endswith("| 1.10 (F 42 mm) | yes |")

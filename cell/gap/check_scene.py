@@ -8,7 +8,8 @@ identified objects included). A bounce's parameter is the one measured in the wo
 (the slide from the crossing to the rest point per impact speed), compared in the law the
 tool chose. Judged as `cell.gap.check_other` judges (`judge_campaign`): diagonal, phase,
 parameters within 30 % (a scale within 0.5 %), robust held-out RMSE within 1.3 × the
-world's own floor (the same throws without the effect, against the configured model).
+world's own floor (the same throws without the effect, against the configured model,
+with the scatter the effect itself adds between repeats: `cell.gap.world_scene`).
 """
 
 from __future__ import annotations
@@ -248,6 +249,7 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
     row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
                          objects=mp.objects)  # fmt: skip
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
+            "world_floor0_m": camp.floor0_m, "world_repeat_sd_m": list(camp.repeat_sd_m),
             "throws": len(camp.records), "objects": list(objects or ["thesis14"])}  # fmt: skip
 
 

@@ -4,7 +4,8 @@
 Parameters found are printed to 3 significant figures (a per-object law's value for each
 object by the object's name); a world's parameter in brackets
 (the case's setting, or a bounce's as measured in the world, `world_truth`); A / world
-floor to 2 decimals and the floor F in mm; a proposal by its number of terms and its first
+floor to 2 decimals and the floor F in mm (with F0, the effect-free throws' part,
+where the effect's own repeat scatter raises F by 1 mm or more); a proposal by its number of terms and its first
 two terms."""
 
 from __future__ import annotations
@@ -63,6 +64,13 @@ def _params(row: dict[str, Any]) -> str:
     return text
 
 
+def _floor(row: dict[str, Any]) -> str:
+    """F in mm, and F0 (the effect-free throws' alone) where the effect's own repeat
+    scatter raises it by a millimetre or more."""
+    f, f0 = 1000 * row["world_floor_m"], 1000 * row.get("world_floor0_m", float("nan"))
+    return f"F {f:.0f} mm" + (f", F0 {f0:.0f}" if f - f0 >= 1.0 else "")
+
+
 def scene_row(row: dict[str, Any]) -> str:
     phases = "; ".join(f"{k}: {v}" for k, v in row["phases"].items()) or "—"
     cells = (
@@ -71,7 +79,7 @@ def scene_row(row: dict[str, Any]) -> str:
         row["verdict"],
         phases,
         _params(row),
-        f"{row['after_over_floor']:.2f} (F {1000 * row['world_floor_m']:.0f} mm)",
+        f"{row['after_over_floor']:.2f} ({_floor(row)})",
         "yes" if row["passes"] else "no",
     )
     return "| " + " | ".join(cells) + " |"

@@ -1,0 +1,192 @@
+"""The checks of what docs/gap_scene.md says of the scene world's launch jitter, its floor
+with an effect's own repeat scatter, the bounce cases' repeats
+(docs/figures/gap_scene_repeats.json, `python -m cell.gap.scene_repeats`) and the cases
+on the verdict's edge (run by tests/test_readme_figures.py through
+`check_the_gap_scene_prose`)."""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+from typing import Any
+
+from tests.figure_quotes import COVERED, close, load_json, note, page_text, quoted
+
+PAGE = "docs/gap_scene.md"
+_LAWS = ("tau", "inv_mu", "tau+inv_mu", "inv_mu+hop")
+_COLS = ("repeat_sd_rest_m", "repeat_sd_crossing_m", "slide_rms_m", *_LAWS,
+         "inv_mu per object", "tau per object")  # fmt: skip
+
+
+def _mm(q: str, value_m: float) -> None:
+    close(q, 1000 * value_m, len(q.split(".")[1]) if "." in q else 0)
+
+
+def _written(q: str, value: float) -> None:
+    close(q.replace("−", "-"), value, len(q.split(".")[1]) if "." in q else 0)
+
+
+def check_the_launch_jitter_and_floor(rows: dict[str, dict[str, Any]]) -> None:
+    from cell import synth
+    from cell.gap import world_scene as ws
+
+    (sd,) = quoted(PAGE, r"ε drawn per throw with an sd of ([\d.]+) %")
+    close(sd, 100 * ws.JITTER_REL, 3)
+    reach, spread = quoted(PAGE, r"from the arm reaches ([\d.]+) ± ([\d.]+) m\)")
+    assert (float(reach), float(spread)) == (synth.THESIS_REACH_M, synth.THESIS_SPREAD_M)
+    lo, hi = quoted(PAGE, r"effect-free throws scatter between repeats by (\d+)–(\d+) mm")
+    free = [1000 * r["world_repeat_sd_m"][1] for r in rows.values()]
+    close(lo, min(free), 0)
+    close(hi, max(free), 0)
+    (zero,) = quoted(PAGE, r"F² = F0² \+ max\((\d), V_effect − V_none\)")
+    assert int(zero) == 0 and "max(0.0, extra)" in inspect.getsource(ws.draw_scene_campaign)
+    for r in rows.values():  # the formula, as the rows carry it
+        eff, none = r["world_repeat_sd_m"]
+        f0 = r["world_floor0_m"]
+        want = math.sqrt(f0**2 + max(0.0, eff**2 - none**2))
+        assert abs(r["world_floor_m"] - want) < 1e-9, r["case"]
+
+
+def check_the_repeats_table() -> None:
+    doc = load_json("docs/figures/gap_scene_repeats.json")
+    cases = doc["cases"]
+    n, seed = quoted(PAGE, r"bounce case's plan \((\d+) throws, each configuration twice, "
+                     r"seed (\d+)\)")  # fmt: skip
+    assert (int(n), int(seed)) == (doc["n"], doc["seed"])
+    from cell.gap.world_scene import JITTER_REL
+
+    assert doc["jitter"] == JITTER_REL
+    pattern = r"\n\| (s:[\w+.-]+) " + r"\| (\d+) " * len(_COLS) + r"\|(?=\n)"
+    ms = list(re.finditer(pattern, page_text(PAGE)))
+    assert [m.group(1) for m in ms] == list(cases)
+    for m in ms:
+        note(PAGE, m)
+        for q, col in zip(m.groups()[1:], _COLS, strict=True):
+            _mm(q, cases[m.group(1)][col])
+    sl, s3 = cases["s:bounce-slide"], cases["s:bounce-slide-mu03"]
+    c1, mu1, r1, c01, r01, b1, p1, cu_lo, cu_hi, cb_lo, cb_hi = quoted(
+        PAGE,
+        r"crossings differ by (\d+) mm, the rest points of blocks on a floor of μ ([\d.]+) lie "
+        r"(\d+) mm apart; at a tenth of the jitter \(crossings ([\d.]+) mm apart\) still "
+        r"(\d+) mm\..*?the best leaves (\d+) mm\), and per object they come nearer \((\d+) "
+        r"mm; 1/μ ([\d.]+)–([\d.]+) for the cubes, ([\d.]+)–([\d.]+) for the cuboids",
+    )
+    _mm(c1, sl["repeat_sd_crossing_m"])
+    from cell.gap.check_scene import SCENE_CASES
+
+    def friction(case: str) -> float:
+        return float(SCENE_CASES[case][0][0]["friction"])
+
+    assert float(mu1) == friction("s:bounce-slide")
+    _mm(r1, sl["repeat_sd_rest_m"])
+    tenth = sl["jitters"][f"{JITTER_REL / 10:g}"]
+    _mm(c01, tenth["repeat_sd_crossing_m"])
+    _mm(r01, tenth["repeat_sd_rest_m"])
+    _mm(b1, min(sl[k] for k in _LAWS))
+    _mm(p1, sl["inv_mu per object"])
+    mu = sl["inv_mu_per_object"]
+    cubes = [v for k, v in mu.items() if k.startswith("cube") and not k.startswith("cuboid")]
+    cuboids = [v for k, v in mu.items() if k.startswith("cuboid")]
+    for q, v in ((cu_lo, min(cubes)), (cu_hi, max(cubes)), (cb_lo, min(cuboids)),
+                 (cb_hi, max(cuboids))):  # fmt: skip
+        _written(q, v)
+    mu3, s3_rms, times = quoted(PAGE, r"On\s+μ ([\d.]+) the slide is long \((\d+) mm RMS\) and "
+                                r"no law of the table comes within\s+(\d+) × the scatter")  # fmt: skip
+    assert float(mu3) == friction("s:bounce-slide-mu03")
+    _mm(s3_rms, s3["slide_rms_m"])
+    best = min(s3[k] for k in (*_LAWS, "inv_mu per object", "tau per object"))
+    assert int(times) <= best / s3["repeat_sd_rest_m"] < int(times) + 1
+    balls = cases["s:bounce-roll"]["inv_mu_per_object"]
+    *mus, k40, k55, k70 = quoted(
+        PAGE,
+        r"1/μ is ([\d.]+), ([\d.]+) and ([\d.]+) for sphere40, sphere55 and\s+sphere70, "
+        r"([\d.]+), ([\d.]+) and ([\d.]+) per metre of diameter",
+    )
+    from cell.sim.items import resolve_object
+
+    for q, k, name in zip(mus, (k40, k55, k70), ("sphere40", "sphere55", "sphere70"),
+                          strict=True):  # fmt: skip
+        _written(q, balls[name])
+        _written(k, balls[name] / max(resolve_object(name)[0].size))
+    hop = cases["s:bounce-hop-mu05"]
+    mu5, h1, h2, h0 = quoted(PAGE, r"A hop on a floor of μ ([\d.]+)\*\*.*?cuts what the slide "
+                             r"leaves from (\d+) to (\d+) mm \(the repeats\s+scatter by (\d+)\)")  # fmt: skip
+    assert float(mu5) == friction("s:bounce-hop-mu05")
+    _mm(h1, hop["inv_mu"])
+    _mm(h2, hop["inv_mu+hop"])
+    _mm(h0, hop["repeat_sd_rest_m"])
+
+
+def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float) -> None:
+    edge = ("s:wind", "s:drag-high", "s:wind+scale")
+    lo, hi, *over, line = quoted(
+        PAGE,
+        r"A within the world's floor\s+\(([\d.]+)–([\d.]+) F\), but the verdict is `unknown`: A "
+        r"over the tool's floor is ([\d.]+), ([\d.]+)\s+and ([\d.]+), just above the verdict's "
+        r"([\d.]+)\.",
+    )
+    for c in edge:
+        r = rows[c]
+        assert r["verdict"] == "unknown" and r["params_ok"] and r["floor_ok"], c
+    close(lo, min(rows[c]["after_over_floor"] for c in edge), 2)
+    close(hi, max(rows[c]["after_over_floor"] for c in edge), 2)
+    for q, c in zip(over, edge, strict=True):
+        close(q, rows[c]["after_robust_m"] / rows[c]["tool_floor_m"], 3)
+    from cell.gap.select import VERDICT_RATIO
+
+    assert float(line) == VERDICT_RATIO
+    before = quoted(PAGE, r"they\s+passed at ([\d.]+), ([\d.]+) and ([\d.]+): the jitter")
+    assert before == ("1.299", "1.295", "1.292")  # the table before, as the page tells it
+    pairs, share, t_lo, t_hi, w_lo, w_hi = quoted(
+        PAGE,
+        r"floor comes from (\d+) repeat pairs \(a relative sampling error of about (\d+) %\).*?"
+        r"\((\d+)–(\d+) mm against (\d+)–(\d+) mm in these three;",
+    )
+    n = {r["throws"] for r in rows.values()}
+    assert n == {2 * int(pairs)}
+    close(share, 100 / math.sqrt(2 * int(pairs)), 0)
+    for q, v in ((t_lo, min(rows[c]["tool_floor_m"] for c in edge)),
+                 (t_hi, max(rows[c]["tool_floor_m"] for c in edge)),
+                 (w_lo, min(rows[c]["world_floor_m"] for c in edge)),
+                 (w_hi, max(rows[c]["world_floor_m"] for c in edge))):  # fmt: skip
+        _mm(q, v)
+    wb = rows["s:wind+bounce"]
+    fx, fy, tx, ty, m_f, m_t, a_f = quoted(
+        PAGE,
+        r"phase \(([\d.]+)/(−[\d.]+) m/s for (\d+)/(−[\d.]+); 1/μ ([\d.]+) against ([\d.]+)\) "
+        r"and A ([\d.]+) F, but\s+`release_pitch` joins",
+    )
+    _written(fx, wb["params"]["wind"]["x_mps"])
+    _written(fy, wb["params"]["wind"]["y_mps"])
+    assert wb["verdict"] == "bounce+release_pitch+wind"
+    from cell.gap.check_scene import SCENE_CASES
+
+    w = SCENE_CASES["s:wind+bounce"][0][0]
+    assert (float(tx), float(ty.replace("−", "-"))) == (w["x_mps"], w["y_mps"])
+    _written(m_f, wb["params"]["bounce"]["inv_mu"])
+    _written(m_t, wb["world_truth"]["inv_mu"])
+    close(a_f, wb["after_over_floor"], 2)
+    bs = rows["s:bounce-slide"]
+    a, tool, af, f = quoted(PAGE, r"\(`s:bounce-slide`: A (\d+) mm\s+against the tool's floor of "
+                            r"(\d+) mm, and A / F ([\d.]+) with F (\d+) mm\)")  # fmt: skip
+    _mm(a, bs["after_robust_m"])
+    _mm(tool, bs["tool_floor_m"])
+    close(af, bs["after_over_floor"], 2)
+    _mm(f, bs["world_floor_m"])
+    (short,) = quoted(PAGE, r"called\s+`stroke_offset` \(a stroke read (−[\d.]+) mm short\)")
+    _mm(
+        short.replace("−", "-"), rows["s:launch-speed-stroke"]["params"]["stroke_offset"]["delta_m"]
+    )
+    doc = load_json("docs/figures/gap_check_scene.json")
+    old, new, total, s1, s2, m1, m2 = quoted(
+        PAGE,
+        r"(\d+) → (\d+) of (\d+) pass, the three cases.*?`s:bounce-slide`'s A / F ([\d.]+) → "
+        r"([\d.]+) and `s:bounce-slide-mu03`'s ([\d.]+) → ([\d.]+) \(both",
+    )
+    assert (old, s1, m1) == ("24", "4.70", "8.63")  # the table before, as the page tells it
+    assert (int(new), int(total)) == (doc["passes"], doc["total"])
+    close(s2, bs["after_over_floor"], 2)
+    close(m2, rows["s:bounce-slide-mu03"]["after_over_floor"], 2)
+    assert ratio == doc["criteria"]["floor_ratio"]
+    COVERED[PAGE].sort()
