@@ -35,6 +35,7 @@ class ReleaseChoice(ArmBase):
         stroke: float,
         obj: ObjectParams,
         beat: float | None = None,
+        lower: bool = False,
     ) -> tuple[np.ndarray, tuple[bool, float] | None]:
         """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
         estimate (None where none was made; `_plan` compares facings by it): of the two rolls
@@ -53,7 +54,8 @@ class ReleaseChoice(ArmBase):
         (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
         With `cycle_search`, the candidates are timed as the cell makes the cycle, soonest
         bound first, and `beat` [s] is a cycle estimate another release bounds' plan has
-        (`_release_search`). IKFailed when the pose has no configuration."""
+        (`_release_search`; `lower`: in one of the lower release bounds). IKFailed when
+        the pose has no configuration."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
@@ -63,7 +65,7 @@ class ReleaseChoice(ArmBase):
             kept = self._frame
             try:
                 if self.cycle_search:
-                    best = self._release_search(tcp, plan, stroke, obj, beat)
+                    best = self._release_search(tcp, plan, stroke, obj, beat, lower)
                 else:
                     for roll in WEIGHT_ROLLS_RAD:
                         self._frame = (float(a), roll)  # the pick is gripped at this roll
@@ -78,7 +80,13 @@ class ReleaseChoice(ArmBase):
         return self._ik(tcp, e, a), None
 
     def _release_search(
-        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams, beat: float | None
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        stroke: float,
+        obj: ObjectParams,
+        beat: float | None,
+        lower: bool = False,
     ) -> tuple[tuple[bool, float], np.ndarray] | None:
         """`_release_q` with `cycle_search`: ((asks more of the grip than it holds, cycle
         estimate [s]), release configuration) of the soonest release at either roll, or
@@ -137,6 +145,8 @@ class ReleaseChoice(ArmBase):
         soonest = math.inf if beat is None else beat
         pruned = False
         timed, most = 0, self.tuning.release_timed_max
+        if lower and self.tuning.release_timed_max_lower is not None:
+            most = self.tuning.release_timed_max_lower  # in the lower release bounds
         for low, order, roll, q_rel, over, t_approach in ranked:
             if low >= soonest:
                 pruned = True

@@ -108,6 +108,8 @@ class ArmTuning:
             for one more approach planned a candidate. Counted over the demo's 64
             searches with every candidate timed, the soonest was first by it in 41,
             first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
+        release_timed_max_lower: with the release search, `release_timed_max` in the lower
+            release bounds (release_fallbacks; None: the same as in the cell's).
         release_lower_room_s: [s] with the release search, the lower release bounds
             (release_fallbacks) are searched after a plan in the cell's bounds only where
             that plan's carry is at least this much slower than its lower bound (the
@@ -187,6 +189,7 @@ class ArmTuning:
     approach_weight: float = 0.25
     release_timed_max: int = 2
     release_rank_way: bool = True
+    release_timed_max_lower: int | None = None
     release_lower_room_s: float | None = None
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
