@@ -58,8 +58,9 @@ def _decide(
     o._static_cycle_s = watched  # type: ignore[method-assign]
     kept = o.tuning
     # every candidate under the bound timed: the pruning alone (`release_timed_max`, which
-    # may change the choice, is `test_the_search_times_only_the_soonest_bounded`'s)
-    o.tuning = dataclasses.replace(kept, release_timed_max=0)
+    # may change the choice, is `test_the_search_times_only_the_soonest_bounded`'s; so is
+    # `release_timed_max_lower`, in the lower release bounds)
+    o.tuning = dataclasses.replace(kept, release_timed_max=0, release_timed_max_lower=None)
     if exhaustive:
         o._release_ik = lambda robot, pose, seed=None: solve_ik(robot, pose, seed)  # type: ignore[method-assign]
         o._cycle_bound_s = lambda q_pick, q_rel: -math.inf  # type: ignore[method-assign]

@@ -115,7 +115,7 @@ class ArmTuning:
             hour (305.99 -> 305.23 s simulated); the demo decides the same (`sig`
             fa68a371528e), its decisions' CPU 13.44 -> 12.41 s, p95 1.25 -> 1.11 s an item
             (the duck's 1.27 -> 0.99 s); tune layout 0's first 14 items 11.87 -> 11.20 s,
-            30.35 -> 30.77 s simulated (docs/HISTORY.md, 2026-11-29, sixth round).
+            30.35 -> 30.77 s simulated (docs/HISTORY.md, 2026-11-29, seventh round).
         release_lower_room_s: [s] with the release search, the lower release bounds
             (release_fallbacks) are searched after a plan in the cell's bounds only where
             that plan's carry is at least this much slower than its lower bound (the
