@@ -110,31 +110,9 @@ class ReleaseChoice(ArmBase):
         worked out only where the candidate might be ranked before those taken so far
         (`_Ranked`, by `_rank_floor_s`, a bound on that bound): the same order, fewer ways
         back planned (tests/test_release_rank_lazy.py)."""
-        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
-
         level = self._turns_if_rolled(obj, stroke)
         a = float(plan.azimuth_rad)
-        # (a floor under the rank bound [s], order, roll, release, (pick, lift), approach [s])
-        found: list[tuple[float, int, float, np.ndarray, Any, float]] = []
-        for roll in WEIGHT_ROLLS_RAD:
-            self._frame = (a, roll)  # the pick is gripped at this roll
-            try:
-                over = self.over_item(self._presented, stroke, obj)
-                t_approach = self._approach_s(self.q, over, stroke, obj)
-            except (IKFailed, TrajectoryError):
-                continue
-            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
-            mine: list[np.ndarray] = []
-            for seed in (over[1], self.q, over[0]):
-                try:
-                    q_rel = self._release_ik(self.robot, pose, seed).q
-                except IKFailed:
-                    continue
-                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
-                    continue
-                mine.append(q_rel)
-                floor = self._rank_floor_s(q_rel, over, t_approach)
-                found.append((floor, len(found), roll, q_rel, over, t_approach))
+        found = self._release_candidates(tcp, plan, stroke, obj)
 
         def rank(c: _Cand) -> float:
             self._frame = (a, c[2])  # the pick gripped at its roll, as it was found
@@ -180,6 +158,38 @@ class ReleaseChoice(ArmBase):
         if pruned:
             return (False, math.inf), ranked.first()[3]
         return None
+
+    def _release_candidates(
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
+    ) -> list[_Cand]:
+        """`_release_search`'s candidates: at either roll, each distinct release IK finds
+        from the lift, from where the arm is and from the pick, as (a floor under its rank
+        bound [s] (`_rank_floor_s`), order, roll, release, (pick, lift), approach [s]); a
+        roll whose pick or approach is not found has none."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
+
+        a = float(plan.azimuth_rad)
+        found: list[_Cand] = []
+        for roll in WEIGHT_ROLLS_RAD:
+            self._frame = (a, roll)  # the pick is gripped at this roll
+            try:
+                over = self.over_item(self._presented, stroke, obj)
+                t_approach = self._approach_s(self.q, over, stroke, obj)
+            except (IKFailed, TrajectoryError):
+                continue
+            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
+            mine: list[np.ndarray] = []
+            for seed in (over[1], self.q, over[0]):
+                try:
+                    q_rel = self._release_ik(self.robot, pose, seed).q
+                except IKFailed:
+                    continue
+                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
+                    continue
+                mine.append(q_rel)
+                floor = self._rank_floor_s(q_rel, over, t_approach)
+                found.append((floor, len(found), roll, q_rel, over, t_approach))
+        return found
 
     def _release_costs(
         self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
