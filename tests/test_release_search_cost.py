@@ -58,8 +58,9 @@ def _decide(
     o._static_cycle_s = watched  # type: ignore[method-assign]
     kept = o.tuning
     # every candidate under the bound timed: the pruning alone (`release_timed_max`, which
-    # may change the choice, is `test_the_search_times_only_the_soonest_bounded`'s)
-    o.tuning = dataclasses.replace(kept, release_timed_max=0)
+    # may change the choice, is `test_the_search_times_only_the_soonest_bounded`'s; so is
+    # `release_timed_max_lower`, in the lower release bounds)
+    o.tuning = dataclasses.replace(kept, release_timed_max=0, release_timed_max_lower=None)
     if exhaustive:
         o._release_ik = lambda robot, pose, seed=None: solve_ik(robot, pose, seed)  # type: ignore[method-assign]
         o._cycle_bound_s = lambda q_pick, q_rel: -math.inf  # type: ignore[method-assign]
@@ -220,6 +221,15 @@ def test_the_search_times_only_the_soonest_bounded(orchestrator: Any) -> None:
         same = search(len(every))
         assert same is not None and same[0] == full[0]
         np.testing.assert_array_equal(same[1], full[1])
+        # `release_timed_max_lower`: in the lower release bounds only
+        for lower, k in ((True, 1), (False, len(every))):
+            timed.clear()
+            o.tuning = dataclasses.replace(
+                kept_tuning, release_timed_max=0, release_timed_max_lower=1
+            )
+            got = o._release_search(tcp, plan, stroke, spec.obj, None, lower)
+            assert len(timed) == k and got is not None
+            np.testing.assert_array_equal(got[1], (one if lower else full)[1])
     finally:
         o.__dict__.pop("_static_cycle_s", None)
         o.tuning, o._frame = kept_tuning, kept_frame

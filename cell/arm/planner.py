@@ -257,7 +257,7 @@ class Planner(ArmBase):
         ordinary, shrunk = self._release_bounds(target)
         for tier in (ordinary, shrunk):
             found: list[ThrowChoice] = []
-            for bounds in tier:
+            for k, bounds in enumerate(tier):
                 if found and (tier is shrunk or not self._lower_bounds_wanted(found[0])):
                     break  # the first reached is kept
                 try:
@@ -269,6 +269,7 @@ class Planner(ArmBase):
                             stroke_max_m,
                             dc_replace(bounds, facing_rad=facing),
                             _sooner_beat(self._beat(found), beat),
+                            lower=k > 0,
                         )
                     )
                 except (UnreachableTarget, IKFailed) as exc:
@@ -304,11 +305,14 @@ class Planner(ArmBase):
         stroke_max_m: float,
         bounds: Any,
         beat: float | None = None,
+        lower: bool = False,
     ) -> ThrowChoice:
         """The throw's plan in release `bounds` and its release (`_release_q`, which need
         not time a release whose cycle cannot beat `beat` [s]): steep enough for the grip
         to hold the item at its release first; where the arm reaches no such release, as
-        the bounds are (`_steep_enough`). UnreachableTarget or IKFailed."""
+        the bounds are (`_steep_enough`). `lower`: `bounds` are one of the lower release
+        bounds (RELEASE_FALLBACKS; `ArmTuning.release_timed_max_lower`). UnreachableTarget
+        or IKFailed."""
         err: IKFailed | None = None
         for steep in (True, False):
             plan, delta, aim, model_obj, steepened = self._plan_once(
@@ -325,6 +329,7 @@ class Planner(ArmBase):
                     stroke,
                     obj,
                     beat,
+                    lower=lower,
                 )
             except IKFailed as exc:
                 err = err or exc

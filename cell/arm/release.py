@@ -35,6 +35,7 @@ class ReleaseChoice(ArmBase):
         stroke: float,
         obj: ObjectParams,
         beat: float | None = None,
+        lower: bool = False,
     ) -> tuple[np.ndarray, tuple[bool, float] | None]:
         """The release configuration for a throw's `plan` at `tcp` [m, W], and its cycle
         estimate (None where none was made; `_plan` compares facings by it): of the two rolls
@@ -53,7 +54,8 @@ class ReleaseChoice(ArmBase):
         (`_release_costs`: a tall item's swing that rolls the grip) ranks after the others.
         With `cycle_search`, the candidates are timed as the cell makes the cycle, soonest
         bound first, and `beat` [s] is a cycle estimate another release bounds' plan has
-        (`_release_search`). IKFailed when the pose has no configuration."""
+        (`_release_search`; `lower`: in one of the lower release bounds). IKFailed when
+        the pose has no configuration."""
         from cell.robot.ik import WEIGHT_ROLLS_RAD
 
         e, a = plan.elevation_rad, plan.azimuth_rad
@@ -63,7 +65,7 @@ class ReleaseChoice(ArmBase):
             kept = self._frame
             try:
                 if self.cycle_search:
-                    best = self._release_search(tcp, plan, stroke, obj, beat)
+                    best = self._release_search(tcp, plan, stroke, obj, beat, lower)
                 else:
                     for roll in WEIGHT_ROLLS_RAD:
                         self._frame = (float(a), roll)  # the pick is gripped at this roll
@@ -78,7 +80,13 @@ class ReleaseChoice(ArmBase):
         return self._ik(tcp, e, a), None
 
     def _release_search(
-        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams, beat: float | None
+        self,
+        tcp: np.ndarray,
+        plan: Any,
+        stroke: float,
+        obj: ObjectParams,
+        beat: float | None,
+        lower: bool = False,
     ) -> tuple[tuple[bool, float], np.ndarray] | None:
         """`_release_q` with `cycle_search`: ((asks more of the grip than it holds, cycle
         estimate [s]), release configuration) of the soonest release at either roll, or
@@ -97,40 +105,27 @@ class ReleaseChoice(ArmBase):
         first one's configuration with the estimate (False, ∞): it cannot be chosen
         (`_soonest_release`). Ties go to the candidate first in the rolls' order
         (WEIGHT_ROLLS_RAD) and then the seeds', so the choice is the one the search timing
-        every candidate makes (tests/test_release_search_cost.py)."""
-        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
-
+        every candidate makes (tests/test_release_search_cost.py). The bound a candidate is
+        ranked by (`_rank_bound_s`: with `release_rank_way`, the way back planned) is
+        worked out only where the candidate might be ranked before those taken so far
+        (`_Ranked`, by `_rank_floor_s`, a bound on that bound): the same order, fewer ways
+        back planned (tests/test_release_rank_lazy.py)."""
         level = self._turns_if_rolled(obj, stroke)
         a = float(plan.azimuth_rad)
-        # (lower bound on the estimate [s], order, roll, release, (pick, lift), approach [s])
-        found: list[tuple[float, int, float, np.ndarray, Any, float]] = []
-        for roll in WEIGHT_ROLLS_RAD:
-            self._frame = (a, roll)  # the pick is gripped at this roll
-            try:
-                over = self.over_item(self._presented, stroke, obj)
-                t_approach = self._approach_s(self.q, over, stroke, obj)
-            except (IKFailed, TrajectoryError):
-                continue
-            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
-            mine: list[np.ndarray] = []
-            for seed in (over[1], self.q, over[0]):
-                try:
-                    q_rel = self._release_ik(self.robot, pose, seed).q
-                except IKFailed:
-                    continue
-                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
-                    continue
-                mine.append(q_rel)
-                try:
-                    low = self._rank_bound_s(q_rel, over, (stroke, obj), t_approach)
-                except (IKFailed, TrajectoryError):
-                    continue  # no way back to the pick: it could not be timed either
-                found.append((low, len(found), roll, q_rel, over, t_approach))
+        found = self._release_candidates(tcp, plan, stroke, obj)
+
+        def rank(c: _Cand) -> float:
+            self._frame = (a, c[2])  # the pick gripped at its roll, as it was found
+            return self._rank_bound_s(c[3], c[4], (stroke, obj), c[5])
+
+        ranked = _Ranked(found, rank)
         best: tuple[tuple[tuple[bool, float], int], np.ndarray, float] | None = None
         soonest = math.inf if beat is None else beat
         pruned = False
         timed, most = 0, self.tuning.release_timed_max
-        for low, order, roll, q_rel, over, t_approach in sorted(found, key=lambda c: c[:2]):
+        if lower and self.tuning.release_timed_max_lower is not None:
+            most = self.tuning.release_timed_max_lower  # in the lower release bounds
+        for low, order, roll, q_rel, over, t_approach in ranked:
             if low >= soonest:
                 pruned = True
                 break  # nor can any after it
@@ -161,8 +156,40 @@ class ReleaseChoice(ArmBase):
             self._release_room_s = best[2]
             return best[0][0], best[1]
         if pruned:
-            return (False, math.inf), found[0][3]
+            return (False, math.inf), ranked.first()[3]
         return None
+
+    def _release_candidates(
+        self, tcp: np.ndarray, plan: Any, stroke: float, obj: ObjectParams
+    ) -> list[_Cand]:
+        """`_release_search`'s candidates: at either roll, each distinct release IK finds
+        from the lift, from where the arm is and from the pick, as (a floor under its rank
+        bound [s] (`_rank_floor_s`), order, roll, release, (pick, lift), approach [s]); a
+        roll whose pick or approach is not found has none."""
+        from cell.robot.ik import WEIGHT_ROLLS_RAD, ReleasePose
+
+        a = float(plan.azimuth_rad)
+        found: list[_Cand] = []
+        for roll in WEIGHT_ROLLS_RAD:
+            self._frame = (a, roll)  # the pick is gripped at this roll
+            try:
+                over = self.over_item(self._presented, stroke, obj)
+                t_approach = self._approach_s(self.q, over, stroke, obj)
+            except (IKFailed, TrajectoryError):
+                continue
+            pose = ReleasePose.from_angles(tcp, plan.elevation_rad, a, roll)
+            mine: list[np.ndarray] = []
+            for seed in (over[1], self.q, over[0]):
+                try:
+                    q_rel = self._release_ik(self.robot, pose, seed).q
+                except IKFailed:
+                    continue
+                if any(joint_gap(q_rel, q) < 1e-3 for q in mine):
+                    continue
+                mine.append(q_rel)
+                floor = self._rank_floor_s(q_rel, over, t_approach)
+                found.append((floor, len(found), roll, q_rel, over, t_approach))
+        return found
 
     def _release_costs(
         self, tcp: np.ndarray, plan: Any, roll: float, stroke: float, obj: ObjectParams
@@ -228,6 +255,24 @@ class ReleaseChoice(ArmBase):
         if not self.tuning.release_rank_way:
             return self._cycle_bound_s(over[0], q_rel) + self.tuning.approach_weight * approach_s
         back = self._approach_s(q_rel, over, held[0], held[1])
+        return self._way_bound_s(over[0], q_rel, back, approach_s)
+
+    def _rank_floor_s(
+        self, q_rel: np.ndarray, over: tuple[np.ndarray, np.ndarray], approach_s: float
+    ) -> float:
+        """A lower bound [s] on `_rank_bound_s` of the release q_rel [rad] (the pick and the
+        lift `over`, the approach `approach_s` [s]) that plans nothing: with
+        `ArmTuning.release_rank_way`, `_way_bound_s` with the way back's bang-bang time
+        (`_one_way_bound_s` from q_rel to the pick) for the way back planned. That way is
+        the empty arm from rest at q_rel to rest at the pick within the joint limits (a
+        ruckig approach at `speed_scale` of them, or two jerk-limited moves at them, each
+        no quicker than its bang-bang time, which is subadditive): each joint travels at
+        least its gap at no more than its limits, so it takes no less; added in the same
+        order, the floating-point sum is no larger either. Without it, `_rank_bound_s`
+        itself (it plans nothing)."""
+        if not self.tuning.release_rank_way:
+            return self._cycle_bound_s(over[0], q_rel) + self.tuning.approach_weight * approach_s
+        back = self._one_way_bound_s(q_rel, over[0])
         return self._way_bound_s(over[0], q_rel, back, approach_s)
 
     def _cycle_bound_s(self, q_pick: np.ndarray, q_rel: np.ndarray) -> float:
@@ -304,3 +349,56 @@ class ReleaseChoice(ArmBase):
         at = (q_pick, self.scene.item_position(self._presented), obj, stroke)
         _, t_carry = self._static_carry(at, q_lift, q_rel, plan)
         return t_carry + COAST_S + self._approach_s(q_rel, (q_pick, q_lift), stroke, obj)
+
+
+_Cand = tuple[float, int, float, np.ndarray, Any, float]
+
+
+class _Ranked:
+    """`_release_search`'s candidates in ascending order of (their rank bound, their
+    order), the rank bound (`exact`, which may raise IKFailed or TrajectoryError: such a
+    candidate is left out) worked out lazily. Each candidate comes with a floor under its
+    rank bound (its first element, `_rank_floor_s`); a candidate whose floor is above
+    the next one ranked cannot come before it, so its bound is worked out only when it
+    might. The order is the one sorting every candidate by its bound gives: a heap holds
+    each candidate by its floor until its bound is known, then by its bound, and the
+    least (key, order) is yielded once it is a bound."""
+
+    def __init__(self, cands: list[_Cand], exact: Any) -> None:
+        import heapq
+
+        self._cands, self._exact = cands, exact
+        self._bounds: dict[int, float | None] = {}  # order -> rank bound, None: raised
+        self._heap = [(c[0], c[1], False) for c in cands]
+        heapq.heapify(self._heap)
+        self._at = {c[1]: c for c in cands}
+
+    def _bound(self, order: int) -> float | None:
+        """The candidate's rank bound, worked out once; None where it raised."""
+        if order not in self._bounds:
+            try:
+                self._bounds[order] = float(self._exact(self._at[order]))
+            except (IKFailed, TrajectoryError):
+                self._bounds[order] = None  # no way back to the pick: not timed either
+        return self._bounds[order]
+
+    def __iter__(self) -> Any:
+        import heapq
+
+        heap = self._heap
+        while heap:
+            key, order, known = heapq.heappop(heap)
+            if known:
+                yield (key, *self._at[order][1:])
+                continue
+            low = self._bound(order)
+            if low is not None:
+                heapq.heappush(heap, (low, order, True))
+
+    def first(self) -> _Cand:
+        """The first candidate (in the search's order) whose rank bound is found, with it."""
+        for c in self._cands:
+            low = self._bound(c[1])
+            if low is not None:
+                return (low, *c[1:])
+        raise AssertionError("a search that pruned a candidate had one ranked")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,7 @@ class Routes(ArmBase):
         q_rel: np.ndarray,
         plan: Any,
         carried: tuple[ObjectParams, float] | None = None,
+        usable: Callable[[list[np.ndarray]], bool] | None = None,
     ) -> list[np.ndarray]:
         """Waypoints between the lift and the release that keep the grip on the twist-free
         swing (`_pick_frame`): the throw axis turns up about one horizontal axis, the
@@ -56,7 +58,11 @@ class Routes(ArmBase):
         SWING_WAYPOINTS of them rolls the grip more than the level swing must
         (`_swing_holds`), twice as many are tried, up to SWING_WAYPOINTS_MAX, and the
         one asking least of the grip at rest is kept (the fewer on a tie). `carried`:
-        the item and its stroke [m] (default: the one in the grip)."""
+        the item and its stroke [m] (default: the one in the grip). `usable`: where the
+        caller takes the route only if `usable(waypoints)` (`_departure`), and neither
+        the swing's waypoints nor none (the spline between the ends) are, the swing's
+        are returned without weighing the spline between the ends against them
+        (`_direct_is_better`, which plans both carries): the caller takes neither."""
         if (
             self._frame is None
             or self.tuning.swing_waypoints < 1
@@ -84,6 +90,8 @@ class Routes(ArmBase):
             return []
         if best[0] > best[1] + self._over_bound(held[0]):
             log.info("the level swing asks more of the grip than it must, even at rest")
+        if usable is not None and not usable(best[2]) and not usable([]):
+            return best[2]  # neither is taken: which is better need not be found
         if self._direct_is_better([q_lift, *best[2], q_rel], best[0], held, plan):
             return []
         return best[2]
@@ -208,9 +216,14 @@ class Routes(ArmBase):
                 start = [q_up]
             elif up > 0.0:
                 continue
-            swung = self._swung(start[-1] if start else q_pick, q_end, plan, swing_of)
+
+            def usable(mid: list[np.ndarray], start: list[np.ndarray] = start) -> bool:
+                w = [*start, *mid, q_end]
+                return self._rises_from_station([q_pick, *w]) and holds(w)
+
+            swung = self._swung(start[-1] if start else q_pick, q_end, plan, swing_of, usable)
             ways = [[*start, *swung, q_end]] + ([[*start, q_end]] if swung and unswung else [])
-            ways = [w for w in ways if self._rises_from_station([q_pick, *w]) and holds(w)]
+            ways = [w for w in ways if usable(w[len(start) : -1])]
             if ways:
                 return self._soonest(ways, q_pick, (obj, stroke))
         swung = self._swung(q_lift, q_end, plan, swing_of)
@@ -247,10 +260,11 @@ class Routes(ArmBase):
         q_end: np.ndarray,
         plan: Any,
         carried: tuple[ObjectParams, float] | None = None,
+        usable: Callable[[list[np.ndarray]], bool] | None = None,
     ) -> list[np.ndarray]:
-        """The twist-free swing's waypoints for a throw's `plan` (`_swing`, `carried` as
-        there); none for a place."""
-        return [] if plan is None else self._swing(q_from, q_end, plan, carried)
+        """The twist-free swing's waypoints for a throw's `plan` (`_swing`, `carried` and
+        `usable` as there); none for a place."""
+        return [] if plan is None else self._swing(q_from, q_end, plan, carried, usable)
 
     def _rises_from_station(self, waypoints: list[np.ndarray], n: int = 400) -> bool:
         """Does the spline through `waypoints` (`cell.robot.motion.spline_path`, the path a

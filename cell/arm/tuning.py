@@ -108,6 +108,14 @@ class ArmTuning:
             for one more approach planned a candidate. Counted over the demo's 64
             searches with every candidate timed, the soonest was first by it in 41,
             first by the bang-bang bound in 39: hardly a better ranking, a tighter cut.
+        release_timed_max_lower: with the release search, `release_timed_max` in the lower
+            release bounds (release_fallbacks; None: the same as in the cell's): there
+            only the soonest-bounded candidate is timed. On tune layouts 0-3 against 2
+            (main at aeaa149): 132 -> 133 of 136 in their bins, 1,553 -> 1,569 items per
+            hour (305.99 -> 305.23 s simulated); the demo decides the same (`sig`
+            fa68a371528e), its decisions' CPU 13.44 -> 12.41 s, p95 1.25 -> 1.11 s an item
+            (the duck's 1.27 -> 0.99 s); tune layout 0's first 14 items 11.87 -> 11.20 s,
+            30.35 -> 30.77 s simulated (docs/HISTORY.md, 2026-11-29, seventh round).
         release_lower_room_s: [s] with the release search, the lower release bounds
             (release_fallbacks) are searched after a plan in the cell's bounds only where
             that plan's carry is at least this much slower than its lower bound (the
@@ -187,6 +195,7 @@ class ArmTuning:
     approach_weight: float = 0.25
     release_timed_max: int = 2
     release_rank_way: bool = True
+    release_timed_max_lower: int | None = 1
     release_lower_room_s: float | None = None
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
