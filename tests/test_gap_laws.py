@@ -99,6 +99,24 @@ def test_size_proportional_bounce_is_learned_as_such():
     assert best.heldout_rmse_m < 0.8 * const.heldout_rmse_m
 
 
+def test_a_laws_mean_over_the_log_is_reported_and_its_slide_is_the_closed_form():
+    from cell.gap.diagnose import _law_means
+    from cell.gap.laws import law_class
+    from cell.model.effects_apply import predict_with_effects
+
+    prob, _, _ = _problem([], n=60)
+    size = prob.batch.size[:, 0]
+    law = law_class(Bounce, "size_x_m", False)(k=2.6)  # type: ignore[call-arg]
+    assert _law_means([law], prob)["bounce"]["inv_mu"] == pytest.approx(2.6 * size.mean())
+    # the model's friction slide takes one 1/μ per throw: v_h |v_h| · 1/μ / (2 g)
+    bare = predict_with_effects(prob.batch, DEFAULT_EE)
+    slid = predict_with_effects(prob.batch, DEFAULT_EE, [law])
+    vh = bare.impact_velocity[:, :2]
+    want = vh * (np.linalg.norm(vh, axis=1) * 2.6 * size / (2 * 9.81))[:, None]
+    got = np.c_[slid.x - bare.x, slid.y - bare.y]
+    assert np.allclose(got, want, rtol=2e-3, atol=1e-9)
+
+
 @pytest.mark.parametrize(
     ("slide", "cls", "param", "value"),
     [({"form": "friction", "mu": 1.2}, Bounce, "inv_mu", 1 / 1.2),

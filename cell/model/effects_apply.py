@@ -206,8 +206,8 @@ def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) ->
     bo = _find(effs, Bounce)
     if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
         vh = v_imp[:, :2]
-        inv_mu = np.reshape(np.asarray(bo.inv_mu, float), (-1, 1))
-        xy = xy + vh * np.linalg.norm(vh, axis=1)[:, None] * inv_mu / (2 * G)
+        inv_mu = np.asarray(bo.inv_mu, float)
+        xy = xy + vh * (np.linalg.norm(vh, axis=1) * inv_mu / (2 * G))[:, None]
     br = _find(effs, BounceRolling)
     if br is not None and np.any(np.asarray(br.tau_s) > 0):
         xy = xy + v_imp[:, :2] * np.reshape(np.asarray(br.tau_s, float), (-1, 1))
