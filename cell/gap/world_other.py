@@ -315,10 +315,10 @@ def _slide(th: Throws, xy: np.ndarray, vimp: np.ndarray, sl: dict[str, Any] | No
     if not sl:
         return xy
     vh = vimp[:, :2]
-    if sl.get("form") in ("friction", "friction_size"):
-        # 1/μ one value, or k times the object's size across the throw (a rolling ball's)
-        inv_mu = (1 / float(sl["mu"]) if sl["form"] == "friction"
-                  else float(sl["k"]) * th.size[:, 0])  # fmt: skip
+    if sl.get("form") == "friction":
+        return xy + vh * (np.linalg.norm(vh, axis=1) / (2 * float(sl["mu"]) * G))[:, None]
+    if sl.get("form") == "friction_size":  # 1/μ = k · size across the throw (a rolling ball's)
+        inv_mu = float(sl["k"]) * th.size[:, 0]
         return xy + vh * (np.linalg.norm(vh, axis=1) * inv_mu / (2 * G))[:, None]
     tau = _value(sl, th, None, "tau_s")
     return xy + vh * tau[:, None]
