@@ -1,7 +1,8 @@
 """The law of an effect learned from the data: its parameter as a function of the throw.
 
 An effect of one parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
-drag_scale's `factor`, ...) may follow one of these forms, c a logged covariate of the
+drag_scale's `factor`, the bounce's `inv_mu` or `tau_s` in whichever of its laws stands
+for it, ...) may follow one of these forms, c a logged covariate of the
 throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
 
 | form | law | terms |
