@@ -187,6 +187,16 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     assert (old, s1, m1) == ("24", "4.70", "8.63")  # the table before, as the page tells it
     assert (int(new), int(total)) == (doc["passes"], doc["total"])
     close(s2, bs["after_over_floor"], 2)
-    close(m2, rows["s:bounce-slide-mu03"]["after_over_floor"], 2)
+    mu3 = rows["s:bounce-slide-mu03"]
+    law, m_before, m_after = quoted(
+        PAGE, r"`s:bounce-slide-mu03` is given `([^`]+)`, its A / F ([\d.]+) → ([\d.]+) \(still"
+    )
+    assert m2 == m_before == "5.37"  # the jitter's table, before the bounce had laws
+    assert law == mu3["laws"]["bounce"] and mu3["verdict"] == "unknown"
+    close(m_after, mu3["after_over_floor"], 2)
+    laws = {c: r["laws"].get("bounce") for c, r in rows.items() if "bounce" in r["laws"]}
+    assert [c for c, v in laws.items() if v not in ("friction", "rolling")] == [
+        "s:bounce-slide-mu03"
+    ], laws  # "no other case takes a bounce law"
     assert ratio == doc["criteria"]["floor_ratio"]
     COVERED[PAGE].sort()

@@ -18,7 +18,7 @@ from cell.gap.propose import propose
 from cell.gap.run import diagnose_log
 from cell.gap.world_other import OBJECTS, Throws, draw_other_campaign, landings
 from cell.log.table import ThrowTable
-from cell.model.effects import BandMass, ReleasePitch
+from cell.model.effects import BandMass, Bounce, BounceRolling, ReleasePitch
 from cell.model.params import DEFAULT_EE
 
 # MODEL.md golden values: object, stroke, release, elevation/azimuth [deg], base velocity,
@@ -86,6 +86,48 @@ def test_constant_world_gets_no_extra_terms():
     best, tried = choose_law(prob, const)
     assert type(best.full.effects[-1]) is ReleasePitch, tried
     assert best.full.effects[-1].params()["delta_rad"] == pytest.approx(0.08, rel=0.05)
+
+
+def test_size_proportional_bounce_is_learned_as_such():
+    # a ball's rolling friction: its slide's 1/μ grows with its size (1/μ = k · size_x_m)
+    prob, _, _ = _problem([{"kind": "slide", "form": "friction_size", "k": 2.6}], n=160)
+    const = score_set(prob, [Bounce])
+    best, tried = choose_law(prob, const)
+    eff = best.full.effects[-1]
+    assert eff.law == "inv_mu = k · size_x_m", tried
+    assert eff.params()["k"] == pytest.approx(2.6, rel=0.05)
+    assert best.heldout_rmse_m < 0.8 * const.heldout_rmse_m
+
+
+def test_a_laws_mean_over_the_log_is_reported_and_its_slide_is_the_closed_form():
+    from cell.gap.diagnose import _law_means
+    from cell.gap.laws import law_class
+    from cell.model.effects_apply import predict_with_effects
+
+    prob, _, _ = _problem([], n=60)
+    size = prob.batch.size[:, 0]
+    law = law_class(Bounce, "size_x_m", False)(k=2.6)  # type: ignore[call-arg]
+    assert _law_means([law], prob)["bounce"]["inv_mu"] == pytest.approx(2.6 * size.mean())
+    # the model's friction slide takes one 1/μ per throw: v_h |v_h| · 1/μ / (2 g)
+    bare = predict_with_effects(prob.batch, DEFAULT_EE)
+    slid = predict_with_effects(prob.batch, DEFAULT_EE, [law])
+    vh = bare.impact_velocity[:, :2]
+    want = vh * (np.linalg.norm(vh, axis=1) * 2.6 * size / (2 * 9.81))[:, None]
+    got = np.c_[slid.x - bare.x, slid.y - bare.y]
+    assert np.allclose(got, want, rtol=2e-3, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("slide", "cls", "param", "value"),
+    [({"form": "friction", "mu": 1.2}, Bounce, "inv_mu", 1 / 1.2),
+     ({"form": "const", "tau_s": 0.05}, BounceRolling, "tau_s", 0.05)],
+)  # fmt: skip
+def test_constant_bounce_gets_no_extra_terms(slide, cls, param, value):
+    prob, _, _ = _problem([{"kind": "slide", **slide}], n=160)
+    best, tried = choose_law(prob, score_set(prob, [cls]))
+    assert type(best.full.effects[-1]) is cls, tried
+    assert set(tried["bounce"]) > {"constant", f"{param} = k · size_x_m"}  # the forms were tried
+    assert best.full.effects[-1].params()[param] == pytest.approx(value, rel=0.05)
 
 
 def test_outliers_are_flagged_by_row_and_robust_error_is_reported():

@@ -154,6 +154,24 @@ def test_a_constant_told_per_object_is_judged_object_by_object():
     assert not _params_ok(expect, {"drag_scale": {"k": 82.0}})[0]  # a law in a covariate
 
 
+def test_a_bounce_told_by_a_law_is_judged_by_its_mean_over_the_log():
+    """A bounce's slide is measured in the world as one constant over the log (`one_of`);
+    a law in the size is judged by the value it gives averaged over the log's throws (the
+    report's `law_mean`), under the parameter the law is of. A world's own constant (not
+    measured) is not judged that way."""
+    from cell.gap.check_other import _params_ok
+
+    expect = {"bounce": {"one_of": [{"tau_s": 0.05}, {"inv_mu": 0.15}]}}
+    got = {"bounce": {"k": 2.6}}
+    assert not _params_ok(expect, got)[0]  # without the law's mean: nothing to compare
+    ok, errs = _params_ok(expect, got, {"bounce": {"inv_mu": 0.16}})
+    assert ok and errs == {"bounce.inv_mu": pytest.approx(0.01 / 0.15)}
+    assert not _params_ok(expect, got, {"bounce": {"inv_mu": 0.2}})[0]  # 33 % off
+    assert not _params_ok(expect, got, {"bounce": {"tau_s": 0.2}})[0]  # the other law, 4 × off
+    const = {"drag_scale": {"factor": 2.5}}
+    assert not _params_ok(const, {"drag_scale": {"k": 82.0}}, {"drag_scale": {"factor": 2.5}})[0]
+
+
 def test_a_case_named_alone_is_its_table_row():
     """`--truths` reruns a row of the table: a case's seeds do not depend on which cases
     run with it (they were drawn in the order of the cases asked for)."""

@@ -31,7 +31,7 @@ Verdict rules:
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -329,6 +329,9 @@ def diagnose(
         ),
         "rules": _rules(),
     }
+    report["verdict"]["law_mean"] = (
+        _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
+    )
     return Diagnosis(
         report=report,
         baseline_residual=r0,
@@ -356,6 +359,18 @@ def _law_params(e: Effect, ci: dict[str, list[float]] | None) -> dict[str, Any]:
         "spread": tau,
         "per_object": {o: float(v) for o, v in zip(ids, vals, strict=True)},
     }
+
+
+def _law_means(effects: Sequence[Effect], prob: GapProblem) -> dict[str, dict[str, float]]:
+    """For each effect whose parameter follows a law (`cell.gap.laws`), the value the law
+    gives its parameter averaged over the log's throws {effect: {param: mean}}."""
+    out: dict[str, dict[str, float]] = {}
+    for e in effects:
+        base = getattr(type(e), "law_base", None)
+        if base is not None:
+            p = base.param_names()[0]
+            out[e.name] = {p: float(np.mean(getattr(e.per_throw(prob.batch), p)))}
+    return out
 
 
 def _verdict_ci(score: Score) -> dict[str, dict[str, list[float]]]:

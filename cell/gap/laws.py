@@ -1,7 +1,8 @@
 """The law of an effect learned from the data: its parameter as a function of the throw.
 
 An effect of one parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
-drag_scale's `factor`, ...) may follow one of these forms, c a logged covariate of the
+drag_scale's `factor`, the bounce's `inv_mu` or `tau_s` in whichever of its laws stands
+for it, ...) may follow one of these forms, c a logged covariate of the
 throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
 
 | form | law | terms |
@@ -48,7 +49,7 @@ COVARIATES: dict[str, tuple[Any, float]] = {
     "mass_kg": (lambda b: b.mass, 0.12),
     "size_x_m": (lambda b: b.size[:, 0], 0.07),
 }
-LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping")
+LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping", "bounce")
 _CACHE: dict[tuple[type[Effect], str, bool], type[Effect]] = {}
 
 
@@ -235,6 +236,17 @@ def law_stretched(eff: Effect, batch: ThrowBatch) -> bool:
     return bool(lo < max(plo, blo + tol) or hi > min(phi, bhi - tol))
 
 
+def _constant_member(cls: type[Effect]) -> type[Effect] | None:
+    """The family member (`cell.model.effects.FAMILIES`) an effect's form is a law of: the
+    class itself for a member (a bounce's friction or rolling law), its `law_base` for a
+    covariate or per-object form."""
+    from cell.model.effects import FAMILIES
+
+    if cls in FAMILIES.get(cls.name, ()):
+        return cls
+    return getattr(cls, "law_base", None)
+
+
 def choose_law(
     prob: GapProblem,
     score: Score,
@@ -254,14 +266,13 @@ def choose_law(
     """
     from cell.gap.fit import score_set
     from cell.gap.stats import bootstrap_cut
-    from cell.model.effects import EFFECTS
 
     tick = tick or (lambda s: None)
     best = score
     tried: dict[str, dict[str, float]] = {}
     for j in range(len(score.full.effects)):
         eff = best.full.effects[j]
-        base = EFFECTS.get(eff.name)
+        base = _constant_member(type(eff))
         if eff.name not in LAW_BASES or base is None:
             continue
         classes = [type(e) for e in best.full.effects]

@@ -16,7 +16,7 @@ integrator, and applies every effect with its own code, as a world would:
 | drag_scale | C_d times f | const, object, throw |
 | downwash | air moving down at w (rpm/5000) in a Gaussian column about the release, decaying below it | const |
 | side_force | a constant horizontal acceleration (outside the vocabulary) | const |
-| slide | the object slides on after touchdown: τ·v_h (rolling) or v_h|v_h|/(2 μ g) (friction) | rolling, friction, object |
+| slide | the object slides on after touchdown: τ·v_h (rolling) or v_h|v_h|/(2 μ g) (friction) | rolling, friction, friction_size (1/μ = k·size, a ball's rolling friction), object |
 | tracking_scale | logged landings are s times the true ones | const |
 
 An effect is a plain dict `{"kind": ..., "form": ..., parameters}` so a case can be
@@ -317,6 +317,9 @@ def _slide(th: Throws, xy: np.ndarray, vimp: np.ndarray, sl: dict[str, Any] | No
     vh = vimp[:, :2]
     if sl.get("form") == "friction":
         return xy + vh * (np.linalg.norm(vh, axis=1) / (2 * float(sl["mu"]) * G))[:, None]
+    if sl.get("form") == "friction_size":  # 1/μ = k · size across the throw (a rolling ball's)
+        inv_mu = float(sl["k"]) * th.size[:, 0]
+        return xy + vh * (np.linalg.norm(vh, axis=1) * inv_mu / (2 * G))[:, None]
     tau = _value(sl, th, None, "tau_s")
     return xy + vh * tau[:, None]
 

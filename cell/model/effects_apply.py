@@ -202,13 +202,15 @@ def _area(batch: ThrowBatch) -> np.ndarray:
 def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) -> np.ndarray:
     """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
     from the impact velocities v_imp [m/s] (n, 3)."""
+    # a parameter is one value, or one per throw (a law in a covariate, `cell.gap.laws`)
     bo = _find(effs, Bounce)
-    if bo is not None and bo.inv_mu > 0:
+    if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
         vh = v_imp[:, :2]
-        xy = xy + vh * (np.linalg.norm(vh, axis=1) * bo.inv_mu / (2 * G))[:, None]
+        inv_mu = np.asarray(bo.inv_mu, float)
+        xy = xy + vh * (np.linalg.norm(vh, axis=1) * inv_mu / (2 * G))[:, None]
     br = _find(effs, BounceRolling)
-    if br is not None and br.tau_s > 0:
-        xy = xy + v_imp[:, :2] * np.reshape(br.tau_s, (-1, 1))
+    if br is not None and np.any(np.asarray(br.tau_s) > 0):
+        xy = xy + v_imp[:, :2] * np.reshape(np.asarray(br.tau_s, float), (-1, 1))
     return xy
 
 
