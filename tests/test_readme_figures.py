@@ -231,6 +231,9 @@ def check_the_headline(tune: dict) -> None:
     assert num(rate_h) == round(bench["items_per_hour"])
     (dropped,) = quoted("README.md", r"(No) item was dropped while carried on the\s+`test` layouts")
     assert bench["failures"].get("dropped_while_carried", 0) == 0
+    quoted("README.md", r"nor on the `tune` (ones)")
+    tune = load_json("docs/figures/bench_sort_tune.json")
+    assert tune["failures"].get("dropped_while_carried", 0) == 0
     slowest = [lay for lay in bench["per_layout"] if lay["slowest_item"] == "o5_tetrapack"]
     (n_slowest,) = quoted("README.md", r"a placed tetrapack is the slowest item of (\w+) layouts")
     assert n_slowest == {1: "one", 2: "two", 3: "three", 4: "four"}.get(len(slowest))
