@@ -11,6 +11,7 @@ import math
 import re
 from typing import Any
 
+from tests.figure_checks_pages import _case
 from tests.figure_quotes import COVERED, close, load_json, note, page_text, quoted
 
 PAGE = "docs/gap_scene.md"
@@ -200,3 +201,110 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     ], laws  # "no other case takes a bounce law"
     assert ratio == doc["criteria"]["floor_ratio"]
     COVERED[PAGE].sort()
+
+
+def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict) -> None:
+    from cell.model.effects import Wind
+
+    every_obj = rows["s:wind-all-objects"]["params"]["wind"]
+    fx, fy, tx, ty, lo, hi = quoted(
+        page,
+        r"phase right, but ([\d.]+)/−([\d.]+) m/s for ([\d.]+)/−([\d.]+): the\s+calibrated "
+        r"objects' drag constants are ([\d.]+)–([\d.]+) × the scene's",
+    )
+    _written(fx, every_obj["x_mps"])
+    _written(fy, -every_obj["y_mps"])
+    eff = _case("s:wind-all-objects")[0]
+    assert (float(tx), -float(ty)) == (eff["x_mps"], eff["y_mps"])
+    close(lo, min(ratios.values()), 1)
+    close(hi, max(ratios.values()), 1)
+    across, up, wy, found_y = quoted(
+        page,
+        r"\(within ±(\d+) m/s across, ±(\d+) m/s up\), which refused `s:wind-y`: the world's "
+        r"([\d.]+) m/s along y, fitted at ([\d.]+) m/s, passes now",
+    )
+    assert (float(across), float(up)) == (3, 1)  # the old box, as the page tells it
+    assert float(wy) == _case("s:wind-y")[0]["y_mps"]
+    _written(found_y, rows["s:wind-y"]["params"]["wind"]["y_mps"])
+    assert rows["s:wind-y"]["passes"]
+    six, one = quoted(page, r"within (\d+) m/s across and (\d+) m/s up or down")
+    assert (float(six), float(one)) == (Wind.plausible[0][1], Wind.plausible[2][1])
+    sd, mean, fx, a_f = quoted(
+        page,
+        r"`s:wind-throw-wide` \(drawn throw to throw with an sd of ([\d.]+) m/s about ([\d.]+) "
+        r"m/s\s+along x\): named `wind` by its level member, phase right, but x ([\d.]+) m/s, "
+        r"A ([\d.]+) F",
+    )
+    wide = rows["s:wind-throw-wide"]
+    assert (float(sd), float(mean)) == (_case("s:wind-throw-wide")[0]["sd"],
+                                        _case("s:wind-throw-wide")[0]["x_mps"])  # fmt: skip
+    assert wide["verdict"] == "wind" and wide["laws"] == {"wind": "level"}
+    _written(fx, wide["params"]["wind"]["x_mps"])
+    close(a_f, wide["after_over_floor"], 2)
+    f, factor, a, k = quoted(
+        page,
+        r"`s:drag-low` \(factor ([\d.]+)\) is the constant now \(([\d.]+)\): the law it was "
+        r"given,\s+`factor = a \+ k · stroke_m` \(a ([\d.]+), k (−[\d.]+) /m\)",
+    )
+    dl = rows["s:drag-low"]
+    assert float(f) == _case("s:drag-low")[0]["value"] and dl["passes"] and not dl["laws"]
+    _written(factor, dl["params"]["drag_scale"]["factor"])
+    assert (a, k) == ("0.793", "−8.77")  # the table before, as the page tells it
+    assert rows["s:drag-stroke"]["verdict"] == "shape_stretch+stroke_offset"
+    dw = rows["s:downwash"]
+    base, floor, radius = quoted(
+        page,
+        r"the baseline,\s+(\d+) mm, equals the world's effect-free floor, (\d+) mm\): the throws "
+        r"leave the jet \(([\d.]+) m\s+wide at the rotor\)",
+    )
+    close(base, 1000 * dw["baseline_m"], 0)
+    close(floor, 1000 * dw["world_floor_m"], 0)
+    from cell.gap.check_scene import _JET
+
+    assert float(radius) == _JET["radius_m"]
+    long_, repeats = quoted(page, r"on the long drone flights \((\d+) mm, against (\d+) mm the "
+                            r"repeats see\)")  # fmt: skip
+    close(long_, 1000 * dw["baseline_m"], 0)
+    close(repeats, 1000 * dw["tool_floor_m"], 0)
+    assert rows["s:none-drone"]["verdict"] == "none"
+    strong = rows["s:downwash-strong"]
+    base2, floor2 = quoted(page, r"\(baseline\s+(\d+) mm against a floor of (\d+) mm\)")
+    close(base2, 1000 * strong["baseline_m"], 0)
+    close(floor2, 1000 * strong["world_floor_m"], 0)
+    fx, fy, tx, ty, fx2, fy2, ratio = quoted(
+        page,
+        r"the wind is found \(([\d.]+)/([\d.]+) for (\d+)/(\d+)\s+m/s with the narrow jet, "
+        r"([\d.]+)/([\d.]+) with the wide one\) but A stays above ([\d.]+) ×",
+    )
+    for (qx, qy), c in (((fx, fy), "s:downwash+wind"), ((fx2, fy2), "s:downwash-strong+wind")):
+        _written(qx, rows[c]["params"]["wind"]["x_mps"])
+        _written(qy, rows[c]["params"]["wind"]["y_mps"])
+        w = _case(c)[1]
+        assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
+    assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+    b1, m1, b2, m2, mu5, b3, m3, mu3, t4, m4 = quoted(
+        page,
+        r"\(1/μ ([\d.]+)\s+against ([\d.]+) for balls, ([\d.]+) against ([\d.]+) at μ ([\d.]+), "
+        r"([\d.]+) against ([\d.]+) with\s+outliers; for blocks at μ ([\d.]+) `[^`]+`, its mean "
+        r"over the log within\s+(\d+) % of the world's τ ([\d.]+)\)",
+    )
+    for (q, t), c in (((b1, m1), "s:bounce-roll"), ((b2, m2), "s:bounce-hop-mu05"),
+                      ((b3, m3), "s:bounce-hop+outliers")):  # fmt: skip
+        _written(q, rows[c]["params"]["bounce"]["inv_mu"])
+        _written(t, rows[c]["world_truth"]["inv_mu"])
+    # a law in the mass, judged on its mean over the log (`verdict.law_mean`)
+    close(t4, 100 * rows["s:bounce-slide-mu03"]["param_errors"]["bounce.tau_s"], 0)
+    _written(m4, rows["s:bounce-slide-mu03"]["world_truth"]["tau_s"])
+    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
+    assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
+    (above,) = quoted(page, r"but A stays above ([\d.]+) × F: a\s+block that tumbles")
+    from tests.figure_checks_scene import check_the_edge_and_the_changes
+
+    check_the_edge_and_the_changes(rows, float(above))
+    (one,) = quoted(page, r"\(`s:bounce-roll-one`\) comes nearest, A ([\d.]+) × F")
+    close(one, rows["s:bounce-roll-one"]["after_over_floor"], 2)
+    (sh,) = quoted(page, r"the bounce alone, its 1/μ\s+([\d.]+) absorbing the scale")
+    _written(sh, rows["s:scale+hop"]["params"]["bounce"]["inv_mu"])
+
+
+# -- docs/realtime.md ------------------------------------------------------------------------
