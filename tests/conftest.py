@@ -14,6 +14,8 @@ runs in its place by name.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import pytest
 from threadpoolctl import threadpool_limits
@@ -84,3 +86,24 @@ def ik_solve_calls(monkeypatch: pytest.MonkeyPatch) -> Calls:
 
     monkeypatch.setattr(ik, "solve_ik", counting)
     return calls
+
+
+@pytest.fixture(scope="module")
+def orchestrator_on(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Callable[..., Any]]:
+    """A maker of orchestrators on a job's text, closed when the module's tests end:
+    `orchestrator_on(JOB, "session", cycle_search=True)` (the job parsed as a file in a
+    fresh temporary folder named after the session)."""
+    from cell.jobs import parse_job
+    from cell.orchestrator import Orchestrator
+
+    made: list[Orchestrator] = []
+
+    def make(job_text: str, session: str, **options: Any) -> Orchestrator:
+        tmp = tmp_path_factory.mktemp(session)
+        o = Orchestrator(parse_job(job_text, str(tmp / "job.yaml")), session=session, **options)
+        made.append(o)
+        return o
+
+    yield make
+    for o in made:
+        o.close()

@@ -23,17 +23,9 @@ from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.params import load_params, scene_params_path
 from cell.sim.mechanism import DEFAULT_GEOMETRY
+from tests.job_texts import NEAR_AND_FAR
 
-JOB = """
-cell: {robot: panda}
-pick_station: {position_m: [0.45, -0.40, 0.20]}
-bins:
-  - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
-  - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
-items:
-  - {%s}
-seed: 0
-"""
+JOB = NEAR_AND_FAR
 
 
 def _strip_width(name: str, across: int) -> float:

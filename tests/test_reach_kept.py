@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 from cell.arm import kinematics
-from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
@@ -26,11 +25,8 @@ FAR = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)
 
 
 @pytest.fixture(scope="module")
-def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    tmp = tmp_path_factory.mktemp("reach_kept")
-    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="reach", cycle_search=True)
-    yield o
-    o.close()
+def orchestrator(orchestrator_on: Any) -> Any:
+    return orchestrator_on(JOB, "reach", cycle_search=True)
 
 
 def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None:

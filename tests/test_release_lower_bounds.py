@@ -21,17 +21,13 @@ import pytest
 
 from cell.arm.planner import Planner, ThrowChoice
 from cell.arm.tuning import TUNING
-from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
 
 @pytest.fixture(scope="module")
-def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    tmp = tmp_path_factory.mktemp("lower_bounds")
-    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="low", cycle_search=True)
-    yield o
-    o.close()
+def orchestrator(orchestrator_on: Any) -> Any:
+    return orchestrator_on(JOB, "low", cycle_search=True)
 
 
 def _decide(o: Orchestrator, k: int, room: float | None) -> tuple[Any, list[ThrowChoice], int]:

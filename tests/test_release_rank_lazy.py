@@ -18,8 +18,6 @@ import pytest
 
 import cell.arm.release as release_mod
 from cell.errors import IKFailed, TrajectoryError
-from cell.jobs import parse_job
-from cell.orchestrator import Orchestrator
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
 
@@ -72,11 +70,8 @@ def test_the_lazy_ranking_is_the_sort_of_every_bound() -> None:
 
 
 @pytest.fixture(scope="module")
-def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    tmp = tmp_path_factory.mktemp("rank_lazy")
-    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="lazy", cycle_search=True)
-    yield o
-    o.close()
+def orchestrator(orchestrator_on: Any) -> Any:
+    return orchestrator_on(JOB, "lazy", cycle_search=True)
 
 
 def test_the_floor_is_under_the_planned_rank_bound(orchestrator: Any) -> None:

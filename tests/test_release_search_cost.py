@@ -21,7 +21,6 @@ import pytest
 
 from cell.arm.planner import ThrowChoice, soonest_of
 from cell.arm.tuning import TUNING
-from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from cell.robot.motion import move_time
@@ -30,11 +29,8 @@ from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
 
 @pytest.fixture(scope="module")
-def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    tmp = tmp_path_factory.mktemp("search_cost")
-    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="cost", cycle_search=True)
-    yield o
-    o.close()
+def orchestrator(orchestrator_on: Any) -> Any:
+    return orchestrator_on(JOB, "cost", cycle_search=True)
 
 
 def _decide(

@@ -15,9 +15,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.jobs import parse_job
-from cell.orchestrator import Orchestrator
-
 JOB = """\
 cell: {robot: panda, ee: pybullet}
 pick_station: {position_m: [0.45, -0.40, 0.20]}
@@ -33,11 +30,8 @@ seed: 0
 
 
 @pytest.fixture(scope="module")
-def orchestrator(tmp_path_factory: pytest.TempPathFactory) -> Any:
-    tmp = tmp_path_factory.mktemp("swing_usable")
-    o = Orchestrator(parse_job(JOB, str(tmp / "job.yaml")), session="usable", cycle_search=True)
-    yield o
-    o.close()
+def orchestrator(orchestrator_on: Any) -> Any:
+    return orchestrator_on(JOB, "usable", cycle_search=True)
 
 
 def _decide(o: Any, k: int, weigh_all: bool) -> tuple[Any, list[float], int]:
