@@ -9,7 +9,7 @@ comes down over it as it lies. A mesh's catalogue frame need not be how it rests
 
 `rest_shift` drops the item on the station of a scene without an arm as the cell sets
 it down (1 mm over it, its catalogue frame turned about the vertical), at each of
-REST_YAWS_RAD, steps until it is still (`cell.sim.settle` thresholds) or REST_MAX_S,
+REST_YAWS_RAD, steps until it rests (`cell.sim.settle.Tracker`) or REST_MAX_S,
 and reads how far its surface moved from its catalogue frame: the tilt (its z axis
 from the vertical) and the largest displacement of a vertex of its hull under that tilt
 about its centre of mass (the turn about the vertical left out: the pick turns with the
@@ -31,7 +31,6 @@ __all__ = ["REST_YAWS_RAD", "RestPose", "rest_shift"]
 
 REST_YAWS_RAD = (0.0, 1.0, 2.0, 3.0)  # [rad] the turns about the vertical it is dropped at
 REST_MAX_S = 1.5  # [s] the longest it is left to settle (a mesh rests within 0.3 s)
-_STILL_S = 0.1  # [s] still this long (REST_SPEED_MPS, REST_SPIN_RADPS) = at rest
 
 
 @dataclass(frozen=True)
@@ -49,14 +48,10 @@ class RestPose:
     shift_m: float
 
 
+@functools.lru_cache(maxsize=64)
 def rest_shift(obj: ObjectParams) -> RestPose:
     """How `obj` (its catalogue frame) rests on the pick station, measured in the scene
     (cached per object)."""
-    return _rest(obj)
-
-
-@functools.lru_cache(maxsize=64)
-def _rest(obj: ObjectParams) -> RestPose:
     v = _surface(obj)
     worst = RestPose(0.0, 0.0)
     for yaw in REST_YAWS_RAD:
@@ -89,17 +84,13 @@ def _surface(obj: ObjectParams) -> np.ndarray:
 
 
 def _rested(obj: ObjectParams, yaw: float) -> np.ndarray:
-    """The item's rotation matrix [W] once it rests, dropped as the cell sets it down."""
+    """The item's rotation matrix [W] once it rests (`cell.sim.settle.Tracker.at_rest`: the
+    thresholds a landing is scored by), dropped as the cell sets it down."""
     from cell.sim.scene import CellScene
-    from cell.sim.settle import REST_SPEED_MPS, REST_SPIN_RADPS
 
     with CellScene(robot=None) as sc:
         item = sc.spawn_item(obj.name if obj.shape == "mesh" else obj, yaw=yaw)
-        still, t = 0.0, 0.0
-        while t < REST_MAX_S and still < _STILL_S:
+        tracker, t_end = sc.track(item), sc.t + REST_MAX_S
+        while not tracker.at_rest and sc.t < t_end:
             sc.step()
-            t += sc.dt_s
-            v, w = sc.item_velocity(item)
-            calm = np.linalg.norm(v) < REST_SPEED_MPS and np.linalg.norm(w) < REST_SPIN_RADPS
-            still = still + sc.dt_s if calm else 0.0
         return sc.item_pose(item)[1]
