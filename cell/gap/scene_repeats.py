@@ -23,11 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.gap.world_scene import JITTER_REL, draw_plan, repeat_var, throw_plan
+from cell.gap.world_scene import JITTER_REL, G, draw_plan, repeat_var, throw_plan
 
 __all__ = ["slide_laws", "main"]
-
-G = 9.81  # [m/s²]
 
 
 def _fit(d: np.ndarray, cols: list[np.ndarray]) -> tuple[float, np.ndarray]:
