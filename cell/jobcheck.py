@@ -127,13 +127,19 @@ def _missed(miss: float) -> str:
     return "farther than any configuration reaches"
 
 
+def _inner(reach: float, here_m: float) -> bool:
+    """Is a pose `here_m` [m] out that the arm misses nearer the base than its reach
+    `reach` [m] there (`_reach_m`, to its 1 cm): a gap its joints' limits leave inside?"""
+    return here_m < reach - 0.01
+
+
 def _out(reach: float, here_m: float) -> str:
     """How far out the grip pointing down reaches at a height, in words; `here_m` is how
     far out the pose missed lies [m]: nearer than `reach`, the gap is an inner one (the
     joints' limits keep the grip from pointing down that close to the base)."""
     if reach <= 0.0:
         return "the arm's grip pointing down does not get there at that height"
-    if here_m < reach - 0.01:
+    if _inner(reach, here_m):
         return (
             f"the arm's grip pointing down reaches about {reach:.2f} m out at that height, "
             "but not this near the base (its joints' limits)"
@@ -191,7 +197,7 @@ def reach_problems(
             f"{_missed(miss)}); the station's centre is "
             f"{r_pick:.2f} m from the base and "
             f"{_out(reach, r_pick)}: move the station "
-            f"{'farther out' if r_pick < reach - 0.01 else 'within that'}, or choose another arm"
+            f"{'farther out' if _inner(reach, r_pick) else 'within that'}, or choose another arm"
         )
         break
     return out + place_problems(robot, bins, items, placed, where)
@@ -223,7 +229,7 @@ def place_problems(
             f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
             f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
             f"{_out(reach, r_bin)}): "
-            f"move the bin {'farther out' if r_bin < reach - 0.01 else 'closer'}, or have its items thrown (policy: auto with limits.place_reach_m below "
+            f"move the bin {'farther out' if _inner(reach, r_bin) else 'closer'}, or have its items thrown (policy: auto with limits.place_reach_m below "
             f"{math.hypot(*b.position):.2f} m)"
         )
     return out
