@@ -29,6 +29,7 @@ from cell.model.effects import (
     BandMass,
     Downwash,
     DownwashDecay,
+    DownwashJet,
     DragScale,
     Effect,
     ReleasePitch,
@@ -53,6 +54,7 @@ STACKABLE: tuple[type[Effect], ...] = (
     Wind,
     Downwash,
     DownwashDecay,
+    DownwashJet,
     Spin,
 )
 

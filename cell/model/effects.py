@@ -14,6 +14,7 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 | release_pitch | the object leaves at elevation + δ (`delta_rad`) |
 | downwash (column) | air moves down at w = k (rpm / 5000)^p within `radius_m` of the release (horizontally) |
 | downwash (decay) | the same column, its speed falling off as exp(−depth / `depth_m`) below the release height |
+| downwash (jet) | a free round jet below the release point: a Gaussian profile exp(−(ρ / b)²) whose width b = `radius_m` + `JET_SPREAD` · depth grows with the depth, its centre speed w · `radius_m` / b (the jet's momentum flux kept) |
 | wind | a constant air velocity (`x_mps`, `y_mps`, `z_mps`) in the drag law |
 | wind (level) | the same without its vertical part (`x_mps`, `y_mps`) |
 | drag_scale | the drag constant k = ½ρC_dA/m times `factor` (C_d off for rough, soft or tumbling objects) |
@@ -62,6 +63,7 @@ __all__ = [
     "Bounce",
     "BounceRolling",
     "DownwashDecay",
+    "DownwashJet",
     "DragScale",
     "EFFECTS",
     "FAMILIES",
@@ -74,6 +76,11 @@ PHASES = ("launch", "flight", "landing", "measurement")
 _CURVED = np.array([s in ("cylinder", "sphere", "mesh") for s in SHAPES])
 DOWNWASH_EDGE_M = 0.05  # [m] width of the smooth edge of the downwash column
 DOWNWASH_REF_RPM = 5000.0  # [rpm] rotor speed at which the downwash speed is k
+# [-] a round turbulent jet's spreading rate: the 1/e width of its Gaussian profile grows
+# by this per metre downstream (half-velocity width 0.094 x, Hussein, Capp & George 1994,
+# Pope, Turbulent Flows, 2000, Table 5.1, divided by √ln 2); a property of free round
+# jets, not fitted to any case (the landings hang little on it: docs/gap_scene.md)
+JET_SPREAD = 0.11
 
 
 @dataclass(frozen=True)
@@ -240,6 +247,31 @@ class DownwashDecay(Effect):
     exponent: float = 1.0  # [-] w ∝ rpm^exponent
 
 
+@dataclass(frozen=True)
+class DownwashJet(Effect):
+    """Rotor downwash as a round jet: the far-field law of a free round turbulent jet below
+    the rotor, a Gaussian profile whose width grows in proportion to the depth at the
+    round jet's spreading rate (`JET_SPREAD`) and whose centre speed falls as the width
+    grows (a free jet keeps its momentum flux, ∝ centre speed² · width²): the form a
+    column of fixed reach or an exponential decay cannot take when the jet widens and
+    slows algebraically over the drop."""
+
+    name: ClassVar[str] = "downwash"
+    phase: ClassVar[str] = "flight"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 40.0), (0.02, 5.0), (0.5, 2.5))
+    scale: ClassVar[tuple[float, ...]] = (2.0, 0.3, 0.5)
+    hangs_on: ClassVar[str | None] = "rotor_rpm"
+    law: ClassVar[str] = "jet"
+    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = (
+        (0.0, 25.0),
+        (0.05, 3.0),
+        (0.5, 2.5),
+    )
+    speed_mps: float = 0.0  # [m/s] centre speed at the rotor, at DOWNWASH_REF_RPM
+    radius_m: float = 0.5  # [m] the profile's width (1/e of the speed) at the rotor
+    exponent: float = 1.0  # [-] w ∝ rpm^exponent
+
+
 # [m/s] an indoor cell's air: a fan's jet or a draught through a door reaches a fresh
 # breeze across (6 m/s); air rising or sinking, away from a drone's rotors, stays slow
 WIND_ACROSS_MPS = 6.0
@@ -369,9 +401,11 @@ FAMILIES: dict[str, tuple[type[Effect], ...]] = {
     name: (cls, *extra)
     for name, cls in EFFECTS.items()
     for extra in [
-        {"downwash": (DownwashDecay,), "bounce": (BounceRolling,), "wind": (WindLevel,)}.get(
-            name, ()
-        )
+        {
+            "downwash": (DownwashDecay, DownwashJet),
+            "bounce": (BounceRolling,),
+            "wind": (WindLevel,),
+        }.get(name, ())
     ]
 }
 

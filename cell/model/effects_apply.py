@@ -15,12 +15,14 @@ from cell.model.effects import (
     _CURVED,
     DOWNWASH_EDGE_M,
     DOWNWASH_REF_RPM,
+    JET_SPREAD,
     BandDamping,
     BandMass,
     Bounce,
     BounceRolling,
     Downwash,
     DownwashDecay,
+    DownwashJet,
     DragScale,
     Effect,
     ReleasePitch,
@@ -99,12 +101,12 @@ def _flight_accel(
     permutation: np.ndarray | None,
 ) -> Any:
     wind = _find(effects, Wind) or _find(effects, WindLevel)
-    dw = _find(effects, Downwash) or _find(effects, DownwashDecay)
+    dw = _find(effects, Downwash) or _find(effects, DownwashDecay) or _find(effects, DownwashJet)
     sp = _find(effects, Spin)
     ds = _find(effects, DragScale)
     if wind is None and dw is None and sp is None and ds is None:
         return None
-    decay = isinstance(dw, DownwashDecay)
+    decay, jet = isinstance(dw, DownwashDecay), isinstance(dw, DownwashJet)
     par = _params(wind, dw, sp)
     # a parameter given one value per throw (a fit's stacked Jacobian, cell/gap/fit_jac.py)
     # is read at the rows integrated, like the per-throw arrays
@@ -131,7 +133,13 @@ def _flight_accel(
         w[:] = r["w"]
         if dw is not None:
             rho = np.hypot(p[:, 0] - r["cx"], p[:, 1] - r["cy"])
-            inside = column_fraction(rho, r["radius"], DOWNWASH_EDGE_M)
+            if jet:
+                depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
+                width = r["radius"] + JET_SPREAD * depth
+                inside = np.exp(-((rho / width) ** 2)) * (r["radius"] / width)
+                inside = np.where(p[:, 2] < r["release_z"], inside, 0.0)
+            else:
+                inside = column_fraction(rho, r["radius"], DOWNWASH_EDGE_M)
             if decay:
                 depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
                 inside = inside * np.exp(-depth / r["depth"])
