@@ -93,17 +93,22 @@ SCENE_CASES: dict[
         {},
         {},
     ),  # fmt: skip
+    # the narrow jet is in these two worlds but moves no landing: the throws leave it
+    # (0.25 m wide at the rotor) soon after release, and it moves the logged points by
+    # 0.2 mm RMS alone and 0.7 mm beside the wind (measured: the same throws with and
+    # without it; the row's `world_effect_m`), against a tracker scatter of 25 mm. What
+    # the campaign shows is `none` and `wind` (tests/test_gap_jet.py)
     "s:downwash": (
         [_e("downwash", **_JET)],
-        "downwash",
-        {"downwash": "flight"},
+        "none",
+        {},
         {},
         {"drone_share": 0.6},
     ),  # fmt: skip
     "s:downwash+wind": (
         [_e("downwash", **_JET), _e(W, x_mps=2.0, y_mps=1.0)],
-        "downwash+wind",
-        {"downwash": "flight", W: "flight"},
+        W,
+        {W: "flight"},
         {W: {"x_mps": 2.0, "y_mps": 1.0}},
         {"drone_share": 0.6},
     ),  # fmt: skip
@@ -250,6 +255,7 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
                          objects=mp.objects)  # fmt: skip
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
             "world_floor0_m": camp.floor0_m, "world_repeat_sd_m": list(camp.repeat_sd_m),
+            "world_effect_m": camp.effect_m,
             "throws": len(camp.records), "objects": list(objects or ["thesis14"])}  # fmt: skip
 
 

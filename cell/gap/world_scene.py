@@ -208,6 +208,9 @@ class SceneCampaign:
         outliers: row numbers (0-based, in records) of the moved landings.
         truth: quantities measured in the world itself (a bounce's slide per impact
             speed, tau_s and inv_mu), for the parameters a case expects.
+        effect_m: how far the effects move the logged points [m]: the RMS 2-D distance
+            between the true points with the effects (scaled by a tracker's scale) and
+            the same throws without them, over the inlier rows (no tracker scatter).
     """
 
     records: list[dict[str, Any]]
@@ -217,6 +220,7 @@ class SceneCampaign:
     truth: dict[str, float]
     floor0_m: float = float("nan")
     repeat_sd_m: tuple[float, float] = (float("nan"), float("nan"))
+    effect_m: float = float("nan")
 
 
 def repeat_var(plan: list[Throw], xy: np.ndarray, use: np.ndarray) -> float:
@@ -309,6 +313,7 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
     use = ok & ~out
     v_eff, v_none = repeat_var(plan, scale * xy, use), repeat_var(plan, xy0, use)
     extra = v_eff - v_none if np.isfinite(v_eff) and np.isfinite(v_none) else 0.0
+    moved = (scale * xy - xy0)[use]
     return SceneCampaign(
         records=recs,
         floor_m=float(np.sqrt(f0**2 + max(0.0, extra))),
@@ -317,6 +322,7 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         truth=truth,
         floor0_m=f0,
         repeat_sd_m=(float(np.sqrt(v_eff)), float(np.sqrt(v_none))),
+        effect_m=float(np.sqrt(np.mean(np.sum(moved**2, axis=1)))),
     )
 
 
