@@ -136,6 +136,19 @@ class ArmTuning:
             before; from 30° with the release search: random layouts 0-19, 1,474 -> 1,507
             items per hour with the 2 cm rise),
         face_throw_stretch: lengthening the throw at most this much (random layout 16).
+        steep_rim_m: [m] a throw into a bin whose rim is lower than this is planned first
+            with the throw axis at least steep_elevation_rad up (`Planner.
+            _steep_landing_bounds`; the ordinary bounds where the band does not reach so
+            steeply). On the tune layouts, 15 of the 22 items that missed their bin had
+            landed within 3 cm of their aim in a bin with a 0.050-0.068 m rim (nearly
+            always empty), coming down at 50-58°, and skipped off its floor over the far
+            rim (their centres rose to 0.09-0.15 m); none missed so over a higher rim (the
+            next, 0.086 and 0.088 m, missed off a pile). Chosen above the highest of those.
+        steep_elevation_rad: [rad] the least throw-axis elevation of those throws: at 60°
+            those of layouts 8, 14 and 16 came down at 69-74° and stayed in their bins.
+            Tune layouts 0, 2, 8, 10, 14, 16: 183 -> 194 of 201 in their bins; tune 0-3
+            132 -> 133 of 136, 303.5 -> 320.2 s simulated (a near low bin thrown at
+            steeply is slower to reach; docs/HISTORY.md, branch grip8).
 
     The flywheel (`learn`): an object's correction stays within x1/1.5 … x1.5 of reach and
     ±10° of turn; a class's (shape's, for objects never thrown before) within ±15 % and ±3°.
@@ -200,6 +213,8 @@ class ArmTuning:
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10
+    steep_rim_m: float = 0.08
+    steep_elevation_rad: float = math.radians(60.0)
     learn_max_log_ratio: float = math.log(1.5)
     learn_max_turn_rad: float = math.radians(10.0)
     learn_class_max_log_ratio: float = math.log(1.15)
