@@ -91,7 +91,9 @@ class Kinematics(ArmBase):
                 found = self._out_of_reach.get(rule)
         if found is None:
             try:
-                found = self._solved(key, pose, seed, self.tuning.ik_give_up if reach else None)
+                t = self.tuning
+                rule_of = (t.ik_give_up, t.ik_solutions, t.ik_polish) if reach else (None, 3, 3)
+                found = self._solved(key, pose, seed, *rule_of)
             except IKNoSolution as exc:
                 found = exc
                 if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:
@@ -111,10 +113,13 @@ class Kinematics(ArmBase):
         pose: Any,
         seed: np.ndarray | None,
         give_up: tuple[int, float] | None,
+        solutions: int = 3,
+        polish: int = 3,
     ) -> Any:
-        """`solve_ik(self.robot, pose, seed, give_up=give_up)`, kept across decisions
+        """`solve_ik(self.robot, pose, seed, give_up=..., solutions=..., polish=...)`, kept
+        across decisions
         (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when full): the search
-        is a function of the pose, the seed and the give-up rule alone (its random seeds
+        is a function of the pose, the seed, the give-up rule, `solutions` and `polish` alone (its random seeds
         drawn from a fixed generator, the robot's model fixed), so the same pose from the
         same seed is the same IKResult, or the same IKNoSolution, in any decision. A
         release pose recurs where the same object is thrown to the same spot, from a
@@ -123,11 +128,13 @@ class Kinematics(ArmBase):
         Raises IKNoSolution as `solve_ik` does."""
         from cell.robot.ik import IKNoSolution, solve_ik
 
-        rule = (*key, repr(give_up).encode())
+        rule = (*key, repr((give_up, solutions, polish)).encode())
         found = self._ik_solved.get(rule)
         if found is None:
             try:
-                found = solve_ik(self.robot, pose, seed, give_up=give_up)
+                found = solve_ik(
+                    self.robot, pose, seed, give_up=give_up, solutions=solutions, polish=polish
+                )
             except IKNoSolution as exc:
                 found = exc.with_traceback(None)  # kept: not the frames it was raised in
             if len(self._ik_solved) >= IK_SOLVED_KEPT_MAX:

@@ -76,6 +76,13 @@ class ArmTuning:
             The same decisions on the demo and tune layout 0's first 14 items; on the demo
             the second and third sphere40's and duck's failed searches 0.14-0.19 s ->
             0.02-0.05 s of CPU (docs/HISTORY.md, 2026-11-29, fifth round).
+        ik_solutions: with the release search, a release pose its first seed (the lift,
+            where the arm is, the pick) does not reach is searched from home and random
+            seeds until this many converge, the one nearest the first seed kept
+            (`solve_ik`'s `solutions`; 3 without the release search).
+        ik_polish: with the release search, a release pose no seed reaches is refined from
+            this many of the seeds' closest ends with a bounded solve before it is given up
+            (`solve_ik`'s `polish`; 3 without the release search).
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -187,6 +194,8 @@ class ArmTuning:
     ik_out_of_reach_m: float = 5e-3
     ik_give_up: tuple[int, float] | None = (6, 30.0)
     ik_reach_kept: bool = True
+    ik_solutions: int = 3
+    ik_polish: int = 3
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
