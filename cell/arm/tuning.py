@@ -79,10 +79,15 @@ class ArmTuning:
         ik_solutions: with the release search, a release pose its first seed (the lift,
             where the arm is, the pick) does not reach is searched from home and random
             seeds until this many converge, the one nearest the first seed kept
-            (`solve_ik`'s `solutions`; 3 without the release search).
+            (`solve_ik`'s `solutions`; 3 without the release search). 1 with `ik_polish`
+            0: the demo's decisions 23 % fewer DLS iterations, 24/24 and 1,533 items per
+            hour (1,506); tune layouts 0-3 128/136, tune layout 0 29/33 against 31/33 (four
+            cube60 missed): kept at 3 (docs/HISTORY.md, 2026-11-29, eighth round).
         ik_polish: with the release search, a release pose no seed reaches is refined from
             this many of the seeds' closest ends with a bounded solve before it is given up
-            (`solve_ik`'s `polish`; 3 without the release search).
+            (`solve_ik`'s `polish`; 3 without the release search). 0 decided the same on
+            the demo, all of tune layout 0 and tune layout 1's first 14 items (the polish
+            rescued none of their searches), for 5 % of layout 0's decisions' CPU.
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
