@@ -241,6 +241,8 @@ class Orchestrator(
         self._ik_memo: dict[tuple[bytes, ...], Any] = {}
         # release poses out of reach, kept across decisions (`_solve_ik`, `ik_reach_kept`)
         self._out_of_reach: dict[tuple[bytes, ...], Any] = {}
+        # IK searches kept across decisions (`Kinematics._solved`)
+        self._ik_solved: dict[tuple[bytes, ...], Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)

@@ -4,7 +4,9 @@
 Independent checks: what it returns is what `solve_release_ik` with `solve_ik` itself
 (every seed, the polish) returns from the same seed, bit for bit, in reach and out of it
 (the same best residual); the same pose from the same seed is not searched twice in one
-decision; after `decide`'s clearing, it is searched afresh.
+decision; after `decide`'s clearing, it is not searched again either (the search kept
+whole across decisions, `Kinematics._solved`), and with that cleared too it is searched
+afresh, to the same answer.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ def orchestrator() -> Any:
 def test_in_reach_the_same_solution_searched_once(orchestrator: Any, ik_solve_calls: Any) -> None:
     o = orchestrator
     o._ik_memo.clear()
+    o._ik_solved.clear()
     o._frame = None  # no gripped roll: the free roll at once
     seed = np.asarray(o.robot.home, float)
     tcp = o.robot.tcp_pose(seed)[0] + np.array([0.02, -0.03, -0.05])
@@ -41,7 +44,11 @@ def test_in_reach_the_same_solution_searched_once(orchestrator: Any, ik_solve_ca
     again = o._ik_gripped(tcp, -math.pi / 2, 0.0, seed)
     assert n >= 1 and calls.n == n  # the second time, nothing searched
     assert first.tobytes() == fresh.q.tobytes() and again is first
-    o._ik_memo.clear()  # as `decide` does: searched afresh, the same answer
+    o._ik_memo.clear()  # as `decide` does: the search kept across decisions, not run again
+    assert o._ik_gripped(tcp, -math.pi / 2, 0.0, seed).tobytes() == fresh.q.tobytes()
+    assert calls.n == n
+    o._ik_memo.clear()
+    o._ik_solved.clear()  # nothing kept: searched afresh, the same answer
     assert o._ik_gripped(tcp, -math.pi / 2, 0.0, seed).tobytes() == fresh.q.tobytes()
     assert calls.n == 2 * n
 
@@ -51,6 +58,7 @@ def test_out_of_reach_the_same_verdict_searched_once(
 ) -> None:
     o = orchestrator
     o._ik_memo.clear()
+    o._ik_solved.clear()
     o._frame = (0.0, 0.0)  # the gripped roll first, then the free roll: both out of reach
     seed = np.asarray(o.robot.home, float)
     tcp = np.array([0.35, -0.2, 0.95])  # 0.95 m up, the grip down: beyond the UR3

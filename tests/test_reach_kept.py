@@ -104,10 +104,12 @@ def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_call
     try:
         _decide(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach
+        o._ik_solved.clear()  # the searches kept whole (`_solved`): not the rule counted here
         calls.reset()
         with_kept = _decide(o, 3)
         n_kept = calls.n
         o._out_of_reach.clear()
+        o._ik_solved.clear()
         o.tuning = dataclasses.replace(kept, ik_reach_kept=False)
         calls.reset()
         without = _decide(o, 3)

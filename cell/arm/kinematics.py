@@ -21,6 +21,9 @@ log = logging.getLogger(__name__)
 # (`ArmTuning.ik_reach_kept`); the record is cleared when full
 OUT_OF_REACH_KEPT_MAX = 4096
 
+# the most IK searches `Kinematics._solved` keeps across decisions; cleared when full
+IK_SOLVED_KEPT_MAX = 4096
+
 
 def roll_of(robot: Any, q: np.ndarray, elevation: float, azimuth: float) -> float:
     """The roll (0 or π) of `robot`'s release configuration q [rad] for a throw axis at
@@ -74,7 +77,7 @@ class Kinematics(ArmBase):
         With `ArmTuning.ik_reach_kept`, such a pose is kept as out of reach across
         decisions too (`_out_of_reach`, the robot's: the same pose, exactly, is not
         searched again in a later item's plan, from any seed)."""
-        from cell.robot.ik import IKNoSolution, solve_ik
+        from cell.robot.ik import IKNoSolution
 
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
@@ -88,8 +91,9 @@ class Kinematics(ArmBase):
                 found = self._out_of_reach.get(rule)
         if found is None:
             try:
-                give_up = self.tuning.ik_give_up if reach else None
-                found = solve_ik(self.robot, pose, seed, give_up=give_up)
+                t = self.tuning
+                rule_of = (t.ik_give_up, t.ik_solutions, t.ik_polish) if reach else (None, 3, 3)
+                found = self._solved(key, pose, seed, *rule_of)
             except IKNoSolution as exc:
                 found = exc
                 if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:
@@ -101,6 +105,43 @@ class Kinematics(ArmBase):
             self._ik_memo[key] = found
         if isinstance(found, Exception):
             raise found
+        return found
+
+    def _solved(
+        self,
+        key: tuple[bytes, ...],
+        pose: Any,
+        seed: np.ndarray | None,
+        give_up: tuple[int, float] | None,
+        solutions: int = 3,
+        polish: int = 3,
+    ) -> Any:
+        """`solve_ik(self.robot, pose, seed, give_up=..., solutions=..., polish=...)`, kept
+        across decisions
+        (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when full): the search
+        is a function of the pose, the seed, the give-up rule, `solutions` and `polish` alone (its random seeds
+        drawn from a fixed generator, the robot's model fixed), so the same pose from the
+        same seed is the same IKResult, or the same IKNoSolution, in any decision. A
+        release pose recurs where the same object is thrown to the same spot, from a
+        seed that recurs too (the arm's configuration where a decision begins, a pick's
+        lift). `key`: `_solve_ik`'s (the pose and the seed, bit for bit).
+        Raises IKNoSolution as `solve_ik` does."""
+        from cell.robot.ik import IKNoSolution, solve_ik
+
+        rule = (*key, repr((give_up, solutions, polish)).encode())
+        found = self._ik_solved.get(rule)
+        if found is None:
+            try:
+                found = solve_ik(
+                    self.robot, pose, seed, give_up=give_up, solutions=solutions, polish=polish
+                )
+            except IKNoSolution as exc:
+                found = exc.with_traceback(None)  # kept: not the frames it was raised in
+            if len(self._ik_solved) >= IK_SOLVED_KEPT_MAX:
+                self._ik_solved.clear()  # bounded: a long job's poses
+            self._ik_solved[rule] = found
+        if isinstance(found, Exception):
+            raise found.with_traceback(None)  # not a chain grown by every raise
         return found
 
     def ik_frame(self, tcp: np.ndarray, seed: np.ndarray | None = None) -> np.ndarray:

@@ -76,6 +76,18 @@ class ArmTuning:
             The same decisions on the demo and tune layout 0's first 14 items; on the demo
             the second and third sphere40's and duck's failed searches 0.14-0.19 s ->
             0.02-0.05 s of CPU (docs/HISTORY.md, 2026-11-29, fifth round).
+        ik_solutions: with the release search, a release pose its first seed (the lift,
+            where the arm is, the pick) does not reach is searched from home and random
+            seeds until this many converge, the one nearest the first seed kept
+            (`solve_ik`'s `solutions`; 3 without the release search). 1 with `ik_polish`
+            0: the demo's decisions 23 % fewer DLS iterations, 24/24 and 1,533 items per
+            hour (1,506); tune layouts 0-3 128/136, tune layout 0 29/33 against 31/33 (four
+            cube60 missed): kept at 3 (docs/HISTORY.md, 2026-11-29, eighth round).
+        ik_polish: with the release search, a release pose no seed reaches is refined from
+            this many of the seeds' closest ends with a bounded solve before it is given up
+            (`solve_ik`'s `polish`; 3 without the release search). 0 decided the same on
+            the demo, all of tune layout 0 and tune layout 1's first 14 items (the polish
+            rescued none of their searches), for 5 % of layout 0's decisions' CPU.
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -200,6 +212,8 @@ class ArmTuning:
     ik_out_of_reach_m: float = 5e-3
     ik_give_up: tuple[int, float] | None = (6, 30.0)
     ik_reach_kept: bool = True
+    ik_solutions: int = 3
+    ik_polish: int = 3
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
