@@ -83,15 +83,16 @@ class Kinematics(ArmBase):
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
         found = self._ik_memo.get(key)
         kept = reach and self.tuning.ik_reach_kept
-        # the verdict's terms: a search with other give-up or reach constants is another
-        rule = (*where, repr((self.tuning.ik_give_up, self.tuning.ik_out_of_reach_m)).encode())
+        # the verdict's terms: a search with other give-up, polish or reach constants is
+        # another (`ik_solutions` changes no failure: the search fails from every seed)
+        t = self.tuning
+        rule = (*where, repr((t.ik_give_up, t.ik_out_of_reach_m, t.ik_polish)).encode())
         if found is None and reach:
             found = self._ik_memo.get(where)
             if found is None and kept:
                 found = self._out_of_reach.get(rule)
         if found is None:
             try:
-                t = self.tuning
                 rule_of = (t.ik_give_up, t.ik_solutions, t.ik_polish) if reach else (None, 3, 3)
                 found = self._solved(key, pose, seed, *rule_of)
             except IKNoSolution as exc:
