@@ -73,7 +73,8 @@ class Kinematics(ArmBase):
         the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
         writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
         more is not searched again from another seed either (`_release_ik`), and the
-        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`).
+        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`),
+        with `ArmTuning.ik_solutions` and `ik_polish` for its solutions and polish.
         With `ArmTuning.ik_reach_kept`, such a pose is kept as out of reach across
         decisions too (`_out_of_reach`, the robot's: the same pose, exactly, is not
         searched again in a later item's plan, from any seed)."""
@@ -118,11 +119,11 @@ class Kinematics(ArmBase):
         polish: int = 3,
     ) -> Any:
         """`solve_ik(self.robot, pose, seed, give_up=..., solutions=..., polish=...)`, kept
-        across decisions
-        (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when full): the search
-        is a function of the pose, the seed, the give-up rule, `solutions` and `polish` alone (its random seeds
-        drawn from a fixed generator, the robot's model fixed), so the same pose from the
-        same seed is the same IKResult, or the same IKNoSolution, in any decision. A
+        across decisions (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when
+        full): the search is a function of the pose, the seed, the give-up rule,
+        `solutions` and `polish` alone (its random seeds drawn from a fixed generator, the
+        robot's model fixed), so the same pose from the same seed is the same IKResult, or
+        the same IKNoSolution, in any decision. A
         release pose recurs where the same object is thrown to the same spot, from a
         seed that recurs too (the arm's configuration where a decision begins, a pick's
         lift). `key`: `_solve_ik`'s (the pose and the seed, bit for bit).
