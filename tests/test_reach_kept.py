@@ -52,6 +52,12 @@ def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None
         with pytest.raises(IKNoSolution) as other:
             o._release_ik(o.robot, FAR, seed)
         assert other.value is not first.value
+        # another polish: another verdict too (the polish can lower the best residual)
+        o._ik_memo.clear()
+        o.tuning = dataclasses.replace(kept, ik_polish=kept.ik_polish + 3)
+        with pytest.raises(IKNoSolution) as polished:
+            o._release_ik(o.robot, FAR, seed)
+        assert polished.value is not first.value and polished.value is not other.value
         # the rule off: nothing kept across decisions is used
         o._ik_memo.clear()
         o.tuning = dataclasses.replace(kept, ik_reach_kept=False)

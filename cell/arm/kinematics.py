@@ -73,7 +73,8 @@ class Kinematics(ArmBase):
         the same IKNoSolution. Every caller gets the same IKResult: nothing in the cell
         writes into a configuration array. `reach`: a pose missed by IK_OUT_OF_REACH_M or
         more is not searched again from another seed either (`_release_ik`), and the
-        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`).
+        search gives up early where its first seeds are all far off (`ArmTuning.ik_give_up`),
+        with `ArmTuning.ik_solutions` and `ik_polish` for its solutions and polish.
         With `ArmTuning.ik_reach_kept`, such a pose is kept as out of reach across
         decisions too (`_out_of_reach`, the robot's: the same pose, exactly, is not
         searched again in a later item's plan, from any seed)."""
@@ -83,15 +84,16 @@ class Kinematics(ArmBase):
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
         found = self._ik_memo.get(key)
         kept = reach and self.tuning.ik_reach_kept
-        # the verdict's terms: a search with other give-up or reach constants is another
-        rule = (*where, repr((self.tuning.ik_give_up, self.tuning.ik_out_of_reach_m)).encode())
+        # the verdict's terms: a search with other give-up, polish or reach constants is
+        # another (`ik_solutions` changes no failure: the search fails from every seed)
+        t = self.tuning
+        rule = (*where, repr((t.ik_give_up, t.ik_out_of_reach_m, t.ik_polish)).encode())
         if found is None and reach:
             found = self._ik_memo.get(where)
             if found is None and kept:
                 found = self._out_of_reach.get(rule)
         if found is None:
             try:
-                t = self.tuning
                 rule_of = (t.ik_give_up, t.ik_solutions, t.ik_polish) if reach else (None, 3, 3)
                 found = self._solved(key, pose, seed, *rule_of)
             except IKNoSolution as exc:
@@ -117,11 +119,11 @@ class Kinematics(ArmBase):
         polish: int = 3,
     ) -> Any:
         """`solve_ik(self.robot, pose, seed, give_up=..., solutions=..., polish=...)`, kept
-        across decisions
-        (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when full): the search
-        is a function of the pose, the seed, the give-up rule, `solutions` and `polish` alone (its random seeds
-        drawn from a fixed generator, the robot's model fixed), so the same pose from the
-        same seed is the same IKResult, or the same IKNoSolution, in any decision. A
+        across decisions (`_ik_solved`, at most IK_SOLVED_KEPT_MAX searches, cleared when
+        full): the search is a function of the pose, the seed, the give-up rule,
+        `solutions` and `polish` alone (its random seeds drawn from a fixed generator, the
+        robot's model fixed), so the same pose from the same seed is the same IKResult, or
+        the same IKNoSolution, in any decision. A
         release pose recurs where the same object is thrown to the same spot, from a
         seed that recurs too (the arm's configuration where a decision begins, a pick's
         lift). `key`: `_solve_ik`'s (the pose and the seed, bit for bit).

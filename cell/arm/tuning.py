@@ -85,9 +85,11 @@ class ArmTuning:
             cube60 missed): kept at 3 (docs/HISTORY.md, 2026-11-29, eighth round).
         ik_polish: with the release search, a release pose no seed reaches is refined from
             this many of the seeds' closest ends with a bounded solve before it is given up
-            (`solve_ik`'s `polish`; 3 without the release search). 0 decided the same on
-            the demo, all of tune layout 0 and tune layout 1's first 14 items (the polish
-            rescued none of their searches), for 5 % of layout 0's decisions' CPU.
+            (`solve_ik`'s `polish`; 3 without the release search). 0 against 3: the same
+            decisions on tune layouts 0-3 (132/136 in their bins, 303.42 s simulated,
+            layout by layout) and on the demo (`sig` fa68a371528e): the polish rescued none
+            of their release searches; its 81 bounded solves on the demo, 5 % of tune
+            layout 0's decisions' CPU (docs/HISTORY.md, 2026-11-29, eighth round).
 
     The release:
         release_fallbacks: (largest elevation [rad], release height [m]) tried in turn when
@@ -213,7 +215,7 @@ class ArmTuning:
     ik_give_up: tuple[int, float] | None = (6, 30.0)
     ik_reach_kept: bool = True
     ik_solutions: int = 3
-    ik_polish: int = 3
+    ik_polish: int = 0
     release_fallbacks: tuple[tuple[float, float], ...] = (
         (math.radians(45.0), 0.7),
         (math.radians(30.0), 0.6),
