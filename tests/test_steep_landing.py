@@ -1,4 +1,4 @@
-"""A throw into a bin with a low rim comes down steeply (`Planner._steep_landing_bounds`,
+"""A throw into a bin with a low rim comes down steeply (`cell.arm.steep.steep_tiers`,
 `ArmTuning.steep_rim_m`, `steep_elevation_rad`).
 
 On tune layout 14 (Panda) three 72 mm, 66 g cylinders (`item4_cylinder`, 53.5 mm tall)
@@ -12,9 +12,8 @@ item comes to rest), with the rule and without it.
 from __future__ import annotations
 
 import dataclasses
-from types import SimpleNamespace
 
-from cell.arm.planner import Planner
+from cell.arm.steep import steep_tiers
 from cell.arm.tuning import TUNING
 from cell.jobs import parse_job
 from cell.optimize.bounds import ThrowBounds
@@ -37,13 +36,7 @@ def _tiers(rim_m: float) -> tuple[tuple[list[ThrowBounds], bool], ...]:
         for e, h in TUNING.release_fallbacks
     ]
     shrunk = [dataclasses.replace(x, release_radius=0.3) for x in ordinary]
-    planner = SimpleNamespace(tuning=TUNING)
-    return Planner._steep_landing_bounds(
-        planner,  # type: ignore[arg-type]
-        SimpleNamespace(rim_height=rim_m),
-        ordinary,
-        shrunk,
-    )
+    return steep_tiers(TUNING, rim_m, ordinary, shrunk)
 
 
 def test_a_low_rim_is_thrown_at_steeply_first_and_a_higher_one_as_before() -> None:

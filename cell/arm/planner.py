@@ -23,6 +23,7 @@ from cell.arm.launch import (
     plan_clean,
 )
 from cell.arm.spots import throw_spot
+from cell.arm.steep import steep_tiers
 from cell.errors import (
     CellError,
     IKFailed,
@@ -255,7 +256,7 @@ class Planner(ArmBase):
         """
         err: CellError | None = None
         ordinary, shrunk = self._release_bounds(target)
-        steep = self._steep_landing_bounds(target, ordinary, shrunk)
+        steep = steep_tiers(self.tuning, target.rim_height, ordinary, shrunk)
         for tier, first_kept in (*steep, (ordinary, False), (shrunk, True)):
             found: list[ThrowChoice] = []
             for k, bounds in enumerate(tier):
@@ -384,35 +385,6 @@ class Planner(ArmBase):
             )
         return best
 
-    def _steep_landing_bounds(
-        self, target: Any, ordinary: list[Any], shrunk: list[Any]
-    ) -> tuple[tuple[list[Any], bool], ...]:
-        """For a bin whose rim is lower than `ArmTuning.steep_rim_m`, the release bounds
-        `ordinary` and `shrunk` (`_release_bounds`) with the throw axis at least
-        `ArmTuning.steep_elevation_rad` up, those left with an elevation range, tried
-        before the others (`_plan_facing`): a throw that comes down steeply stays in a
-        low-rimmed bin, where one that comes down at 50-58° skips off its floor (its
-        landing within 3 cm of the aim, still 2.2 of its 2.9 m/s across, rising to
-        0.09-0.13 m) and over the far rim. Where the band does not reach the bin so
-        steeply, the ordinary bounds (a 141 g cube 2.0 m out reaches 1.46 m at 60°).
-        Measured on tune layouts 8, 14 and 16 (docs/HISTORY.md, branch grip8): their
-        cubes and cylinders thrown into 0.050-0.061 m rims 1.4-2.4 m out, 0 of 8 in
-        the bin, 8 of 8 thrown at 60° and more (landing at 69-74°). None for another
-        bin. Each tier with whether its first plan reached is kept (the shrunk boxes')."""
-        e_min = self.tuning.steep_elevation_rad
-        if target.rim_height >= self.tuning.steep_rim_m:
-            return ()
-
-        def raised(tier: list[Any]) -> list[Any]:
-            return [
-                dc_replace(b, elevation_min=max(b.elevation_min, e_min))
-                for b in tier
-                if b.elevation_max >= e_min
-            ]
-
-        tiers = ((raised(ordinary), False), (raised(shrunk), True))
-        return tuple((t, first) for t, first in tiers if t)
-
     def _release_bounds(self, target: Any) -> tuple[list[Any], list[Any]]:
         """The release bounds a plan is made in (`_plan_facing`): the cell's, then lower
         and flatter (RELEASE_FALLBACKS); and each of those in a release box shrunk about
@@ -422,12 +394,10 @@ class Planner(ArmBase):
         Tried and left out: into a bin with a low rim (0.05 m), steep throws first
         (elevation ≥ 50°): of 10 throws of 5 objects, 4 landed against 8 with the least
         energy throw (a cube slides out either way, coming down at 49° or at 52°); from
-        60°, coming down at 69-74°, they stay (`_steep_landing_bounds`). Nor
+        60°, coming down at 69-74°, they stay (`cell.arm.steep.steep_tiers`). Nor
         does aiming short of the centre help: with the aim half-way to the near wall, 138
         of 168 throws into 0.05 and 0.08 m rims 1.3-2.7 m out stayed in, against 139
         aimed at the centre (a 50 mm cube slides out of half of them either way)."""
-        from dataclasses import replace as dc_replace
-
         b = self.bounds
         ordinary = [b] + [
             dc_replace(b, elevation_max=min(b.elevation_max, e_max), release_height=h)

@@ -151,8 +151,8 @@ class ArmTuning:
             items per hour with the 2 cm rise),
         face_throw_stretch: lengthening the throw at most this much (random layout 16).
         steep_rim_m: [m] a throw into a bin whose rim is lower than this is planned first
-            with the throw axis at least steep_elevation_rad up (`Planner.
-            _steep_landing_bounds`; the ordinary bounds where the band does not reach so
+            with the throw axis at least steep_elevation_rad up (`cell.arm.steep.
+            steep_tiers`; the ordinary bounds where the band does not reach so
             steeply). On the tune layouts, 15 of the 22 items that missed their bin had
             landed within 3 cm of their aim in a bin with a 0.050-0.068 m rim (nearly
             always empty), coming down at 50-58°, and skipped off its floor over the far
