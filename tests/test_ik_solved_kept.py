@@ -16,6 +16,7 @@ import pytest
 
 from cell.arm import kinematics
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
+from tests.test_reach_kept import decide_presented
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
 FAR = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)  # beyond the Panda
@@ -71,15 +72,6 @@ def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatc
     o._ik_solved.clear()
 
 
-def _decide(o: Any, k: int) -> Any:
-    spec = o.job.expanded_items()[k]
-    o.present(k, spec.obj)
-    try:
-        return o.decide(k, spec.obj, o.job.bin(spec.bin))
-    finally:
-        o.scene.remove_item(o._presented)
-
-
 def test_a_decision_with_searches_kept_is_the_same(orchestrator: Any, ik_solve_calls: Any) -> None:
     """Items 2 and 3 (the same cube to the same bin): item 3 decided after item 2 with the
     searches item 2 kept, and again with none kept."""
@@ -87,16 +79,16 @@ def test_a_decision_with_searches_kept_is_the_same(orchestrator: Any, ik_solve_c
     calls = ik_solve_calls
     o._out_of_reach.clear()
     o._ik_solved.clear()
-    _decide(o, 2)
+    decide_presented(o, 2)
     out_of_reach = dict(o._out_of_reach)
     calls.reset()
-    with_kept = _decide(o, 3)
+    with_kept = decide_presented(o, 3)
     n_kept = calls.n
     o._ik_solved.clear()
     o._out_of_reach.clear()
     o._out_of_reach.update(out_of_reach)  # as item 2 left it: only the searches differ
     calls.reset()
-    without = _decide(o, 3)
+    without = decide_presented(o, 3)
     assert n_kept < calls.n  # searches item 2 kept were not run again
     assert with_kept.plan == without.plan
     np.testing.assert_array_equal(with_kept.state.q_release, without.state.q_release)

@@ -97,7 +97,8 @@ def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatc
     o._out_of_reach.clear()
 
 
-def _decide(o: Orchestrator, k: int) -> Any:
+def decide_presented(o: Orchestrator, k: int) -> Any:
+    """The job's item k presented on the station, decided, and taken away again."""
     spec = o.job.expanded_items()[k]
     o.present(k, spec.obj)
     try:
@@ -115,17 +116,17 @@ def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_call
     calls = ik_solve_calls
     o._out_of_reach.clear()
     try:
-        _decide(o, 2)
+        decide_presented(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach
         o._ik_solved.clear()  # the searches kept whole (`_solved`): not the rule counted here
         calls.reset()
-        with_kept = _decide(o, 3)
+        with_kept = decide_presented(o, 3)
         n_kept = calls.n
         o._out_of_reach.clear()
         o._ik_solved.clear()
         o.tuning = dataclasses.replace(kept, ik_reach_kept=False)
         calls.reset()
-        without = _decide(o, 3)
+        without = decide_presented(o, 3)
         assert n_kept < calls.n  # the poses kept were not searched again
     finally:
         o.tuning = kept
