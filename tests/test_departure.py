@@ -24,6 +24,9 @@ from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot.carry import plan_carry
 
+# the departure and the level carry are checked, not the release search or the turn
+FAST: dict[str, Any] = {"cycle_search": False, "turn_release": False}
+
 JOB = """\
 cell: {robot: %s}
 pick_station: {position_m: [0.45, -0.40, 0.20]}
@@ -48,7 +51,7 @@ def _cell(
 
 @pytest.fixture(params=["panda", "ur5"])
 def orch(request: Any, tmp_path: Path) -> Iterator[Orchestrator]:
-    yield from _cell(JOB % request.param, tmp_path, "departure", release="static")
+    yield from _cell(JOB % request.param, tmp_path, "departure", release="static", **FAST)
 
 
 def test_a_throw_leaves_the_pick_upward_sooner_than_through_the_lift_and_still_held(
@@ -215,7 +218,7 @@ class Leveller(Orchestrator):
 
 @pytest.fixture
 def leveller(tmp_path: Path) -> Iterator[Leveller]:
-    for o in _cell(LEVEL_JOB, tmp_path, "level", Leveller, release="static"):
+    for o in _cell(LEVEL_JOB, tmp_path, "level", Leveller, release="static", **FAST):
         assert isinstance(o, Leveller)
         yield o
 
