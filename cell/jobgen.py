@@ -154,16 +154,21 @@ def _object_of(entry: dict[str, Any]) -> Any:
 
 def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any) -> list[str]:
     """The ids of the bins the cell can sort this item into (cell.orchestrator.check_sortable)."""
+    from cell.arm.grip_side import holding_sides
     from cell.arm.launch import check_sortable
     from cell.errors import CannotGrip, UnreachableTarget
     from cell.jobs import BinSpec
 
     obj = _object_of(entry)
+    try:  # the sides the pads hold it across: the item's, whatever the bin
+        sides = holding_sides(params, obj)
+    except CannotGrip:
+        return []
     ok = []
     for b in bins:
         spec = BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
         try:
-            check_sortable(params, obj, spec)
+            check_sortable(params, obj, spec, sides=sides)
         except (CannotGrip, UnreachableTarget):
             continue
         ok.append(b["id"])

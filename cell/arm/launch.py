@@ -118,15 +118,18 @@ def check_sortable(
     policy: str = "auto",
     place_reach_m: float = 0.75,
     bounds: Any = None,
+    sides: list[Any] | None = None,
 ) -> None:
     """Raise CannotGrip or UnreachableTarget when the cell cannot sort `obj` into the
     bin: the pads hold it across none of its sides (`cell.arm.grip_side`), or (for a
     throw) none briskly (`throw_sides`), or no release within the bounds lands it there, across any side that holds, by
-    the planner's model of the scene."""
+    the planner's model of the scene. `sides`: what `holding_sides(params, obj)` gave,
+    where the caller has it (`cell.jobgen.sortable_bins`: once an item, not once a bin)."""
     from cell.arm.grip_side import holding_sides, throw_sides
     from cell.optimize.bounds import ThrowBounds
 
-    sides = holding_sides(params, obj)
+    if sides is None:
+        sides = holding_sides(params, obj)
     dist = math.hypot(*bin_spec.position)
     if policy == "place" or (policy == "auto" and dist <= place_reach_m):
         return
