@@ -31,27 +31,27 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 threadpool_limits(limits=1)
 
 # slow first, from `pytest -n 2 --dist loadfile --durations=0 tests` (per-file sums): the
-# sixteen slowest files of the idle run from a fresh clone at f147689 (2026-11-29), with the
-# savings of branches `suite7` and `suite8` (each measured file's CPU ratio before/after, the
-# others scaled by the measured files' 0.73), slowest first; handed out so, the estimated
-# sums end within 0.3 s of each other (0.7 s with the twenty files listed before)
+# sixteen slowest files of the run at cd14b54 (2026-11-30, 805 s of test time), with the
+# savings of branch `suite9` (each changed test's fresh-process CPU ratio before/after applied
+# to its own duration; the gap files as in that run), slowest first; handed out so, the
+# estimated sums end within 0.2 s of each other (0.4 s with the sixteen listed before)
 SLOW_FILES = (
     "test_parallel.py",
-    "test_same_result.py",
-    "test_envelope_edges.py",
     "test_gap_rules.py",
-    "test_release_choice.py",
-    "test_departure.py",
-    "test_release_search_cost.py",
-    "test_gap_scene.py",
-    "test_record_run.py",
     "test_gap_laws.py",
-    "test_accounting.py",
-    "test_scene_reach_law.py",
-    "test_carry.py",
-    "test_moving_choice.py",
+    "test_gap_scene.py",
+    "test_same_result.py",
+    "test_gap_jet.py",
     "test_gap.py",
-    "test_tall_item.py",
+    "test_envelope_edges.py",
+    "test_residual_learning.py",
+    "test_departure.py",
+    "test_accounting.py",
+    "test_carry.py",
+    "test_release_choice.py",
+    "test_record_run.py",
+    "test_grip_probe.py",
+    "test_release_search_cost.py",
 )
 
 
