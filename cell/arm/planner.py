@@ -14,6 +14,7 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.grip_limits import (
+    carry_hold,
     grip_bounds,
     release_elevation_min,
     release_grip_use,
@@ -23,7 +24,7 @@ from cell.arm.launch import (
     plan_clean,
 )
 from cell.arm.spots import throw_spot
-from cell.arm.steep import steep_tiers
+from cell.arm.steep import steep_shortfall, steep_tiers
 from cell.errors import (
     CellError,
     IKFailed,
@@ -61,6 +62,9 @@ class ThrowChoice:
             bang-bang bound, the settle, the push, the way back and the approach's share:
             `ReleaseChoice._way_bound_s`), how much slower than the arm's limits the carry
             is; None where no release was timed (`Planner._lower_bounds_wanted`).
+        route: [rad] the release's carry route from the lift where the item is carried
+            level (`ReleaseChoice._release_route`: the route `cost`'s grip use is judged
+            on); None elsewhere, or where no release was timed.
     """
 
     cost: tuple[bool, float] | None
@@ -73,6 +77,7 @@ class ThrowChoice:
     goal: np.ndarray | None = None
     held: bool = True
     room_s: float | None = None
+    route: tuple[np.ndarray, ...] | None = None
 
 
 def _sooner_beat(a: float | None, b: float | None) -> float | None:
@@ -257,7 +262,12 @@ class Planner(ArmBase):
         err: CellError | None = None
         ordinary, shrunk = self._release_bounds(target)
         steep = steep_tiers(self.tuning, target.rim_height, ordinary, shrunk)
-        for tier, first_kept in (*steep, (ordinary, False), (shrunk, True)):
+        tiers = [(t, first, True) for t, first in steep]
+        tiers += [(ordinary, False, False), (shrunk, True, False)]
+        passed_steep = True
+        for tier, first_kept, is_steep in tiers:
+            if is_steep and not passed_steep:
+                continue  # a steep plan fell short: the ordinary bounds
             found: list[ThrowChoice] = []
             for k, bounds in enumerate(tier):
                 if found and (first_kept or not self._lower_bounds_wanted(found[0])):
@@ -276,8 +286,19 @@ class Planner(ArmBase):
                     )
                 except (UnreachableTarget, IKFailed) as exc:
                     err = err or exc
-            if found:
-                return self._soonest_release(obj, found)
+            if not found:
+                continue
+            r = self._soonest_release(obj, found)
+            why = self._steep_shortfall(obj, r) if is_steep else None
+            if why is None:
+                return r
+            passed_steep = False
+            log.info(
+                "%s: the steep release (%.0f° up) is not kept: %s; the ordinary bounds",
+                obj.name or obj.shape,
+                math.degrees(r.plan.elevation_rad),
+                why,
+            )
         assert err is not None
         raise err
 
@@ -296,8 +317,27 @@ class Planner(ArmBase):
         most = self.tuning.release_lower_room_s
         if most is None or first.room_s is None or first.cost is None:
             return True
-        slips, t = first.cost
-        return slips or not first.held or not math.isfinite(t) or first.room_s >= most
+        t = first.cost[1]
+        short = self._grip_short(first) is not None
+        return short or not math.isfinite(t) or first.room_s >= most
+
+    def _steep_shortfall(self, obj: ObjectParams, r: ThrowChoice) -> str | None:
+        """Why the steep tier's plan `r` for `obj` is not kept (`steep_shortfall`), or None."""
+        at_points = carry_hold(self.params, obj, r.plan.stroke_m + r.delta).torque_nm <= 0.0
+        return steep_shortfall(r, self._grip_short(r), at_points, self.robot, self.tuning)
+
+    @staticmethod
+    def _grip_short(r: ThrowChoice) -> str | None:
+        """How the plan `r` falls short of the grip, or None: its route asks more of the
+        grip than it holds (`ThrowChoice.cost`'s first), or its release does not hold the
+        item still (`ThrowChoice.held`). A plan in the cell's bounds so short has the
+        lower bounds searched after it (`_lower_bounds_wanted`) and is not kept over one
+        that is not (`soonest_of`); a steep tier's is not kept (`steep_shortfall`)."""
+        if r.cost is not None and r.cost[0]:
+            return "its route asks more of the grip than it holds"
+        if not r.held:
+            return "its release does not hold the item still"
+        return None
 
     def _plan_in(
         self,
@@ -339,10 +379,8 @@ class Planner(ArmBase):
                     break
                 continue
             held = self._held_at_release(obj, stroke, plan.elevation_rad)
-            room = self._release_room_s
-            return ThrowChoice(
-                cost, plan, delta, q_release, bounds, aim, model_obj, held=held, room_s=room
-            )
+            kept = {"held": held, "room_s": self._release_room_s, "route": self._release_route}
+            return ThrowChoice(cost, plan, delta, q_release, bounds, aim, model_obj, **kept)
         assert err is not None
         raise err
 

@@ -1,15 +1,18 @@
 """The steep tiers of the release bounds: into a low-rimmed bin a throw is planned first
 with the throw axis steeply up (`ArmTuning.steep_rim_m`, `steep_elevation_rad`;
-`cell.arm.planner.Planner._plan_facing` tries these tiers before the ordinary ones)."""
+`cell.arm.planner.Planner._plan_facing` tries these tiers before the ordinary ones), and
+the tests a plan in them must pass to be kept over the ordinary bounds' (`steep_shortfall`)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Any
 
+from cell.arm.joints import twist
 from cell.arm.tuning import ArmTuning
 
-__all__ = ["steep_tiers"]
+__all__ = ["steep_shortfall", "steep_tiers"]
 
 
 def steep_tiers(
@@ -40,3 +43,38 @@ def steep_tiers(
 
     tiers = ((raised(ordinary), False), (raised(shrunk), True))
     return tuple((t, first) for t, first in tiers if t)
+
+
+def steep_shortfall(
+    choice: Any, grip_short: str | None, at_points: bool, robot: Any, tuning: ArmTuning
+) -> str | None:
+    """Why the plan `choice` (a `ThrowChoice`) found in a steep tier is not kept, the
+    ordinary bounds planned instead (`Planner._plan_facing`); None where it is. The
+    steep tier is a preference, not the cell's last resort: its plan must pass what an
+    ordinary plan is searched past for (`grip_short`, `Planner._grip_short`: its route
+    asks more of the grip than it holds, or its release does not hold the item still).
+
+    For an item held at points (`at_points`: a sphere, a mesh) carried level, that route
+    test asks nothing (`GripUse._swing_static`: any roll turns it, the twist-free swing is
+    all a route can do for it): its carry must instead turn the grip no more than
+    `ArmTuning.steep_twist_max_rad` off the one rotation between its ends
+    (`cell.arm.joints.twist`, `_direct_is_better`'s measure), along the route the release
+    search judged (`ThrowChoice.route`). A steep release the level swing cannot reach
+    without going round is carried along the spline between the ends: a 43 mm sphere's
+    into a bin behind the arm turned the grip 52° and 132° in the scene (tests/
+    test_swing_twist.py; its routes 112-121° so measured, the ordinary releases' 21-31°).
+    A box's or a cylinder's level swing is not about one axis (the grip turns in azimuth
+    on the way up): 58-67° so measured on ordinary routes the pads hold, the grip use
+    held still its test."""
+    if grip_short is not None:
+        return grip_short
+    if not at_points or choice.route is None:
+        return None
+    turned = twist(robot, list(choice.route), tuning.swing_check_samples)
+    if turned > tuning.steep_twist_max_rad:
+        return (
+            f"its carry turns the grip {math.degrees(turned):.0f}° off one rotation "
+            f"(at most {math.degrees(tuning.steep_twist_max_rad):.0f}° for an item held at "
+            "points)"
+        )
+    return None

@@ -231,6 +231,7 @@ class ArmTuning:
     face_throw_stretch: float = 1.10
     steep_rim_m: float = 0.08
     steep_elevation_rad: float = math.radians(60.0)
+    steep_twist_max_rad: float = math.radians(45.0)
     learn_max_log_ratio: float = math.log(1.5)
     learn_max_turn_rad: float = math.radians(10.0)
     learn_class_max_log_ratio: float = math.log(1.15)
