@@ -1,5 +1,5 @@
 """The steep tier's plan is held to the ordinary plans' tests (`cell.arm.steep.steep_shortfall`,
-`Planner._grip_short`, `_plan_facing`): where it falls short, the ordinary bounds' plan.
+`cell.arm.choice.grip_short`, `Planner._plan_to`): where it falls short, the ordinary bounds' plan.
 
 Independent checks: the twist of a joint path measured with scipy's rotations from the
 arm's forward kinematics (`tests.test_swing_twist.twist_deg`), and the decision the cell
@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.arm.planner import ThrowChoice
+from cell.arm.choice import ThrowChoice, grip_short
 from cell.arm.steep import steep_shortfall
 from cell.arm.tuning import TUNING
 from tests.test_reach_kept import decide_presented
@@ -35,12 +35,10 @@ def _choice(cost: Any = (False, 2.0), held: bool = True, route: Any = None) -> T
 
 
 def test_a_plan_short_of_the_grip_is_named() -> None:
-    from cell.arm.planner import Planner
-
-    assert Planner._grip_short(_choice()) is None
-    assert Planner._grip_short(_choice(cost=None)) is None  # no estimate: nothing to judge
-    assert "asks more of the grip" in str(Planner._grip_short(_choice(cost=(True, 2.0))))
-    assert "does not hold the item still" in str(Planner._grip_short(_choice(held=False)))
+    assert grip_short(_choice()) is None
+    assert grip_short(_choice(cost=None)) is None  # no estimate: nothing to judge
+    assert "asks more of the grip" in str(grip_short(_choice(cost=(True, 2.0))))
+    assert "does not hold the item still" in str(grip_short(_choice(held=False)))
     # and so the steep tier's plan is not kept, whatever its route
     assert steep_shortfall(_choice(), "short", False, None, TUNING) == "short"
 

@@ -1,7 +1,7 @@
 """The steep tiers of the release bounds: into a low-rimmed bin a throw is planned first
 with the throw axis steeply up (`ArmTuning.steep_rim_m`, `steep_elevation_rad`;
-`cell.arm.planner.Planner._plan_facing` tries these tiers before the ordinary ones), and
-the tests a plan in them must pass to be kept over the ordinary bounds' (`steep_shortfall`)."""
+`cell.arm.planner.Planner._plan_to` tries these tiers, at each facing, before the
+ordinary ones), and the tests a plan in them must pass to be kept (`steep_shortfall`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def steep_tiers(
     """For a bin whose rim (`rim_height_m`) is lower than `ArmTuning.steep_rim_m`, the release bounds
     `ordinary` and `shrunk` (`Planner._release_bounds`) with the throw axis at least
     `ArmTuning.steep_elevation_rad` up, those left with an elevation range, tried
-    before the others (`_plan_facing`): a throw that comes down steeply stays in a
+    before the others (`Planner._plan_to`): a throw that comes down steeply stays in a
     low-rimmed bin, where one that comes down at 50-58° skips off its floor (its
     landing within 3 cm of the aim, still 2.2 of its 2.9 m/s across, rising to
     0.09-0.13 m) and over the far rim. Where the band does not reach the bin so
@@ -49,10 +49,11 @@ def steep_shortfall(
     choice: Any, grip_short: str | None, at_points: bool, robot: Any, tuning: ArmTuning
 ) -> str | None:
     """Why the plan `choice` (a `ThrowChoice`) found in a steep tier is not kept, the
-    ordinary bounds planned instead (`Planner._plan_facing`); None where it is. The
-    steep tier is a preference, not the cell's last resort: its plan must pass what an
-    ordinary plan is searched past for (`grip_short`, `Planner._grip_short`: its route
-    asks more of the grip than it holds, or its release does not hold the item still).
+    ordinary bounds planned instead unless another facing's is kept (`Planner._plan_to`);
+    None where it is. The steep tier is a preference, not the cell's last resort: its
+    plan must pass what an ordinary plan is searched past for (`grip_short`,
+    `cell.arm.choice.grip_short`: its route asks more of the grip than it holds, or its
+    release does not hold the item still).
 
     For an item held at points (`at_points`: a sphere, a mesh) carried level, that route
     test asks nothing (`GripUse._swing_static`: any roll turns it, the twist-free swing is
