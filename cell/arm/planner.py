@@ -14,7 +14,6 @@ import numpy as np
 from cell.arm.base import ArmBase
 from cell.arm.choice import ThrowChoice, grip_short, sooner_beat, soonest_of
 from cell.arm.grip_limits import (
-    carry_hold,
     grip_bounds,
     release_elevation_min,
     release_grip_use,
@@ -24,7 +23,7 @@ from cell.arm.launch import (
     plan_clean,
 )
 from cell.arm.spots import throw_spot
-from cell.arm.steep import steep_shortfall, steep_tiers
+from cell.arm.steep import steep_kept, steep_tiers
 from cell.errors import (
     CellError,
     IKFailed,
@@ -89,7 +88,7 @@ class Planner(ArmBase):
     ) -> ThrowChoice:
         """`_plan` to the point `goal` [m, W] of the bin's rim plane: in the steep tiers
         (`steep_tiers`, a low-rimmed bin) at each facing, a plan there kept only where it
-        passes what an ordinary plan is held to (`_steep_kept`); where none is kept,
+        passes what an ordinary plan is held to (`steep_kept`); where none is kept,
         in the ordinary release bounds at each facing (`_release_bounds`)."""
         err: CellError | None = None
         ordinary, shrunk = self._release_bounds(target)
@@ -110,7 +109,7 @@ class Planner(ArmBase):
                 except (UnreachableTarget, IKFailed) as exc:
                     err = err or exc
                     continue
-                if tiers is steep and not self._steep_kept(obj, r):
+                if tiers is steep and not steep_kept(r, obj, self.params, self.robot, self.tuning):
                     continue
                 cost = r.cost
                 log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
@@ -246,20 +245,6 @@ class Planner(ArmBase):
         t = first.cost[1]
         short = grip_short(first) is not None
         return short or not math.isfinite(t) or first.room_s >= most
-
-    def _steep_kept(self, obj: ObjectParams, r: ThrowChoice) -> bool:
-        """Is the steep tiers' plan `r` for `obj` kept (`steep_shortfall`)? Where not, why
-        is logged, and the ordinary bounds are planned unless another facing's is kept."""
-        at_points = carry_hold(self.params, obj, r.plan.stroke_m + r.delta).torque_nm <= 0.0
-        why = steep_shortfall(r, grip_short(r), at_points, self.robot, self.tuning)
-        if why is not None:
-            log.info(
-                "%s: the steep release (%.0f° up) is not kept: %s",
-                obj.name or obj.shape,
-                math.degrees(r.plan.elevation_rad),
-                why,
-            )
-        return why is None
 
     def _plan_in(
         self,

@@ -5,14 +5,20 @@ ordinary ones), and the tests a plan in them must pass to be kept (`steep_shortf
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import replace
 from typing import Any
 
+from cell.arm.choice import grip_short
+from cell.arm.grip_limits import carry_hold
 from cell.arm.joints import twist
 from cell.arm.tuning import ArmTuning
+from cell.model.objects import ObjectParams
 
-__all__ = ["steep_shortfall", "steep_tiers"]
+__all__ = ["steep_kept", "steep_shortfall", "steep_tiers"]
+
+log = logging.getLogger(__name__)
 
 
 def steep_tiers(
@@ -79,3 +85,20 @@ def steep_shortfall(
             "points)"
         )
     return None
+
+
+def steep_kept(choice: Any, obj: ObjectParams, params: Any, robot: Any, tuning: ArmTuning) -> bool:
+    """Is the steep tiers' plan `choice` for `obj` kept (`steep_shortfall`; `params` the
+    model's, for whether the pads hold `obj` at points at its stroke)? Where not, why is
+    logged, and `Planner._plan_to` plans the ordinary bounds unless another facing's
+    steep plan is kept."""
+    at_points = carry_hold(params, obj, choice.plan.stroke_m + choice.delta).torque_nm <= 0.0
+    why = steep_shortfall(choice, grip_short(choice), at_points, robot, tuning)
+    if why is not None:
+        log.info(
+            "%s: the steep release (%.0f° up) is not kept: %s",
+            obj.name or obj.shape,
+            math.degrees(choice.plan.elevation_rad),
+            why,
+        )
+    return why is None
