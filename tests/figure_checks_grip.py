@@ -206,6 +206,22 @@ def _check_the_slow_holds(page: str, params: Any) -> None:
     assert f"random layout {layout}, UR5" in test and f"a {s_mm} mm stroke" in test
 
 
+def _check_the_steep_throw(page: str) -> None:
+    """The steep rule's constants as the page gives them (`ArmTuning`)."""
+    import math
+
+    from cell.arm.tuning import TUNING
+
+    rim, steep = quoted(page, r"rim is lower than ([\d.]+) m \(`ArmTuning.steep_rim_m`\) a throw "
+                        r"is planned first with the throw axis at least (\d+)° up")  # fmt: skip
+    assert float(rim) == TUNING.steep_rim_m
+    assert int(steep) == round(math.degrees(TUNING.steep_elevation_rad))
+    (logged,) = quoted(page, r"logged at info \(`the steep release \((\d+)° up\)")
+    assert int(logged) == int(steep)
+    (twist,) = quoted(page, r"turns the grip at most (\d+)° off the one rotation between its ends")
+    assert int(twist) == round(math.degrees(TUNING.steep_twist_max_rad))
+
+
 def check_the_grip_page() -> None:
     """The side choice, the carry's scaling and the refusals as docs/grip.md describes them
     are the code's: its margins, the catalogue's items and the messages it gives."""
@@ -220,6 +236,7 @@ def check_the_grip_page() -> None:
     _check_the_mesh_sides(page, params)
     _check_the_carry(page, params)
     _check_the_slow_holds(page, params)
+    _check_the_steep_throw(page)
     # the refusals, each message the code's own
     cube = ObjectParams("cube", 0.3, (0.25,) * 3, name="item0_cube")
     thin = ObjectParams("cylinder", 0.05, (0.018, 0.018, 0.06), name="thin")

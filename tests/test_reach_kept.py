@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 from cell.arm import kinematics
-from cell.arm.tuning import TUNING
 from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, ReleasePose, solve_ik
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
@@ -28,12 +27,9 @@ FAR = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def orchestrator(orchestrator_on: Any) -> Any:
     # the job's bin_0 has a low rim (0.05 m): its throws are planned in the steep bounds
-    # first (`ArmTuning.steep_rim_m`), whose plans are not held to the tests the
-    # ordinary bounds' are (docs/HISTORY.md, 2026-11-30); what is tested here is the
-    # ordinary bounds' search, so the rule is off
-    return orchestrator_on(
-        JOB, "reach", cycle_search=True, tuning=dataclasses.replace(TUNING, steep_rim_m=0.0)
-    )
+    # first (`ArmTuning.steep_rim_m`, on as by default); its cubes' steep plans ask more of
+    # the grip than it holds and fall through to the ordinary bounds (`cell.arm.steep`)
+    return orchestrator_on(JOB, "reach", cycle_search=True)
 
 
 def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None:

@@ -31,12 +31,9 @@ from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 @pytest.fixture(scope="module")
 def orchestrator(orchestrator_on: Any) -> Any:
     # the job's bin_0 has a low rim (0.05 m): its throws are planned in the steep bounds
-    # first (`ArmTuning.steep_rim_m`), whose plans are not held to the tests the
-    # ordinary bounds' are (docs/HISTORY.md, 2026-11-30); what is tested here is the
-    # ordinary bounds' search, so the rule is off
-    return orchestrator_on(
-        JOB, "cost", cycle_search=True, tuning=dataclasses.replace(TUNING, steep_rim_m=0.0)
-    )
+    # first (`ArmTuning.steep_rim_m`, on as by default), whose plans are held to the
+    # ordinary bounds' tests (`cell.arm.steep.steep_passes`)
+    return orchestrator_on(JOB, "cost", cycle_search=True)
 
 
 def _decide(

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
 from dataclasses import replace as dc_replace
 from typing import Any
 
 import numpy as np
 
 from cell.arm.base import ArmBase
+from cell.arm.choice import ThrowChoice, grip_short, sooner_beat, soonest_of
 from cell.arm.grip_limits import (
     grip_bounds,
     release_elevation_min,
@@ -23,7 +23,7 @@ from cell.arm.launch import (
     plan_clean,
 )
 from cell.arm.spots import throw_spot
-from cell.arm.steep import steep_tiers
+from cell.arm.steep import steep_kept, steep_tiers
 from cell.errors import (
     CellError,
     IKFailed,
@@ -37,65 +37,6 @@ log = logging.getLogger(__name__)
 # `Planner._held_at_release`): what the pads hold at rest. Boxes and cylinders turn in the
 # pads at 1.02-1.23 of what the grip model says they resist (tests/test_grip_probe.py).
 RELEASE_HELD_MAX = 1.0
-
-
-@dataclass(frozen=True)
-class ThrowChoice:
-    """A throw as the planner chose it: the plan in one release bounds and its release.
-    `Planner._plan` returns one; the release bounds compare them (`_plan_facing`).
-
-    Attributes:
-        cost: (asks more of the grip than it holds, cycle estimate [s]), or None where no
-            estimate was made.
-        plan: the static throw plan (`cell.optimize.ThrowPlan`).
-        delta: [m] the learned ΔL_s (the residual's), added to the plan's stroke.
-        q_release: [rad] the release configuration chosen.
-        bounds: the release bounds it was planned in (the grip's cap not applied).
-        aim: [m, W] where the plan aims to cross the rim plane (the goal, or the learned aim).
-        model_obj: the object as the plan's model assumed it.
-        goal: [m, W] the point of the rim plane the throw is for (`throw_spot`); None until
-            `_plan` has set it.
-        held: the pads hold the item still at the release, at the throw's stroke
-            (`Planner._held_at_release`).
-        room_s: [s] the release's cycle estimate less its lower bound (the carry's
-            bang-bang bound, the settle, the push, the way back and the approach's share:
-            `ReleaseChoice._way_bound_s`), how much slower than the arm's limits the carry
-            is; None where no release was timed (`Planner._lower_bounds_wanted`).
-    """
-
-    cost: tuple[bool, float] | None
-    plan: Any
-    delta: float
-    q_release: np.ndarray
-    bounds: Any
-    aim: np.ndarray
-    model_obj: ObjectParams
-    goal: np.ndarray | None = None
-    held: bool = True
-    room_s: float | None = None
-
-
-def _sooner_beat(a: float | None, b: float | None) -> float | None:
-    """The sooner of two cycle estimates to beat [s] (None: none)."""
-    if a is None:
-        return b
-    return a if b is None else min(a, b)
-
-
-def soonest_of(found: list[ThrowChoice]) -> ThrowChoice:
-    """Of the plans `found` in the release bounds in `Planner._release_bounds`' order, the
-    first, unless a later one's cycle estimate is sooner and its route asks no more of
-    the grip than the first's (and, where the first's release holds the item still,
-    its release does too: `ThrowChoice.held`); the first where an estimate is missing."""
-    first = best = found[0]
-    for r in found[1:]:
-        if first.cost is None or r.cost is None or best.cost is None:
-            continue
-        if r.held < first.held:
-            continue
-        if r.cost[0] <= first.cost[0] and r.cost < best.cost:
-            best = r
-    return best
 
 
 class Planner(ArmBase):
@@ -145,38 +86,45 @@ class Planner(ArmBase):
         stroke_max_m: float,
         beat: float | None,
     ) -> ThrowChoice:
-        """`_plan` to the point `goal` [m, W] of the bin's rim plane."""
+        """`_plan` to the point `goal` [m, W] of the bin's rim plane: in the steep tiers
+        (`steep_tiers`, a low-rimmed bin) at each facing, a plan there kept only where it
+        passes what an ordinary plan is held to (`steep_kept`); where none is kept,
+        in the ordinary release bounds at each facing (`_release_bounds`)."""
         err: CellError | None = None
-        best: ThrowChoice | None = None
+        ordinary, shrunk = self._release_bounds(target)
+        steep = steep_tiers(self.tuning, target.rim_height, ordinary, shrunk)
         turned = self._facing_toward_station(target)
-        for facing in (None,) if turned is None else (None, turned):
-            try:
-                r = self._plan_facing(
-                    obj,
-                    goal,
-                    target,
-                    index,
-                    stroke_max_m,
-                    facing,
-                    _sooner_beat(self._to_beat(best), beat),
-                )
-            except (UnreachableTarget, IKFailed) as exc:
-                err = err or exc
-                continue
-            cost = r.cost
-            log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
-            if best is not None and (
-                cost is None or best.cost is None or r.held < best.held or not cost < best.cost
-            ):
-                continue
-            best = r
-            if cost is None:  # nothing to compare by: the arm faces the bin
-                break
-        if best is None:
-            assert err is not None
-            raise err
-        # where it should cross the rim plane
-        return dc_replace(best, goal=np.asarray(goal, float))
+        for tiers in (steep, ((ordinary, False), (shrunk, True))):
+            best: ThrowChoice | None = None
+            for facing in () if not tiers else (None,) if turned is None else (None, turned):
+                try:
+                    r = self._plan_facing(
+                        obj,
+                        goal,
+                        (index, stroke_max_m),
+                        tiers,
+                        facing,
+                        sooner_beat(self._to_beat(best), beat),
+                    )
+                except (UnreachableTarget, IKFailed) as exc:
+                    err = err or exc
+                    continue
+                if tiers is steep and not steep_kept(r, obj, self.params, self.robot, self.tuning):
+                    continue
+                cost = r.cost
+                log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
+                if best is not None and (
+                    cost is None or best.cost is None or r.held < best.held or not cost < best.cost
+                ):
+                    continue
+                best = r
+                if cost is None:  # nothing to compare by: the arm faces the bin
+                    break
+            if best is not None:
+                # where it should cross the rim plane
+                return dc_replace(best, goal=np.asarray(goal, float))
+        assert err is not None
+        raise err
 
     @staticmethod
     def _to_beat(best: ThrowChoice | None) -> float | None:
@@ -233,14 +181,15 @@ class Planner(ArmBase):
         self,
         obj: ObjectParams,
         goal: tuple[float, float, float],
-        target: Any,
-        index: int,
-        stroke_max_m: float,
+        item: tuple[int, float],
+        tiers: Any,
         facing: float | None,
         beat: float | None = None,
     ) -> ThrowChoice:
-        """`_plan` with the arm facing `facing` [rad, W] at the release (None: the bin), with
-        the release's cycle estimate (`_release_q`; None where none was made).
+        """`_plan` in the release bounds `tiers` ((bounds, the first reached kept), in
+        turn: `_plan_to`) with the arm facing `facing` [rad, W] at the release (None: the
+        bin), with the release's cycle estimate (`_release_q`; None where none was made);
+        `item`: (its index, the most stroke the grip holds it at [m]).
 
         The plan is made in the cell's release bounds; where IK finds no configuration for
         its release pose, again with the release lower and the throw axis flatter
@@ -255,9 +204,7 @@ class Planner(ArmBase):
         the release bounds (their own `_beat` too), where the cycle is searched.
         """
         err: CellError | None = None
-        ordinary, shrunk = self._release_bounds(target)
-        steep = steep_tiers(self.tuning, target.rim_height, ordinary, shrunk)
-        for tier, first_kept in (*steep, (ordinary, False), (shrunk, True)):
+        for tier, first_kept in tiers:
             found: list[ThrowChoice] = []
             for k, bounds in enumerate(tier):
                 if found and (first_kept or not self._lower_bounds_wanted(found[0])):
@@ -267,10 +214,9 @@ class Planner(ArmBase):
                         self._plan_in(
                             obj,
                             goal,
-                            index,
-                            stroke_max_m,
+                            *item,
                             dc_replace(bounds, facing_rad=facing),
-                            _sooner_beat(self._beat(found), beat),
+                            sooner_beat(self._beat(found), beat),
                             lower=k > 0,
                         )
                     )
@@ -296,8 +242,9 @@ class Planner(ArmBase):
         most = self.tuning.release_lower_room_s
         if most is None or first.room_s is None or first.cost is None:
             return True
-        slips, t = first.cost
-        return slips or not first.held or not math.isfinite(t) or first.room_s >= most
+        t = first.cost[1]
+        short = grip_short(first) is not None
+        return short or not math.isfinite(t) or first.room_s >= most
 
     def _plan_in(
         self,
@@ -339,10 +286,8 @@ class Planner(ArmBase):
                     break
                 continue
             held = self._held_at_release(obj, stroke, plan.elevation_rad)
-            room = self._release_room_s
-            return ThrowChoice(
-                cost, plan, delta, q_release, bounds, aim, model_obj, held=held, room_s=room
-            )
+            kept = {"held": held, "room_s": self._release_room_s, "route": self._release_route}
+            return ThrowChoice(cost, plan, delta, q_release, bounds, aim, model_obj, **kept)
         assert err is not None
         raise err
 

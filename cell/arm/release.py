@@ -27,6 +27,11 @@ class ReleaseChoice(ArmBase):
     # [s] the chosen release's cycle estimate less its lower bound (`_release_search`), set
     # by each `_release_q`; None where no candidate was timed (`Planner._plan_in` keeps it)
     _release_room_s: float | None = None
+    # [rad] the chosen release's carry route from the lift (its twist-free swing's
+    # waypoints, `_swing`) where the item is carried level (`_turns_if_rolled`): the route
+    # its grip use held still is judged on (`_swing_holds`); None elsewhere, or where no
+    # candidate was timed (`Planner._plan_in` keeps it, `cell.arm.steep` checks its twist)
+    _release_route: tuple[np.ndarray, ...] | None = None
 
     def _release_q(
         self,
@@ -60,7 +65,7 @@ class ReleaseChoice(ArmBase):
 
         e, a = plan.elevation_rad, plan.azimuth_rad
         best: tuple[tuple[bool, float], np.ndarray] | None = None
-        self._release_room_s = None
+        self._release_room_s = self._release_route = None
         if self._presented is not None and self.pick_mode != "physical" and abs(math.cos(e)) > 1e-6:
             kept = self._frame
             try:
@@ -119,7 +124,7 @@ class ReleaseChoice(ArmBase):
             return self._rank_bound_s(c[3], c[4], (stroke, obj), c[5])
 
         ranked = _Ranked(found, rank)
-        best: tuple[tuple[tuple[bool, float], int], np.ndarray, float] | None = None
+        best: tuple[tuple[tuple[bool, float], int], np.ndarray, float, Any] | None = None
         soonest = math.inf if beat is None else beat
         pruned = False
         timed, most = 0, self.tuning.release_timed_max
@@ -149,11 +154,12 @@ class ReleaseChoice(ArmBase):
             )
             log.debug("release roll %.2f rad: (slips, cycle estimate) (%s, %.3f)", roll, slips, t)
             if best is None or ((slips, t), order) < best[0]:
-                best = (((slips, t), order), q_rel, t - low)
+                route = (over[1], *way, q_rel) if level else None
+                best = (((slips, t), order), q_rel, t - low, route)
             if not slips:
                 soonest = min(soonest, t)
         if best is not None:
-            self._release_room_s = best[2]
+            self._release_room_s, self._release_route = best[2], best[3]
             return best[0][0], best[1]
         if pruned:
             return (False, math.inf), ranked.first()[3]

@@ -163,6 +163,14 @@ class ArmTuning:
             Tune layouts 0, 2, 8, 10, 14, 16: 183 -> 194 of 201 in their bins; tune 0-3
             132 -> 133 of 136, 303.5 -> 320.2 s simulated (a near low bin thrown at
             steeply is slower to reach; docs/HISTORY.md, branch grip8).
+        steep_twist_max_rad: [rad] a steep plan for an item held at points (a sphere, a
+            mesh) is kept only where its carry turns the grip at most this far off the one
+            rotation between its ends (`cell.arm.steep.steep_shortfall`; a box's is judged
+            by its grip use held still, as an ordinary plan's): on random layout 4 a 43 mm
+            sphere's steep releases behind the arm were reached only off the level swing
+            (112-121° so measured; 52° and 132° in the scene), its ordinary ones 21-31°
+            (tests/test_swing_twist.py); the tune layouts' steep sphere and rock carries
+            that fell short turned it 47-132° (docs/HISTORY.md, branch grip9).
 
     The flywheel (`learn`): an object's correction stays within x1/1.5 … x1.5 of reach and
     ±10° of turn; a class's (shape's, for objects never thrown before) within ±15 % and ±3°.
@@ -231,6 +239,7 @@ class ArmTuning:
     face_throw_stretch: float = 1.10
     steep_rim_m: float = 0.08
     steep_elevation_rad: float = math.radians(60.0)
+    steep_twist_max_rad: float = math.radians(45.0)
     learn_max_log_ratio: float = math.log(1.5)
     learn_max_turn_rad: float = math.radians(10.0)
     learn_class_max_log_ratio: float = math.log(1.15)
