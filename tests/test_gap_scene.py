@@ -210,7 +210,7 @@ def test_a_tumbling_block_scatters_between_repeats_the_launch_barely_does():
     from cell.gap.world_scene import draw_plan, repeat_var, throw_plan
 
     bounce = [{"kind": "bounce", "form": "contact", "restitution": 0.05, "friction": 1.0}]
-    plan = draw_plan(24, np.random.default_rng(3), repeats=4, objects=("cube30", "cube50"))
+    plan = draw_plan(16, np.random.default_rng(3), repeats=4, objects=("cube30", "cube50"))
     same, _, _ = throw_plan(plan, bounce, 5, jitter_rel=0.0)
     again, _, _ = throw_plan(plan, bounce, 6, jitter_rel=0.0)
     assert np.array_equal(same, again)  # the same throws, to the bit

@@ -9,13 +9,14 @@ folds): every throw is predicted by fits that never saw it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from cell.gap.fit_jac import clipped_blocks, misses_many, refit_folds, stackable, stacked_jacobian
+from cell.gap.fit_jac import clipped_blocks, misses_many, refit_folds, stackable, stacked_fun_jac
 from cell.gap.problem import GapProblem, rmse
 from cell.model.effects import Effect
 
@@ -94,13 +95,15 @@ def fit_set(
     inset = np.minimum(1.0, 0.05 * (hi - lo))
     start = np.clip(start, lo + inset, hi - inset)
 
-    def fun(x: np.ndarray) -> np.ndarray:
+    def one(x: np.ndarray) -> np.ndarray:
         return prob.residual(train, _unpack(classes, x, scale), permute=permute).ravel()
 
-    # scipy's own forward differences, every perturbed vector in one flight (bitwise the same)
+    # scipy's own forward differences, every perturbed vector in one flight (bitwise the
+    # same), made with each residual: the Jacobian at an accepted step is already there
+    fun: Callable[[np.ndarray], np.ndarray] = one
     jac: Any = "2-point"
     if stackable(classes, permute):
-        jac = stacked_jacobian(prob, classes, train, scale, (lo, hi), DIFF_STEP)
+        fun, jac = stacked_fun_jac(prob, classes, train, scale, (lo, hi), DIFF_STEP)
     res = least_squares(
         fun,
         start,
@@ -195,15 +198,18 @@ def score_set(
     full, r_all, jac = fit_set(prob, classes, np.arange(n), x0=warm, permute=permute, max_nfev=cap)
     sq = np.zeros(n)
     schemes = 0
-    together = stackable(classes, permute)  # the folds refitted and predicted in lockstep
+    # the folds of every scheme refitted and predicted in lockstep
+    together = stackable(classes, permute) and bool(prob.folds)
+    if together:
+        flat = [f for folds in prob.folds.values() for f in folds]
+        lo, hi = _layout(classes)[1:3]
+        xs = refit_folds(prob, classes, [t for t, _ in flat], full.x, r_all, jac, (lo, hi))
+        got = iter(misses_many(prob, classes, [t for _, t in flat], np.array(xs), scale))
     for folds in prob.folds.values():
         r = np.zeros((n, 2))
         if together:
-            lo, hi = _layout(classes)[1:3]
-            xs = refit_folds(prob, classes, [t for t, _ in folds], full.x, r_all, jac, (lo, hi))
-            got = misses_many(prob, classes, [t for _, t in folds], np.array(xs), scale)
-            for (_, test), r_test in zip(folds, got, strict=True):
-                r[test] = r_test.reshape(-1, 2)
+            for _, test in folds:
+                r[test] = next(got).reshape(-1, 2)
         else:
             for train, test in folds:
                 x = _refit(prob, classes, train, full.x, r_all, jac, permute)

@@ -270,9 +270,7 @@ def landings(th: Throws, effs: list[dict[str, Any]], rng: np.random.Generator | 
     p, v = th.p0.copy(), th.vb.copy()
     t = 0.0
     done = np.zeros(n, bool)
-    xy = np.full((n, 2), np.nan)
-    tl = np.full(n, np.nan)
-    vimp = np.full((n, 3), np.nan)
+    steps: list[tuple[np.ndarray, ...]] = []  # each crossing: its rows, states and step
     while t < 6.0 and not done.all():
         h = H_PUSH if t < PUSH_S - 1e-12 else H_FLIGHT
         k1p, k1v = rate(t, p, v)
@@ -283,30 +281,44 @@ def landings(th: Throws, effs: list[dict[str, Any]], rng: np.random.Generator | 
         v1 = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         cross = ~done & (v1[:, 2] < 0) & (p1[:, 2] <= th.land_z) & (t + h > PUSH_S)
         if cross.any():
-            # cubic Hermite in z over the step, its root by bisection
-            z0, z1 = p[cross, 2] - th.land_z[cross], p1[cross, 2] - th.land_z[cross]
-            d0, d1 = v[cross, 2] * h, v1[cross, 2] * h
-            lo, hi = np.zeros(z0.size), np.ones(z0.size)
-            for _ in range(40):
-                s = 0.5 * (lo + hi)
-                z = ((2 * s**3 - 3 * s**2 + 1) * z0 + (s**3 - 2 * s**2 + s) * d0
-                     + (-2 * s**3 + 3 * s**2) * z1 + (s**3 - s**2) * d1)  # fmt: skip
-                above = z > 0
-                lo, hi = np.where(above, s, lo), np.where(above, hi, s)
-            s = 0.5 * (lo + hi)[:, None]
-            pp, pv = p[cross], p1[cross]
-            vv0, vv1 = v[cross], v1[cross]
-            xy[cross] = ((2 * s**3 - 3 * s**2 + 1) * pp[:, :2] + (s**3 - 2 * s**2 + s) * h
-                         * vv0[:, :2] + (-2 * s**3 + 3 * s**2) * pv[:, :2]
-                         + (s**3 - s**2) * h * vv1[:, :2])  # fmt: skip
-            vimp[cross] = (1 - s) * vv0 + s * vv1
-            tl[cross] = t + s[:, 0] * h
+            k = np.flatnonzero(cross)
+            steps.append((k, p[k], p1[k], v[k], v1[k], np.full(k.size, t), np.full(k.size, h)))
             done |= cross
         p, v, t = p1, v1, t + h
+    xy, tl, vimp = _crossings(th, n, steps)
     xy = _slide(th, xy, vimp, _find(effs, "slide"))
     ts = _find(effs, "tracking_scale")
     if ts:
         xy = xy * float(ts["value"])
+    return xy, tl, vimp
+
+
+def _crossings(th: Throws, n: int, steps: list[tuple[np.ndarray, ...]]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """(xy (n, 2), time (n,), velocity (n, 3)) where each throw crosses its landing plane
+    within the step it crossed in (rows, p, p1, v, v1, t, h of each such step): a cubic
+    Hermite in z over the step, its root by bisection, all crossings at once (each row's
+    arithmetic its own); NaN for a throw that never crossed."""
+    xy, tl, vimp = np.full((n, 2), np.nan), np.full(n, np.nan), np.full((n, 3), np.nan)
+    if not steps:
+        return xy, tl, vimp
+    rows, pp, pv, vv0, vv1, t, h = (np.concatenate(a) for a in zip(*steps, strict=True))
+    z0, z1 = pp[:, 2] - th.land_z[rows], pv[:, 2] - th.land_z[rows]
+    d0, d1 = vv0[:, 2] * h, vv1[:, 2] * h
+    lo, hi = np.zeros(z0.size), np.ones(z0.size)
+    for _ in range(40):
+        s = 0.5 * (lo + hi)
+        z = ((2 * s**3 - 3 * s**2 + 1) * z0 + (s**3 - 2 * s**2 + s) * d0
+             + (-2 * s**3 + 3 * s**2) * z1 + (s**3 - s**2) * d1)  # fmt: skip
+        above = z > 0
+        lo, hi = np.where(above, s, lo), np.where(above, hi, s)
+    s = 0.5 * (lo + hi)[:, None]
+    hc = h[:, None]
+    xy[rows] = ((2 * s**3 - 3 * s**2 + 1) * pp[:, :2] + (s**3 - 2 * s**2 + s) * hc
+                * vv0[:, :2] + (-2 * s**3 + 3 * s**2) * pv[:, :2]
+                + (s**3 - s**2) * hc * vv1[:, :2])  # fmt: skip
+    vimp[rows] = (1 - s) * vv0 + s * vv1
+    tl[rows] = t + s[:, 0] * h
     return xy, tl, vimp
 
 

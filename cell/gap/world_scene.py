@@ -147,12 +147,13 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
 
 
 def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int,
-               jitter_rel: float = JITTER_REL) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-    """Throw every planned throw in a fresh EffectScene with `effects` on: (true logged
-    points (n, 2) [m], crossing times (n,) [s], crossing velocities (n, 3) [m/s]); NaN
-    for a throw that did not land. The tracker is not applied here. Each throw's stroke
-    is jittered by a relative sd `jitter_rel`, drawn from `seed` alone (the same draws
-    whatever the effects)."""
+               jitter_rel: float = JITTER_REL, *, rows: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """Throw every planned throw (or the `rows` of it, a mask; NaN for the others) in a
+    fresh EffectScene with `effects` on: (true logged points (n, 2) [m], crossing times
+    (n,) [s], crossing velocities (n, 3) [m/s]); NaN for a throw that did not land. The
+    tracker is not applied here. Each throw's stroke is jittered by a relative sd
+    `jitter_rel`, drawn from `seed` alone (the same draws whatever the effects and rows)."""
     from cell.endeffector.factory import make_end_effector
 
     rng = np.random.default_rng(seed)
@@ -182,6 +183,8 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int,
                 if dr.get("form") == "stroke":
                     sc.drag_factor = float(dr["k"]) * th.stroke
             sc.jet = (np.array(th.p0), th.rpm, dw) if dw and th.rpm > 0 else None
+            if rows is not None and not rows[i]:
+                continue
             try:
                 thj = replace(th, stroke=th.stroke * float(jit[i]))
                 xy[i], tl[i], vc[i] = _one(sc, ee, thj, rest=bo is not None, kick=kick)
@@ -275,6 +278,17 @@ def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> di
             "inv_mu": float(np.sum(d * q) / np.sum(q * q))}  # fmt: skip
 
 
+def _untouched(plan: list[Throw], effects: list[dict[str, Any]]) -> np.ndarray:
+    """The throws (mask) that no effect acts on in the scene: with a downwash and a
+    tracker alone, the arm's throws (no rotor); with a tracker alone, every throw."""
+    kinds = {e["kind"] for e in effects}
+    if not kinds <= {"downwash", "tracker"}:
+        return np.zeros(len(plan), bool)
+    if "downwash" in kinds:
+        return np.array([t.rpm <= 0 for t in plan], bool)
+    return np.ones(len(plan), bool)
+
+
 def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, params: Any,
                         *, n: int = 160, noise_m: float = 0.025, outliers: float = 0.0,
                         repeats: int = 2, drone_share: float = 0.0,
@@ -285,7 +299,12 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
     plan = draw_plan(n, rng, repeats=repeats, drone_share=drone_share, objects=objects)
     seed = int(rng.integers(2**31))
     xy, tl, vc = throw_plan(plan, effects, seed)
-    xy0, tl0, vc0 = throw_plan(plan, [], seed)
+    # a throw no effect acts on in the scene (a jet on an arm's throw; a tracker acts on
+    # the logged points only) is the same throw without the effects: thrown once (PyBullet
+    # repeats a throw to the bit, wherever it comes in a scene's sequence)
+    same = _untouched(plan, effects)
+    xy0, tl0, vc0 = throw_plan(plan, [], seed, rows=~same)
+    xy0[same], tl0[same], vc0[same] = xy[same], tl[same], vc[same]
     truth: dict[str, float] = {}
     if _find(effects, "bounce"):
         # the slide from where the item crosses the plane in the same air (the effects
