@@ -6,7 +6,11 @@ tolerances by forward kinematics alone, within the joint limits; where neither t
 nor the warm start converges, the search is the cold one (the same solution, bit for bit,
 from the same usual seeds); a pose out of reach fails warm or cold, `give_up` counting the
 usual seeds alone; the nearest kept solution against a brute-force scan; the record is
-bounded; and the orchestrator's release search warm-starts only with `ik_warm` set.
+bounded; and the orchestrator's release search warm-starts only with `ik_warm` set. Poses
+kept as out of reach (`FarPoses`): found by nearness and rule against a scan; a pose within
+1 mm of one a whole search missed by 5 mm or more is missed by the whole search too (every
+seed and the polish); the release search refuses it unsearched only with `ik_warm` and
+`ik_reach_kept`.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import pytest
 from cell.errors import IKFailed, InvalidInput
 from cell.robot import ik_warm
 from cell.robot.ik import AXIS_TOL_RAD, POSITION_TOL_M, IKNoSolution, ReleasePose, solve_ik
-from cell.robot.ik_warm import WarmStarts
+from cell.robot.ik_warm import FarPoses, WarmStarts
 from cell.robot.model import load_robot
 from tests.test_release_choice import JOB  # random layout 2's geometry (Panda)
 
@@ -196,3 +200,91 @@ def test_the_release_search_warm_starts_only_when_asked(orchestrator: Any) -> No
         o._ik_solved.clear()
         o._ik_memo.clear()
         o._ik_warm.clear()
+
+
+def test_far_poses_against_a_scan() -> None:
+    rng = np.random.default_rng(4)
+    kept = FarPoses()
+    rows = []
+    for k in range(200):
+        pose = ReleasePose(rng.uniform(-0.01, 0.01, 3), np.array([0.0, 0.0, 1.0]), 0.0)
+        rule = ["a", "b"][k % 2]
+        kept.add(pose, rule, k)
+        rows.append((pose, rule, k))
+    copy = kept.copy()
+    kept.add(ReleasePose(np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0), "a", -1)
+    assert len(copy) == 200 and len(kept) == 201
+    for _ in range(40):
+        probe = ReleasePose(rng.uniform(-0.01, 0.01, 3), np.array([0.0, 0.0, 1.0]), 0.0)
+        want = [
+            k
+            for pose, rule, k in rows
+            if rule == "b" and np.linalg.norm(pose.position - probe.position) <= 3e-3
+        ]
+        assert copy.near(probe, "b", 3e-3, 0.01) == (want[0] if want else None)
+    other_roll = ReleasePose(rows[0][0].position, rows[0][0].axis, math.pi)
+    assert copy.near(other_roll, "a", 1.0, 1.0) is None
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_a_pose_near_one_missed_by_5_mm_is_missed(name: str) -> None:
+    """Poses just beyond the arm's reach (a reached pose pushed 3 cm out from the base),
+    missed by the release search's rule (`ik_give_up`, no polish) by 5 mm or more: the
+    same pose moved by 1 mm and ~0.4° is missed by that search too, and where the whole
+    search (every seed and the polish) misses the first, it misses the second."""
+    robot = load_robot(name)
+    rng = np.random.default_rng(8)
+    checked = whole = 0
+    for q in robot.random_configuration(rng, 60):
+        p, r = robot.tcp_pose(q)
+        out = p + 0.03 * p / np.linalg.norm(p)
+        pose = ReleasePose(out, r[:, 2], 0.0)
+        try:
+            solve_ik(robot, pose, robot.home, give_up=(6, 30.0), polish=0)
+            continue
+        except IKNoSolution as exc:
+            if exc.position_error_m < 5e-3:
+                continue
+        step = rng.normal(0.0, 1.0, 3)
+        u = r[:, 2] + rng.normal(0.0, 0.004, 3)
+        near = ReleasePose(out + 1e-3 * step / np.linalg.norm(step), u, 0.0)
+        with pytest.raises(IKNoSolution):
+            solve_ik(robot, near, robot.home, give_up=(6, 30.0), polish=0)
+        try:
+            solve_ik(robot, pose, robot.home)
+        except IKNoSolution:
+            with pytest.raises(IKNoSolution):
+                solve_ik(robot, near, robot.home)
+            whole += 1
+        checked += 1
+    assert checked >= 6 and whole >= 5
+
+
+def test_the_release_search_refuses_a_pose_near_one_out_of_reach(
+    orchestrator: Any, ik_solve_calls: Any
+) -> None:
+    o = orchestrator
+    tuning = o.tuning
+    far = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)  # beyond the Panda
+    near = ReleasePose(far.position + np.array([6e-4, 0.0, 0.0]), far.axis, 0.0)
+    seed = np.asarray(o.robot.home, float)
+    try:
+        for warm, searched in (((1e-3, math.radians(0.5)), 0), (None, 1)):
+            o.tuning = dataclasses.replace(tuning, ik_warm=warm)
+            o._ik_memo.clear()
+            o._out_of_reach.clear()
+            o._far_poses.clear()
+            with pytest.raises(IKNoSolution) as first:
+                o._release_ik(o.robot, far, seed)
+            assert first.value.position_error_m >= tuning.ik_out_of_reach_m
+            o._ik_memo.clear()  # the next decision
+            ik_solve_calls.reset()
+            with pytest.raises(IKNoSolution) as again:
+                o._release_ik(o.robot, near, seed)
+            assert ik_solve_calls.n == searched
+            assert (again.value is first.value) == (searched == 0)
+    finally:
+        o.tuning = tuning
+        o._ik_memo.clear()
+        o._out_of_reach.clear()
+        o._far_poses.clear()

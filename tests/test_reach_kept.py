@@ -41,6 +41,7 @@ def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None
     kept = o.tuning
     o._ik_memo.clear()
     o._out_of_reach.clear()
+    o._far_poses.clear()
     try:
         with pytest.raises(IKNoSolution) as first:
             o._release_ik(o.robot, FAR, np.asarray(o.robot.home, float))
@@ -115,6 +116,7 @@ def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_call
     kept = o.tuning
     calls = ik_solve_calls
     o._out_of_reach.clear()
+    o._far_poses.clear()
     try:
         decide_presented(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach
