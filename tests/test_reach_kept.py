@@ -87,6 +87,7 @@ def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None
 def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     o = orchestrator
     o._out_of_reach.clear()
+    o._far_poses.clear()  # the poses near those kept: none (`ik_warm`)
     monkeypatch.setattr(kinematics, "OUT_OF_REACH_KEPT_MAX", 2)
     for k in range(5):
         o._ik_memo.clear()
@@ -96,6 +97,7 @@ def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatc
         assert 1 <= len(o._out_of_reach) <= 2
     o._ik_memo.clear()
     o._out_of_reach.clear()
+    o._far_poses.clear()
 
 
 def decide_presented(o: Orchestrator, k: int) -> Any:
