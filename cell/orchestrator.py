@@ -58,6 +58,7 @@ from cell.loop import ItemLoop
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams, load_params, scene_params_path
 from cell.results import FAILURES, ItemResult, RunSummary
+from cell.robot.ik_warm import FarPoses, WarmStarts
 
 __all__ = [
     "FAILURES",  # re-exported from cell.results, where it is defined
@@ -243,6 +244,12 @@ class Orchestrator(
         self._out_of_reach: dict[tuple[bytes, ...], Any] = {}
         # IK searches kept across decisions (`Kinematics._solved`)
         self._ik_solved: dict[tuple[bytes, ...], Any] = {}
+        # release poses solved in this decision, warm starts for nearby ones
+        # (`Kinematics._solved`, `ik_warm`; `decide` clears it)
+        self._ik_warm = WarmStarts()
+        # release poses out of reach, kept across decisions to refuse poses near them
+        # (`Kinematics._solve_ik`, `ik_reach_kept` and `ik_warm`)
+        self._far_poses = FarPoses()
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
@@ -346,6 +353,7 @@ class Orchestrator(
         the throw's plan, made before the pick: the end-effector grasps at the stroke it
         will throw with, so the item sits on the band carriage as the plan assumes."""
         self._ik_memo.clear()
+        self._ik_warm.clear()
         self._approach_memo.clear()
         self._approach_plans.clear()
         self._plan_memo.clear()

@@ -78,15 +78,18 @@ def test_a_decision_with_searches_kept_is_the_same(orchestrator: Any, ik_solve_c
     o = orchestrator
     calls = ik_solve_calls
     o._out_of_reach.clear()
+    o._far_poses.clear()
     o._ik_solved.clear()
     decide_presented(o, 2)
     out_of_reach = dict(o._out_of_reach)
+    far_poses = o._far_poses.copy()
     calls.reset()
     with_kept = decide_presented(o, 3)
     n_kept = calls.n
     o._ik_solved.clear()
     o._out_of_reach.clear()
     o._out_of_reach.update(out_of_reach)  # as item 2 left it: only the searches differ
+    o._far_poses = far_poses
     calls.reset()
     without = decide_presented(o, 3)
     assert n_kept < calls.n  # searches item 2 kept were not run again

@@ -37,6 +37,7 @@ def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None
     kept = o.tuning
     o._ik_memo.clear()
     o._out_of_reach.clear()
+    o._far_poses.clear()
     try:
         with pytest.raises(IKNoSolution) as first:
             o._release_ik(o.robot, FAR, np.asarray(o.robot.home, float))
@@ -82,6 +83,7 @@ def test_a_pose_out_of_reach_is_kept_across_decisions(orchestrator: Any) -> None
 def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatch) -> None:
     o = orchestrator
     o._out_of_reach.clear()
+    o._far_poses.clear()  # the poses near those kept: none (`ik_warm`)
     monkeypatch.setattr(kinematics, "OUT_OF_REACH_KEPT_MAX", 2)
     for k in range(5):
         o._ik_memo.clear()
@@ -91,6 +93,7 @@ def test_the_record_is_bounded(orchestrator: Any, monkeypatch: pytest.MonkeyPatc
         assert 1 <= len(o._out_of_reach) <= 2
     o._ik_memo.clear()
     o._out_of_reach.clear()
+    o._far_poses.clear()
 
 
 def decide_presented(o: Orchestrator, k: int) -> Any:
@@ -111,6 +114,7 @@ def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_call
     kept = o.tuning
     calls = ik_solve_calls
     o._out_of_reach.clear()
+    o._far_poses.clear()
     try:
         decide_presented(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach

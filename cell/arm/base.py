@@ -64,6 +64,8 @@ class ArmBase:
     _ik_memo: dict[tuple[bytes, ...], Any]
     _out_of_reach: dict[tuple[bytes, ...], Any]
     _ik_solved: dict[tuple[bytes, ...], Any]
+    _ik_warm: Any
+    _far_poses: Any
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]

@@ -88,12 +88,16 @@ def _seeds(
     p_des: np.ndarray,
     random_seeds: int,
     rng: np.random.Generator | None,
+    warm: np.ndarray | None = None,
 ) -> Iterator[np.ndarray]:
-    """The seeds in order: the current configuration, home (if different), then
-    `random_seeds` random configurations, every other one with its base joint turned to
-    face the target. Lazy: the random ones are drawn only when the first seeds fail."""
+    """The seeds in order: the current configuration, `warm` (if given), home (if
+    different), then `random_seeds` random configurations, every other one with its base
+    joint turned to face the target. Lazy: the random ones are drawn only when the first
+    seeds fail (the same draws with a warm seed or without)."""
     lim = robot.limits
     yield q_cur
+    if warm is not None:
+        yield warm
     if not np.allclose(robot.home, q_cur):
         yield robot.home
     g = rng if rng is not None else np.random.default_rng(0)
@@ -124,17 +128,19 @@ def _search_seeds(
     seeds: Iterator[np.ndarray],
     solutions: int,
     give_up: tuple[int, float] | None = None,
+    first: int = 1,
 ) -> _Search:
-    """Descend from each seed in turn; stop at once if the first converges, else once
-    `solutions` seeds have. `give_up` (seeds, score): stop too once that many seeds have
-    been tried, none has converged and none came within that score (`_descend`'s:
-    position error / tolerance + angle error / tolerance) of the pose; the search is then
-    marked as given up (`_Search.gave_up`)."""
+    """Descend from each seed in turn; stop at once if one of the `first` seeds converges
+    (the current configuration; and a warm start's), else once `solutions` seeds have.
+    `give_up` (seeds, score): stop too once that many seeds after the `first` - 1 extra
+    ones have been tried, none has converged and none came within that score
+    (`_descend`'s: position error / tolerance + angle error / tolerance) of the pose; the
+    search is then marked as given up (`_Search.gave_up`)."""
     s = _Search(best=(math.inf, math.inf, math.inf, d.q_cur))
     for seed in seeds:
         if (
             give_up is not None
-            and s.tried >= give_up[0]
+            and s.tried - (first - 1) >= give_up[0]
             and not s.found
             and min(e[0] for e in s.ends) > give_up[1]
         ):
@@ -148,7 +154,7 @@ def _search_seeds(
         q, ep, th, roll = _near_current(robot, d, seed_best[1])
         if d.within(ep, th, roll):
             s.found.append((float(np.linalg.norm(q - d.q_cur)), q, ep, th, roll))
-            if s.tried == 1 or len(s.found) >= solutions:
+            if s.tried <= first or len(s.found) >= solutions:
                 break
     return s
 
@@ -199,6 +205,7 @@ def solve_ik(
     polish: int = 3,
     rng: np.random.Generator | None = None,
     give_up: tuple[int, float] | None = None,
+    warm: np.ndarray | None = None,
 ) -> IKResult:
     """Joint configuration that puts the grip centre at a release pose.
 
@@ -227,6 +234,10 @@ def solve_ik(
             and none came within that score of the pose (position error / tol_position_m
             + angle error / tol_axis_rad), the pose is taken as out of reach: no more
             seeds and no polish (None: every seed).
+        warm: a warm start [rad], shape (n,) (the solution of a nearby pose): the second
+            seed, after the current configuration; if either converges, its solution is
+            returned at once, else the usual seeds follow (`give_up` counts them alone).
+            Clamped onto the limits.
 
     Uses `robot.data` as scratch space: one Robot per thread.
 
@@ -234,8 +245,8 @@ def solve_ik(
         The IKResult of the chosen solution.
 
     Raises:
-        InvalidInput: q_current has the wrong shape or is outside the limits, or a solver
-            setting is out of range.
+        InvalidInput: q_current has the wrong shape or is outside the limits, warm has the
+            wrong shape or is not finite, or a solver setting is out of range.
         IKNoSolution (an IKFailed): no seed converged; carries the best residual.
     """
     _check_settings(
@@ -243,8 +254,15 @@ def solve_ik(
     )
     q_cur = _current_configuration(robot, q_current)
     d = _Descent.of(pose, q_cur, tol_position_m, tol_axis_rad, max_iterations, damping, null_gain)
-    seeds = _seeds(robot, q_cur, pose.position, random_seeds, rng)
-    s = _search_seeds(robot, d, seeds, solutions, give_up)
+    if warm is not None:
+        warm = np.asarray(warm, dtype=float)
+        if warm.shape != q_cur.shape or not np.all(np.isfinite(warm)):
+            raise InvalidInput(
+                f"warm must be {q_cur.shape[0]} finite joint angles [rad], got {warm!r}"
+            )
+        warm = np.clip(warm, robot.limits.lower, robot.limits.upper)
+    seeds = _seeds(robot, q_cur, pose.position, random_seeds, rng, warm)
+    s = _search_seeds(robot, d, seeds, solutions, give_up, 1 if warm is None else 2)
     if not s.found and polish > 0 and not s.gave_up:
         _polish_ends(robot, d, s, polish)
     if not s.found:
