@@ -27,8 +27,8 @@ FAR = ReleasePose.from_angles(np.array([0.1, 0.0, 1.5]), 0.3, 0.0, 0.0)
 @pytest.fixture(scope="module")
 def orchestrator(orchestrator_on: Any) -> Any:
     # the job's bin_0 has a low rim (0.05 m): its throws are planned in the steep bounds
-    # first (`ArmTuning.steep_rim_m`, on as by default); its cubes' steep plans ask more of
-    # the grip than it holds and fall through to the ordinary bounds (`cell.arm.steep`)
+    # first (`ArmTuning.steep_rim_m`, on as by default), kept only where they pass what an
+    # ordinary plan is held to (`cell.arm.steep`)
     return orchestrator_on(JOB, "reach", cycle_search=True)
 
 
@@ -109,13 +109,16 @@ def decide_presented(o: Orchestrator, k: int) -> Any:
 def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_calls: Any) -> None:
     """Items 2 and 3 (the same cube to the same bin): the second decided with what the
     first kept out of reach, and again with nothing kept, the rule off: fewer IK searches,
-    the same decision."""
+    the same decision. The steep rule off: into their bin's low rim (0.05 m) their steep
+    plans, warm-started (`ArmTuning.ik_warm`), hold and meet no pose out of reach, and
+    the rule tested here is the ordinary bounds' search."""
     o = orchestrator
     kept = o.tuning
     calls = ik_solve_calls
     o._out_of_reach.clear()
     o._far_poses.clear()
     try:
+        o.tuning = dataclasses.replace(kept, steep_rim_m=0.0)
         decide_presented(o, 2)
         assert o._out_of_reach  # the first decision met a pose out of reach
         o._ik_solved.clear()  # the searches kept whole (`_solved`): not the rule counted here
@@ -124,7 +127,7 @@ def test_a_decision_with_poses_kept_is_the_same(orchestrator: Any, ik_solve_call
         n_kept = calls.n
         o._out_of_reach.clear()
         o._ik_solved.clear()
-        o.tuning = dataclasses.replace(kept, ik_reach_kept=False)
+        o.tuning = dataclasses.replace(kept, steep_rim_m=0.0, ik_reach_kept=False)
         calls.reset()
         without = decide_presented(o, 3)
         assert n_kept < calls.n  # the poses kept were not searched again
