@@ -19,12 +19,14 @@ velocity: it comes out of the contact with the carriage.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.ops import Ops
 from cell.model.params import EndEffectorParams
 from cell.sim.mechanism import EEGeometry
 
@@ -35,6 +37,27 @@ FINGER_LEFT = 1  # ee_finger_left_joint
 FINGER_RIGHT = 2  # ee_finger_right_joint
 _LATCH_FORCE_N = 400.0  # [N] most the latch/spool can hold
 _FINGER_SPEED = 0.3  # [m/s] closing speed of a finger before contact
+_JOINTS = (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)
+
+
+def _maximum(x: Any, y: Any) -> Any:
+    """np.maximum of two scalars: x where x > y (what np.maximum returns there), else
+    np.maximum itself (NaN, signed zeros)."""
+    return x if x > y else float(np.maximum(x, y))
+
+
+# The band law on one configuration per physics step, on Python floats: the model's own
+# formulas (cell.model.band) with scalar operations that give the very bits NumPy's gave
+# (IEEE sqrt; libm's cos and sin, which NumPy's float64 cos and sin call here, checked on
+# 300,000 values; NumPy's own arctan2, which is not libm's), without NumPy's per-call cost.
+_SCALAR = Ops(
+    sqrt=math.sqrt,
+    cos=math.cos,
+    sin=math.sin,
+    atan2=lambda y, x: float(np.arctan2(y, x)),
+    where=lambda c, a, b: a if c else b,
+    fmax=_maximum,
+)
 
 
 @dataclass(frozen=True)
@@ -123,10 +146,10 @@ class BandDrive:
     def law(self, s: float, a: float) -> tuple[float, float, float, float]:
         """(ΔL, f_e, f_o, f_g) of the law at carriage position s and width a [m, N]."""
         a_eff = max(a, self.ee.d)
-        stretch = float(band_stretch(s, a_eff, self.ee))
-        f_e = float(band_force(np.float64(stretch), self.ee))
-        alpha = float(band_angle(s, a_eff, self.ee))
-        return stretch, f_e, float(2 * f_e * np.cos(alpha)), float(f_e * np.sin(alpha))
+        stretch = float(band_stretch(s, a_eff, self.ee, _SCALAR))
+        f_e = float(band_force(stretch, self.ee, _SCALAR))
+        alpha = float(band_angle(s, a_eff, self.ee, _SCALAR))
+        return stretch, f_e, 2 * f_e * math.cos(alpha), f_e * math.sin(alpha)
 
     def reading(self) -> BandReading:
         """The band now (law evaluated at the current configuration)."""
@@ -159,9 +182,9 @@ class BandDrive:
                 self.stroke_cmd_m, self.wind_target_m = self.wind_target_m, None
             else:
                 self.stroke_cmd_m += step if ds > 0 else -step
-        s = float(cl.getJointState(self.body, BAND_JOINT)[0])
-        a = self.width()
-        _, _, push, grip = self.law(s, a)
+        # the carriage and both fingers in one call (`position`, `width`)
+        band, left, right = cl.getJointStates(self.body, _JOINTS)
+        _, _, push, grip = self.law(float(band[0]), float(left[0] + right[0]))
         if push > 0:
             cl.applyExternalForce(self.body, BAND_JOINT, [0, 0, push], [0, 0, 0], cl.LINK_FRAME)
             cl.applyExternalForce(self.body, -1, [0, 0, -push], [0, 0, 0], cl.LINK_FRAME)
