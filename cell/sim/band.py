@@ -41,9 +41,11 @@ _JOINTS = (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)
 
 
 def _maximum(x: Any, y: Any) -> Any:
-    """np.maximum of two scalars: x where x > y (what np.maximum returns there), else
-    np.maximum itself (NaN, signed zeros)."""
-    return x if x > y else float(np.maximum(x, y))
+    """np.maximum of two scalars: the larger where they differ (what np.maximum returns
+    there), else np.maximum itself (NaN, signed zeros)."""
+    if x > y:
+        return x
+    return y if x < y else float(np.maximum(x, y))
 
 
 # The band law on one configuration per physics step, on Python floats: the model's own
