@@ -110,6 +110,9 @@ class BandDrive:
         self.wind_target_m: float | None = None  # spool winding towards it (see `wind`)
         self.open_to_m: float | None = None  # open fingers stop at this opening (None: widest)
         self.wind_speed_mps = 0.0
+        # the last motor command sent to each joint, with the step [s] it was sent for
+        # (`_motors`)
+        self._sent: dict[int, tuple[Any, ...]] = {}
         for j in (FINGER_LEFT, FINGER_RIGHT):
             client.changeDynamics(
                 body,
@@ -190,38 +193,64 @@ class BandDrive:
         if push > 0:
             cl.applyExternalForce(self.body, BAND_JOINT, [0, 0, push], [0, 0, 0], cl.LINK_FRAME)
             cl.applyExternalForce(self.body, -1, [0, 0, -push], [0, 0, 0], cl.LINK_FRAME)
+        self._motors(dt_s, grip)
+
+    def _motors(self, dt_s: float, grip: float) -> None:
+        """Command the latch's motor and the fingers' for a physics step of dt_s [s], each
+        only when it differs from the last command that joint was sent (`_sent`), sent for
+        a step of the same length. Bullet's joint motor keeps what the last command set
+        (the targets, the gains, the velocity clamp, and the force times the step, the
+        largest impulse): PhysicsServerCommandProcessor's processSendDesiredStateCommand
+        sets nothing else, and no physics step changes it; only this class commands these
+        joints. A command sent again would set the same bits: skipping it changes no
+        number. Each float compared with its sign (a grip of -0.0 is sent as such)."""
+        cl, body, sent = self.client, self.body, self._sent
         if self.latched:
+            x = self.stroke_cmd_m
+            key: tuple[Any, ...] = ("latch", dt_s, x, math.copysign(1.0, x))
+            if sent.get(BAND_JOINT) != key:
+                cl.setJointMotorControl2(
+                    body,
+                    BAND_JOINT,
+                    cl.POSITION_CONTROL,
+                    targetPosition=x,
+                    force=_LATCH_FORCE_N,
+                    positionGain=1.0,
+                    velocityGain=1.0,
+                )
+                sent[BAND_JOINT] = key
+        elif sent.get(BAND_JOINT) != ("free", dt_s):
             cl.setJointMotorControl2(
-                self.body,
-                BAND_JOINT,
-                cl.POSITION_CONTROL,
-                targetPosition=self.stroke_cmd_m,
-                force=_LATCH_FORCE_N,
-                positionGain=1.0,
-                velocityGain=1.0,
+                body, BAND_JOINT, cl.VELOCITY_CONTROL, targetVelocity=0, force=0
             )
+            sent[BAND_JOINT] = ("free", dt_s)
+        if self.fingers_closing:
+            key = ("close", dt_s, grip, math.copysign(1.0, grip))
+        elif self.open_to_m is None:
+            key = ("open", dt_s)
         else:
-            cl.setJointMotorControl2(
-                self.body, BAND_JOINT, cl.VELOCITY_CONTROL, targetVelocity=0, force=0
-            )
+            key = ("open_to", dt_s, self.open_to_m, math.copysign(1.0, self.open_to_m))
+        if sent.get(FINGER_LEFT) == key:  # both fingers are always sent the same command
+            return
         for j in (FINGER_LEFT, FINGER_RIGHT):
             if self.fingers_closing:
                 cl.setJointMotorControl2(
-                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
+                    body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
                 )
             elif self.open_to_m is None:
                 cl.setJointMotorControl2(
-                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
+                    body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
                 )
             else:
                 cl.setJointMotorControl2(
-                    self.body,
+                    body,
                     j,
                     cl.POSITION_CONTROL,
                     targetPosition=self.open_to_m,
                     force=2.0,
                     maxVelocity=_FINGER_SPEED,
                 )
+        sent[FINGER_LEFT] = key
 
     # -- commands --------------------------------------------------------------
     def wind(self, stroke_m: float, speed_mps: float) -> None:
