@@ -42,8 +42,10 @@ def scene():
 def test_the_band_law_on_floats_is_the_numpy_law_to_the_bit(scene: CellScene) -> None:
     rng = np.random.default_rng(0)
     ee = DEFAULT_EE
-    strokes = np.r_[rng.uniform(-0.01, ee.stroke_max + 0.02, 3000), 0.0, ee.stroke_max, ee.L_t]
-    widths = np.r_[rng.uniform(0.0, 0.12, 3000), ee.d, 0.0, ee.d]
+    # strokes short of the band's origin L_t and beyond it (α past π/2), on it, and widths
+    # inside the hoop (a = d: α = 0)
+    strokes = np.r_[rng.uniform(-0.01, ee.L_t + 0.05, 3000), 0.0, ee.stroke_max, ee.L_t, ee.L_t]
+    widths = np.r_[rng.uniform(0.0, 0.12, 3000), ee.d, 0.0, ee.d, 0.05]
     slack = 0
     for s, a in zip(strokes.tolist(), widths.tolist(), strict=True):
         got, want = scene.band.law(s, a), _numpy_law(s, a)

@@ -153,6 +153,11 @@ class BandDrive:
         a_eff = max(a, self.ee.d)
         stretch = float(band_stretch(s, a_eff, self.ee, _SCALAR))
         f_e = float(band_force(stretch, self.ee, _SCALAR))
+        if f_e == 0.0 and self.ee.L_t - s > 0.0:
+            # a slack band (every step of a flight): with the carriage short of the band's
+            # origin, 0 <= α < π/2, so cos α > 0 and sin α >= +0, and 2 f_e cos α and
+            # f_e sin α are f_e's own zero, sign and all: α is not needed
+            return stretch, f_e, f_e, f_e
         alpha = float(band_angle(s, a_eff, self.ee, _SCALAR))
         return stretch, f_e, 2 * f_e * math.cos(alpha), f_e * math.sin(alpha)
 
