@@ -19,12 +19,14 @@ velocity: it comes out of the contact with the carriage.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from cell.model.band import band_angle, band_force, band_stretch
+from cell.model.ops import Ops
 from cell.model.params import EndEffectorParams
 from cell.sim.mechanism import EEGeometry
 
@@ -35,6 +37,29 @@ FINGER_LEFT = 1  # ee_finger_left_joint
 FINGER_RIGHT = 2  # ee_finger_right_joint
 _LATCH_FORCE_N = 400.0  # [N] most the latch/spool can hold
 _FINGER_SPEED = 0.3  # [m/s] closing speed of a finger before contact
+_JOINTS = (BAND_JOINT, FINGER_LEFT, FINGER_RIGHT)
+
+
+def _maximum(x: Any, y: Any) -> Any:
+    """np.maximum of two scalars: the larger where they differ (what np.maximum returns
+    there), else np.maximum itself (NaN, signed zeros)."""
+    if x > y:
+        return x
+    return y if x < y else float(np.maximum(x, y))
+
+
+# The band law on one configuration per physics step, on Python floats: the model's own
+# formulas (cell.model.band) with scalar operations that give the very bits NumPy's gave
+# (IEEE sqrt; libm's cos and sin, which NumPy's float64 cos and sin call here, checked on
+# 300,000 values; NumPy's own arctan2, which is not libm's), without NumPy's per-call cost.
+_SCALAR = Ops(
+    sqrt=math.sqrt,
+    cos=math.cos,
+    sin=math.sin,
+    atan2=lambda y, x: float(np.arctan2(y, x)),
+    where=lambda c, a, b: a if c else b,
+    fmax=_maximum,
+)
 
 
 @dataclass(frozen=True)
@@ -85,6 +110,9 @@ class BandDrive:
         self.wind_target_m: float | None = None  # spool winding towards it (see `wind`)
         self.open_to_m: float | None = None  # open fingers stop at this opening (None: widest)
         self.wind_speed_mps = 0.0
+        # the last motor command sent to each joint, with the step [s] it was sent for
+        # (`_motors`)
+        self._sent: dict[int, tuple[Any, ...]] = {}
         for j in (FINGER_LEFT, FINGER_RIGHT):
             client.changeDynamics(
                 body,
@@ -123,10 +151,15 @@ class BandDrive:
     def law(self, s: float, a: float) -> tuple[float, float, float, float]:
         """(ΔL, f_e, f_o, f_g) of the law at carriage position s and width a [m, N]."""
         a_eff = max(a, self.ee.d)
-        stretch = float(band_stretch(s, a_eff, self.ee))
-        f_e = float(band_force(np.float64(stretch), self.ee))
-        alpha = float(band_angle(s, a_eff, self.ee))
-        return stretch, f_e, float(2 * f_e * np.cos(alpha)), float(f_e * np.sin(alpha))
+        stretch = float(band_stretch(s, a_eff, self.ee, _SCALAR))
+        f_e = float(band_force(stretch, self.ee, _SCALAR))
+        if f_e == 0.0 and self.ee.L_t - s > 0.0:
+            # a slack band (every step of a flight): with the carriage short of the band's
+            # origin, 0 <= α < π/2, so cos α > 0 and sin α >= +0, and 2 f_e cos α and
+            # f_e sin α are f_e's own zero, sign and all: α is not needed
+            return stretch, f_e, f_e, f_e
+        alpha = float(band_angle(s, a_eff, self.ee, _SCALAR))
+        return stretch, f_e, 2 * f_e * math.cos(alpha), f_e * math.sin(alpha)
 
     def reading(self) -> BandReading:
         """The band now (law evaluated at the current configuration)."""
@@ -159,44 +192,70 @@ class BandDrive:
                 self.stroke_cmd_m, self.wind_target_m = self.wind_target_m, None
             else:
                 self.stroke_cmd_m += step if ds > 0 else -step
-        s = float(cl.getJointState(self.body, BAND_JOINT)[0])
-        a = self.width()
-        _, _, push, grip = self.law(s, a)
+        # the carriage and both fingers in one call (`position`, `width`)
+        band, left, right = cl.getJointStates(self.body, _JOINTS)
+        _, _, push, grip = self.law(float(band[0]), float(left[0] + right[0]))
         if push > 0:
             cl.applyExternalForce(self.body, BAND_JOINT, [0, 0, push], [0, 0, 0], cl.LINK_FRAME)
             cl.applyExternalForce(self.body, -1, [0, 0, -push], [0, 0, 0], cl.LINK_FRAME)
+        self._motors(dt_s, grip)
+
+    def _motors(self, dt_s: float, grip: float) -> None:
+        """Command the latch's motor and the fingers' for a physics step of dt_s [s], each
+        only when it differs from the last command that joint was sent (`_sent`), sent for
+        a step of the same length. Bullet's joint motor keeps what the last command set
+        (the targets, the gains, the velocity clamp, and the force times the step, the
+        largest impulse): PhysicsServerCommandProcessor's processSendDesiredStateCommand
+        sets nothing else, and no physics step changes it; only this class commands these
+        joints. A command sent again would set the same bits: skipping it changes no
+        number. Each float compared with its sign (a grip of -0.0 is sent as such)."""
+        cl, body, sent = self.client, self.body, self._sent
         if self.latched:
+            x = self.stroke_cmd_m
+            key: tuple[Any, ...] = ("latch", dt_s, x, math.copysign(1.0, x))
+            if sent.get(BAND_JOINT) != key:
+                cl.setJointMotorControl2(
+                    body,
+                    BAND_JOINT,
+                    cl.POSITION_CONTROL,
+                    targetPosition=x,
+                    force=_LATCH_FORCE_N,
+                    positionGain=1.0,
+                    velocityGain=1.0,
+                )
+                sent[BAND_JOINT] = key
+        elif sent.get(BAND_JOINT) != ("free", dt_s):
             cl.setJointMotorControl2(
-                self.body,
-                BAND_JOINT,
-                cl.POSITION_CONTROL,
-                targetPosition=self.stroke_cmd_m,
-                force=_LATCH_FORCE_N,
-                positionGain=1.0,
-                velocityGain=1.0,
+                body, BAND_JOINT, cl.VELOCITY_CONTROL, targetVelocity=0, force=0
             )
+            sent[BAND_JOINT] = ("free", dt_s)
+        if self.fingers_closing:
+            key = ("close", dt_s, grip, math.copysign(1.0, grip))
+        elif self.open_to_m is None:
+            key = ("open", dt_s)
         else:
-            cl.setJointMotorControl2(
-                self.body, BAND_JOINT, cl.VELOCITY_CONTROL, targetVelocity=0, force=0
-            )
+            key = ("open_to", dt_s, self.open_to_m, math.copysign(1.0, self.open_to_m))
+        if sent.get(FINGER_LEFT) == key:  # both fingers are always sent the same command
+            return
         for j in (FINGER_LEFT, FINGER_RIGHT):
             if self.fingers_closing:
                 cl.setJointMotorControl2(
-                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
+                    body, j, cl.VELOCITY_CONTROL, targetVelocity=-_FINGER_SPEED, force=grip
                 )
             elif self.open_to_m is None:
                 cl.setJointMotorControl2(
-                    self.body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
+                    body, j, cl.VELOCITY_CONTROL, targetVelocity=_FINGER_SPEED, force=2.0
                 )
             else:
                 cl.setJointMotorControl2(
-                    self.body,
+                    body,
                     j,
                     cl.POSITION_CONTROL,
                     targetPosition=self.open_to_m,
                     force=2.0,
                     maxVelocity=_FINGER_SPEED,
                 )
+        sent[FINGER_LEFT] = key
 
     # -- commands --------------------------------------------------------------
     def wind(self, stroke_m: float, speed_mps: float) -> None:

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from cell.model.objects import ObjectParams
+from cell.sim.drag import apply_drag, speed
 from cell.sim.scene import CellScene
 
 __all__ = ["RHO", "STATION_XY", "EffectScene"]
@@ -62,7 +64,7 @@ class EffectScene(CellScene):
         out = [f * (c * v[0] - s * v[1]), f * (s * v[0] + c * v[1]), f * v[2]]
         cl.resetBaseVelocity(item.body, out, w)
 
-    def air(self, p: np.ndarray) -> np.ndarray:
+    def air(self, p: Sequence[float]) -> np.ndarray:
         """The air velocity at a point [m/s, W]: the steady flow plus the rotor jet."""
         w = self.wind.copy()
         if self.jet is not None:
@@ -75,17 +77,32 @@ class EffectScene(CellScene):
                 w[2] -= centre * math.exp(-((r / width) ** 2))
         return w
 
-    def step(self, n: int = 1) -> None:
-        cl = self.client
-        for _ in range(n):
-            for it in self.items:
-                pos, _ = cl.getBasePositionAndOrientation(it.body)
-                v = np.asarray(cl.getBaseVelocity(it.body)[0])
-                rel = v - self.air(np.asarray(pos))
-                cd, area = _cd_area(it.obj)
-                c_f = self.drag_factor * 0.5 * RHO * cd * area  # [kg/m]
-                f = -c_f * np.linalg.norm(rel) * rel + it.drag_c * np.linalg.norm(v) * v
-                f = f + it.obj.mass * self.side_mps2
-                if np.any(f != 0.0):
-                    cl.applyExternalForce(it.body, -1, f.tolist(), pos, cl.WORLD_FRAME)
-            super().step(1)
+    def _item_forces(self) -> None:
+        """Before each physics step, on every item: the effect's force, the air drag taken
+        on the velocity relative to the air (`air`) with this world's factor, the scene's
+        own drag cancelled, plus the side force; then the scene's own drag (not on an item
+        kept in a bin). The item's position and velocity are read once for both, on plain
+        floats: each component the same products and sums, in the same order, as the
+        vectors gave."""
+        cl, kept = self.client, self._kept
+        sx, sy, sz = self.side_mps2
+        for it in self.items:
+            pos, _ = cl.getBasePositionAndOrientation(it.body)
+            vel, _ = cl.getBaseVelocity(it.body)
+            vx, vy, vz = vel
+            wx, wy, wz = self.air(pos)
+            rx, ry, rz = vx - wx, vy - wy, vz - wz
+            cd, area = _cd_area(it.obj)
+            c_f = self.drag_factor * 0.5 * RHO * cd * area  # [kg/m]
+            k_air = -c_f * speed(np.array((rx, ry, rz)))
+            k_own = it.drag_c * speed(np.array(vel, float))
+            m = it.obj.mass
+            f = [
+                k_air * rx + k_own * vx + m * sx,
+                k_air * ry + k_own * vy + m * sy,
+                k_air * rz + k_own * vz + m * sz,
+            ]
+            if f[0] != 0.0 or f[1] != 0.0 or f[2] != 0.0:
+                cl.applyExternalForce(it.body, -1, f, pos, cl.WORLD_FRAME)
+            if it.body not in kept:
+                apply_drag(cl, it.body, it.drag_c, pos, vel)

@@ -381,14 +381,20 @@ class CellScene:
                 if self._arm_motion is not None:
                     self.set_arm(self._arm_motion(self.t))
                 self.band.apply(self._dt_now)
-                for it in self.items:
-                    if it.body not in self._kept:
-                        apply_drag(cl, it.body, it.drag_c)
+                self._item_forces()
                 cl.stepSimulation()
                 self.t += self._dt_now
                 watch.sample_trackers(self)
         finally:
             self._count_wall(t0)
+
+    def _item_forces(self) -> None:
+        """The forces on the items for the next physics step: air drag on every item but
+        those kept in a bin (`cell.sim.drag.apply_drag`)."""
+        cl, kept = self.client, self._kept
+        for it in self.items:
+            if it.body not in kept:
+                apply_drag(cl, it.body, it.drag_c)
 
     def refresh_contacts(self, item: Item) -> None:
         """Drop the cached contacts between the end-effector and `item`, then step once;

@@ -10,6 +10,7 @@ while descending (the landing point as MODEL.md defines it).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,6 +22,11 @@ __all__ = ["Outcome", "Tracker", "crossing", "REST_SPEED_MPS", "REST_SPIN_RADPS"
 REST_SPEED_MPS = 0.01  # [m/s] below this (and the spin below), the item is still
 REST_SPIN_RADPS = 0.2  # [rad/s]
 REST_TIME_S = 0.1  # [s] still for this long = at rest
+
+
+def _norm(v: np.ndarray) -> float:
+    """|v| of a 3-vector: the bits np.linalg.norm gives (sqrt of the same v·v), cheaper."""
+    return math.sqrt(v.dot(v))
 
 
 def crossing(track: np.ndarray, land_z: float) -> tuple[float, float, float]:
@@ -121,7 +127,7 @@ class Tracker:
             return
         rel = t - self.t0
         self.samples.append((rel, float(pos[0]), float(pos[1]), float(pos[2])))
-        speed = float(np.linalg.norm(vel))
+        speed = _norm(vel)
         if self.touchdown is None:
             other = [c for c in contacts if c[2] != self.ee_body]
             if other:
@@ -132,7 +138,7 @@ class Tracker:
                     rel,
                 )
         self._last_speed = speed
-        still = speed < REST_SPEED_MPS and float(np.linalg.norm(spin)) < REST_SPIN_RADPS
+        still = speed < REST_SPEED_MPS and _norm(spin) < REST_SPIN_RADPS
         if still and self.touchdown is not None:
             if self._still_since is None:
                 self._still_since = rel
@@ -140,6 +146,12 @@ class Tracker:
                 self.rest_t = rel
         else:
             self._still_since = None
+
+    @property
+    def needs_contacts(self) -> bool:
+        """`sample` still reads the contacts it is given: until the touchdown (later
+        samples may be given none)."""
+        return self.touchdown is None and self.rest_t is None
 
     @property
     def at_rest(self) -> bool:

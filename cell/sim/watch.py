@@ -105,9 +105,15 @@ def end_watch(scene: CellScene, item: Item, tr: Tracker, timeout_s: float) -> Ou
 
 def sample_trackers(scene: CellScene) -> None:
     """Record a sample of every tracked item after a physics step: its position [m, W],
-    velocity [m/s, W], spin [rad/s, W] and contacts at the scene time [s]."""
+    velocity [m/s, W], spin [rad/s, W] and contacts at the scene time [s]. A tracker
+    whose item rests records nothing more (`Tracker.sample`), so its item is not read; the
+    contacts are read only until the touchdown, the one thing `Tracker.sample` uses them for."""
     cl = scene.client
+    t = scene.t
     for body, tr in scene._trackers.items():
+        if tr.rest_t is not None:
+            continue
         pos, _ = cl.getBasePositionAndOrientation(body)
         vel, spin = cl.getBaseVelocity(body)
-        tr.sample(scene.t, pos, np.asarray(vel), np.asarray(spin), cl.getContactPoints(bodyA=body))
+        contacts = cl.getContactPoints(bodyA=body) if tr.needs_contacts else []
+        tr.sample(t, pos, np.array(vel, float), np.array(spin, float), contacts)
