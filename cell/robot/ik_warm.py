@@ -58,28 +58,47 @@ class _Poses:
         return np.flatnonzero(close)
 
 
-class WarmStarts:
-    """Solutions of release poses already solved, by roll (free, or fixed at a value), at
-    most WARM_KEPT_MAX of them (all cleared when full)."""
+class _PoseRecord:
+    """Poses kept by a key (a roll, and for `FarPoses` a search's rule), at most
+    WARM_KEPT_MAX of them (all cleared when full), found by nearness: what `WarmStarts` and
+    `FarPoses` share."""
 
     def __init__(self) -> None:
-        self._by_roll: dict[str, _Poses] = {}
+        self._by_key: dict[str, _Poses] = {}
         self._count = 0
 
     def __len__(self) -> int:
         return self._count
 
     def clear(self) -> None:
-        self._by_roll.clear()
+        self._by_key.clear()
         self._count = 0
+
+    def _add(self, key: str, pose: ReleasePose, q: np.ndarray, payload: Any = None) -> None:
+        if self._count >= WARM_KEPT_MAX:
+            self.clear()
+        self._by_key.setdefault(key, _Poses(q.shape[0])).add(pose, q, payload)
+        self._count += 1
+
+    def _close(
+        self, key: str, pose: ReleasePose, within_m: float, within_rad: float
+    ) -> tuple[_Poses, np.ndarray] | None:
+        """The poses kept under `key` and the rows of those near `pose` (`_Poses.close`),
+        or None where none is."""
+        kept = self._by_key.get(key)
+        if kept is None or kept.count == 0:
+            return None
+        rows = kept.close(pose, within_m, within_rad)
+        return (kept, rows) if rows.size else None
+
+
+class WarmStarts(_PoseRecord):
+    """Solutions of release poses already solved, by roll (free, or fixed at a value), at
+    most WARM_KEPT_MAX of them (all cleared when full)."""
 
     def add(self, pose: ReleasePose, q: np.ndarray) -> None:
         """Keep q [rad], a solution of `pose` (within the IK's tolerances)."""
-        if self._count >= WARM_KEPT_MAX:
-            self.clear()
-        q = np.asarray(q, dtype=float)
-        self._by_roll.setdefault(repr(pose.roll), _Poses(q.shape[0])).add(pose, q)
-        self._count += 1
+        self._add(repr(pose.roll), pose, np.asarray(q, dtype=float))
 
     def near(
         self, pose: ReleasePose, q_ref: np.ndarray, within_m: float, within_rad: float
@@ -87,58 +106,41 @@ class WarmStarts:
         """The kept solution, of a pose at the same roll within `within_m` [m] of `pose`'s
         position and `within_rad` [rad] of its axis, nearest q_ref [rad] (the Euclidean
         norm of the joints' difference; the earliest kept of equals), or None."""
-        kept = self._by_roll.get(repr(pose.roll))
-        if kept is None or kept.count == 0:
+        found = self._close(repr(pose.roll), pose, within_m, within_rad)
+        if found is None:
             return None
-        rows = kept.close(pose, within_m, within_rad)
-        if rows.size == 0:
-            return None
+        kept, rows = found
         dq = kept.q[rows] - q_ref
         best = rows[int(np.argmin(np.einsum("ij,ij->i", dq, dq)))]
         return kept.q[best].copy()
 
 
-class FarPoses:
+class FarPoses(_PoseRecord):
     """Release poses a whole search missed by `ArmTuning.ik_out_of_reach_m` or more, each
     with its error (an IKNoSolution), by roll and the search's rule (a string: the give-up,
     reach and polish constants), at most WARM_KEPT_MAX of them (all cleared when full)."""
 
-    def __init__(self) -> None:
-        self._by_kind: dict[str, _Poses] = {}
-        self._count = 0
-
-    def __len__(self) -> int:
-        return self._count
-
-    def clear(self) -> None:
-        self._by_kind.clear()
-        self._count = 0
-
     def copy(self) -> FarPoses:
         """A record with the same poses, which adding to this one leaves as it is."""
         out = FarPoses()
-        for kind, kept in self._by_kind.items():
+        for kind, kept in self._by_key.items():
             mine = _Poses(0)
             mine.count = kept.count
             mine.position, mine.axis, mine.q = kept.position.copy(), kept.axis.copy(), kept.q
             mine.payload = list(kept.payload)
-            out._by_kind[kind] = mine
+            out._by_key[kind] = mine
         out._count = self._count
         return out
 
     def add(self, pose: ReleasePose, rule: str, error: Any) -> None:
         """Keep `pose` as out of reach under `rule`, with the error its search raised."""
-        if self._count >= WARM_KEPT_MAX:
-            self.clear()
-        kept = self._by_kind.setdefault(repr(pose.roll) + rule, _Poses(0))
-        kept.add(pose, np.empty(0), error)
-        self._count += 1
+        self._add(repr(pose.roll) + rule, pose, np.empty(0), error)
 
     def near(self, pose: ReleasePose, rule: str, within_m: float, within_rad: float) -> Any:
         """The error of the earliest pose kept under `rule`, at the same roll, within
         `within_m` [m] and `within_rad` [rad] of `pose`, or None."""
-        kept = self._by_kind.get(repr(pose.roll) + rule)
-        if kept is None or kept.count == 0:
+        found = self._close(repr(pose.roll) + rule, pose, within_m, within_rad)
+        if found is None:
             return None
-        rows = kept.close(pose, within_m, within_rad)
-        return kept.payload[int(rows[0])] if rows.size else None
+        kept, rows = found
+        return kept.payload[int(rows[0])]
