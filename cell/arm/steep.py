@@ -52,13 +52,13 @@ def steep_tiers(
 
 
 def steep_shortfall(
-    choice: Any, grip_short: str | None, at_points: bool, robot: Any, tuning: ArmTuning
+    choice: Any, short: str | None, at_points: bool, robot: Any, tuning: ArmTuning
 ) -> str | None:
     """Why the plan `choice` (a `ThrowChoice`) found in a steep tier is not kept, the
     ordinary bounds planned instead unless another facing's is kept (`Planner._plan_to`);
     None where it is. The steep tier is a preference, not the cell's last resort: its
-    plan must pass what an ordinary plan is searched past for (`grip_short`,
-    `cell.arm.choice.grip_short`: its route asks more of the grip than it holds, or its
+    plan must pass what an ordinary plan is searched past for (`short`, what
+    `cell.arm.choice.grip_short` says of it: its route asks more of the grip than it holds, or its
     release does not hold the item still).
 
     For an item held at points (`at_points`: a sphere, a mesh) carried level, that route
@@ -73,8 +73,8 @@ def steep_shortfall(
     A box's or a cylinder's level swing is not about one axis (the grip turns in azimuth
     on the way up): 58-67° so measured on ordinary routes the pads hold, the grip use
     held still its test."""
-    if grip_short is not None:
-        return grip_short
+    if short is not None:
+        return short
     if not at_points or choice.route is None:
         return None
     turned = twist(robot, list(choice.route), tuning.swing_check_samples)
