@@ -235,3 +235,24 @@ def test_the_repeats_tool_refuses_what_it_cannot_measure(capsys: pytest.CaptureF
     assert main(["s:wind"]) == 2
     err = capsys.readouterr().err
     assert err.count("cell: error:") == 4 and "not a case with a bounce" in err
+
+
+def test_the_null_case_on_cubes_throws_the_flight_cases_objects(monkeypatch):
+    """`s:none-cubes` has no effect, yet throws the objects the flight cases throw (their
+    configurations miss the configured model by more than the tracker's scatter), and the
+    campaign is drawn without any option of its own."""
+    import cell.gap.check_scene as cs
+    from cell.params import load_params, scene_params_path
+
+    seen: list[tuple] = []
+
+    def draw(effects, rng, mp, *, n, objects=None, **opts):  # type: ignore[no-untyped-def]
+        seen.append((objects, opts))
+        raise RuntimeError("drawn")
+
+    monkeypatch.setattr(cs, "draw_scene_campaign", draw)
+    for name in ("s:none-cubes", "s:wind", "s:none"):
+        with pytest.raises(RuntimeError, match="drawn"):
+            cs.check_scene_case(cs.scene_cases((name,))[0])
+    matched = cs.matched_objects(load_params(scene_params_path()))
+    assert matched and seen == [(matched, {}), (matched, {}), (None, {})]
