@@ -18,7 +18,7 @@ from cell.gap.propose import propose
 from cell.gap.run import diagnose_log
 from cell.gap.world_other import OBJECTS, Throws, draw_other_campaign, landings
 from cell.log.table import ThrowTable
-from cell.model.effects import BandMass, Bounce, BounceRolling, ReleasePitch
+from cell.model.effects import BandMass, Bounce, BounceImpact, BounceRolling, ReleasePitch
 from cell.model.params import DEFAULT_EE
 
 # MODEL.md golden values: object, stroke, release, elevation/azimuth [deg], base velocity,
@@ -290,3 +290,74 @@ def test_a_wind_with_a_vertical_part_is_given_it():
     v = _diagnosed(ThrowTable.from_records(recs))["verdict"]
     assert v["effects"] == ["wind"] and v["laws"] == {"wind": "with vertical"}, v
     assert v["params"]["wind"]["z_mps"] == pytest.approx(-0.7, abs=0.15)
+
+
+def _coulomb_rest(xy, vimp, mu, dt=1e-3):
+    """Where objects come to rest on a Coulomb floor of friction mu that acts through the
+    impact: the plastic impact's normal impulse m |v_z| brings a friction impulse of at
+    most mu m |v_z| against v_h, then the object decelerates at mu g, stepped in time
+    (written here from the physics, not from the model's closed form)."""
+    vh = vimp[:, :2]
+    speed = np.linalg.norm(vh, axis=1)
+    u = vh / speed[:, None]
+    s = np.zeros_like(speed)
+    left = np.maximum(speed - mu * np.abs(vimp[:, 2]), 0.0)  # after the impact
+    while np.any(left > 0):
+        new = np.maximum(left - mu * 9.81 * dt, 0.0)
+        s += 0.5 * (left + new) * dt
+        left = new
+    return xy + u * s[:, None]
+
+
+def _slid_table(mu, n=160, seed=11):
+    """A campaign of the other implementation's throws (no effect in flight) that come to
+    rest by `_coulomb_rest`, logged with 12 mm of scatter per axis."""
+    from cell.gap.world_other import draw_throws, landings
+
+    rng = np.random.default_rng(seed)
+    th = draw_throws(n, rng)
+    xy, tl, vimp = landings(th, [], None)
+    ok = np.all(np.isfinite(xy), axis=1)
+    obs = _coulomb_rest(xy, vimp, mu) + rng.normal(0.0, 0.012, (n, 2))
+    recs = [{"throw_id": f"o{i:04d}", "object_id": str(th.obj[i]), "shape": str(th.shape[i]),
+             "mass_kg": float(th.mass[i]), "size_x_m": float(th.size[i, 0]),
+             "size_y_m": float(th.size[i, 1]), "size_z_m": float(th.size[i, 2]),
+             "stroke_m": float(th.stroke[i]), "x_m": float(th.p0[i, 0]),
+             "y_m": float(th.p0[i, 1]), "z_m": float(th.p0[i, 2]),
+             "elevation_rad": float(th.elev[i]), "azimuth_rad": float(th.azim[i]),
+             "roll_rad": 0.0, "vx_mps": float(th.vb[i, 0]), "vy_mps": float(th.vb[i, 1]),
+             "vz_mps": float(th.vb[i, 2]), "platform": str(th.platform[i]),
+             "rotor_rpm": float(th.rpm[i]), "land_z_m": float(th.land_z[i]),
+             "landed_x_m": float(obs[i, 0]), "landed_y_m": float(obs[i, 1]),
+             "session": "other", "t_flight_s": float(tl[i])}
+            for i in np.flatnonzero(ok)]  # fmt: skip
+    return ThrowTable.from_records(recs)
+
+
+def _bounce_member(prob):
+    """The score of the bounce family's member that stands for the effect: the lowest
+    `member_rank_of`, the rule `cell.gap.diagnose._score_members` applies per family."""
+    from cell.gap.select import member_rank_of
+    from cell.model.effects import FAMILIES
+
+    return min((score_set(prob, [c]) for c in FAMILIES["bounce"]), key=member_rank_of)
+
+
+def test_an_impact_slide_is_told_from_the_friction_law():
+    # a floor of μ 0.5 whose friction acts through the impact: steep impacts slide less
+    prob = build_problem(_slid_table(0.5), DEFAULT_EE, seed=0)
+    best = _bounce_member(prob)
+    eff = best.full.effects[-1]
+    assert isinstance(eff, BounceImpact), best.full.effects
+    assert eff.inv_mu_imp == pytest.approx(1 / 0.5, rel=0.03)
+    fric = score_set(prob, [Bounce])
+    assert best.heldout_rmse_m < 0.7 * fric.heldout_rmse_m
+
+
+@pytest.mark.parametrize(
+    ("slide", "cls"),
+    [({"form": "friction", "mu": 1.2}, Bounce), ({"form": "const", "tau_s": 0.05}, BounceRolling)],
+)  # fmt: skip
+def test_a_friction_or_rolling_world_is_not_given_the_impact_law(slide, cls):
+    prob, _, _ = _problem([{"kind": "slide", **slide}], n=160)
+    assert type(_bounce_member(prob).full.effects[-1]) is cls

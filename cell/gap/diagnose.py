@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.fit import Score, score_set
+from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
@@ -147,7 +147,7 @@ def _score_members(
             tick(cls.name + (f" ({cls.law})" if cls.law else ""))
             warm = None
             if identified is not None:
-                neutral = cls.neutral().vector() / np.asarray(cls.scale, float)
+                neutral = fit_start(cls) / np.asarray(cls.scale, float)
                 warm = np.r_[identified.full.x, neutral]
             sc = score_set(prob, prefix + [cls], warm=warm)
             if len(family) > 1:

@@ -20,7 +20,7 @@ from cell.gap.fit_jac import clipped_blocks, misses_many, refit_folds, stackable
 from cell.gap.problem import GapProblem, rmse
 from cell.model.effects import Effect
 
-__all__ = ["Fit", "fit_set", "score_set", "Score"]
+__all__ = ["Fit", "fit_set", "fit_start", "score_set", "Score"]
 
 DIFF_STEP = 1e-3  # relative step of the fit's forward-difference Jacobian
 
@@ -54,11 +54,17 @@ class Score:
     permuted: bool = False
 
 
+def fit_start(cls: type[Effect]) -> np.ndarray:
+    """Where a fit of `cls` without a warm start begins (physical units): its `start`, or
+    its neutral size (`cell.model.effects.Effect.start`)."""
+    return np.asarray(cls.start if cls.start is not None else cls.neutral().vector(), float)
+
+
 def _layout(classes: list[type[Effect]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     scale = np.concatenate([np.asarray(c.scale, float) for c in classes])
     lo = np.concatenate([[b[0] for b in c.bounds] for c in classes])
     hi = np.concatenate([[b[1] for b in c.bounds] for c in classes])
-    x0 = np.concatenate([c.neutral().vector() for c in classes])
+    x0 = np.concatenate([fit_start(c) for c in classes])
     return scale, lo / scale, hi / scale, x0 / scale
 
 
@@ -81,7 +87,7 @@ def fit_set(
         prob: the problem.
         classes: the effect classes to fit together.
         train: indices of the training throws.
-        x0: a warm start (scaled parameters), else each effect's neutral size.
+        x0: a warm start (scaled parameters), else each effect's `fit_start`.
         permute: the permutation control (effects read their quantity shuffled).
         max_nfev: a cap on function evaluations.
 

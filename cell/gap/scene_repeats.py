@@ -10,7 +10,8 @@ the repeats' scatter (sqrt of the pooled within-configuration variance, 2-D) of 
 points and of the crossings of the landing plane, and the RMS of the slide (rest −
 crossing) left by each slide law fitted to it by least squares on the crossing's velocity:
 τ · v_h (rolling), 1/μ · v_h|v_h|/2g (friction), both, a hop term v_h|v_z|/g beside the
-friction, and 1/μ or τ per object. A law that leaves about the rest points' repeat scatter
+friction, the impact law (v_h − μ|v_z|)₊² / 2μg (`impact`, 1/μ `inv_mu_imp`: the
+impact's friction impulse off v_h, then the slide), and 1/μ or τ per object. A law that leaves about the rest points' repeat scatter
 is all a perfect account could do; a law that leaves much more is missing something.
 """
 
@@ -23,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.gap.world_scene import JITTER_REL, G, draw_plan, repeat_var, throw_plan
+from cell.gap.world_scene import JITTER_REL, G, draw_plan, impact_fit, repeat_var, throw_plan
 
 __all__ = ["slide_laws", "main"]
 
@@ -38,9 +39,9 @@ def _fit(d: np.ndarray, cols: list[np.ndarray]) -> tuple[float, np.ndarray]:
 
 
 def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER_REL
-               ) -> tuple[dict[str, float], dict[str, float]]:  # fmt: skip
+               ) -> tuple[dict[str, float], dict[str, float], float]:  # fmt: skip
     """The case's repeat scatter [m] (rest points, crossings) and each slide law's RMS
-    residual [m] (see the module docstring); and 1/μ per object [-]."""
+    residual [m] (see the module docstring); 1/μ per object [-]; the impact law's 1/μ [-]."""
     from cell.gap.check_scene import SCENE_CASES
 
     effects, _, _, _, opts = SCENE_CASES[name]
@@ -60,17 +61,23 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     names = sorted(set(objs))
     per = [objs == o for o in names]
     per_mu = _fit(d, [fric * m[:, None] for m in per])
-    return {
-        "repeat_sd_rest_m": float(np.sqrt(repeat_var(plan, rest, ok))),
-        "repeat_sd_crossing_m": float(np.sqrt(repeat_var(plan, cross, ok))),
-        "slide_rms_m": float(np.sqrt(np.mean(np.sum(d * d, axis=1)))),
-        "tau": _fit(d, [tau])[0],
-        "inv_mu": _fit(d, [fric])[0],
-        "tau+inv_mu": _fit(d, [tau, fric])[0],
-        "inv_mu+hop": _fit(d, [fric, hop])[0],
-        "inv_mu per object": per_mu[0],
-        "tau per object": _fit(d, [tau * m[:, None] for m in per])[0],
-    }, dict(zip(names, (float(c) for c in per_mu[1]), strict=True))
+    inv_mu_imp, imp_rms = impact_fit(d, v)
+    return (
+        {
+            "repeat_sd_rest_m": float(np.sqrt(repeat_var(plan, rest, ok))),
+            "repeat_sd_crossing_m": float(np.sqrt(repeat_var(plan, cross, ok))),
+            "slide_rms_m": float(np.sqrt(np.mean(np.sum(d * d, axis=1)))),
+            "tau": _fit(d, [tau])[0],
+            "inv_mu": _fit(d, [fric])[0],
+            "tau+inv_mu": _fit(d, [tau, fric])[0],
+            "inv_mu+hop": _fit(d, [fric, hop])[0],
+            "impact": imp_rms,
+            "inv_mu per object": per_mu[0],
+            "tau per object": _fit(d, [tau * m[:, None] for m in per])[0],
+        },
+        dict(zip(names, (float(c) for c in per_mu[1]), strict=True)),
+        inv_mu_imp,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     doc: dict = {"n": args.n, "seed": args.seed, "jitter": args.jitter, "cases": {}}
     for name in args.cases:
         try:
-            r, mu = slide_laws(name, args.n, args.seed, args.jitter)
+            r, mu, imp = slide_laws(name, args.n, args.seed, args.jitter)
             runs = {f"{j:g}": slide_laws(name, args.n, args.seed, j)[0] for j in more}
         except ValueError as e:
             print(f"cell: error: {e}", file=sys.stderr)
@@ -104,10 +111,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name}: " + "; ".join(f"{k.removesuffix('_m')} {1000 * v:.0f} mm"
                                       for k, v in r.items()))  # fmt: skip
         print("  1/mu per object: " + ", ".join(f"{k} {v:.3f}" for k, v in mu.items()))
+        print(f"  impact law: 1/mu {imp:.3f}")
         for j, rj in runs.items():
             print(f"  jitter {j}: rest {1000 * rj['repeat_sd_rest_m']:.0f} mm, crossing "
                   f"{1000 * rj['repeat_sd_crossing_m']:.1f} mm")  # fmt: skip
-        doc["cases"][name] = {**r, "inv_mu_per_object": mu, "jitters": runs}
+        doc["cases"][name] = {**r, "inv_mu_per_object": mu, "inv_mu_imp": imp, "jitters": runs}
     if args.json is not None:
         args.json.write_text(json.dumps(doc, indent=1) + "\n")
     return 0

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.fit import Score, score_set
+from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
 from cell.gap.tracks import phase_evidence
@@ -313,7 +313,7 @@ class Selection:
                 classes = [effect_class(nm, self.members) for nm in have] + [member]
                 own = sc.full.x[len(self.prefix) :]
                 if member is not self.members.get(sc.names[-1]):
-                    own = member.neutral().vector() / np.asarray(member.scale, float)
+                    own = fit_start(member) / np.asarray(member.scale, float)
                 warm = np.concatenate([last.full.x, own])
                 self.tick("+".join(public(classes_names(classes))))
                 combo = score_set(self.prob, classes, warm=warm)

@@ -268,14 +268,35 @@ def _model_xy(recs: list[dict[str, Any]], params: Any) -> np.ndarray:
     return np.asarray(predict_landing(batch, params.ee).xy, float)
 
 
+def impact_fit(d: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """The impact law (`cell.model.effects.BounceImpact`) fitted to slides d (n, 2) [m]
+    from impact velocities v (n, 3) [m/s]: (1/μ [-] minimising the squared 2-D residual of
+    (v_h − μ |v_z|)₊² / (2 μ g) along v_h, a bounded 1-D search; the RMS 2-D residual [m])."""
+    from scipy.optimize import minimize_scalar
+
+    vh, vz = v[:, :2], np.abs(v[:, 2])
+    speed = np.linalg.norm(vh, axis=1)
+    u = vh / np.maximum(speed, 1e-12)[:, None]
+
+    def ss(inv_mu: float) -> float:
+        left = np.maximum(speed - vz / max(inv_mu, 1e-12), 0.0)
+        r = d - u * (left**2 * inv_mu / (2 * G))[:, None]
+        return float(np.sum(r * r))
+
+    res = minimize_scalar(ss, bounds=(1e-3, 20.0), method="bounded", options={"xatol": 1e-4})
+    return float(res.x), float(np.sqrt(ss(float(res.x)) / max(len(d), 1)))
+
+
 def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> dict[str, float]:
     """The bounce's slide measured in the world: least squares of (rest − crossing) on
-    v_h (tau_s [s]) and on v_h |v_h| / (2 g) (inv_mu [-])."""
+    v_h (tau_s [s]), on v_h |v_h| / (2 g) (inv_mu [-]) and on the impact law's slide
+    (inv_mu_imp [-], `impact_fit`)."""
     ok = np.all(np.isfinite(xy_rest), axis=1) & np.all(np.isfinite(xy_cross), axis=1)
     d, vh = xy_rest[ok] - xy_cross[ok], v[ok, :2]
     q = vh * (np.linalg.norm(vh, axis=1) / (2 * G))[:, None]
     return {"tau_s": float(np.sum(d * vh) / np.sum(vh * vh)),
-            "inv_mu": float(np.sum(d * q) / np.sum(q * q))}  # fmt: skip
+            "inv_mu": float(np.sum(d * q) / np.sum(q * q)),
+            "inv_mu_imp": impact_fit(d, v[ok])[0]}  # fmt: skip
 
 
 def _untouched(plan: list[Throw], effects: list[dict[str, Any]]) -> np.ndarray:

@@ -22,6 +22,7 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 | tracking_scale | the tracker logs s · true positions (about the world origin); release poses and planes are the robot's, true |
 | bounce (friction) | the logged point is the rest point: touchdown + v_h |v_h| / (2 μ g) (∝ impact speed²) |
 | bounce (rolling) | the rest point is touchdown + `tau_s` · v_h (∝ impact speed: rolling) |
+| bounce (impact) | a Coulomb contact that takes its friction impulse at the impact too: v_h loses μ v_z as the object hits (a plastic impact, v_z the vertical impact speed), then slides (v_h − μ v_z)² / (2 μ g) further, nothing where μ v_z ≥ v_h; `inv_mu_imp` = 1/μ |
 
 An effect is a family of laws (`FAMILIES`): its members share the name and the phase and
 differ in how the effect grows (the diagnosis picks the member that predicts held-out
@@ -62,6 +63,7 @@ __all__ = [
     "TrackingScale",
     "Bounce",
     "BounceRolling",
+    "BounceImpact",
     "DownwashDecay",
     "DownwashJet",
     "DragScale",
@@ -95,6 +97,9 @@ class Effect:
     law: ClassVar[str] = ""  # the member of the effect's family of laws
     # plausible range of each parameter (None: the bounds): what a real cell can have
     plausible: ClassVar[tuple[tuple[float, float], ...] | None] = None
+    # where a fit without a warm start begins (None: one typical size inside the neutral
+    # size); for a law flat about its neutral size (`BounceImpact`)
+    start: ClassVar[tuple[float, ...] | None] = None
 
     def vector(self) -> np.ndarray:
         """The parameters as an array, in field order."""
@@ -379,6 +384,29 @@ class BounceRolling(Effect):
     tau_s: float = 0.0  # [s] rolled distance per m/s of horizontal impact speed
 
 
+@dataclass(frozen=True)
+class BounceImpact(Effect):
+    """The logged point is where the object came to rest on a Coulomb contact of friction
+    μ that acts through the impact as well: the floor's normal impulse m v_z (a plastic
+    impact, v_z the vertical impact speed) brings a friction impulse of at most μ m v_z,
+    so the object leaves the impact at v_h − μ v_z (or stops), then slides under μ g
+    to rest: (v_h − μ v_z)² / (2 μ g) beyond the touchdown. A rolling ball's resistance
+    takes the same form (its torque, too, is bounded by the normal force, at the impact as
+    after it). Steep impacts slide less than flat ones of the same v_h, which the friction
+    law (v_h² / (2 μ g)) cannot tell apart.
+
+    The slide is nil wherever μ v_z ≥ v_h, so about its neutral size (μ → ∞) the law is
+    flat: a fit without a warm start begins at μ 0.5 (`start`), a middling floor's."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 5.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.05,)
+    law: ClassVar[str] = "impact"
+    start: ClassVar[tuple[float, ...] | None] = (2.0,)
+    inv_mu_imp: float = 0.0  # [-] 1/μ of the contact (impact impulse and slide)
+
+
 EFFECTS: dict[str, type[Effect]] = {
     c.name: c
     for c in (
@@ -403,7 +431,7 @@ FAMILIES: dict[str, tuple[type[Effect], ...]] = {
     for extra in [
         {
             "downwash": (DownwashDecay, DownwashJet),
-            "bounce": (BounceRolling,),
+            "bounce": (BounceRolling, BounceImpact),
             "wind": (WindLevel,),
         }.get(name, ())
     ]

@@ -19,6 +19,7 @@ from cell.model.effects import (
     BandDamping,
     BandMass,
     Bounce,
+    BounceImpact,
     BounceRolling,
     Downwash,
     DownwashDecay,
@@ -219,6 +220,16 @@ def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) ->
     br = _find(effs, BounceRolling)
     if br is not None and np.any(np.asarray(br.tau_s) > 0):
         xy = xy + v_imp[:, :2] * np.reshape(np.asarray(br.tau_s, float), (-1, 1))
+    bi = _find(effs, BounceImpact)
+    if bi is not None and np.any(np.asarray(bi.inv_mu_imp) > 0):
+        # the impact's friction impulse μ v_z off v_h, then the slide (v_h')² / (2 μ g)
+        vh = v_imp[:, :2]
+        speed = np.linalg.norm(vh, axis=1)
+        inv_mu = np.asarray(bi.inv_mu_imp, float)
+        mu = 1.0 / np.maximum(inv_mu, 1e-12)
+        left = np.maximum(speed - mu * np.abs(v_imp[:, 2]), 0.0)
+        slide = left**2 * inv_mu / (2 * G)
+        xy = xy + vh * (slide / np.maximum(speed, 1e-12))[:, None]
     return xy
 
 
