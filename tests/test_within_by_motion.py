@@ -61,8 +61,8 @@ def test_no_move_the_bound_clears_passes_a_limit(name: str) -> None:
             lower[j] = lo[j] + 1e-6
             assert not _within_by_motion(p0, v0, a0, p1, v1, vmax, amax, dur, lower, wide_hi)
     # of use: against the arm's own limits, the moves from rest to rest it clears and
-    # those the speed bound alone clears (Panda 21 and 17 of 30, UR5 17 and 14), and
-    # the others (46 and 56 of 90)
+    # those the speed bound alone clears (Panda 12 and 7 of 30, UR5 20 and 12), and
+    # the others (86 and 87 of 120)
     lim = load_robot(name).limits
     by_speed = by_motion = others = 0
     for p0, v0, a0, p1, v1, vmax, amax, dur, _, _ in moves:
