@@ -163,10 +163,7 @@ def _ruckig(
     traj = RuckigTrajectory(raw, n)
     lower, upper = lim.lower - POSITION_TOL_RAD, lim.upper + POSITION_TOL_RAD
     at_rest = not velocity_interface and not np.any(a0) and np.all(np.abs(v0) <= vmax)
-    if (at_rest and _within_by_speed(p0, p1, vmax, traj.duration, lower, upper)) or (
-        not velocity_interface
-        and _within_by_motion(p0, v0, a0, p1, v1, vmax, amax, traj.duration, lower, upper)
-    ):
+    if at_rest and _within_by_speed(p0, p1, vmax, traj.duration, lower, upper):
         bad = np.zeros(0, dtype=int)  # no joint can reach a limit: nothing to sample
     else:
         lo, hi = traj.position_bounds(amax, within=(lower, upper))
@@ -205,63 +202,6 @@ def _within_by_speed(
     reach = np.asarray(vmax, float) * (1.0 + 1e-6) * duration_s + 1e-7
     mid = p0 + p1
     return bool(np.all((mid + reach) / 2.0 <= upper) and np.all((mid - reach) / 2.0 >= lower))
-
-
-WITHIN_STEPS = 64  # `_within_by_motion`'s intervals of the move
-
-
-def _reach_up(t: np.ndarray, v: np.ndarray, vmax: np.ndarray, amax: np.ndarray) -> np.ndarray:
-    """The farthest a joint can move up [rad] in t [s] from velocity v [rad/s] (|v| ≤
-    vmax) never faster than vmax [rad/s] nor accelerating more than amax [rad/s²]: up at
-    amax until vmax, then at vmax. Convex in t (its slope rises, then stays)."""
-    t_full = (vmax - v) / amax  # [s] to reach vmax
-    speeding = v * t + 0.5 * amax * t * t
-    at_full = v * t_full + 0.5 * amax * t_full * t_full + vmax * (t - t_full)
-    return np.where(t <= t_full, speeding, at_full)
-
-
-def _within_by_motion(
-    p0: np.ndarray,
-    v0: np.ndarray,
-    a0: np.ndarray,
-    p1: np.ndarray,
-    v1: np.ndarray,
-    vmax: np.ndarray,
-    amax: np.ndarray,
-    duration_s: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-) -> bool:
-    """Can no joint of a move from (p0, v0, a0) to (p1, v1) [rad, rad/s, rad/s²] in
-    duration_s [s], never faster than vmax [rad/s] nor accelerating more than amax
-    [rad/s²] (ruckig's limits, where the move starts within them), leave [lower, upper]
-    [rad]? At time t a joint is at most `_reach_up`(t, v0) above p0 (the jerk limit and
-    a0 only slow it) and, the move run backwards from its end, at most `_reach_up`(T − t,
-    −v1) above p1; below likewise. Both are convex in t, so over each of WITHIN_STEPS
-    intervals of [0, T] each is at most its larger end: the joint is at most the lesser of
-    the two there. Tighter than `_within_by_speed` (the acceleration counted) and for
-    moves that start or end moving too. Margins over ruckig's own rounding: 1e-6 of vmax
-    and amax, 1e-7 rad (tests/test_within_by_motion.py: every sampled position of random
-    ruckig moves within the bound). False where a start or end state is outside the limits."""
-    if not (math.isfinite(duration_s) and duration_s >= 0.0):
-        return False
-    if np.any(np.abs(v0) > vmax) or np.any(np.abs(v1) > vmax) or np.any(np.abs(a0) > amax):
-        return False
-    vm, am = np.asarray(vmax, float) * (1.0 + 1e-6), np.asarray(amax, float) * (1.0 + 1e-6)
-    t = np.linspace(0.0, duration_s, WITHIN_STEPS + 1)[:, None]
-    rest = duration_s - t
-    ends = (  # at each instant: above p0, above p1, below p0, below p1
-        p0 + _reach_up(t, v0, vm, am),
-        p1 + _reach_up(rest, -v1, vm, am),
-        p0 - _reach_up(t, -v0, vm, am),
-        p1 - _reach_up(rest, v1, vm, am),
-    )
-    # over each interval each bound is at most its value at one end (the larger, convex)
-    hi0, hi1 = (np.maximum(e[:-1], e[1:]) for e in ends[:2])
-    lo0, lo1 = (np.minimum(e[:-1], e[1:]) for e in ends[2:])
-    top = np.max(np.minimum(hi0, hi1), axis=0) + 1e-7
-    bottom = np.min(np.maximum(lo0, lo1), axis=0) - 1e-7
-    return bool(np.all(top <= upper) and np.all(bottom >= lower))
 
 
 class ChainTrajectory(Trajectory):
