@@ -250,6 +250,8 @@ class Orchestrator(
         # release poses out of reach, kept across decisions to refuse poses near them
         # (`Kinematics._solve_ik`, `ik_reach_kept` and `ik_warm`)
         self._far_poses = FarPoses()
+        # release-on-the-move searches kept across decisions (`_choose_release`)
+        self._moving_kept: dict[bytes, Any] = {}
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)

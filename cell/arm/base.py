@@ -66,6 +66,7 @@ class ArmBase:
     _ik_solved: dict[tuple[bytes, ...], Any]
     _ik_warm: Any
     _far_poses: Any
+    _moving_kept: dict[bytes, Any]
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]

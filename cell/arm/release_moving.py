@@ -19,6 +19,8 @@ from cell.model.objects import ObjectParams
 
 log = logging.getLogger(__name__)
 
+MOVING_KEPT_MAX = 256  # release-on-the-move searches kept across decisions (`_moving_kept`)
+
 
 class MovingRelease(ArmBase):
     """The release on the move (a part of the arm; `cell.orchestrator.Orchestrator`)."""
@@ -42,25 +44,27 @@ class MovingRelease(ArmBase):
         `stroke_max_m`: what the grip holds), and that is sooner than the static one as
         the cell makes them from the pick (`_moving_sooner`); or None. `throw`: the static
         throw the planner chose (`cell.arm.planner.ThrowChoice`)."""
-        from cell.robot.moving_release import choose_release
-
         plan, delta = throw.plan, throw.delta
         stroke = plan.stroke_m + delta
         self._frame = self._pick_frame(plan, throw.q_release)
         try:
             _, q_lift = self.over_item(self._presented, stroke, obj)
-            choice = choose_release(
+            args = (
                 self.robot,
                 throw.model_obj,
                 plan,
                 q_lift,
                 self.params.ee,
+            )
+            kw = dict(
                 bounds=grip_bounds(throw.bounds, self.params, stroke_max_m),
-                ik=lambda t, e, a: self._ik_gripped(t, e, a, q_lift),
                 hold=carry_hold(self.params, obj, stroke),
                 criterion="cycle",
                 velocity_scale=self.speed_scale,
                 acceleration_scale=self.speed_scale,
+            )
+            choice = self._choose_release(
+                args, kw, lambda t, e, a: self._ik_gripped(t, e, a, q_lift)
             )
             if choice.moving is not None and not self._moving_sooner(
                 obj, plan, stroke, choice.moving, delta, throw.q_release
@@ -74,6 +78,43 @@ class MovingRelease(ArmBase):
         if choice.moving is not None:
             log.info("%s: release on the move saves %.2f s", obj.name or obj.shape, choice.saved_s)
         return choice.moving
+
+    def _choose_release(self, args: tuple[Any, ...], kw: dict[str, Any], ik: Any) -> Any:
+        """`choose_release(*args, ik=ik, **kw)`, kept across decisions (`_moving_kept`,
+        at most MOVING_KEPT_MAX, cleared when full): the same item thrown from the same
+        lift by the same static plan is the same search. The search is a function of its
+        arguments and of the answers `ik` gives (the robot's model, the landing model and
+        ruckig are fixed); `ik` (`_ik_gripped`, remembered within a decision, `_solve_ik`)
+        may answer a pose from what an earlier search of the decision found, so a kept
+        choice is taken only where `ik` gives every answer it gave (the same
+        configuration, bit for bit, or the same failure) again: then the search would make
+        every step it made, and the same choice. On the demo, 2 of its 8 searches were
+        the same as one before (tests/test_moving_kept.py)."""
+        from cell.robot.moving_release import choose_release
+
+        key = _exact((args, kw, self._frame))
+        kept = self._moving_kept.get(key)
+        if kept is not None:
+            asked, choice = kept
+            if all(_answer(ik, q) == a for q, a in asked):
+                return choice
+        asked = []
+
+        def asking(t: np.ndarray, e: float, a: float) -> np.ndarray:
+            q = (np.array(t, float), float(e), float(a))
+            try:
+                out = ik(*q)
+            except IKFailed as exc:
+                asked.append((q, _failed(exc)))
+                raise
+            asked.append((q, np.asarray(out, float).tobytes()))
+            return out
+
+        choice = choose_release(*args, ik=asking, **kw)
+        if len(self._moving_kept) >= MOVING_KEPT_MAX:
+            self._moving_kept.clear()  # bounded: a long job's searches
+        self._moving_kept[key] = (asked, choice)
+        return choice
 
     def _moving_sooner(
         self,
@@ -153,3 +194,42 @@ class MovingRelease(ArmBase):
         except TrajectoryError:
             pass
         return True, motion_from(q_lift)
+
+
+def _exact(x: Any) -> bytes:
+    """`x` (numbers, strings, None, arrays, dataclasses, tuples, lists and dicts of them,
+    a `Robot`) as bytes that differ wherever a value differs, bit for bit: floats by
+    `float.hex`, arrays by dtype, shape and bytes, a robot by its name and identity."""
+    import dataclasses
+
+    if x is None or isinstance(x, (bool, int, str)):
+        return repr(x).encode()
+    if isinstance(x, (float, np.floating)):
+        return float(x).hex().encode()
+    if isinstance(x, np.ndarray):
+        return repr((x.dtype.str, x.shape)).encode() + x.tobytes()
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        fields = [(f.name, getattr(x, f.name)) for f in dataclasses.fields(x)]
+        return type(x).__qualname__.encode() + _exact(fields)
+    if isinstance(x, (tuple, list)):
+        return b"(" + b",".join(_exact(v) for v in x) + b")"
+    if isinstance(x, dict):
+        return _exact(sorted(x.items()))
+    from cell.robot.model import Robot
+
+    if isinstance(x, Robot):
+        return f"robot {x.name} {id(x)}".encode()
+    raise TypeError(f"no exact key for a {type(x).__name__}")
+
+
+def _failed(exc: IKFailed) -> bytes:
+    """An IK failure as an answer (`_choose_release`): its type and message."""
+    return f"{type(exc).__name__}: {exc}".encode()
+
+
+def _answer(ik: Any, q: tuple[np.ndarray, float, float]) -> bytes:
+    """What `ik` answers to (tcp, elevation, azimuth) `q`, as `_choose_release` keeps it."""
+    try:
+        return np.asarray(ik(*q), float).tobytes()
+    except IKFailed as exc:
+        return _failed(exc)
