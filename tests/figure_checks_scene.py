@@ -152,22 +152,11 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
                  (w_lo, min(rows[c]["world_floor_m"] for c in edge)),
                  (w_hi, max(rows[c]["world_floor_m"] for c in edge))):  # fmt: skip
         _mm(q, v)
-    wb = rows["s:wind+bounce"]
-    fx, fy, tx, ty, m_f, m_t, a_f = quoted(
-        PAGE,
-        r"phase \(([\d.]+)/(−[\d.]+) m/s for (\d+)/(−[\d.]+); 1/μ ([\d.]+) against ([\d.]+)\) "
-        r"and A ([\d.]+) F, but\s+`release_pitch` joins",
-    )
-    _written(fx, wb["params"]["wind"]["x_mps"])
-    _written(fy, wb["params"]["wind"]["y_mps"])
-    assert wb["verdict"] == "bounce+release_pitch+wind"
-    from cell.gap.check_scene import SCENE_CASES
-
-    w = SCENE_CASES["s:wind+bounce"][0][0]
-    assert (float(tx), float(ty.replace("−", "-"))) == (w["x_mps"], w["y_mps"])
-    _written(m_f, wb["params"]["bounce"]["inv_mu"])
-    _written(m_t, wb["world_truth"]["inv_mu"])
-    close(a_f, wb["after_over_floor"], 2)
+    # the wind beside a slide and beside a hop, each named with its phase (the page's
+    # "What passes"; the impact law's parameters are in the table)
+    quoted(PAGE, r"beside a hop \(`s:wind\+bounce`, `s:wind\+hop`: each effect with its phase")
+    for c in ("s:wind+bounce", "s:wind+hop"):
+        assert rows[c]["verdict"] == "bounce+wind" and rows[c]["passes"]
     bs = rows["s:bounce-slide"]
     a, tool, af, f = quoted(PAGE, r"\(`s:bounce-slide`: A (\d+) mm\s+against the tool's floor of "
                             r"(\d+) mm, and A / F ([\d.]+) with F (\d+) mm\)")  # fmt: skip
@@ -188,7 +177,7 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     # the tables before the jitter and after it, as the page tells them (the jet member's
     # change, after them, is checked with today's count in `_check_the_jet`)
     assert (old, new, s1, m1) == ("24", "21", "4.70", "8.63")
-    assert int(total) == doc["total"]
+    assert total == "42"  # the cases of that step (a null case was added after it)
     close(s2, bs["after_over_floor"], 2)
     mu3 = rows["s:bounce-slide-mu03"]
     law, m_before, m_after = quoted(
@@ -196,11 +185,10 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     )
     assert m2 == m_before == "5.37"  # the jitter's table, before the bounce had laws
     assert law == mu3["laws"]["bounce"] and mu3["verdict"] == "unknown"
-    close(m_after, mu3["after_over_floor"], 2)
-    laws = {c: r["laws"].get("bounce") for c, r in rows.items() if "bounce" in r["laws"]}
-    assert [c for c, v in laws.items() if v not in ("friction", "rolling")] == [
-        "s:bounce-slide-mu03"
-    ], laws  # "no other case takes a bounce law"
+    assert m_after == "4.41"  # that step's table (the impact law's is in the table now)
+    # "The impact law's 1/μ is itself given a law in the stroke in the three pairs"
+    for c in ("s:wind+bounce", "s:wind+hop", "s:drag+hop"):
+        assert rows[c]["laws"]["bounce"] == "inv_mu_imp = a + k · stroke_m", c
     assert ratio == doc["criteria"]["floor_ratio"]
     COVERED[PAGE].sort()
 
@@ -287,27 +275,62 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
     _check_the_jet(page, rows)
     assert float(ratio) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
-    b1, m1, b2, m2, mu5, b3, m3, mu3, t4, m4 = quoted(
+    b1, m1, sc, b3, m3, mu3, t4, m4 = quoted(
         page,
-        r"\(1/μ ([\d.]+)\s+against ([\d.]+) for balls, ([\d.]+) against ([\d.]+) at μ ([\d.]+), "
-        r"([\d.]+) against ([\d.]+) with\s+outliers; for blocks at μ ([\d.]+) `[^`]+`, its mean "
-        r"over the log within\s+(\d+) % of the world's τ ([\d.]+)\)",
+        r"\(1/μ ([\d.]+) against ([\d.]+) by the impact law for the balls of `s:bounce-roll`, "
+        r"where a tracking scale of ([\d.]+) joins beside it; ([\d.]+) against ([\d.]+) with "
+        r"outliers; for blocks at μ ([\d.]+) `[^`]+`, its mean over the log within (\d+) % of "
+        r"the world's τ ([\d.]+)\)",
     )
-    for (q, t), c in (((b1, m1), "s:bounce-roll"), ((b2, m2), "s:bounce-hop-mu05"),
-                      ((b3, m3), "s:bounce-hop+outliers")):  # fmt: skip
-        _written(q, rows[c]["params"]["bounce"]["inv_mu"])
-        _written(t, rows[c]["world_truth"]["inv_mu"])
+    roll = rows["s:bounce-roll"]
+    _written(b1, roll["params"]["bounce"]["inv_mu_imp"])
+    _written(m1, roll["world_truth"]["inv_mu_imp"])
+    _written(sc, roll["params"]["tracking_scale"]["scale_factor"])
+    _written(b3, rows["s:bounce-hop+outliers"]["params"]["bounce"]["inv_mu"])
+    _written(m3, rows["s:bounce-hop+outliers"]["world_truth"]["inv_mu"])
     # a law in the mass, judged on its mean over the log (`verdict.law_mean`)
     close(t4, 100 * rows["s:bounce-slide-mu03"]["param_errors"]["bounce.tau_s"], 0)
     _written(m4, rows["s:bounce-slide-mu03"]["world_truth"]["tau_s"])
-    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
     assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
     (above,) = quoted(page, r"but A stays above ([\d.]+) × F: a\s+block that tumbles")
     from tests.figure_checks_scene import check_the_edge_and_the_changes
 
     check_the_edge_and_the_changes(rows, float(above))
-    (one,) = quoted(page, r"\(`s:bounce-roll-one`\) comes nearest, A ([\d.]+) × F")
+    mu5, a5, a_roll, ratio2, one = quoted(
+        page,
+        r"the bouncy floor at μ ([\d.]+) \(`s:bounce-hop-mu05`\) to A ([\d.]+) F and the balls "
+        r"to ([\d.]+) F \(both still `unknown`: over ([\d.]+) × the tool's floor\); one ball "
+        r"size \(`s:bounce-roll-one`\) stays at ([\d.]+) F",
+    )
+    assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
+    close(a5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
+    close(a_roll, roll["after_over_floor"], 2)
+    assert float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
     close(one, rows["s:bounce-roll-one"]["after_over_floor"], 2)
+    assert not rows["s:bounce-hop-mu05"]["passes"] and not roll["passes"]
+    (cubes,) = quoted(page, r"\(`s:none-cubes`, A ([\d.]+) F\)")
+    close(cubes, rows["s:none-cubes"]["after_over_floor"], 2)
+    assert rows["s:none-cubes"]["passes"] and rows["s:wind+bounce"]["passes"]
+    assert rows["s:wind+hop"]["passes"]
+    dh = rows["s:drag+hop"]
+    a_dh, da, dk = quoted(
+        page,
+        r"`s:drag\+hop` is named `bounce\+drag_scale`, each with its phase, A ([\d.]+) F, but the "
+        r"drag is given a law in the stroke \(`factor = a \+ k · stroke_m`, a ([\d.]+), "
+        r"k (−[\d.]+) /m\)",
+    )
+    close(a_dh, dh["after_over_floor"], 2)
+    assert dh["laws"]["drag_scale"] == "factor = a + k · stroke_m" and not dh["params_ok"]
+    _written(da, dh["params"]["drag_scale"]["a"])
+    _written(dk, dh["params"]["drag_scale"]["k"])
+    was5, now5, was_roll, now_roll = quoted(
+        page,
+        r"`s:bounce-hop-mu05` ([\d.]+) → ([\d.]+) F and `s:bounce-roll`\s+([\d.]+) → ([\d.]+) F "
+        r"stay `unknown`",
+    )
+    assert (was5, was_roll) == ("1.65", "1.22")  # the table before the impact law
+    close(now5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
+    close(now_roll, roll["after_over_floor"], 2)
     (sh,) = quoted(page, r"the bounce alone, its 1/μ\s+([\d.]+) absorbing the scale")
     _written(sh, rows["s:scale+hop"]["params"]["bounce"]["inv_mu"])
 
@@ -349,4 +372,8 @@ def _check_the_jet(page: str, rows: dict[str, dict[str, Any]]) -> None:
     _written(fy, pair["params"]["wind"]["y_mps"])
     w = _case("s:downwash-strong+wind")[1]
     assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
-    assert n0 == "21" and (int(n1), int(total)) == (old["passes"], old["total"])
+    # the jet member's step, as the page tells it (later steps moved the count on)
+    assert (n0, n1, total) == ("21", "23", "42")
+    # the latest step: the bounce's impact law and the null case on the flight objects
+    m0, t0, m1, t1 = quoted(page, r"(\d+) of (\d+)\s+→ (\d+) of (\d+) pass\. `s:wind\+bounce`")
+    assert (m0, t0) == ("23", "42") and (int(m1), int(t1)) == (old["passes"], old["total"])
