@@ -305,7 +305,9 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
     close(a5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
     close(a_roll, roll["after_over_floor"], 2)
-    assert float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+    assert (
+        float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
+    )
     close(one, rows["s:bounce-roll-one"]["after_over_floor"], 2)
     assert not rows["s:bounce-hop-mu05"]["passes"] and not roll["passes"]
     (cubes,) = quoted(page, r"\(`s:none-cubes`, A ([\d.]+) F\)")
