@@ -24,7 +24,13 @@ from cell.errors import IKFailed
 from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot import moving_release
-from tests.test_moving_choice import JOB, SETTLE_THEN_S
+from tests.test_moving_choice import JOB as JOB4
+from tests.test_moving_choice import SETTLE_THEN_S
+
+# layout 11's job with its fifth item, the cyl40 (tests/test_moving_choice.py runs the four
+# before it): the item whose decision here takes a release on the move
+JOB = JOB4.replace("seed: 11", "  - {object: cyl40, count: 1, bin: bin_3}\nseed: 11")
+assert JOB != JOB4
 
 
 def _decision(o: Orchestrator, k: int) -> tuple[Any, ...]:
