@@ -312,25 +312,14 @@ def _coulomb_rest(xy, vimp, mu, dt=1e-3):
 def _slid_table(mu, n=160, seed=11):
     """A campaign of the other implementation's throws (no effect in flight) that come to
     rest by `_coulomb_rest`, logged with 12 mm of scatter per axis."""
-    from cell.gap.world_other import draw_throws, landings
+    from cell.gap.world_other import draw_throws, landings, throw_record
 
     rng = np.random.default_rng(seed)
     th = draw_throws(n, rng)
     xy, tl, vimp = landings(th, [], None)
     ok = np.all(np.isfinite(xy), axis=1)
     obs = _coulomb_rest(xy, vimp, mu) + rng.normal(0.0, 0.012, (n, 2))
-    recs = [{"throw_id": f"o{i:04d}", "object_id": str(th.obj[i]), "shape": str(th.shape[i]),
-             "mass_kg": float(th.mass[i]), "size_x_m": float(th.size[i, 0]),
-             "size_y_m": float(th.size[i, 1]), "size_z_m": float(th.size[i, 2]),
-             "stroke_m": float(th.stroke[i]), "x_m": float(th.p0[i, 0]),
-             "y_m": float(th.p0[i, 1]), "z_m": float(th.p0[i, 2]),
-             "elevation_rad": float(th.elev[i]), "azimuth_rad": float(th.azim[i]),
-             "roll_rad": 0.0, "vx_mps": float(th.vb[i, 0]), "vy_mps": float(th.vb[i, 1]),
-             "vz_mps": float(th.vb[i, 2]), "platform": str(th.platform[i]),
-             "rotor_rpm": float(th.rpm[i]), "land_z_m": float(th.land_z[i]),
-             "landed_x_m": float(obs[i, 0]), "landed_y_m": float(obs[i, 1]),
-             "session": "other", "t_flight_s": float(tl[i])}
-            for i in np.flatnonzero(ok)]  # fmt: skip
+    recs = [throw_record(th, i, obs[i], float(tl[i])) for i in np.flatnonzero(ok)]
     return ThrowTable.from_records(recs)
 
 

@@ -354,6 +354,24 @@ class OtherCampaign:
     scatter_m: float
 
 
+def throw_record(th: Throws, i: int, landed_xy: np.ndarray, t_flight_s: float) -> dict[str, Any]:
+    """Throw i of `th` as a throw-log record (docs/throw_log.md columns), landed at
+    landed_xy [m] (world frame) after t_flight_s [s]."""
+    return {
+        "throw_id": f"o{i:04d}", "object_id": str(th.obj[i]), "shape": str(th.shape[i]),
+        "mass_kg": float(th.mass[i]), "size_x_m": float(th.size[i, 0]),
+        "size_y_m": float(th.size[i, 1]), "size_z_m": float(th.size[i, 2]),
+        "stroke_m": float(th.stroke[i]), "x_m": float(th.p0[i, 0]),
+        "y_m": float(th.p0[i, 1]), "z_m": float(th.p0[i, 2]),
+        "elevation_rad": float(th.elev[i]), "azimuth_rad": float(th.azim[i]),
+        "roll_rad": 0.0, "vx_mps": float(th.vb[i, 0]), "vy_mps": float(th.vb[i, 1]),
+        "vz_mps": float(th.vb[i, 2]), "platform": str(th.platform[i]),
+        "rotor_rpm": float(th.rpm[i]), "land_z_m": float(th.land_z[i]),
+        "landed_x_m": float(landed_xy[0]), "landed_y_m": float(landed_xy[1]),
+        "session": "other", "t_flight_s": float(t_flight_s),
+    }  # fmt: skip
+
+
 def draw_other_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, *,
                         n: int = 400, noise_m: float = 0.012, outliers: float = 0.0,
                         repeats: int = 2, drone_share: float = 0.3) -> OtherCampaign:  # fmt: skip
@@ -376,19 +394,7 @@ def draw_other_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
     for i in np.flatnonzero(ok):
         if out_rows[i]:
             rows_out.append(len(recs))
-        recs.append({
-            "throw_id": f"o{i:04d}", "object_id": str(th.obj[i]), "shape": str(th.shape[i]),
-            "mass_kg": float(th.mass[i]), "size_x_m": float(th.size[i, 0]),
-            "size_y_m": float(th.size[i, 1]), "size_z_m": float(th.size[i, 2]),
-            "stroke_m": float(th.stroke[i]), "x_m": float(th.p0[i, 0]),
-            "y_m": float(th.p0[i, 1]), "z_m": float(th.p0[i, 2]),
-            "elevation_rad": float(th.elev[i]), "azimuth_rad": float(th.azim[i]),
-            "roll_rad": 0.0, "vx_mps": float(th.vb[i, 0]), "vy_mps": float(th.vb[i, 1]),
-            "vz_mps": float(th.vb[i, 2]), "platform": str(th.platform[i]),
-            "rotor_rpm": float(th.rpm[i]), "land_z_m": float(th.land_z[i]),
-            "landed_x_m": float(obs[i, 0]), "landed_y_m": float(obs[i, 1]),
-            "session": "other", "t_flight_s": float(tl[i]),
-        })  # fmt: skip
+        recs.append(throw_record(th, int(i), obs[i], float(tl[i])))
     inl = ok & ~out_rows
     d = obs[inl] - ref[inl]
     return OtherCampaign(
