@@ -247,11 +247,9 @@ class Orchestrator(
         # release poses solved in this decision, warm starts for nearby ones
         # (`Kinematics._solved`, `ik_warm`; `decide` clears it)
         self._ik_warm = WarmStarts()
-        # release poses out of reach, kept across decisions to refuse poses near them
-        # (`Kinematics._solve_ik`, `ik_reach_kept` and `ik_warm`)
-        self._far_poses = FarPoses()
-        # release-on-the-move searches kept across decisions (`_choose_release`)
-        self._moving_kept: dict[bytes, Any] = {}
+        # kept across decisions (`Kinematics._solve_ik`, `MovingRelease._choose_release`):
+        self._far_poses = FarPoses()  # poses out of reach (`ik_reach_kept`, `ik_warm`)
+        self._moving_kept: dict[bytes, Any] = {}  # release-on-the-move searches
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
