@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.linalg import _umath_linalg  # type: ignore[attr-defined]
 
-from cell.robot.ik_pose import ReleasePose, _axis_angle, _axis_error, _log3
+from cell.robot.ik_pose import ReleasePose, _axis_angle, _log3_floats
 from cell.robot.model import Robot
 
 _AXIS_LEVER_M = 0.3  # [m] weighs axis errors against position errors in the bounded solve
@@ -97,7 +97,6 @@ class _Descent:
         half: the iteration after which the null-space pull stops and far-off seeds quit.
         lam2: the DLS damping λ² [-].
         null_gain: null-space pull per iteration.
-        eye_m: the identity of the task's size (5 or 6).
     """
 
     pose: ReleasePose
@@ -112,7 +111,6 @@ class _Descent:
     half: int
     lam2: float
     null_gain: float
-    eye_m: np.ndarray
 
     @classmethod
     def of(
@@ -141,7 +139,6 @@ class _Descent:
             half=max_iterations // 2,
             lam2=damping * damping,
             null_gain=null_gain,
-            eye_m=np.eye(6 if six else 5),
         )
 
     def within(self, ep: float, th: float, roll: float) -> bool:
@@ -171,74 +168,27 @@ class _Search:
     gave_up: bool = False
 
 
-def _orientation_error(d: _Descent, r: np.ndarray) -> tuple[np.ndarray, float, float]:
-    """The orientation error at a tool rotation r, shape (3, 3).
-
-    Returns:
-        (rotation vector w the descent turns by [rad], axis error th [rad], the angle the
-        descent drives to zero [rad]: the full rotation's with a fixed roll, else th).
-    """
-    if d.six:
-        w = _log3(d.r_des @ r.T)
-        th = _axis_angle(r[:, 2], d.pose.axis)
-        ang = math.sqrt(float(w @ w))
-    else:
-        w, th = _axis_error(r[:, 2], d.pose.axis, r[:, 0])
-        ang = th
-    return w, th, ang
-
-
-def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """x with a x = b for the descent's damped a (J Jᵀ + λ² I, λ > 0: symmetric positive
-    definite, never singular): LAPACK's gesv, the routine `np.linalg.solve` calls, called
-    directly (bitwise the same result without its checks, a quarter of its time; the
-    descent makes ~15,000 such solves a throw's planning)."""
-    return _umath_linalg.solve1(a, b, signature="dd->d")  # type: ignore[no-any-return]
-
-
-def _dls_step(
-    d: _Descent,
-    jac: np.ndarray,
-    r: np.ndarray,
-    e_p: np.ndarray,
-    w: np.ndarray,
-    q: np.ndarray,
-    k: int,
-) -> np.ndarray:
-    """One damped-least-squares step dq [rad], no joint moving more than 0.5 rad.
-
-    Args:
-        d: the descent's settings.
-        jac: the tool's frame Jacobian (world-aligned), shape (6, n).
-        r: the tool's rotation, shape (3, 3).
-        e_p: position error [m], shape (3,).
-        w: orientation error (rotation vector) [rad], shape (3,).
-        q: the configuration [rad], shape (n,).
-        k: the iteration (the null-space pull acts in the first half).
-    """
-    if d.six:
-        jt = jac
-        err = np.concatenate([e_p, w])
-    else:
-        # Only rotations about axes perpendicular to z move the throw axis.
-        jt = np.concatenate([jac[:3], r[:, :2].T @ jac[3:]])
-        err = np.concatenate([e_p, r[:, :2].T @ w])
-    a = jt @ jt.T + (d.lam2 + 0.01 * float(err @ err)) * d.eye_m
-    if k < d.half:
-        # J⁺e + (I - J⁺J) z = z + J⁺(e - J z), with J⁺ = Jᵀ (J Jᵀ + λ² I)⁻¹. The
-        # pull stops halfway: at a joint limit it can fight the clamp.
-        z0 = d.null_gain * (d.q_cur - q)
-        dq = z0 + jt.T @ _solve(a, err - jt @ z0)
-    else:
-        dq = jt.T @ _solve(a, err)
-    step = max(map(abs, dq.tolist()))  # np.abs(dq).max(), as floats: the same, sooner
-    if step > 0.5:
-        dq *= 0.5 / step
-    return dq
+# x with a x = b for the descent's damped a (J Jᵀ + λ² I, λ > 0: symmetric positive definite,
+# never singular): LAPACK's gesv, the gufunc `np.linalg.solve` calls, called directly
+# (bitwise the same result without its checks; its float64 loop without naming it, which
+# takes longer than the solve); the descent makes ~15,000 such solves a throw's planning
+_solve = _umath_linalg.solve1
 
 
 def _descend(robot: Robot, d: _Descent, seed: np.ndarray, s: _Search) -> tuple[float, np.ndarray]:
     """Damped least squares from one seed, joints clamped to their limits at every step.
+
+    Each iteration: the tool's pose and Jacobian (world-aligned) at q; the errors (position
+    e_p [m]; orientation w [rad]: the full rotation's vector with a fixed roll, else the
+    turn of the throw axis onto the target's, seen in the tool's x-y plane); the score;
+    then one DLS step dq = Jᵀ (J Jᵀ + (λ² + 0.01 |e|²) I)⁻¹ e, with a pull towards the
+    current configuration in the null space during the first half (J⁺e + (I - J⁺J) z =
+    z + J⁺(e - J z)), no joint moving more than 0.5 rad, and the clamp onto the limits.
+
+    The arithmetic of 3- to 7-vectors is done by numpy's BLAS (dot products, matrix
+    products, LAPACK's gesv) where it sums, and entry by entry in floats where numpy's
+    elementwise operations would make the same IEEE products and differences: numpy's
+    call overhead, not the arithmetic, was most of an iteration's time.
 
     Updates the search's best attempt and its iteration count.
 
@@ -257,29 +207,80 @@ def _descend(robot: Robot, d: _Descent, seed: np.ndarray, s: _Search) -> tuple[f
         pin.updateFramePlacement,
         pin.getFrameJacobian,
     )
-    target, tol_p, tol_a = d.pose.position, d.tol_position_m, d.tol_axis_rad
-    stop_p, stop_a, half = d.stop_p, d.stop_a, d.half
-    maximum, minimum, sqrt = np.maximum, np.minimum, math.sqrt
+    p0, p1, p2 = d.pose.position.tolist()
+    six, r_des, axis = d.six, d.r_des, d.pose.axis
+    u0, u1, u2 = axis.tolist()
+    tol_p, tol_a, stop_p, stop_a = d.tol_position_m, d.tol_axis_rad, d.stop_p, d.stop_a
+    half, lam2, gain, q_cur = d.half, d.lam2, d.null_gain, d.q_cur
+    maximum, minimum, sqrt, atan2 = np.maximum, np.minimum, math.sqrt, math.atan2
+    # J Jᵀ + (λ² + 0.01 |e|²) I in place: the damping added to the diagonal (a view) alone,
+    # the sums numpy's J Jᵀ + c I makes there (off it, + 0.0 changes nothing)
+    m = 6 if six else 5
+    a = np.empty((m, m))
+    a_diag = a.reshape(-1)[:: m + 1]
     q = np.array(seed, dtype=float)
     seed_best = (math.inf, q)
+    best = s.best[0]
+    steps = 0
     for k in range(d.max_iterations):
         jacobians(model, data, q)
         oMf = placement(model, data, fid)  # data.oMf[fid], updated
         r = oMf.rotation
-        e_p = target - oMf.translation
-        w, th, ang = _orientation_error(d, r)
-        ep = sqrt(float(e_p @ e_p))
+        t0, t1, t2 = oMf.translation.tolist()  # e_p = target - translation, entry by entry
+        if six:
+            # the task's error err = (e_p, w), w the full rotation's vector
+            w0, w1, w2 = _log3_floats(r_des.dot(r.T))
+            err = np.array((p0 - t0, p1 - t1, p2 - t2, w0, w1, w2))
+            e_p, w = err[:3], err[3:]
+            ang = sqrt(w.dot(w))
+        else:
+            # the throw axis z turned onto u by th about z × u (`_axis_error`); only
+            # rotations about axes perpendicular to z move it: err = (e_p, the turn in the
+            # tool's x-y plane)
+            z = r[:, 2]
+            z0, z1, z2 = z.tolist()
+            c0, c1, c2 = z1 * u2 - z2 * u1, z2 * u0 - z0 * u2, z0 * u1 - z1 * u0
+            c = np.array((c0, c1, c2))
+            sn = sqrt(c.dot(c))
+            ang = th = atan2(sn, z.dot(axis))
+            if sn > 1e-12:
+                w = np.array((th * c0 / sn, th * c1 / sn, th * c2 / sn))
+            else:
+                w = th * r[:, 0] if th > 1.0 else np.zeros(3)
+            rxy = r[:, :2].T
+            g0, g1 = rxy.dot(w).tolist()
+            err = np.array((p0 - t0, p1 - t1, p2 - t2, g0, g1))
+            e_p = err[:3]
+        ep = sqrt(e_p.dot(e_p))
         score = ep / tol_p + ang / tol_a
         if score < seed_best[0]:
             seed_best = (score, q)
-        if score < s.best[0]:
+        if score < best:
+            if six:
+                th = _axis_angle(r[:, 2], axis)  # (only kept with the best attempt)
+            best = score
             s.best = (score, ep, th, q)
         if ep < stop_p and ang < stop_a:
             break
         if k == half and score > 100.0:
             break  # far off after half the budget: a new seed is a better bet
-        s.iterations += 1
-        dq = _dls_step(d, frame_jacobian(model, data, fid, world), r, e_p, w, q, k)
-        q = q + dq  # a new array: seed_best and s.best keep the old one
-        minimum(maximum(q, lower, out=q), upper, out=q)  # np.clip's result, sooner
+        steps += 1
+        jt = frame_jacobian(model, data, fid, world)  # a new array, (6, n)
+        if not six:
+            jt[3:5] = rxy.dot(jt[3:])
+            jt = jt[:5]
+        jt_t = jt.T
+        jt.dot(jt_t, a)  # into a
+        a_diag += lam2 + 0.01 * float(err.dot(err))
+        if k < half:
+            # The pull stops halfway: at a joint limit it can fight the clamp.
+            z_pull = gain * (q_cur - q)
+            dq = z_pull + jt_t.dot(_solve(a, err - jt.dot(z_pull)))
+        else:
+            dq = jt_t.dot(_solve(a, err))
+        step = max(map(abs, dq.tolist()))  # np.abs(dq).max(), as floats: the same, sooner
+        if step > 0.5:
+            dq *= 0.5 / step
+        q = minimum(maximum(q + dq, lower), upper)  # np.clip's result, sooner; a new array
+    s.iterations += steps
     return seed_best

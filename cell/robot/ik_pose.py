@@ -116,21 +116,29 @@ class IKResult:
 
 def _log3(r: np.ndarray) -> np.ndarray:
     """Rotation vector of a rotation matrix [rad], shape (3,)."""
+    return np.array(_log3_floats(r))
+
+
+def _log3_floats(r: np.ndarray) -> tuple[float, float, float]:
+    """`_log3`'s rotation vector [rad] as three floats."""
     # the trace and the skew part from the nine entries as floats (the same IEEE sums and
-    # differences numpy's scalars make, in np.trace's order; a tenth of the time)
+    # differences numpy's scalars make, in np.trace's order; a tenth of the time); the
+    # scaling too (numpy's float-times-array is the same product, entry by entry)
     f = r.ravel().tolist()
     c = max(-1.0, min(1.0, ((f[0] + f[4] + f[8]) - 1.0) / 2.0))
     th = math.acos(c)
-    v = np.array([f[7] - f[5], f[2] - f[6], f[3] - f[1]])
+    v0, v1, v2 = f[7] - f[5], f[2] - f[6], f[3] - f[1]
     if th < 1e-8:
-        return 0.5 * v
+        return 0.5 * v0, 0.5 * v1, 0.5 * v2
     if math.pi - th < 1e-6:
         # Near π the antisymmetric part vanishes: take the axis from the symmetric part.
         b = (r + np.eye(3)) / 2.0
         k = int(np.argmax(np.diag(b)))
         ax = b[:, k] / math.sqrt(max(b[k, k], 1e-12))
-        return th * ax / np.linalg.norm(ax)
-    return th / (2.0 * math.sin(th)) * v
+        w0, w1, w2 = (th * ax / np.linalg.norm(ax)).tolist()
+        return w0, w1, w2
+    s = th / (2.0 * math.sin(th))
+    return s * v0, s * v1, s * v2
 
 
 def _cross(z: np.ndarray, u: np.ndarray) -> np.ndarray:
