@@ -8,6 +8,14 @@ switched-on model effects, as YAML.
     mass_rule: {kappa: 0.143, band_mass_kg: 0.014, width_exponent: -0.08}
                                           # optional: m_eff = κ √(m + m_b) (a / 0.05 m)^β
     note: free text on how the file was made
+    validation:                           # optional: the model's accuracy on held-out throws
+      throws: 896                         # (`cell calibrate --validate`)
+      seed: 1
+      objects: {cube30: {heldout_rmse_m: 0.036, n: 64}, ...}
+
+The validation section is what the identified model still misses on throws it was not
+fitted to (RMS 2-D landing miss per object, no tracker scatter): the part of a campaign's
+noise floor that repeats of a configuration cannot see (`cell.gap.noise`).
 
 The mass rule (fitted by `cell calibrate`, see cell.workflows.calibrate) gives an
 object the file does not list (an ad-hoc item of a job, a catalogue object
@@ -17,6 +25,7 @@ every item is planned with the same model of the scene.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -28,9 +37,36 @@ from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.yamlsafe import read_yaml_text, safe_load
 
-__all__ = ["ModelParams", "load_params", "save_params", "scene_params_path", "WIDTH_REF_M"]
+__all__ = [
+    "ModelParams",
+    "Validation",
+    "load_params",
+    "save_params",
+    "scene_params_path",
+    "WIDTH_REF_M",
+]
 
 WIDTH_REF_M = 0.05  # [m] the grip width the mass rule's κ refers to
+
+
+@dataclass(frozen=True)
+class Validation:
+    """The identified model's accuracy on held-out throws (never fitted to).
+
+    Attributes:
+        objects: object id -> (RMS 2-D landing miss of the model on its held-out
+            throws [m], number of those throws).
+        throws: held-out throws in all.
+        seed: the seed of their draw (`cell calibrate --validate --seed`).
+    """
+
+    objects: dict[str, tuple[float, int]]
+    throws: int
+    seed: int
+
+    def misfit_m(self, object_ids: list[str]) -> list[float]:
+        """Each throw's object's held-out misfit [m]; NaN for an object not validated."""
+        return [self.objects[o][0] if o in self.objects else float("nan") for o in object_ids]
 
 
 @dataclass(frozen=True)
@@ -45,6 +81,7 @@ class ModelParams:
         mass_rule: (κ [kg^½], m_b [kg], β) of m_eff = κ √(m + m_b) (a / a_ref)^β for
             objects not in `objects` (a their grip width, a_ref = WIDTH_REF_M), or None
             (they keep their own mass). A file without β (width_exponent) has β = 0.
+        validation: the model's accuracy on held-out throws, or None.
     """
 
     ee: EndEffectorParams = field(default_factory=EndEffectorParams)
@@ -52,6 +89,7 @@ class ModelParams:
     effects: dict[str, dict[str, float]] = field(default_factory=dict)
     note: str = ""
     mass_rule: tuple[float, ...] | None = None
+    validation: Validation | None = None
 
     def model_object(self, obj: ObjectParams) -> ObjectParams:
         """The η_o the planner uses for `obj`: the identified one when the file has
@@ -108,7 +146,7 @@ def load_params(path: str | Path | None) -> ModelParams:
     raw = safe_load(read_yaml_text(p, "parameter file"), p) or {}
     if not isinstance(raw, dict):
         raise InvalidInput(f"{p}: must be a mapping with keys end_effector, objects, effects, note")
-    valid = {"end_effector", "objects", "effects", "mass_rule", "note"}
+    valid = {"end_effector", "objects", "effects", "mass_rule", "note", "validation"}
     unknown = sorted(set(raw) - valid)
     if unknown:
         raise InvalidInput(f"{p}: unknown key(s) {unknown}; valid: {sorted(valid)}")
@@ -155,7 +193,60 @@ def load_params(path: str | Path | None) -> ModelParams:
         effects=effects,
         note=str(raw.get("note", "")),
         mass_rule=_mass_rule(raw.get("mass_rule"), p),
+        validation=_validation(raw.get("validation"), p),
     )
+
+
+MAX_VALIDATION_M = 1.0  # [m] a held-out RMS miss beyond is no calibrated model (or a typo)
+MAX_VALIDATION_THROWS = 1_000_000
+
+
+def _count(node: Any, where: str, lo: int) -> int:
+    """An integer count (not a bool, not a float) of at least lo, named in the error."""
+    if (
+        isinstance(node, bool)
+        or not isinstance(node, int)
+        or not lo <= node <= MAX_VALIDATION_THROWS
+    ):
+        raise InvalidInput(f"{where}: {node!r} must be an integer {lo}–{MAX_VALIDATION_THROWS}")
+    return int(node)
+
+
+def _validation(node: Any, path: str) -> Validation | None:
+    """The file's validation section, checked field by field; None when absent."""
+    if node is None:
+        return None
+    form = "{throws: N, seed: S, objects: {ID: {heldout_rmse_m: X, n: K}, ...}}"
+    keys = {"throws", "seed", "objects"}
+    if not isinstance(node, dict) or set(node) != keys:
+        raise InvalidInput(f"{path}: validation must be {form}; got {node!r}")
+    throws = _count(node["throws"], f"{path}: validation.throws", 1)
+    seed = node["seed"]
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise InvalidInput(f"{path}: validation.seed: {seed!r} must be an integer")
+    objs = node["objects"]
+    if not isinstance(objs, dict) or not objs:
+        raise InvalidInput(f"{path}: validation.objects: {objs!r} must be a non-empty mapping")
+    out: dict[str, tuple[float, int]] = {}
+    for oid, spec in objs.items():
+        where = f"{path}: validation.objects.{oid}"
+        if not isinstance(spec, dict) or set(spec) != {"heldout_rmse_m", "n"}:
+            raise InvalidInput(f"{where}: {spec!r} must be {{heldout_rmse_m: X, n: K}}")
+        x = spec["heldout_rmse_m"]
+        if isinstance(x, bool) or not isinstance(x, (int, float)):
+            raise InvalidInput(f"{where}.heldout_rmse_m: {x!r} must be a number")
+        if not (math.isfinite(x) and 0.0 <= x <= MAX_VALIDATION_M):
+            raise InvalidInput(
+                f"{where}.heldout_rmse_m: {x!r} must be finite, 0–{MAX_VALIDATION_M:g} m"
+            )
+        out[str(oid)] = (float(x), _count(spec["n"], f"{where}.n", 1))
+    total = sum(k for _, k in out.values())
+    if total > throws:
+        raise InvalidInput(
+            f"{path}: validation.objects: {total} throws in all, more than validation.throws "
+            f"{throws}"
+        )
+    return Validation(objects=out, throws=throws, seed=int(seed))
 
 
 def _mass_rule(node: Any, path: str) -> tuple[float, float, float] | None:
@@ -199,6 +290,16 @@ def save_params(params: ModelParams, path: str | Path) -> None:
             doc["mass_rule"]["width_exponent"] = float(params.mass_rule[2])
     if params.note:
         doc["note"] = params.note
+    if params.validation is not None:
+        v = params.validation
+        doc["validation"] = {
+            "throws": int(v.throws),
+            "seed": int(v.seed),
+            "objects": {
+                k: {"heldout_rmse_m": float(x), "n": int(m)}
+                for k, (x, m) in sorted(v.objects.items())
+            },
+        }
     tmp = Path(str(path) + ".tmp")
     tmp.write_text(yaml.safe_dump(doc, sort_keys=False))
     tmp.replace(path)

@@ -45,6 +45,25 @@ def register(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument(
+        "--validate",
+        type=int,
+        default=0,
+        metavar="N",
+        help=(
+            "then throw N more catalogue throws of the campaign's kind from a random stream of "
+            "their own (never the campaign's) and write the model's RMS landing miss on them "
+            "per object to the file's validation section (0: no section)"
+        ),
+    )
+    p.add_argument(
+        "--params",
+        metavar="FILE",
+        help=(
+            "with --validate: no campaign and no identification; validate FILE's parameters "
+            "and write them, unchanged, with the validation section to -o"
+        ),
+    )
+    p.add_argument(
         "-o",
         "--output",
         default=str(DEFAULT_OUTPUT),
@@ -143,6 +162,13 @@ def _check_args(args: argparse.Namespace) -> None:
 
     if args.n < 1:
         raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+    if args.validate < 0:
+        raise InvalidInput(f"--validate {args.validate}: give 0 (no validation) or more throws")
+    if args.params and args.validate < 1:
+        raise InvalidInput(
+            f"--params {args.params}: only with --validate N (N ≥ 1): the file is validated, "
+            "not identified again"
+        )
     if args.adhoc < 0 or 0 < args.adhoc < 4:
         raise InvalidInput(
             f"--adhoc {args.adhoc}: give 0 (no ad-hoc campaign) or at least 4 throws"
@@ -308,9 +334,74 @@ def _print_summary(
     )
 
 
+def _validate(args: argparse.Namespace, params: Any) -> Any:
+    """The parameters with the validation section of --validate held-out throws (as they
+    are with --validate 0)."""
+    from dataclasses import replace
+
+    from tqdm import tqdm
+
+    from cell.workflows.calibrate import validate
+    from cell.workflows.campaign import campaign_plan, run_campaign
+
+    if not args.validate:
+        return params
+    vplan = campaign_plan(args.validate, seed=args.seed, held_out=True)
+    with tqdm(
+        total=len(vplan), desc="held-out throws", disable=json_to_stdout(args) or None
+    ) as bar:
+        held = run_campaign(
+            vplan,
+            progress=lambda k: bar.update(k - bar.n),
+            workers=args.workers,
+            address=args.ray_address,
+        )
+    return replace(params, validation=validate(params, held, args.seed))
+
+
+def _validation_json(params: Any) -> dict[str, Any] | None:
+    v = params.validation
+    if v is None:
+        return None
+    return {
+        "throws": v.throws,
+        "seed": v.seed,
+        "objects": {k: {"heldout_rmse_m": x, "n": m} for k, (x, m) in v.objects.items()},
+    }
+
+
+def _print_validation(params: Any) -> None:
+    v = params.validation
+    if v is None:
+        return
+    print(f"held-out landing miss (RMS, {plural(v.throws, 'throw')} never fitted to):")
+    for oid, (x, m) in v.objects.items():
+        print(f"  {oid:12s} {1000 * x:6.1f} mm ({m})")
+
+
+def _validate_only(args: argparse.Namespace) -> int:
+    """--params FILE --validate N: FILE's parameters validated and written to -o."""
+    from cell.params import load_params, save_params
+
+    params = _validate(args, load_params(args.params))
+    out = Path(args.output)
+    summary = {"output": str(out), "params": args.params, "validation": _validation_json(params)}
+    if json_to_stdout(args):
+        print_json(summary)
+    else:
+        _print_validation(params)
+        print(f"parameters of {args.params} with their validation written to {out}")
+    save_params(params, out)
+    write_json(args, summary)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
-    """Throw the campaign (and the ad-hoc one), identify the parameters, write them to -o
-    and print the gap before and after the fit (or only render --snapshot with --n 0)."""
+    """Throw the campaign (and the ad-hoc one), identify the parameters, validate them on
+    --validate held-out throws, write them to -o and print the gap before and after the fit
+    (or only render --snapshot with --n 0; or, with --params, only validate that file)."""
+    from dataclasses import replace
+
     from cell.log.csvio import write_throws_csv
     from cell.params import save_params
     from cell.workflows.campaign import campaign_plan
@@ -320,12 +411,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"snapshot written to {args.snapshot}")
         return 0
     _check_args(args)
+    if args.params:
+        return _validate_only(args)
     plan = campaign_plan(args.n, seed=args.seed)
     table = _throw_campaign(args, plan)
     adhoc = _throw_adhoc(args)
     res, nominal, fitted, rule = _identify(table, adhoc, json_to_stdout(args))
+    res = replace(res, params=_validate(args, res.params))
     out = Path(args.output)
     summary = _summary(table, out, res, nominal, fitted, rule, adhoc)
+    summary["validation"] = _validation_json(res.params)
     if json_to_stdout(args):  # the results are printed before any file is written
         print_json(summary)
     else:
@@ -333,6 +428,7 @@ def run(args: argparse.Namespace) -> int:
         from cell.identify.report import evidence_lines
 
         print("\n".join(evidence_lines(res)))
+        _print_validation(res.params)
     if args.log:
         write_throws_csv(table, args.log)
     save_params(res.params, out)

@@ -108,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
             identify=args.identify,
             seed=args.seed,
             progress=tick,
+            validation=mp.validation,
         )
     if args.json == "-":  # JSON on stdout instead of the table
         print(json.dumps(jsonable(d.report), indent=2, allow_nan=False))

@@ -4,7 +4,7 @@ with each effect applied physically (`cell.gap.world_scene`).
 Each case is a world (effects as forces, contacts or a tracker), the verdict it should get,
 the phase of each effect and the parameters the diagnosis should find. The model as
 configured is the scene's calibrated parameter file (robots/cell_scene/ee_params.yaml, its
-identified objects included). A bounce's parameter is the one measured in the world
+identified objects and its validation on held-out throws included). A bounce's parameter is the one measured in the world
 (the slide from the crossing to the rest point per impact speed), compared in the law the
 tool chose. Judged as `cell.gap.check_other` judges (`judge_campaign`): diagonal, phase,
 parameters within 30 % (a scale within 0.5 %), robust held-out RMSE within 1.3 × the
@@ -255,7 +255,7 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
     camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
     judged = {**case, "expect": _measured(case["expect"], camp.truth)}
     row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
-                         objects=mp.objects)  # fmt: skip
+                         objects=mp.objects, validation=mp.validation)  # fmt: skip
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
             "world_floor0_m": camp.floor0_m, "world_repeat_sd_m": list(camp.repeat_sd_m),
             "world_effect_m": camp.effect_m,

@@ -256,6 +256,8 @@ def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
         "repeat_dof": nf.repeat_dof,
         "neighbours_m": nf.neighbours_m,
         "model_m": nf.model_m,
+        "validated_m": nf.validated_m,
+        "validated_share": nf.validated_share,
     }
 
 

@@ -18,6 +18,19 @@ Three estimates of it:
 
 Without repeats F is the smaller of the last two (each is biased up by what
 it cannot resolve).
+
+Repeats see only what scatters between throws of one configuration (the
+tracker). What the configured model misses on each configuration by its own
+amount, not smooth in the logged quantities, is floor too, and repeats cannot
+see it. A parameter file made by `cell calibrate --validate` knows it: its
+model's RMS miss on held-out throws per object (`cell.params.Validation`). With
+it, a floor from repeats takes it in quadrature:
+
+    F² = F_rep² + mean over the throws of their object's validated misfit²
+
+(an object the file does not validate adds nothing); the method is then
+`repeats+validated`. Without repeats the other estimates already carry that
+misfit, and nothing is added.
 """
 
 from __future__ import annotations
@@ -31,7 +44,7 @@ from cell.gap.problem import GapProblem
 from cell.kinds import PLATFORMS
 from cell.model.throw import Landing
 
-__all__ = ["NoiseFloor", "noise_floor", "features"]
+__all__ = ["NoiseFloor", "noise_floor", "features", "validated"]
 
 log = logging.getLogger(__name__)
 
@@ -40,7 +53,12 @@ MIN_REPEAT_DOF = 30
 
 @dataclass(frozen=True)
 class NoiseFloor:
-    """The noise floor and its estimates [m] (NaN where not available)."""
+    """The noise floor and its estimates [m] (NaN where not available).
+
+    `validated_m` is the RMS over the throws of their objects' held-out misfit (the
+    parameter file's validation; unvalidated objects count 0), `validated_share` the
+    share of throws whose object it validates.
+    """
 
     floor_m: float
     repeats_m: float
@@ -48,6 +66,8 @@ class NoiseFloor:
     neighbours_m: float
     model_m: float
     method: str
+    validated_m: float = float("nan")
+    validated_share: float = 0.0
 
 
 def features(prob: GapProblem) -> np.ndarray:
@@ -190,12 +210,32 @@ def noise_floor(prob: GapProblem, residual: np.ndarray, land: Landing) -> NoiseF
     else:
         ok = {k: v for k, v in cands.items() if np.isfinite(v)}
         method = min(ok, key=lambda k: ok[k])
-    log.info("noise floor estimates: %s", cands)
+    floor = cands[method]
+    val, share = validated(prob)
+    if method == "repeats" and share > 0:
+        method = "repeats+validated"
+        floor = float(np.hypot(rep, val))
+    log.info("noise floor estimates: %s; validated misfit %.4f m", cands, val)
     return NoiseFloor(
-        floor_m=cands[method],
+        floor_m=floor,
         repeats_m=rep,
         repeat_dof=dof,
         neighbours_m=nn,
         model_m=mod,
         method=method,
+        validated_m=val,
+        validated_share=share,
     )
+
+
+def validated(prob: GapProblem) -> tuple[float, float]:
+    """The throws' validated misfit [m]: sqrt of the mean over the throws of their
+    object's held-out misfit squared (0 for an object not validated), and the share of
+    throws whose object is validated; (NaN, 0) without a validation."""
+    v = prob.validated_m
+    if v is None or len(v) == 0:
+        return float("nan"), 0.0
+    known = np.isfinite(v)
+    if not known.any():
+        return float("nan"), 0.0
+    return float(np.sqrt(np.mean(np.where(known, v, 0.0) ** 2))), float(known.mean())

@@ -21,6 +21,7 @@ from cell.model.effects_apply import flight_accel, predict_with_effects
 from cell.model.flight3d import acceleration
 from cell.model.params import EndEffectorParams
 from cell.model.throw import Landing, ThrowBatch, drag_constant
+from cell.params import Validation
 
 __all__ = ["GapProblem", "BandStiffness", "build_problem", "rmse"]
 
@@ -73,6 +74,9 @@ class GapProblem:
         groups: object index per throw, shape (n,).
         step: 3-D integrator step [s].
         seed: seed of every random choice (folds, permutations, bootstrap).
+        validated_m: per throw, the configured model's held-out misfit for its object
+            [m] (the parameter file's validation section; NaN for an object it does not
+            list), or None without one: the part of the noise floor repeats cannot see.
     """
 
     table: ThrowTable
@@ -87,6 +91,7 @@ class GapProblem:
     step: float = 0.02
     seed: int = 0
     folds: dict[str, list[tuple[np.ndarray, np.ndarray]]] = field(default_factory=dict)
+    validated_m: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.observed.shape[0])
@@ -179,6 +184,7 @@ class GapProblem:
             has_stroke=self.has_stroke[idx],
             groups=self.groups[idx],
             folds={},
+            validated_m=None if self.validated_m is None else self.validated_m[idx],
         )
         out.make_folds()
         return out
@@ -213,12 +219,14 @@ def build_problem(
     launch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
     seed: int = 0,
     step: float = 0.02,
+    validation: Validation | None = None,
 ) -> GapProblem:
     """The problem of a throw log.
 
     Throws without a stroke (another launcher) are kept only when `launch` gives
     their observed launch state (from tracks); throws without a logged landing
-    are dropped.
+    are dropped. `validation` (the parameter file's) gives each throw its object's
+    held-out misfit (`GapProblem.validated_m`).
 
     Raises:
         InvalidInput: no throw left to diagnose.
@@ -263,6 +271,7 @@ def build_problem(
         groups=np.array([names[o] for o in oid]),
         step=step,
         seed=seed,
+        validated_m=None if validation is None else np.array(validation.misfit_m(oid), float),
     )
     prob.make_folds()
     return prob

@@ -55,10 +55,19 @@ def format_table(report: dict[str, Any]) -> str:
     other = r.get("other_launcher_throws", 0)
     lines.append(f"throws           {r['throws']} ({other} from another launcher, from tracks)")
     nz = r.get("noise", {})
+    val = nz.get("validated_m")
+    with_val = val is not None and np.isfinite(val) and nz.get("validated_share", 0) > 0
     lines.append(
         f"noise floor F    {r['noise_floor_m']:.4f} m  ({nz.get('method', '?')}; "
         f"repeats {_m(nz.get('repeats_m'))}, neighbours {_m(nz.get('neighbours_m'))}, "
-        f"model {_m(nz.get('model_m'))})"
+        f"model {_m(nz.get('model_m'))}"
+        + (
+            f"; validated {_m(val)}: the parameter file's held-out misfit of the throws' "
+            f"objects ({100 * nz['validated_share']:.0f} % of the throws)"
+            if with_val
+            else ""
+        )
+        + ")"
     )
     b = r["baseline"]
     lines.append(

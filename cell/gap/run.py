@@ -22,6 +22,7 @@ from cell.model.effects import EFFECTS, Effect
 from cell.model.objects import SHAPES
 from cell.model.params import EndEffectorParams
 from cell.model.throw import drag_constant
+from cell.params import Validation
 
 __all__ = ["diagnose_log"]
 
@@ -210,6 +211,7 @@ def diagnose_log(
     identify: bool = False,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    validation: Validation | None = None,
 ) -> tuple[Diagnosis, Any]:
     """Diagnose a throw log against the configured model.
 
@@ -222,6 +224,8 @@ def diagnose_log(
         identify: re-identify the nominal band law on training throws.
         seed: seed of folds, permutations and bootstraps.
         progress: called with a short label per step.
+        validation: the parameter file's held-out misfits per object (added to a
+            floor from repeats, `cell.gap.noise`), or None.
 
     Returns:
         The diagnosis (its `report` is the GAP.md JSON) and the problem it was made on.
@@ -235,8 +239,9 @@ def diagnose_log(
         fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))
         launch = launch_arrays(fit_all)
     full = build_problem(
-        table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed
-    )
+        table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed,
+        validation=validation,
+    )  # fmt: skip
     pre = np.zeros(len(full), bool)
     prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
     post = _flags(full, pre, d)

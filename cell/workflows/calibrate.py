@@ -46,7 +46,7 @@ from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.model.throw import predict_landing
-from cell.params import WIDTH_REF_M, ModelParams
+from cell.params import WIDTH_REF_M, ModelParams, Validation
 
 __all__ = [
     "GapSummary",
@@ -58,6 +58,7 @@ __all__ = [
     "extend_objects",
     "calibrate_table",
     "OBJECT_BOUND",
+    "validate",
 ]
 
 OBJECT_BOUND = 0.7  # η_o factors may move by ±70 %: the sim's effective masses need it
@@ -298,3 +299,26 @@ def calibrate_table(
     )
     res = replace(res, params=replace(extended, note=note, mass_rule=rule.as_tuple()))
     return res, nominal, fitted, rule
+
+
+def validate(params: ModelParams, held: ThrowTable, seed: int) -> Validation:
+    """The model's accuracy on held-out throws: per object, the RMS 2-D distance between
+    the landings `params` predicts and the logged ones, over the throws `held` (which must
+    be throws the parameters were not fitted to: `campaign_plan(held_out=True)`). The
+    scene logs exact landings and repeats a throw to the bit, so this is the model's own
+    misfit, with no tracker scatter in it. A throw the model says never lands is left out.
+
+    Raises:
+        InvalidInput: no held-out throw the model predicts.
+    """
+    miss = predicted_landing(held, params) - held.landed
+    d2 = np.sum(miss * miss, axis=1)
+    ids = np.array(held.text("object_id"))
+    ok = np.isfinite(d2)
+    out = {
+        str(o): (float(np.sqrt(np.mean(d2[ok & (ids == o)]))), int(np.sum(ok & (ids == o))))
+        for o in sorted(set(ids[ok]))
+    }
+    if not out:
+        raise InvalidInput(f"validation: none of {len(held)} held-out throws is predicted")
+    return Validation(objects=out, throws=int(ok.sum()), seed=int(seed))

@@ -137,14 +137,19 @@ def throw_once(
     )
 
 
+VALIDATION_STREAM = 0x7A1  # the held-out throws' random stream (`campaign_plan(held_out=True)`)
+
+
 def campaign_plan(
-    n: int, *, seed: int = 0, objects: Sequence[str] | None = None
+    n: int, *, seed: int = 0, objects: Sequence[str] | None = None, held_out: bool = False
 ) -> list[dict[str, Any]]:
     """n throw settings spread over objects, strokes, heights and elevations.
 
     Objects cycle through `objects` (default: the catalogue's thesis14 set);
     stroke, release height, elevation and azimuth are drawn uniformly in the
-    end-effector's range, 0.5-0.9 m, 15-50° and ±30°.
+    end-effector's range, 0.5-0.9 m, 15-50° and ±30°. `held_out`: the same kind of
+    throws from a random stream of their own (`VALIDATION_STREAM`, throw ids `val…`),
+    never the campaign's of the same seed: the throws an identified model is validated on.
 
     Raises:
         InvalidParameter: n < 1 or an empty object list.
@@ -158,7 +163,8 @@ def campaign_plan(
     )
     if not ids:
         raise InvalidParameter("campaign: no objects to throw")
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng([seed, VALIDATION_STREAM] if held_out else seed)
+    tag = "val" if held_out else "cal"
     plan = []
     for i in range(n):
         plan.append(
@@ -168,7 +174,7 @@ def campaign_plan(
                 "position": (0.0, 0.0, float(rng.uniform(0.5, 0.9))),
                 "elevation": math.radians(float(rng.uniform(15, 50))),
                 "azimuth": math.radians(float(rng.uniform(-30, 30))),
-                "throw_id": f"cal{seed:03d}-{i:04d}",
+                "throw_id": f"{tag}{seed:03d}-{i:04d}",
             }
         )
     return plan
