@@ -19,7 +19,11 @@ diagnosis picks the form by held-out evidence with a penalty for each extra term
 TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
 interval above zero; a form that gives any logged throw a value outside the effect's
 plausible range (or at a bound) is stretched and not chosen (`law_stretched`), as a
-constant there is refused. A covariate form is tried only where the covariate takes at least
+constant there is refused. On a log of two or more objects a law in a throw's quantity
+must also hold whatever the object: it is refused where, with whole objects held out
+(`objects_out`), it predicts them worse than the constant with a bootstrap interval below
+zero (a law one object alone follows, or one taking up a partner's misfit that differs
+from object to object). A covariate form is tried only where the covariate takes at least
 MIN_LEVELS distinct values in the log: on two values (a log of two objects, say) a law in
 the mass, one in the size and one per object are the same two numbers, so the difference
 is the per-object form's, which pays for its second term.
@@ -27,7 +31,7 @@ is the per-object form's, which pays for its second term.
 
 from __future__ import annotations
 
-from dataclasses import make_dataclass
+from dataclasses import make_dataclass, replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -43,6 +47,7 @@ __all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_text", "le
 TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
 MIN_LEVELS = 3  # a covariate form is tried where the covariate takes this many values
+OBJECTS_OUT = "objects held out"  # the key of a form's RMSE on whole objects held out
 # covariate name -> (how to read it off a batch, its typical largest value)
 COVARIATES: dict[str, tuple[Any, float]] = {
     "stroke_m": (lambda b: b.stroke, 0.11),
@@ -247,6 +252,19 @@ def _constant_member(cls: type[Effect]) -> type[Effect] | None:
     return getattr(cls, "law_base", None)
 
 
+def objects_out(prob: GapProblem) -> GapProblem | None:
+    """The problem scored with whole objects held out: its leave-objects-out folds (three
+    or more objects), or each of two objects predicted from the other's throws; None for
+    a log of one object."""
+    objs = np.unique(prob.groups)
+    if objs.size < 2:
+        return None
+    folds = prob.folds.get("object") or [
+        (np.flatnonzero(prob.groups != o), np.flatnonzero(prob.groups == o)) for o in objs
+    ]
+    return replace(prob, folds={"object": folds})
+
+
 def choose_law(
     prob: GapProblem,
     score: Score,
@@ -259,7 +277,12 @@ def choose_law(
     solution) and scored held-out; a form replaces the constant when its held-out RMSE,
     raised by TERM_PENALTY per extra term, is the lowest, its cut over the constant
     has a bootstrap interval above zero, and it keeps every logged throw's value within
-    the effect's plausible range and off its bounds (`law_stretched`).
+    the effect's plausible range and off its bounds (`law_stretched`); a covariate form
+    (not the per-object one) is refused where, on a log of two or more objects, it
+    predicts whole objects held out (`objects_out`) worse than the constant with a
+    bootstrap interval below zero. Each form's RMSE with objects held out, where scored,
+    is under `"<law>, objects held out"` (the constant's under `"constant, objects held
+    out"`).
 
     Returns:
         (the set's score with the chosen forms; per effect, each form's held-out RMSE [m]).
@@ -268,6 +291,7 @@ def choose_law(
     from cell.gap.stats import bootstrap_cut
 
     tick = tick or (lambda s: None)
+    held = objects_out(prob)
     best = score
     tried: dict[str, dict[str, float]] = {}
     for j in range(len(score.full.effects)):
@@ -289,6 +313,7 @@ def choose_law(
             classes = [type(e) for e in best.full.effects]
         p = float(eff.vector()[0])
         rows = {"constant": best.heldout_rmse_m}
+        const_held: Score | None = None
         pick, pick_val = best, best.heldout_rmse_m
         forms = law_forms(base, prob.batch)
         n_obj = len(set(_object_keys(prob.batch)))
@@ -309,7 +334,18 @@ def choose_law(
             if val >= pick_val or law_stretched(sc.full.effects[j], prob.batch):
                 continue
             _, lo, _ = bootstrap_cut(best.heldout, sc.heldout, seed=prob.seed + 3)
-            if lo > 0:
+            refuted = False
+            if lo > 0 and held is not None and form.covariate != "object_id":  # type: ignore[attr-defined]
+                # a law in a throw's quantity holds whatever the object: refuted where
+                # it predicts whole objects held out worse than the constant
+                if const_held is None:
+                    const_held = score_set(held, classes, warm=best.full.x)
+                    rows[f"constant, {OBJECTS_OUT}"] = const_held.heldout_rmse_m
+                sc_held = score_set(held, cls_j, warm=sc.full.x)
+                rows[f"{form.law}, {OBJECTS_OUT}"] = sc_held.heldout_rmse_m
+                _, _, hi = bootstrap_cut(const_held.heldout, sc_held.heldout, seed=prob.seed + 7)
+                refuted = hi < 0
+            if lo > 0 and not refuted:
                 pick, pick_val = sc, val
         best = pick
         tried[eff.name] = rows
