@@ -41,42 +41,41 @@ LEAVE_TIMES_KEPT = 4096
 def _leave_time_s(
     obj_mass: float, obj_width: float, stroke_m: float, elevation_rad: float, ee: EndEffectorParams
 ) -> float:
-    """`leave_time_s` of an item of mass [kg] and width [m] `obj_mass`, `obj_width`."""
+    """`leave_time_s` of an item of mass [kg] and width [m] `obj_mass`, `obj_width`.
+
+    The push at each step is `push_force(np.float64(stroke), width, ee)` [N] in Python
+    floats: the same operations in the same order (the square by `pow`, as NumPy's scalar
+    `**`; sqrt, cos and atan2 from libm, which this NumPy's float64 loops equal bit for
+    bit), the terms that do not depend on the stroke computed once, gravity's component
+    along the axis too (tests/test_leave_time_kept.py steps `push_force` itself and gets
+    the same time)."""
     from cell.model.params import G
     from cell.sim.mechanism import DEFAULT_GEOMETRY
 
     end = ee.L_e if ee.L_e > 0 else DEFAULT_GEOMETRY.end_stop_m
     mass = obj_mass + DEFAULT_GEOMETRY.moving_mass_kg
     width = max(float(obj_width), ee.d)
-    push = _push_at(width, ee)
-    s, v, t, h = float(stroke_m), 0.0, 0.0, 1e-5
-    while s < end and t < 0.5:
-        v += (push(s) / mass - G * math.sin(elevation_rad)) * h
-        s += v * h
-        t += h
-    return t
-
-
-def _push_at(width: float, ee: EndEffectorParams) -> Any:
-    """stroke [m] → `push_force(np.float64(stroke), width, ee)` [N] as a float: the same
-    operations on the same NumPy scalars in the same order (bitwise the same force), the
-    terms that do not depend on the stroke computed once; `leave_time_s` asks it at ~3,000
-    steps a throw."""
     half_gap_sq = ((width - ee.d) / 2) ** 2
     base = ee.l1 + ee.r_r * ee.phi + ee.d / 2
     gap = width - ee.d
     k3, k2, k1, c = ee.Ke3, ee.Ke2, ee.Ke1, ee.C
-
-    def push(stroke: float) -> float:
-        sm = np.float64(stroke)
-        stretch = base + np.sqrt(half_gap_sq + (ee.L_t - sm) ** 2) - ee.L0
+    l_t, l_0 = ee.L_t, ee.L0
+    along = G * math.sin(elevation_rad)
+    sqrt, cos, atan2 = math.sqrt, math.cos, math.atan2
+    s, v, t, h = float(stroke_m), 0.0, 0.0, 1e-5
+    while s < end and t < 0.5:
+        out = l_t - s
+        stretch = base + sqrt(half_gap_sq + out**2) - l_0
         if stretch > 0:
-            f_e = np.fmax(((k3 * stretch + k2) * stretch + k1) * stretch + c, 0.0)
+            f_e = ((k3 * stretch + k2) * stretch + k1) * stretch + c
+            if f_e < 0.0:  # np.fmax(f_e, 0.0): -0.0 kept as it is
+                f_e = 0.0
         else:
             f_e = 0.0 * stretch
-        return float(2 * f_e * np.cos(np.arctan2(gap, 2 * (ee.L_t - sm))))
-
-    return push
+        v += (2 * f_e * cos(atan2(gap, 2 * out)) / mass - along) * h
+        s += v * h
+        t += h
+    return t
 
 
 def predict_moving_landing(obj: ObjectParams, plan: Any, ee: EndEffectorParams) -> np.ndarray:
