@@ -68,6 +68,17 @@ class Validation:
         """Each throw's object's held-out misfit [m]; NaN for an object not validated."""
         return [self.objects[o][0] if o in self.objects else float("nan") for o in object_ids]
 
+    def as_dict(self) -> dict[str, Any]:
+        """The section as the parameter file (and `cell calibrate --json`) writes it."""
+        return {
+            "throws": int(self.throws),
+            "seed": int(self.seed),
+            "objects": {
+                k: {"heldout_rmse_m": float(x), "n": int(m)}
+                for k, (x, m) in sorted(self.objects.items())
+            },
+        }
+
 
 @dataclass(frozen=True)
 class ModelParams:
@@ -291,15 +302,7 @@ def save_params(params: ModelParams, path: str | Path) -> None:
     if params.note:
         doc["note"] = params.note
     if params.validation is not None:
-        v = params.validation
-        doc["validation"] = {
-            "throws": int(v.throws),
-            "seed": int(v.seed),
-            "objects": {
-                k: {"heldout_rmse_m": float(x), "n": int(m)}
-                for k, (x, m) in sorted(v.objects.items())
-            },
-        }
+        doc["validation"] = params.validation.as_dict()
     tmp = Path(str(path) + ".tmp")
     tmp.write_text(yaml.safe_dump(doc, sort_keys=False))
     tmp.replace(path)

@@ -360,14 +360,7 @@ def _validate(args: argparse.Namespace, params: Any) -> Any:
 
 
 def _validation_json(params: Any) -> dict[str, Any] | None:
-    v = params.validation
-    if v is None:
-        return None
-    return {
-        "throws": v.throws,
-        "seed": v.seed,
-        "objects": {k: {"heldout_rmse_m": x, "n": m} for k, (x, m) in v.objects.items()},
-    }
+    return None if params.validation is None else params.validation.as_dict()
 
 
 def _print_validation(params: Any) -> None:
