@@ -36,6 +36,14 @@ def stretch_data():
 
 
 @pytest.fixture(scope="module")
+def stretch_round_robin(stretch_data):
+    """Table 5.1's round-robin of the three learners on `stretch_data`, run once for the
+    two tests that read it (a learner's folds are the same run alone or beside others)."""
+    _, data = stretch_data
+    return round_robin(data, learners=("svr", "rf", "mlp"), grid="small")
+
+
+@pytest.fixture(scope="module")
 def plain_data():
     world = _world(0.0)
     table = draw_campaign(world, Campaign(n=N_TRAIN, stroke_m=(0.04, 0.10)), seed=2)
@@ -94,12 +102,12 @@ def test_round_robin_folds_hold_every_object_out_once():
     assert sorted(len(f.held_out) for f in odd) == [2] * 5 + [3]
 
 
-def test_round_robin_never_trains_on_a_held_out_object(stretch_data):
+def test_round_robin_never_trains_on_a_held_out_object(stretch_data, stretch_round_robin):
     """Beyond the bookkeeping: moving the observed landings of one fold's held-out
     objects must leave that fold's fitted model exactly as it was (and must change
     the folds that do train on them, or the check could not fail)."""
     _, data = stretch_data
-    rr = round_robin(data, learners=("svr",), grid="small")["svr"]
+    rr = stretch_round_robin["svr"]
     assert len(rr.folds) == 7
     for f in rr.folds:
         assert set(f.training_objects).isdisjoint(f.fold.held_out)
@@ -123,9 +131,10 @@ def test_round_robin_never_trains_on_a_held_out_object(stretch_data):
         assert same == (a.fold.held_out == target), a.fold.held_out
 
 
-def test_table_51_learners_beat_the_model_alone(stretch_data):
+def test_table_51_learners_beat_the_model_alone(stretch_data, stretch_round_robin):
     _, data = stretch_data
-    rr = round_robin(data, learners=("svr", "rf", "mlp"), grid="small")
+    rr = stretch_round_robin
+    assert set(rr) == {"svr", "rf", "mlp"}
     zero_mse = float(np.mean((data.targets.delta_stroke * 1000) ** 2))  # ΔL_s = 0 everywhere
     for name, s in rr.items():
         assert s.dls_mse_mean < 0.25 * zero_mse, name

@@ -117,6 +117,10 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
         pf.pick(pf.decide(0, item.obj, None), item.obj, item)
         t0 = sc.t
         pf.release(None)  # type: ignore[arg-type]
+        # the tracker the release started (`PyBulletEndEffector.throw`) is never read here:
+        # stopped, so the flight's steps do not sample it (a sample only reads the item's
+        # state and contacts from PyBullet: the same physics, to the bit, without it)
+        sc._trackers.pop(item.body, None)
         if kick:
             yaw = float(kick.get("yaw_k", 0.0)) * th.stroke
             sc.launch_error(item, yaw, float(kick.get("speed_k", 0.0)) * th.stroke)
