@@ -85,40 +85,6 @@ def test_cli_bench_sort_on_two_workers_equals_the_serial_run(local_ray, tmp_path
     assert figures["items"] == 4 and figures["layouts"] == 4
 
 
-def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ray, tmp_path):
-    from parallel_units import throw_or_die_once
-
-    from cell.log.store import ThrowStore
-    from cell.workflows.campaign import campaign_plan
-
-    marker = tmp_path / "died"
-    plan = campaign_plan(5, seed=2)
-    store = ThrowStore(tmp_path / "throws.sqlite")
-    try:
-        # the driver is the only writer: one transaction per row, as results arrive
-        out = run_campaign(
-            throw_or_die_once,
-            [(str(marker), p) for p in plan],
-            workers=2,
-            on_result=lambda i, rec: store.append(rec),
-            progress=False,
-        )
-        ids = store.table().text("throw_id")
-        assert len(store) == len(plan)
-    finally:
-        store.close()
-    assert marker.exists()  # one worker process did die mid-campaign
-    assert [r["throw_id"] for r in out] == [p["throw_id"] for p in plan]
-    assert sorted(ids) == sorted(p["throw_id"] for p in plan)  # one row per throw
-
-
-def test_a_unit_that_raises_is_reported_by_name(local_ray):
-    from parallel_units import fails_on_three
-
-    with pytest.raises(CampaignFailed, match="unit 3"):
-        run_campaign(fails_on_three, list(range(5)), workers=2, progress=False)
-
-
 def test_a_scene_campaign_on_ray_throws_what_the_serial_one_throws(local_ray):
     from cell.workflows.campaign import campaign_plan
     from cell.workflows.campaign import run_campaign as scene_campaign
@@ -194,43 +160,6 @@ def test_cli_calibrate_refuses_a_store_that_holds_the_campaign_already(tmp_path,
         assert len(store) == 1  # nothing thrown, nothing written
 
 
-def test_a_unit_whose_worker_always_dies_is_retried_once_then_reported_as_lost(local_ray, tmp_path):
-    from parallel_units import dies_on_two
-
-    attempts = tmp_path / "attempts"
-    got: dict[int, int] = {}
-    with pytest.raises(
-        CampaignFailed, match=r"unit 2 \(\(2, .*\) was lost: its worker died 2 time"
-    ):
-        run_campaign(
-            dies_on_two,
-            [(k, str(attempts)) for k in range(6)],
-            workers=2,
-            on_result=got.__setitem__,
-            progress=False,
-        )
-    assert attempts.read_text() == "died\n" * 2  # the first try and Ray's one retry
-    assert 2 not in got
-    assert all(v == k * k for k, v in got.items())  # what was handled before is right
-
-
-def test_ctrl_c_cancels_the_campaign_and_keeps_what_was_handled(local_ray):
-    from parallel_units import square
-
-    got: list[int] = []
-
-    def handle(i: int, r: int) -> None:
-        got.append(r)
-        if len(got) == 2:
-            raise KeyboardInterrupt  # as Ctrl-C in the driver while results arrive
-
-    with pytest.raises(KeyboardInterrupt):
-        run_campaign(square, list(range(40)), workers=2, on_result=handle, progress=False)
-    assert len(got) == 2
-    # the same Ray runs the next campaign to the end: nothing of the cancelled one is left
-    assert run_campaign(square, list(range(6)), workers=2, progress=False) == [0, 1, 4, 9, 16, 25]
-
-
 def test_an_address_where_no_ray_answers_is_refused_at_once(tmp_path, capsys):
     import socket
 
@@ -277,3 +206,79 @@ def test_cli_learn_fits_on_two_workers_give_the_serial_table(local_ray, tmp_path
     assert set(docs[0]) == {"svr"}
     assert len(docs[0]["svr"]["folds"]) == 7  # 14 objects, 2 held out a fold
     assert docs[0] == docs[1]  # every fold's figures and chosen hyper-parameters
+
+
+# Last, the tests that end worker processes: a worker dies (killed, or always dying), or
+# the campaign stops early (a unit that raises, Ctrl-C), which cancels the tasks still out
+# and ends the workers running them. A new worker imports the cell again: until here the
+# tests' units run on workers that imported it for the first test; below, only the first
+# test needs the cell on a worker, on its dead one's replacement (the retried throw)
+def test_a_killed_worker_is_retried_and_the_store_has_one_row_per_throw(local_ray, tmp_path):
+    from parallel_units import throw_or_die_once
+
+    from cell.log.store import ThrowStore
+    from cell.workflows.campaign import campaign_plan
+
+    marker = tmp_path / "died"
+    plan = campaign_plan(5, seed=2)
+    store = ThrowStore(tmp_path / "throws.sqlite")
+    try:
+        # the driver is the only writer: one transaction per row, as results arrive
+        out = run_campaign(
+            throw_or_die_once,
+            [(str(marker), p) for p in plan],
+            workers=2,
+            on_result=lambda i, rec: store.append(rec),
+            progress=False,
+        )
+        ids = store.table().text("throw_id")
+        assert len(store) == len(plan)
+    finally:
+        store.close()
+    assert marker.exists()  # one worker process did die mid-campaign
+    assert [r["throw_id"] for r in out] == [p["throw_id"] for p in plan]
+    assert sorted(ids) == sorted(p["throw_id"] for p in plan)  # one row per throw
+
+
+def test_a_unit_that_raises_is_reported_by_name(local_ray):
+    from parallel_units import fails_on_three
+
+    with pytest.raises(CampaignFailed, match="unit 3"):
+        run_campaign(fails_on_three, list(range(5)), workers=2, progress=False)
+
+
+def test_ctrl_c_cancels_the_campaign_and_keeps_what_was_handled(local_ray):
+    from parallel_units import square
+
+    got: list[int] = []
+
+    def handle(i: int, r: int) -> None:
+        got.append(r)
+        if len(got) == 2:
+            raise KeyboardInterrupt  # as Ctrl-C in the driver while results arrive
+
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(square, list(range(40)), workers=2, on_result=handle, progress=False)
+    assert len(got) == 2
+    # the same Ray runs the next campaign to the end: nothing of the cancelled one is left
+    assert run_campaign(square, list(range(6)), workers=2, progress=False) == [0, 1, 4, 9, 16, 25]
+
+
+def test_a_unit_whose_worker_always_dies_is_retried_once_then_reported_as_lost(local_ray, tmp_path):
+    from parallel_units import dies_on_two
+
+    attempts = tmp_path / "attempts"
+    got: dict[int, int] = {}
+    with pytest.raises(
+        CampaignFailed, match=r"unit 2 \(\(2, .*\) was lost: its worker died 2 time"
+    ):
+        run_campaign(
+            dies_on_two,
+            [(k, str(attempts)) for k in range(6)],
+            workers=2,
+            on_result=got.__setitem__,
+            progress=False,
+        )
+    assert attempts.read_text() == "died\n" * 2  # the first try and Ray's one retry
+    assert 2 not in got
+    assert all(v == k * k for k, v in got.items())  # what was handled before is right
