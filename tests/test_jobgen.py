@@ -18,25 +18,12 @@ SEEDS = range(6)
 
 
 @pytest.fixture(scope="module")
-def drawn() -> dict[int, tuple[dict, list[str]]]:
-    """Each seed's job, drawn once with the kinds it drew again asked for (`refused`)."""
-    out = {}
-    for s in SEEDS:
-        refused: list[str] = []
-        out[s] = random_job(s, refused=refused), refused
-    return out
+def jobs():
+    return {s: random_job(s) for s in SEEDS}
 
 
-@pytest.fixture(scope="module")
-def jobs(drawn):
-    return {s: doc for s, (doc, _) in drawn.items()}
-
-
-def test_the_same_seed_draws_the_same_job(jobs, drawn):
-    # drawn again without `refused`: the same job as drawn asking for them (seed 2 draws
-    # two kinds again, an ad-hoc and a catalogue one, so asking changes nothing in the draw)
-    assert random_job(2) == jobs[2]
-    assert len(drawn[2][1]) == 2
+def test_the_same_seed_draws_the_same_job(jobs):
+    assert random_job(2) == jobs[2]  # drawn again
     assert jobs[3] != jobs[2]
 
 
@@ -96,7 +83,7 @@ def test_cell_job_random_writes_a_job_that_loads(tmp_path, capsys, jobs):
     assert capsys.readouterr().out == out.read_text()
 
 
-def test_the_kinds_drawn_again_are_named_and_no_bin_of_the_job_takes_them(drawn):
+def test_the_kinds_drawn_again_are_named_and_no_bin_of_the_job_takes_them(jobs):
     """What a benchmark's rate leaves out: each kind `random_job` drew again, checked
     against the cell's own refusal for every bin of the job (independently of the draw),
     and counted in the job's description."""
@@ -106,9 +93,10 @@ def test_the_kinds_drawn_again_are_named_and_no_bin_of_the_job_takes_them(drawn)
     params = load_params(scene_params_path())
     cat = catalogue()
     seen_refused = 0
-    # the jobs drawn asking for them: asking changes nothing in the draw
-    # (test_the_same_seed_draws_the_same_job)
-    for doc, refused in drawn.values():
+    for s in SEEDS:
+        refused: list[str] = []
+        doc = random_job(s, refused=refused)
+        assert doc == jobs[s]  # asking for them changes nothing in the draw
         assert f"; {len(refused)} kinds drawn that no bin could take" in doc["description"]
         for name in refused:
             if name.startswith("adhoc "):
