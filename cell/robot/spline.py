@@ -30,36 +30,9 @@ def spline_path(
     waypoints: the spline keeps close to it, so within the limits unless a waypoint lies
     on one. Without limits, or when none stays within them, the spline through the
     waypoints."""
-    way = np.array(waypoints_q, float)
-    key = (
-        way.shape,
-        way.tobytes(),
-        None if lower is None else np.asarray(lower, float).tobytes(),
-        None if upper is None else np.asarray(upper, float).tobytes(),
-    )
-    found = _PATHS.get(key)
-    if found is None:
-        found = _spline_path(way, lower, upper)
-        if len(_PATHS) >= _PATHS_MAX:
-            _PATHS.clear()
-        _PATHS[key] = found
-    return found
-
-
-# The paths `spline_path` made, by their waypoints and limits bit for bit: a decision asks
-# for the same path again and again (a carry at each time scale it tries and shaped by the
-# grip, the routes' checks of the spline a carry will follow), 546 of the demo's 1,251
-# (tasks/bins.yaml), each the same to the last bit (toppra's and scipy's splines are
-# deterministic, and nothing changes a path once made: callers only evaluate it).
-# Bounded: cleared when full.
-_PATHS: dict[tuple[tuple[int, ...], bytes, bytes | None, bytes | None], Any] = {}
-_PATHS_MAX = 512
-
-
-def _spline_path(way: np.ndarray, lower: np.ndarray | None, upper: np.ndarray | None) -> Any:
-    """`spline_path` made afresh from the waypoints `way` [rad], shape (k, dof)."""
     import toppra as ta
 
+    way = np.array(waypoints_q, float)
     seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
     ss = np.concatenate([[0.0], np.cumsum(seg)])
     ss /= ss[-1]
