@@ -227,27 +227,17 @@ def _point_motion(
     m, d, fr = robot.model, robot.data, robot.tcp_frame
     r_local = np.asarray(offset_tcp_m, float)
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-    kinematics, place = pin.forwardKinematics, pin.updateFramePlacement
-    velocity, acceleration = pin.getFrameVelocity, pin.getFrameAcceleration
-    classical = pin.getFrameClassicalAcceleration
-    # Pinocchio's answers gathered in lists and made arrays once, ee_tcp's frame alone
-    # placed (`updateFramePlacement`: the frame velocities and accelerations are computed
-    # from the joints' placements, not the frames'), and r = R r_local for all instants
-    # in one `np.matmul` (the same gemv for each instant as `R @ r_local`): the same
-    # floats as placing every frame and writing the rows one by one, in 0.6 of the time
-    # (tests/test_point_motion_bits.py)
-    rows_a, rows_alpha, rows_w, rows_r = [], [], [], []
-    for q, dq, ddq in zip(qs, dqs, ddqs, strict=True):
-        kinematics(m, d, q, dq, ddq)
-        rows_r.append(place(m, d, fr).rotation)
-        rows_a.append(classical(m, d, fr, lwa).linear)
-        rows_alpha.append(acceleration(m, d, fr, lwa).angular)
-        rows_w.append(velocity(m, d, fr, lwa).angular)
-    k = len(rows_r)
-    rots = np.array(rows_r).reshape(k, 3, 3)
-    a_o, alphas = np.array(rows_a).reshape(k, 3), np.array(rows_alpha).reshape(k, 3)
-    ws = np.array(rows_w).reshape(k, 3)
-    r = np.matmul(rots, r_local)
+    k = len(qs)
+    a_o, alphas, ws, r = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3))
+    rots = np.empty((k, 3, 3))
+    for i, (q, dq, ddq) in enumerate(zip(qs, dqs, ddqs, strict=True)):
+        pin.forwardKinematics(m, d, q, dq, ddq)
+        pin.updateFramePlacements(m, d)
+        a_o[i] = pin.getFrameClassicalAcceleration(m, d, fr, lwa).linear
+        alphas[i] = pin.getFrameAcceleration(m, d, fr, lwa).angular
+        ws[i] = pin.getFrameVelocity(m, d, fr, lwa).angular
+        rots[i] = d.oMf[fr].rotation
+        r[i] = rots[i] @ r_local
     # the cross products over all instants at once (one np.cross per row cost 3x the
     # kinematics: np.cross's axis handling dominates for single 3-vectors)
     acc = a_o + np.cross(alphas, r) + np.cross(ws, np.cross(ws, r))
