@@ -85,6 +85,8 @@ def check_the_demo_table() -> None:
         (realtime,) = quoted(page, r"real-time items/h +([\d,]+) \(planning overlapped")
         assert num(realtime) == round(run["items_per_hour_realtime"])
     check_the_planning_row("the demo", run)
+    wall, sim = quoted("README.md", r"(\d+) s of wall time against (\d+) s simulated")
+    assert (int(wall), int(sim)) == (round(run["wall_time_s"]), round(run["sim_time_s"]))
     plain = load_json("docs/figures/run_plain.json")
     p95, rate = quoted(
         "README.md",
