@@ -241,6 +241,7 @@ def check_the_headline(tune: dict) -> None:
     (n_slowest,) = quoted("README.md", r"a placed tetrapack is the slowest item of (\w+) layouts")
     assert n_slowest == {1: "one", 2: "two", 3: "three", 4: "four"}.get(len(slowest))
     (missed,) = quoted("README.md", r"bounce out: (\d+) of the `test` layouts' items missed")
+    assert int(missed) == bench["failures"].get("missed_bin", 0)
     from cell.arm.tuning import TUNING
 
     rim, steep = quoted(
