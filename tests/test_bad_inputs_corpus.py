@@ -12,6 +12,7 @@ from cell.cli import main
 from cell.errors import CellError, JobError
 from cell.jobs import parse_job
 from cell.params import load_params
+from tests.cli_exit import cell_exit
 
 # one field per line, so a field's line is known: (line, yaml key path, text)
 JOB_LINES = [
@@ -221,10 +222,7 @@ def test_bad_command_lines_are_named(
     argv: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys
 ) -> None:
     monkeypatch.chdir(tmp_path)
-    try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own refusals (a choice list) exit 2 too
-        code = int(exc.code or 0)
+    code = cell_exit(argv)  # argparse's own refusals (a choice list) exit 2 too
     err = capsys.readouterr().err
     assert code == 2, err
     assert "error:" in err and "Traceback" not in err

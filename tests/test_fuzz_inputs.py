@@ -232,7 +232,7 @@ def _refused_cleanly(argv: list[str], d: Path, named: str) -> None:
     import os
     import signal
 
-    from cell.cli import main
+    from tests.cli_exit import cell_exit
 
     before = _digest(d)
     err = io.StringIO()
@@ -246,10 +246,7 @@ def _refused_cleanly(argv: list[str], d: Path, named: str) -> None:
     os.chdir(d)
     try:
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            try:
-                code = main(argv)
-            except SystemExit as exc:
-                code = int(exc.code or 0)
+            code = cell_exit(argv)
     finally:
         os.chdir(cwd)
         signal.alarm(0)

@@ -13,10 +13,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.cli import main
 from cell.errors import InvalidInput
 from cell.jobs import ORDERS, parse_job
 from cell.orchestrator import Orchestrator
+from tests.cli_exit import cell_exit
 
 JOB = """\
 cell: {robot: panda}
@@ -101,14 +101,9 @@ def test_an_unknown_order_is_refused_with_the_valid_ones():
 
 
 def _cell(argv, capsys):
-    """`cell argv` in this process, through the parser and the error handling `python -m
-    cell` runs (`cell.__main__` is `sys.exit(main())`; an exception main does not turn into
-    a message fails the test): (exit code, stderr)."""
+    """`cell argv` in this process (`tests.cli_exit`): (exit status, stderr)."""
     capsys.readouterr()
-    try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own refusals
-        code = exc.code
+    code = cell_exit(argv)
     return code, capsys.readouterr().err
 
 

@@ -165,16 +165,14 @@ def test_a_wrong_mount_file_is_refused_by_name(
 def test_a_wrong_mount_in_a_job_is_a_named_error_on_the_command_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from cell.cli import main
+    from tests.cli_exit import cell_exit
 
     _copy_mount(tmp_path, edit=lambda s: s.replace("flange: tool0", "flange: tool9"))
     job = tmp_path / "job.yaml"
     job.write_text(_job_on("ur3").replace("robot: ur3", "mount: my_arm/mount.yaml"))
     monkeypatch.chdir(tmp_path)
     capsys.readouterr()
-    # in this process, through the parser and the error handling `python -m cell` runs
-    # (`sys.exit(main())`; an exception main does not turn into a message fails the test)
-    code = main(["run", str(job), "--no-log"])
+    code = cell_exit(["run", str(job), "--no-log"])  # in this process, as `python -m cell`
     err = capsys.readouterr().err
     assert code == 2
     assert err.startswith("cell: error: ") and "Traceback" not in err

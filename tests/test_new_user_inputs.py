@@ -18,6 +18,7 @@ import pytest
 import cell
 from cell.cli import main
 from cell.cli.common import human, plural
+from tests.cli_exit import cell_exit
 
 ROOT = Path(cell.__file__).resolve().parents[1]
 SHIPPED_PARAMS = ROOT / "robots" / "cell_scene" / "ee_params.yaml"
@@ -73,9 +74,7 @@ def _refused(argv: list[str], named: str, capsys: pytest.CaptureFixture[str]) ->
     old = signal.signal(signal.SIGALRM, hung)
     signal.alarm(20)
     try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own refusals
-        code = int(exc.code or 0)
+        code = cell_exit(argv)
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, old)
