@@ -76,7 +76,7 @@ def _carry_item(
     its duration [s], the item's turn in the grip [deg]).
 
     `plan_only`: the carry planned and not run, for a test that reads only the plan (its
-    use and duration; the rest nan): the arm set at the pick as the approach leaves it
+    use and duration; held True, drift and turn nan, none of them read): the arm set at the pick as the approach leaves it
     (`Mover.follow` ends at the last waypoint's very array) and nothing grasped, since the
     release's IK (seeded from the arm), the hold and `plan_carry` read neither the scene
     nor the grip. The same use and duration to the bit as the carry run in the scene."""
