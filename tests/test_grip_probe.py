@@ -24,12 +24,15 @@ def test_the_scene_holds_a_box_as_the_grip_model_says(params, name):
     """Two independent figures of the same grip: the model's friction force (the band's
     closing force and μ) and its patch couple (PAD_COUPLE_FACTOR, fitted to boxes hanging
     in the pads), against the scene's pads pulled and twisted until the box slips.
-    Measured: force 1.04-1.08 of the model's, couple 0.89-1.07."""
+    Measured: force 1.04-1.08 of the model's, couple 0.89-1.07. The two loads of the
+    probe read (`probe_load`: `probe_grip`'s `pull_n` and `couple_nm`, the same ramps),
+    not its slide along the pads' faces, which nothing here reads."""
     obj = get_object(name)
     for stroke in (0.04, 0.07):
-        model, probe = carry_hold(params, obj, stroke), probe_grip(obj, stroke)
-        assert 0.95 < probe.pull_n / model.force_n < 1.15, (stroke, probe, model)
-        assert 0.8 < probe.couple_nm / model.torque_nm < 1.15, (stroke, probe, model)
+        model = carry_hold(params, obj, stroke)
+        pull, couple = probe_load(obj, stroke, "force", "z"), probe_load(obj, stroke, "torque", "x")
+        assert 0.95 < pull / model.force_n < 1.15, (stroke, pull, model)
+        assert 0.8 < couple / model.torque_nm < 1.15, (stroke, couple, model)
 
 
 def test_a_seated_mesh_is_held_as_the_scene_measures_it_when_placed_or_held_as_a_face(params):
@@ -121,10 +124,11 @@ def test_a_sphere_is_pulled_out_of_the_pads_at_the_wedge_s_force(params, diamete
     equator: pulled out along the throw axis, the pads hold f_g tan(atan μ − θ) each
     (cell.model.grip.grip_friction), not f_g (μ cos θ − sin θ), which the scene's pads
     beat by only 0.74-0.75 at 88 mm. Measured with this law: 0.90 (88 mm), 0.93 (70 mm);
-    a 50 mm sphere, within the pads, 1.05 as a box."""
+    a 50 mm sphere, within the pads, 1.05 as a box. The pull alone is probed
+    (`probe_load` along ee z: `probe_grip`'s `pull_n`, the same ramp)."""
     from cell.model.objects import ObjectParams
 
     ball = ObjectParams(shape="sphere", mass=0.1, size=(diameter_m,) * 3, name="ball")
     for stroke in (0.05, 0.08):
-        model, probe = carry_hold(params, ball, stroke), probe_grip(ball, stroke)
-        assert 0.85 < probe.pull_n / model.force_n < 1.15, (stroke, probe, model)
+        model, pull = carry_hold(params, ball, stroke), probe_load(ball, stroke, "force", "z")
+        assert 0.85 < pull / model.force_n < 1.15, (stroke, pull, model)
