@@ -35,6 +35,7 @@ __all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+BIN_WALL_M = 0.01  # [m] a bin's wall and floor plate in the scene (`cell.sim.bins.BinSpec.wall`)
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 # The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
 # listed, or bin by bin (the items all at hand, as in a tote).
@@ -212,6 +213,13 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
     rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", lo=0.0, hi=1.0, strict_lo=True)
+    if rim <= BIN_WALL_M:
+        raise c.fail(
+            b["rim_height_m"],
+            f"{fp}.rim_height_m",
+            f"{rim} m is not above the bin's floor plate, {BIN_WALL_M} m thick: give a rim "
+            f"higher than {BIN_WALL_M} m",
+        )
     near = math.hypot(*pos) - math.hypot(size[0] / 2, size[1] / 2)
     if near < ROBOT_BASE_CLEARANCE_M:
         raise c.fail(
