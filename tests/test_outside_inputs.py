@@ -5,13 +5,22 @@ up front, naming file, line or row, field and what would be valid."""
 
 from __future__ import annotations
 
+import csv
+import json
+from pathlib import Path
+
 import pytest
 
-from cell.errors import JobError
+from cell.errors import JobError, LogFormatError
 from cell.jobcell import BASE_SPEED_MAX_MPS
 from cell.jobs import BIN_WALL_M, parse_job
+from cell.log import read_throws_csv, read_tracks_csv, write_throws_csv
 from cell.platforms.mobile import BaseLimits
 from cell.sim.bins import BinSpec
+from cell.synth import Campaign, default_world, draw_campaign
+from tests.cli_exit import cell_exit
+
+ROOT = Path(__file__).resolve().parents[1]
 
 BINS = """\
 bins:
@@ -66,3 +75,110 @@ def test_a_base_speed_over_the_bases_limit_is_refused_with_its_line() -> None:
     assert str(BASE_SPEED_MAX_MPS) in msg
     job = parse_job(MOBILE.replace("SPEED", "1.5"), "mobile.yaml", check_reach=False)
     assert job.base_speed_mps == 1.5
+
+
+# -- throw logs and tracks written by hand ------------------------------------------------
+@pytest.fixture(scope="module")
+def log_csv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("outside") / "throws.csv"
+    write_throws_csv(draw_campaign(default_world(), Campaign(n=24), seed=5), path)
+    return path
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _write(rows: list[dict[str, str]], path: Path) -> Path:
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return path
+
+
+def _in_mm(rows: list[dict[str, str]], columns: tuple[str, ...]) -> list[dict[str, str]]:
+    return [{**r, **{c: repr(float(r[c]) * 1000.0) for c in columns if r[c]}} for r in rows]
+
+
+def test_landings_in_millimetres_are_refused_as_such(
+    log_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Landings under 1 m from the base written in millimetres were read as metres
+    (under the old ±1000 m range) and identified into a parameter file with a landing
+    RMSE of 540 m, no word of the units."""
+    rows = [
+        r
+        for r in _rows(log_csv)
+        if max(abs(float(r["landed_x_m"])), abs(float(r["landed_y_m"]))) < 1.0
+    ]
+    assert rows, "the campaign has no landing within 1 m of the base"
+    src = _write(_in_mm(rows, ("landed_x_m", "landed_y_m")), tmp_path / "mm.csv")
+    before = src.read_bytes()
+    out = tmp_path / "ee.yaml"
+    assert cell_exit(["identify", str(src), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    first = next(k for k, r in enumerate(rows, start=1) if abs(float(r["landed_x_m"])) * 1000 > 100)
+    assert f"mm.csv, row {first}, column 'landed_x_m'" in err
+    assert "millimetres" in err and "[-100, 100]" in err
+    assert not out.exists() and src.read_bytes() == before
+    # the same log in metres is read: the bound refuses the units, not the throws
+    read_throws_csv(_write(rows, tmp_path / "m.csv"))
+
+
+def test_a_release_height_in_millimetres_names_z_m_not_the_landing_plane(
+    log_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Every position in millimetres: `cell predict` blamed `land_z_m`, saying the plane
+    z = 0 lies above a flight released 736 m up (the model's flight ends after 30 s)."""
+    rows = _in_mm(_rows(log_csv), ("x_m", "y_m", "z_m", "landed_x_m", "landed_y_m"))
+    src = _write(rows, tmp_path / "all_mm.csv")
+    assert cell_exit(["predict", str(src), "-o", str(tmp_path / "p.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "row 1, column 'x_m'" in err or "row 1, column 'z_m'" in err
+    assert "millimetres" in err
+
+
+def test_tracks_in_millimetres_are_refused_with_row_and_column(
+    log_csv: Path, tmp_path: Path
+) -> None:
+    tracks = tmp_path / "tracks.csv"
+    tid = _rows(log_csv)[0]["throw_id"]
+    with open(tracks, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for k in range(10):
+            t = k / 60.0
+            w.writerow([tid, t, 1.0 * t, 0.0, 0.6 + 2.0 * t - 4.9 * t * t])  # metres
+        w.writerow([tid, 0.2, 200.0, 0.0, 700.0])  # one sample in millimetres
+    with pytest.raises(LogFormatError) as e:
+        read_tracks_csv(tracks)
+    assert "row 11, column 'x_m'" in str(e.value) and "millimetres" in str(e.value)
+    assert len(read_tracks_csv(_write_tracks_head(tracks, 10))[tid]) == 10
+
+
+def _write_tracks_head(path: Path, n: int) -> Path:
+    lines = path.read_text().splitlines()[: n + 1]
+    out = path.with_name("head.csv")
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+def test_tracks_the_diagnosis_sets_aside_are_said_in_its_table() -> None:
+    """Tracks of 2 samples each (or of throws not in the log) were set aside in the JSON
+    report only: the printed table said nothing, as if no tracks had been given."""
+    from cell.gap.report import format_table
+
+    # a report `cell gap` wrote (no tracks), given tracks the diagnosis set aside
+    report = json.loads((ROOT / "docs" / "scene_gap" / "nominal.json").read_text())
+    assert not any(ln.startswith("tracks ") for ln in format_table(report).splitlines())
+    report["tracks"] = {
+        "unusable": [{"throw_id": f"t{i}", "why": "too short: 2 samples"} for i in range(29)]
+        + [{"throw_id": "x", "why": "no throw with this id in the throw log"}],
+        "mended": [{"throw_id": "t0", "note": "samples not in time order (sorted)"}],
+    }
+    text = format_table(report)
+    line = next(ln for ln in text.splitlines() if ln.startswith("tracks "))
+    assert "30 set aside" in line and "too short: 2 samples (29)" in line
+    assert "no throw with this id in the throw log (1)" in line and "1 mended" in line
