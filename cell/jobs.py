@@ -181,7 +181,36 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
         ps = c.mapping(top["pick_station"], "pick_station", dict.fromkeys(PICK_KEYS, ""))
         if "position_m" in ps:
             pick = c.vector(ps["position_m"], "pick_station.position_m", 3)  # type: ignore[assignment]
+            if pick[2] < 0.0:
+                raise c.fail(
+                    ps["position_m"],
+                    "pick_station.position_m",
+                    f"the pick table's top at z = {pick[2]} m is under the floor (z = 0 in "
+                    "the world frame W, z up): give a height of at least 0",
+                )
     return pick
+
+
+def _items_fit(path: str, items: list[ItemSpec], bins: list[BinSpec]) -> list[str]:
+    """An error for each item narrower nowhere than its bin's opening: a box's (cylinder's,
+    sphere's) narrowest width is its smallest extent, and it cannot come to rest inside a
+    bin whose narrower side is less than that. Meshes are not checked (a mesh may be
+    narrower than its box's smallest extent)."""
+    by_id = {b.id: b for b in bins}
+    out = []
+    for it in items:
+        b = by_id.get(it.bin)
+        if b is None or it.obj.shape == "mesh":
+            continue
+        narrowest, opening = min(it.obj.size), min(b.size)
+        if narrowest > opening:
+            out.append(
+                f"{path}, line {it.line}: item {it.obj.name} to bin {b.id!r}: its narrowest "
+                f"extent, {narrowest * 1000:.0f} mm, is wider than the bin's opening, "
+                f"{opening * 1000:.0f} mm across: it cannot come to rest inside; widen the "
+                "bin or send the item to another bin"
+            )
+    return out
 
 
 def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> BinSpec:
@@ -468,6 +497,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         rotor_rpm=cell.rotor_rpm,
         base_speed_mps=cell.base_speed_mps,
     )
+    errors.messages += _items_fit(path, items, bins)
     reach_warnings: list[str] = []
     if cell.platform == "arm":
         from cell.jobcheck import job_problems

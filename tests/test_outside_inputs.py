@@ -182,3 +182,41 @@ def test_tracks_the_diagnosis_sets_aside_are_said_in_its_table() -> None:
     line = next(ln for ln in text.splitlines() if ln.startswith("tracks "))
     assert "30 set aside" in line and "too short: 2 samples (29)" in line
     assert "no throw with this id in the throw log (1)" in line and "1 mended" in line
+
+
+SLOTS = """\
+bins:
+  - {id: slot, position_m: [1.5, 0.0], size_m: [0.30, 0.03], rim_height_m: 0.15}
+  - {id: wide, position_m: [1.5, 0.8], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube50, bin: slot}
+  - {shape: cuboid, mass_kg: 0.05, size_m: [0.05, 0.06, 0.025], bin: slot}
+  - {object: rock_000, bin: slot}
+  - {object: cube50, bin: wide}
+"""
+
+
+def test_an_item_wider_everywhere_than_its_bins_opening_is_refused_with_its_line() -> None:
+    """A 50 mm cube sent to a bin 30 mm across was thrown (missed_bin) or, into a 20 mm
+    slot, carried until it `left the grip while carried`: a reason that hid the job's
+    mistake. The cuboid's narrowest side (25 mm) fits; a mesh is not judged by its box."""
+    with pytest.raises(JobError) as e:
+        parse_job(SLOTS, "slots.yaml", check_reach=False)
+    lines = [ln for ln in str(e.value).splitlines() if "slots.yaml, line" in ln]
+    assert len(lines) == 1, lines
+    assert "line 5: item cube50 to bin 'slot'" in lines[0]
+    assert "50 mm" in lines[0] and "30 mm across" in lines[0]
+    fits = SLOTS.replace("  - {object: cube50, bin: slot}\n", "")
+    job = parse_job(fits, "slots.yaml", check_reach=False)
+    assert [it.bin for it in job.items] == ["slot", "slot", "wide"]
+
+
+def test_a_pick_station_under_the_floor_is_refused_with_its_line() -> None:
+    """`pick_station: {position_m: [0.45, -0.4, -0.3]}` passed the parser and the arm's
+    reach check; the run then failed the item as `grasp_failed`."""
+    job = "pick_station: {position_m: [0.45, -0.40, Z]}\n" + BINS.replace("RIM", "0.15")
+    with pytest.raises(JobError) as e:
+        parse_job(job.replace("Z", "-0.3"), "low.yaml", check_reach=False)
+    assert "low.yaml, line 1, pick_station.position_m" in str(e.value)
+    assert "under the floor" in str(e.value)
+    assert parse_job(job.replace("Z", "0.0"), "low.yaml", check_reach=False).pick_position[2] == 0
