@@ -11,11 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from cell.errors import JobError, LogFormatError
+from cell.errors import InvalidParameter, JobError, LogFormatError
 from cell.jobcell import BASE_SPEED_MAX_MPS
 from cell.jobs import BIN_WALL_M, parse_job
 from cell.log import read_throws_csv, read_tracks_csv, write_throws_csv
 from cell.platforms.mobile import BaseLimits
+from cell.robot.mount import load_mount
 from cell.sim.bins import BinSpec
 from cell.synth import Campaign, default_world, draw_campaign
 from tests.cli_exit import cell_exit
@@ -220,3 +221,33 @@ def test_a_pick_station_under_the_floor_is_refused_with_its_line() -> None:
     assert "low.yaml, line 1, pick_station.position_m" in str(e.value)
     assert "under the floor" in str(e.value)
     assert parse_job(job.replace("Z", "0.0"), "low.yaml", check_reach=False).pick_position[2] == 0
+
+
+@pytest.mark.parametrize(
+    ("field", "slow", "least"),
+    [
+        ("acceleration_limits", "[0.0001, 0.0001, 0.0001, 0.0001, 0.0001, 0.0001]", "0.1"),
+        ("jerk_limits", "[0.5, 800.0, 800.0, 1200.0, 1200.0, 1200.0]", "1"),
+    ],
+)
+def test_an_arm_slower_than_any_cell_could_use_is_refused_by_field(
+    tmp_path: Path, field: str, slow: str, least: str
+) -> None:
+    """A UR5 mount file with accelerations and jerks of 1e-4 (valid: `positive`) made
+    `cell run` end in a traceback, `ValueError: -101 is not a valid Result` (ruckig's
+    duration error, which its Python binding cannot name)."""
+    text = (ROOT / "robots" / "ur5_throwing" / "mount.yaml").read_text()
+    lines = [
+        f"{field}: {slow}" if ln.startswith(f"{field}:") else ln.replace("arm: ur5", "arm: slow")
+        for ln in text.splitlines()
+    ]
+    path = tmp_path / "slow" / "mount.yaml"
+    path.parent.mkdir()
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InvalidParameter) as e:
+        load_mount(str(path))
+    assert str(e.value).startswith(f"{path.resolve()}: field '{field}' must be at least {least}")
+    at_least = [f"{field}: [{', '.join([least] * 6)}]" if ln.startswith(f"{field}:") else ln
+                for ln in lines]  # fmt: skip
+    path.write_text("\n".join(at_least) + "\n")
+    assert min(getattr(load_mount(str(path)), field)) == float(least)
