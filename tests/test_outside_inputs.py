@@ -251,3 +251,21 @@ def test_an_arm_slower_than_any_cell_could_use_is_refused_by_field(
                 for ln in lines]  # fmt: skip
     path.write_text("\n".join(at_least) + "\n")
     assert min(getattr(load_mount(str(path)), field)) == float(least)
+
+
+def test_an_item_resting_over_its_bin_above_the_rim_is_said_to_be_there() -> None:
+    """A placed 250 mm bar came to rest on a 250 mm rod standing in its bin, 7 mm from
+    the bin's centre and above its rim, and was reported as `came to rest outside every
+    bin`: true of the scoring, wrong about where it was."""
+    from cell.jobs import BinSpec as JobBin
+    from cell.results import missed_bin
+
+    near = JobBin("near", (0.55, 0.35), (0.30, 0.30), 0.12)
+    failure, why = missed_bin(None, "near", 0.007, rest_xyz=(0.555, 0.345, 0.27), target=near)
+    assert failure == "missed_bin"
+    assert "over bin 'near' but too high to be in it" in why and "0.270 m up" in why
+    # beside the bin, or with no rest point: as before
+    for rest in ((0.85, 0.35, 0.02), None):
+        _, why = missed_bin(None, "near", 0.3, rest_xyz=rest, target=near)
+        assert why == "came to rest outside every bin, not in 'near' (landing error 0.300 m)"
+    assert missed_bin("near", "near", 0.0, rest_xyz=(0.55, 0.35, 0.05), target=near) == ("", "")
