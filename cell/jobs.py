@@ -342,6 +342,21 @@ def _item_object(
     size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
     if max(size) > 0.25:
         raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
+    # the scene builds a sphere and a cylinder of diameter size_m[0] (cell.sim.items), the
+    # planner holds all three extents: they must say the same item
+    same = {"sphere": (0, 1, 2), "cylinder": (0, 1)}.get(shape, ())
+    if any(not math.isclose(size[k], size[0], rel_tol=1e-3) for k in same):
+        what = (
+            "a sphere's three extents are its diameter"
+            if shape == "sphere"
+            else "a cylinder's x and y extents are its diameter, z its length"
+        )
+        raise c.fail(
+            it["size_m"],
+            f"{fp}.size_m",
+            f"{list(size)} m: {what}; the scene would build a {shape} "
+            f"{size[0] * 1000:.0f} mm across and the planner hold another",
+        )
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
 
 

@@ -269,3 +269,36 @@ def test_an_item_resting_over_its_bin_above_the_rim_is_said_to_be_there() -> Non
         _, why = missed_bin(None, "near", 0.3, rest_xyz=rest, target=near)
         assert why == "came to rest outside every bin, not in 'near' (landing error 0.300 m)"
     assert missed_bin("near", "near", 0.0, rest_xyz=(0.55, 0.35, 0.05), target=near) == ("", "")
+
+
+def test_a_sphere_or_cylinder_whose_extents_disagree_is_refused_by_field() -> None:
+    """`{shape: sphere, size_m: [0.03, 0.06, 0.045]}` was accepted: the scene builds a
+    sphere of diameter size_m[0] (30 mm) while the planner holds a 60 x 45 mm item; a
+    cylinder 30 mm across x and 60 mm across y the same."""
+    job = """\
+bins:
+  - {id: far, position_m: [1.5, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}
+items:
+  - {shape: sphere, mass_kg: 0.05, size_m: [0.03, 0.06, 0.045], bin: far}
+  - {shape: cylinder, mass_kg: 0.05, size_m: [0.03, 0.06, 0.045], bin: far}
+  - {shape: cylinder, mass_kg: 0.05, size_m: [0.04, 0.04, 0.09], bin: far}
+  - {shape: cuboid, mass_kg: 0.05, size_m: [0.03, 0.06, 0.045], bin: far}
+"""
+    with pytest.raises(JobError) as e:
+        parse_job(job, "odd.yaml", check_reach=False)
+    lines = [ln for ln in str(e.value).splitlines() if ln.startswith("odd.yaml, line")]
+    assert [ln.split(":")[0] for ln in lines] == [
+        "odd.yaml, line 4, items[0].size_m",
+        "odd.yaml, line 5, items[1].size_m",
+    ]
+    assert "30 mm across" in lines[0]
+    good = job.replace(
+        "sphere, mass_kg: 0.05, size_m: [0.03, 0.06, 0.045]",
+        "sphere, mass_kg: 0.05, size_m: [0.03, 0.03, 0.03]",
+    )
+    good = good.replace(
+        "cylinder, mass_kg: 0.05, size_m: [0.03, 0.06, 0.045]",
+        "cylinder, mass_kg: 0.05, size_m: [0.03, 0.03, 0.045]",
+    )
+    sizes = [it.obj.size for it in parse_job(good, "odd.yaml", check_reach=False).items]
+    assert sizes[:2] == [(0.03, 0.03, 0.03), (0.03, 0.03, 0.045)]
