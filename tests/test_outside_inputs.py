@@ -302,3 +302,20 @@ items:
     )
     sizes = [it.obj.size for it in parse_job(good, "odd.yaml", check_reach=False).items]
     assert sizes[:2] == [(0.03, 0.03, 0.03), (0.03, 0.03, 0.045)]
+
+
+@pytest.mark.parametrize(("sep", "said"), [(";", "';'"), ("\t", "tabs")])
+def test_a_log_separated_otherwise_than_by_commas_is_said_to_be(
+    log_csv: Path, tmp_path: Path, sep: str, said: str
+) -> None:
+    """A log saved by a spreadsheet with ';' (or tabs) was refused as `column 'throw_id':
+    required column missing (all missing: <the 25 columns>)`, which hid the cause."""
+    src = tmp_path / "semi.csv"
+    src.write_text(log_csv.read_text().replace(",", sep))
+    with pytest.raises(LogFormatError) as e:
+        read_throws_csv(src)
+    assert f"one column separated by {said}, not commas" in str(e.value)
+    tracks = tmp_path / "tracks.csv"
+    tracks.write_text(sep.join(["throw_id", "t_s", "x_m", "y_m", "z_m"]) + "\n")
+    with pytest.raises(LogFormatError, match="the header is one column; a tracks file is comma"):
+        read_tracks_csv(tracks)

@@ -114,7 +114,18 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             header = reader.fieldnames or []
             for c in need:
                 if c not in header:
-                    raise LogFormatError(p, None, c, "required column missing")
+                    one = len(header) == 1 and any(sep in header[0] for sep in ";\t|")
+                    raise LogFormatError(
+                        p,
+                        None,
+                        c,
+                        "required column missing"
+                        + (
+                            ": the header is one column; a tracks file is comma-separated"
+                            if one
+                            else ""
+                        ),
+                    )
             out: dict[str, list[list[float]]] = {}
             for r, row in enumerate(reader, start=1):
                 vals = []

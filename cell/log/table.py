@@ -229,6 +229,16 @@ def _cell(v: Any) -> str:
 
 def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    seps = [sep for sep in (";", "\t", "|") if len(header) == 1 and sep in header[0]]
+    if missing and seps:
+        shown = {";": "';'", "\t": "tabs", "|": "'|'"}[seps[0]]
+        raise LogFormatError(
+            path,
+            None,
+            None,
+            f"the header is one column separated by {shown}, not commas: a throw log is "
+            "comma-separated, with '.' for the decimal point (docs/throw_log.md)",
+        )
     if missing:
         raise LogFormatError(
             path, None, missing[0], f"required column missing (all missing: {', '.join(missing)})"
