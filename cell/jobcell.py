@@ -12,7 +12,10 @@ from cell.jobschema import CELL_KEYS, DRONE_KEYS, MOBILE_KEYS
 from cell.kinds import EE_BACKENDS, PLATFORMS
 from cell.yamltree import Checker, Node
 
-__all__ = ["CellSpec", "cell_section"]
+__all__ = ["BASE_SPEED_MAX_MPS", "CellSpec", "cell_section"]
+
+# [m/s] the moving base's velocity limit (`cell.platforms.mobile.BaseLimits.velocity_mps`)
+BASE_SPEED_MAX_MPS = 1.5
 
 
 @dataclass(frozen=True)
@@ -42,7 +45,7 @@ def _platform(c: Checker, cell: dict[str, Node]) -> tuple[str, float, float, flo
     hover = _setting(c, drone, "cell.drone.hover_height_m", 2.0, 0.5, 10.0)
     rpm = _setting(c, drone, "cell.drone.rotor_rpm", 0.0, 0.0, 30000.0)
     mobile = _platform_section(c, cell, platform, "mobile", MOBILE_KEYS)
-    speed = _setting(c, mobile, "cell.mobile.speed_mps", 0.0, 0.0, 2.0)
+    speed = _setting(c, mobile, "cell.mobile.speed_mps", 0.0, 0.0, BASE_SPEED_MAX_MPS)
     return platform, hover, rpm, speed
 
 

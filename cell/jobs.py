@@ -35,6 +35,7 @@ __all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+BIN_WALL_M = 0.01  # [m] a bin's wall and floor plate in the scene (`cell.sim.bins.BinSpec.wall`)
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 # The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
 # listed, or bin by bin (the items all at hand, as in a tote).
@@ -180,7 +181,36 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
         ps = c.mapping(top["pick_station"], "pick_station", dict.fromkeys(PICK_KEYS, ""))
         if "position_m" in ps:
             pick = c.vector(ps["position_m"], "pick_station.position_m", 3)  # type: ignore[assignment]
+            if pick[2] < 0.0:
+                raise c.fail(
+                    ps["position_m"],
+                    "pick_station.position_m",
+                    f"the pick table's top at z = {pick[2]} m is under the floor (z = 0 in "
+                    "the world frame W, z up): give a height of at least 0",
+                )
     return pick
+
+
+def _items_fit(path: str, items: list[ItemSpec], bins: list[BinSpec]) -> list[str]:
+    """An error for each item narrower nowhere than its bin's opening: a box's (cylinder's,
+    sphere's) narrowest width is its smallest extent, and it cannot come to rest inside a
+    bin whose narrower side is less than that. Meshes are not checked (a mesh may be
+    narrower than its box's smallest extent)."""
+    by_id = {b.id: b for b in bins}
+    out = []
+    for it in items:
+        b = by_id.get(it.bin)
+        if b is None or it.obj.shape == "mesh":
+            continue
+        narrowest, opening = min(it.obj.size), min(b.size)
+        if narrowest > opening:
+            out.append(
+                f"{path}, line {it.line}: item {it.obj.name} to bin {b.id!r}: its narrowest "
+                f"extent, {narrowest * 1000:.0f} mm, is wider than the bin's opening, "
+                f"{opening * 1000:.0f} mm across: it cannot come to rest inside; widen the "
+                "bin or send the item to another bin"
+            )
+    return out
 
 
 def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> BinSpec:
@@ -212,6 +242,13 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
     rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", lo=0.0, hi=1.0, strict_lo=True)
+    if rim <= BIN_WALL_M:
+        raise c.fail(
+            b["rim_height_m"],
+            f"{fp}.rim_height_m",
+            f"{rim} m is not above the bin's floor plate, {BIN_WALL_M} m thick: give a rim "
+            f"higher than {BIN_WALL_M} m",
+        )
     near = math.hypot(*pos) - math.hypot(size[0] / 2, size[1] / 2)
     if near < ROBOT_BASE_CLEARANCE_M:
         raise c.fail(
@@ -305,6 +342,21 @@ def _item_object(
     size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
     if max(size) > 0.25:
         raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
+    # the scene builds a sphere and a cylinder of diameter size_m[0] (cell.sim.items), the
+    # planner holds all three extents: they must say the same item
+    same = {"sphere": (0, 1, 2), "cylinder": (0, 1)}.get(shape, ())
+    if any(not math.isclose(size[k], size[0], rel_tol=1e-3) for k in same):
+        what = (
+            "a sphere's three extents are its diameter"
+            if shape == "sphere"
+            else "a cylinder's x and y extents are its diameter, z its length"
+        )
+        raise c.fail(
+            it["size_m"],
+            f"{fp}.size_m",
+            f"{list(size)} m: {what}; the scene would build a {shape} "
+            f"{size[0] * 1000:.0f} mm across and the planner hold another",
+        )
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
 
 
@@ -460,6 +512,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         rotor_rpm=cell.rotor_rpm,
         base_speed_mps=cell.base_speed_mps,
     )
+    errors.messages += _items_fit(path, items, bins)
     reach_warnings: list[str] = []
     if cell.platform == "arm":
         from cell.jobcheck import job_problems

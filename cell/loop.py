@@ -95,7 +95,9 @@ def _scored(
     throw_id: str = "",
 ) -> ItemResult:
     """The result of a released item from where the plant says it came to rest."""
-    failure, reason = missed_bin(out.bin_id, target.id, err)
+    failure, reason = missed_bin(
+        out.bin_id, target.id, err, rest_xyz=getattr(out, "rest_xyz", None), target=target
+    )
     return ItemResult(
         **base,
         action=action,

@@ -308,11 +308,31 @@ def landing(out: Any, rim_z: float) -> tuple[tuple[float, float, float], float]:
         return (float(x), float(y), float(out.t_touchdown)), float(z)
 
 
-def missed_bin(bin_id: str | None, target_id: str, landing_error_m: float) -> tuple[str, str]:
-    """(failure, reason) of a released item; both empty when it rests in its bin."""
+def missed_bin(
+    bin_id: str | None,
+    target_id: str,
+    landing_error_m: float,
+    *,
+    rest_xyz: Sequence[float] | None = None,
+    target: Any = None,
+) -> tuple[str, str]:
+    """(failure, reason) of a released item; both empty when it rests in its bin.
+
+    With `rest_xyz` (where it came to rest [m, W]) and `target` (the job's bin: `position`,
+    `size`, `rim_height`), an item at rest over the target's footprint but too high to be
+    in it (on another item, on a wall) is said to be there, not "outside every bin".
+    """
     if bin_id == target_id:
         return "", ""
     where = f"in bin {bin_id!r}" if bin_id else "outside every bin"
+    if not bin_id and rest_xyz is not None and target is not None:
+        x, y, z = (float(v) for v in rest_xyz[:3])
+        (cx, cy), (sx, sy) = target.position, target.size
+        if abs(x - cx) <= sx / 2 and abs(y - cy) <= sy / 2:
+            where = (
+                f"over bin {target_id!r} but too high to be in it (its centre {z:.3f} m up, "
+                f"the rim {target.rim_height:.3f} m: on another item or on a wall)"
+            )
     return (
         "missed_bin",
         f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",

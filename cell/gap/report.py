@@ -48,12 +48,33 @@ def _fmt_params(p: dict[str, float]) -> str:
     return " ".join(f"{k}={v:.4g}" for k, v in p.items())
 
 
+def _tracks_set_aside(tracks: dict[str, Any]) -> list[str]:
+    """The table's line on the tracks given that the diagnosis could not use or mended
+    (none: no line), each reason with how many tracks it covers, the commonest first."""
+    bad, mended = tracks.get("unusable", []), tracks.get("mended", [])
+    if not bad and not mended:
+        return []
+    parts = []
+    if bad:
+        why: dict[str, int] = {}
+        for b in bad:
+            why[b["why"]] = why.get(b["why"], 0) + 1
+        top = sorted(why.items(), key=lambda kv: -kv[1])
+        shown = "; ".join(f"{w} ({n})" for w, n in top[:3])
+        more = f"; {len(top) - 3} other reasons" if len(top) > 3 else ""
+        parts.append(f"{len(bad)} set aside, unused: {shown}{more}")
+    if mended:
+        parts.append(f"{len(mended)} mended (the JSON report's tracks.mended)")
+    return [f"tracks           {', '.join(parts)}"]
+
+
 def format_table(report: dict[str, Any]) -> str:
     """The report as a terminal table."""
     r = report
     lines = []
     other = r.get("other_launcher_throws", 0)
     lines.append(f"throws           {r['throws']} ({other} from another launcher, from tracks)")
+    lines.extend(_tracks_set_aside(r.get("tracks") or {}))
     nz = r.get("noise", {})
     val = nz.get("validated_m")
     with_val = val is not None and np.isfinite(val) and nz.get("validated_share", 0) > 0

@@ -17,8 +17,10 @@ from cell.infile import check_input_file
 from cell.log.table import (
     NUMERIC_COLUMNS,
     PLATFORMS,
+    RANGES,
     REQUIRED_COLUMNS,
     ThrowTable,
+    millimetres_hint,
     parse_cells,
 )
 
@@ -101,7 +103,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
 
     Raises:
         LogFormatError: a missing column, a non-numeric cell, a time (or, without
-            `keep_lost`, a position) that is not a finite number.
+            `keep_lost`, a position) that is not a finite number, a position beyond the
+            throw log's range (`RANGES`: ±100 m).
     """
     p = _readable(path)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
@@ -111,7 +114,18 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             header = reader.fieldnames or []
             for c in need:
                 if c not in header:
-                    raise LogFormatError(p, None, c, "required column missing")
+                    one = len(header) == 1 and any(sep in header[0] for sep in ";\t|")
+                    raise LogFormatError(
+                        p,
+                        None,
+                        c,
+                        "required column missing"
+                        + (
+                            ": the header is one column; a tracks file is comma-separated"
+                            if one
+                            else ""
+                        ),
+                    )
             out: dict[str, list[list[float]]] = {}
             for r, row in enumerate(reader, start=1):
                 vals = []
@@ -126,6 +140,15 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
                     if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
+                    lo, hi = RANGES["x_m"]  # a tracked position: as the log's positions
+                    if c != "t_s" and math.isfinite(vals[-1]) and not lo <= vals[-1] <= hi:
+                        raise LogFormatError(
+                            p,
+                            r,
+                            c,
+                            f"{vals[-1]} is outside the valid range [{lo:g}, {hi:g}]"
+                            + millimetres_hint(vals[-1]),
+                        )
                 out.setdefault(row["throw_id"], []).append(vals)
     except (UnicodeDecodeError, csv.Error) as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None

@@ -27,9 +27,11 @@ __all__ = [
     "NUMERIC_COLUMNS",
     "OPTIONAL_NUMERIC",
     "PLATFORMS",
+    "POSITION_COLUMNS",
     "RANGES",
     "REQUIRED_COLUMNS",
     "ThrowTable",
+    "millimetres_hint",
     "parse_cells",
 ]
 
@@ -62,7 +64,10 @@ NUMERIC_COLUMNS = (
 # Columns whose cells may be empty (read as NaN).
 NULLABLE = ("stroke_m", "landed_x_m", "landed_y_m") + OPTIONAL_NUMERIC
 NONNEGATIVE = ("mass_kg", "size_x_m", "size_y_m", "size_z_m", "rotor_rpm")
-_POS_M = 1000.0  # [m] no position of a cell's throw is farther than this from the base
+# [m] no position of a cell's throw is farther than this from the base: a release, a landing
+# plane or a landing point in millimetres mostly lies beyond it (a 0.1 m landing is 100 mm)
+_POS_M = 100.0
+POSITION_COLUMNS = ("x_m", "y_m", "z_m", "land_z_m", "landed_x_m", "landed_y_m")
 _VEL_MPS = 100.0  # [m/s] nor any base or release speed faster
 # Column -> (low, high): what a throw of a real cell can have; wider than any real throw and
 # narrower than nonsense (a 10 rad elevation, a 5 m grip width, a 1e308 kg mass).
@@ -76,7 +81,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "azimuth_rad": (-2 * math.pi, 2 * math.pi),
     "roll_rad": (-2 * math.pi, 2 * math.pi),
     "rotor_rpm": (0.0, 100_000.0),
-    **{c: (-_POS_M, _POS_M) for c in ("x_m", "y_m", "z_m", "land_z_m", "landed_x_m", "landed_y_m")},
+    **{c: (-_POS_M, _POS_M) for c in POSITION_COLUMNS},
     **{c: (-_VEL_MPS, _VEL_MPS) for c in ("vx_mps", "vy_mps", "vz_mps")},
 }
 
@@ -200,6 +205,17 @@ class ThrowTable:
         return parse_cells(header, rows, path)
 
 
+def millimetres_hint(v: float) -> str:
+    """What to say of a position `v` [m] beyond `_POS_M`: a value that would fit in metres
+    read as millimetres is most likely in millimetres ("" otherwise)."""
+    if abs(v) > _POS_M and abs(v) / 1000.0 <= _POS_M:
+        return (
+            f"; positions are in metres, world frame W (z up, the floor at z = 0): "
+            f"is it {v / 1000.0:g} m written in millimetres?"
+        )
+    return ""
+
+
 def _cell(v: Any) -> str:
     if v is None:
         return ""
@@ -213,6 +229,16 @@ def _cell(v: Any) -> str:
 
 def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    seps = [sep for sep in (";", "\t", "|") if len(header) == 1 and sep in header[0]]
+    if missing and seps:
+        shown = {";": "';'", "\t": "tabs", "|": "'|'"}[seps[0]]
+        raise LogFormatError(
+            path,
+            None,
+            None,
+            f"the header is one column separated by {shown}, not commas: a throw log is "
+            "comma-separated, with '.' for the decimal point (docs/throw_log.md)",
+        )
     if missing:
         raise LogFormatError(
             path, None, missing[0], f"required column missing (all missing: {', '.join(missing)})"
@@ -249,7 +275,11 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
                 lo, hi = RANGES.get(c, (-math.inf, math.inf))
                 if not lo <= v <= hi:
                     raise LogFormatError(
-                        path, r, c, f"{v} is outside the valid range [{lo:g}, {hi:g}]"
+                        path,
+                        r,
+                        c,
+                        f"{v} is outside the valid range [{lo:g}, {hi:g}]"
+                        + (millimetres_hint(v) if c in POSITION_COLUMNS else ""),
                     )
                 arr[r - 1] = v
             data[c] = arr

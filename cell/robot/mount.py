@@ -52,6 +52,10 @@ _NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
 _MOVABLE = ("revolute", "continuous", "prismatic")
 MAX_ACCELERATION = 1000.0  # [rad/s²] beyond any arm's motors: a typo (1e300)
 MAX_JERK = 1.0e6  # [rad/s³]
+# [rad/s²], [rad/s³] slower than any arm a cell could use: at 0.01 and 0.01 a UR5 took 58 s
+# an item; at 1e-4 ruckig refused the moves (an error code its Python binding cannot name)
+MIN_ACCELERATION = 0.1
+MIN_JERK = 1.0
 
 
 @dataclass(frozen=True)
@@ -191,6 +195,12 @@ def _per_joint(raw: dict[str, Any], key: str, n: int, path: Path) -> tuple[float
     top = {"acceleration_limits": MAX_ACCELERATION, "jerk_limits": MAX_JERK}.get(key)
     if top is not None and not all(0.0 < x <= top for x in vals):
         raise InvalidParameter(f"{path}: field '{key}' must be positive and ≤ {top:g}, got {v!r}")
+    low = {"acceleration_limits": MIN_ACCELERATION, "jerk_limits": MIN_JERK}.get(key)
+    if low is not None and not all(x >= low for x in vals):
+        raise InvalidParameter(
+            f"{path}: field '{key}' must be at least {low:g} per joint (slower than any arm "
+            f"a cell could use: its moves would take minutes or fail), got {v!r}"
+        )
     return vals
 
 
