@@ -36,6 +36,12 @@ def check_the_arms_page() -> None:
     assert float(acc) == mount.MAX_ACCELERATION
     (ten,) = quoted(page, r"\| one per joint, positive, at most (10)⁶ \|")
     assert float(ten) ** 6 == mount.MAX_JERK
+    slow_acc, slow_jerk = quoted(
+        page,
+        r"An acceleration limit under `MIN_ACCELERATION` \(([\d.]+) rad/s²\) or a jerk limit "
+        r"under `MIN_JERK` \(([\d.]+) rad/s³\) is refused",
+    )
+    assert (float(slow_acc), float(slow_jerk)) == (mount.MIN_ACCELERATION, mount.MIN_JERK)
     lo, hi, default = quoted(page, r"\| from (\d+) to (\d+) \(default (\d+), all around\) \|")
     facing = mount._facing
     where = Path("mount.yaml")
@@ -91,6 +97,11 @@ def check_the_ur3_reach() -> None:
     close(out, station, 2)
     assert reach == said
     page = "docs/jobs.md"
+    from cell.jobs import BIN_WALL_M
+    from cell.sim.bins import BinSpec
+
+    (plate,) = quoted(page, r"above the bin's ([\d.]+) m floor plate")
+    assert float(plate) == BIN_WALL_M == BinSpec.__dataclass_fields__["wall"].default
     (block,) = quoted(page, r"under the pick station's ([\d.]+) m block")
     close(block, 2 * STATION_HALF_M, 2)
     out, reach = quoted(page, r"its station, ([\d.]+) m out, is beyond the ([\d.]+) m the UR3's")

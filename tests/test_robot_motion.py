@@ -127,6 +127,21 @@ def test_ruckig_move_that_would_overshoot_a_joint_limit_raises():
         plan_move(q0, dq0, q1, None, robot)
 
 
+def test_a_move_too_slow_for_ruckig_to_time_is_a_trajectory_error_not_a_traceback():
+    """At a billionth of the UR5's acceleration and jerk limits a one-radian move would
+    last about 22,000 s (the time grows as the limits' inverse square root: 7,071 s at
+    1e-8, measured); ruckig answers a code its binding cannot name, which surfaced as a
+    ValueError from the enum: it is a TrajectoryError like ruckig's other refusals."""
+    robot = load_robot("ur5")
+    q0 = robot.home.copy()
+    q1 = q0.copy()
+    q1[0] += 1.0
+    slow = plan_move(q0, None, q1, None, robot, acceleration_scale=1e-8, jerk_scale=1e-8)
+    assert slow.duration == pytest.approx(7071.0, rel=1e-3)
+    with pytest.raises(TrajectoryError, match="ruckig found no trajectory"):
+        plan_move(q0, None, q1, None, robot, acceleration_scale=1e-9, jerk_scale=1e-9)
+
+
 def test_where_the_cubic_spline_leaves_the_limits_the_path_keeps_within_them():
     robot = load_robot("panda")
     up = robot.limits.upper[0]

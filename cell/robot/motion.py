@@ -158,6 +158,13 @@ def _ruckig(
         result = Ruckig(n).calculate(inp, raw)
     except RuntimeError as exc:
         raise TrajectoryError(f"ruckig rejected the move: {exc}") from None
+    except ValueError as exc:
+        # a result code ruckig's Python binding cannot name (its enum lacks -101, the
+        # duration beyond ruckig's numerical range: limits far too slow for the move)
+        raise TrajectoryError(
+            f"ruckig found no trajectory ({exc}; a move longer than ruckig can time, "
+            "from limits far too slow for it?)"
+        ) from None
     if result != Result.Working and result != Result.Finished:
         raise TrajectoryError(f"ruckig found no trajectory (result {result})")
     traj = RuckigTrajectory(raw, n)
