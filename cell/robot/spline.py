@@ -30,44 +30,9 @@ def spline_path(
     waypoints: the spline keeps close to it, so within the limits unless a waypoint lies
     on one. Without limits, or when none stays within them, the spline through the
     waypoints."""
-    way = np.array(waypoints_q, float)
-    key = _path_key(way, lower, upper)
-    found = _PATHS.get(key)
-    if found is None:
-        if len(_PATHS) >= _PATHS_MAX:
-            _PATHS.clear()
-        found = _spline_path(way, lower, upper)
-        _PATHS[key] = found
-    return found
-
-
-# The paths made so far, by every bit of their inputs (`_path_key`): a decision asks again
-# for the spline through waypoints an earlier one asked for (a carry timed again at another
-# scale, a route checked again), and the same waypoints and limits are the same spline
-# (scipy's `CubicSpline`, deterministic). Every caller gets the same object: nothing in the
-# cell or in toppra writes into a path. Bounded: cleared when full.
-_PATHS: dict[tuple[Any, ...], Any] = {}
-_PATHS_MAX = 512
-
-
-def _path_key(way: np.ndarray, lower: Any, upper: Any) -> tuple[Any, ...]:
-    """`spline_path`'s inputs as a key: the waypoints [rad] (float64, their shape and
-    bytes) and each limit's shape and bytes as float64 (None where not given), the values
-    `_within` compares with (it subtracts a float from each limit)."""
-
-    def limit(x: Any) -> tuple[Any, ...] | None:
-        if x is None:
-            return None
-        a = np.asarray(x, float)
-        return (a.shape, a.tobytes())
-
-    return (way.shape, way.tobytes(), limit(lower), limit(upper))
-
-
-def _spline_path(way: np.ndarray, lower: Any, upper: Any) -> Any:
-    """`spline_path` made afresh through the waypoints `way` (float64, shape (k, dof))."""
     import toppra as ta
 
+    way = np.array(waypoints_q, float)
     seg = np.linalg.norm(np.diff(way, axis=0), axis=1)
     ss = np.concatenate([[0.0], np.cumsum(seg)])
     ss /= ss[-1]
