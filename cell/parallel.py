@@ -41,12 +41,13 @@ import logging
 import os
 import socket
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any, TypeVar
 
 from cell.errors import CellError, InvalidInput, MissingDependency
 
-__all__ = ["run_campaign", "add_campaign_args", "CampaignFailed"]
+__all__ = ["run_campaign", "add_campaign_args", "CampaignFailed", "one_blas_thread"]
 
 U = TypeVar("U")
 R = TypeVar("R")
@@ -56,6 +57,23 @@ _REPR_MAX = 160  # characters of a unit's repr in a message
 
 class CampaignFailed(CellError, RuntimeError):
     """A unit of a campaign failed on its worker (after Ray's retry for a dead worker)."""
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Numpy's and scipy's BLAS on one thread within (each library's count given back after).
+
+    The cell's linear algebra is small (toppra's spline through three waypoints solves a
+    3 x 3 system with `scipy.linalg.solve`): OpenBLAS waking a second thread for it cost
+    about 8 ms of CPU where one thread takes 0.1 ms, and one thread gives the same sums in
+    every process, serially or on a Ray worker (OMP_NUM_THREADS=1 there). scipy's own
+    OpenBLAS is loaded first: threadpoolctl limits only the libraries already loaded, and a
+    job loads scipy's only when it first plans."""
+    import scipy.linalg  # noqa: F401 - loaded to be limited with numpy's
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        yield
 
 
 def add_campaign_args(p: Any) -> None:

@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 import cell.cli.cmd_run as cmd_run
@@ -30,19 +31,23 @@ def test_the_run_works_on_one_blas_thread_and_gives_the_threads_back(monkeypatch
     assert len(seen) == 1 and set(seen[0].values()) == {1}
 
 
-def test_the_libraries_the_job_loads_later_are_on_one_thread_too():
+@pytest.mark.parametrize(
+    "module, entry",
+    [("cell.cli.cmd_run", "run"), ("cell.bench.bench_sort", "run_layout")],
+)
+def test_the_libraries_the_job_loads_later_are_on_one_thread_too(module, entry):
     # a fresh process, its OpenBLAS libraries started on two threads: the job loads
     # scipy's (toppra's splines) only once it plans, after `run` began
     code = (
-        "import cell.cli.cmd_run as m\n"
+        f"import {module} as m\n"
         "from threadpoolctl import threadpool_info\n"
         "def probe(args):\n"
         "    import toppra  # noqa: F401\n"
         "    print(sorted((i['filepath'], i['num_threads']) for i in threadpool_info()\n"
         "                 if i['user_api'] == 'blas'))\n"
         "    return 0\n"
-        "m._run = probe\n"
-        "m.run(None)\n"
+        f"m._{entry} = probe\n"
+        f"m.{entry}(None)\n"
     )
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     env["OPENBLAS_NUM_THREADS"] = "2"

@@ -152,11 +152,12 @@ def run_layout(unit: LayoutUnit) -> dict[str, Any]:
         as one direct move each}, ...]}.
     """
 
-    from threadpoolctl import threadpool_limits
+    from cell.parallel import one_blas_thread
 
     # One BLAS thread, as on a Ray worker (OMP_NUM_THREADS=1): the same floating-point
-    # sums everywhere, so a layout gives the same result serially and on any worker.
-    with threadpool_limits(limits=1):
+    # sums everywhere, so a layout gives the same result serially and on any worker; scipy's
+    # OpenBLAS too, which the first layout of a process would otherwise load after the limit.
+    with one_blas_thread():
         return _run_layout(unit)
 
 

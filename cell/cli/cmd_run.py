@@ -185,17 +185,12 @@ def _runner(
 
 
 def run(args: argparse.Namespace) -> int:
-    """`cell run`, on one BLAS thread, as `cell bench sort` runs each layout
-    (cell/bench/bench_sort.py): toppra's spline through three waypoints makes a 3 x 3
-    `scipy.linalg.solve`, for which OpenBLAS woke its second thread, 8 ms of CPU where one
-    thread takes 0.1 ms; the demo's run.json is the same on one thread as on two but for
-    its wall-clock fields. scipy's own OpenBLAS is loaded first (`scipy.linalg`): a
-    library loaded after the limit is set keeps its threads, and the job loads scipy's only
-    when it first plans."""
-    import scipy.linalg  # noqa: F401 - loaded to be limited with numpy's
-    from threadpoolctl import threadpool_limits
+    """`cell run`, on one BLAS thread (`cell.parallel.one_blas_thread`), as `cell bench
+    sort` runs each layout: the demo's run.json is the same on one thread as on two but for
+    its wall-clock fields."""
+    from cell.parallel import one_blas_thread
 
-    with threadpool_limits(limits=1):
+    with one_blas_thread():
         return _run(args)
 
 
