@@ -1,5 +1,6 @@
-"""`cell learn`'s fits: each learner refitted only when it beats the null candidates, as
-GridSearchCV refits its choice."""
+"""`cell learn`'s fits in joblib's processes give the serial run's table and model to the
+bit: the round-robin's units and the saved learner's fit, started longest first beside
+each other, and each learner refitted only when it beats the null candidates."""
 
 from __future__ import annotations
 
@@ -8,8 +9,16 @@ import pytest
 
 from cell.model import DEFAULT_EE
 from cell.residual.campaign import shape_stretch_hook
+from cell.residual.evaluate import (
+    FitUnit,
+    SaveUnit,
+    round_robin,
+    round_robin_and_save,
+    round_robin_folds,
+    unit_cost,
+)
 from cell.residual.learners import fit_learner, make_pipeline
-from cell.residual.model import training_data
+from cell.residual.model import train_residual, training_data
 from cell.synth import Campaign, NoiseModel, World, draw_campaign
 
 NOISE = NoiseModel(along_rel=0.005, across_rel=0.0025, floor_m=0.003)
@@ -20,6 +29,37 @@ def data():
     world = World(ee=DEFAULT_EE, noise=NOISE, predict=shape_stretch_hook(0.1))
     return training_data(
         draw_campaign(world, Campaign(n=140, stroke_m=(0.04, 0.10)), seed=4), DEFAULT_EE
+    )
+
+
+def test_the_pool_gives_the_serial_table_and_saved_model(data):
+    """Two at a time in joblib's processes, started in `unit_cost`'s order (not the
+    units'), against one after the other in this process: every fold's model, the table
+    and the saved learner (the seeded forest: a seed not handed on would change it)."""
+    learners = ("svr", "rf")
+    serial = round_robin(data, learners=learners, grid="small", seed=3)
+    saved_serial = train_residual(data, learner="rf", grid="small", seed=3)
+    pooled, saved = round_robin_and_save(
+        data, save="rf", learners=learners, grid="small", seed=3, jobs=2
+    )
+    # the order the pool starts them in is not the units' (or this checks no reordering)
+    folds = round_robin_folds(sorted(set(data.groups[data.usable])), seed=3)
+    units = [FitUnit(data, n, f, "small", 3) for n in learners for f in folds]
+    costs = [unit_cost(u) for u in [*units, SaveUnit(data, "rf", "small", 3)]]
+    assert sorted(range(len(costs)), key=lambda i: -costs[i]) != list(range(len(costs)))
+    probe = data.features[data.usable]
+    for name in learners:
+        assert serial[name].as_dict() == pooled[name].as_dict()
+        for a, b in zip(serial[name].folds, pooled[name].folds, strict=True):
+            assert a.fold == b.fold
+            np.testing.assert_array_equal(
+                a.model.predict_features(probe), b.model.predict_features(probe)
+            )
+    assert "null" not in saved.best_params  # the forest itself, not a constant
+    assert saved.best_params == saved_serial.best_params
+    assert saved.training_objects == saved_serial.training_objects
+    np.testing.assert_array_equal(
+        saved.predict_features(probe), saved_serial.predict_features(probe)
     )
 
 
