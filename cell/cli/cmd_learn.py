@@ -152,9 +152,11 @@ def run(args: argparse.Namespace) -> int:
 
 @contextmanager
 def _one_fit_per_core(args: argparse.Namespace) -> Iterator[None]:
-    """In this process (no Ray): each grid search fits its candidates one per core of
-    the machine (joblib's processes; every fit is seeded, so the same table and model
-    as one at a time). On Ray (`--workers` > 1 or an address) each unit fits alone."""
+    """In this process (no Ray), a grid search run here (the saved learner's, with
+    `--compare ""`) fits its candidates one per core of the machine (joblib's processes;
+    every fit is seeded, so the same model as one at a time); the round-robin's units run
+    whole one per core (`round_robin_and_save`). On Ray (`--workers` > 1 or an address)
+    each unit fits alone."""
     import os
 
     from joblib import parallel_config
@@ -167,35 +169,35 @@ def _one_fit_per_core(args: argparse.Namespace) -> Iterator[None]:
 def _fit(
     args: argparse.Namespace, data: Any, compare: tuple[str, ...]
 ) -> tuple[dict[str, Any], Any]:
-    """The round-robin table (when --compare names learners) and the learner to save."""
+    """The round-robin table (when --compare names learners) and the learner to save,
+    its fit one more unit of the round-robin's (beside them, not after them)."""
     from tqdm import tqdm
 
-    from cell.residual.evaluate import round_robin, round_robin_folds
+    from cell.residual.evaluate import round_robin_and_save, round_robin_folds
     from cell.residual.model import train_residual
 
-    summary: dict[str, Any] = {}
-    if compare:
-        ids = sorted(set(data.groups[data.usable].tolist()))
-        n_fits = len(compare) * len(round_robin_folds(ids, hold_out=args.hold_out, seed=args.seed))
-        with tqdm(total=n_fits, desc="round-robin", disable=json_to_stdout(args) or None) as bar:
+    if not compare:
+        return {}, train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
+    ids = sorted(set(data.groups[data.usable].tolist()))
+    n_fits = len(compare) * len(round_robin_folds(ids, hold_out=args.hold_out, seed=args.seed))
+    with tqdm(total=n_fits + 1, desc="round-robin", disable=json_to_stdout(args) or None) as bar:
 
-            def step(text: str) -> None:
-                bar.set_postfix_str(text, refresh=False)
-                bar.update()
+        def step(text: str) -> None:
+            bar.set_postfix_str(text, refresh=False)
+            bar.update()
 
-            summary = round_robin(
-                data,
-                learners=compare,
-                hold_out=args.hold_out,
-                grid=args.grid,
-                seed=args.seed,
-                progress=step,
-                workers=args.workers,
-                address=args.ray_address,
-                jobs=os.cpu_count() or 1,  # in this process: whole fits one per core
-            )
-    model = train_residual(data, learner=args.learner, grid=args.grid, seed=args.seed)
-    return summary, model
+        return round_robin_and_save(
+            data,
+            save=args.learner,
+            learners=compare,
+            hold_out=args.hold_out,
+            grid=args.grid,
+            seed=args.seed,
+            progress=step,
+            workers=args.workers,
+            address=args.ray_address,
+            jobs=os.cpu_count() or 1,  # in this process: whole fits one per core
+        )
 
 
 def _print(

@@ -34,7 +34,10 @@ __all__ = [
     "round_robin",
     "residual_landing",
     "FitUnit",
+    "SaveUnit",
     "fit_fold",
+    "fit_saved",
+    "round_robin_and_save",
 ]
 
 log = logging.getLogger(__name__)
@@ -204,6 +207,56 @@ class FitUnit:
     predict: Callable[[ThrowBatch], Landing] | None = None
 
 
+@dataclass(frozen=True)
+class SaveUnit:
+    """The learner `cell learn` saves, tuned and fitted on every usable throw, as one more
+    unit of the round-robin's campaign (it does not depend on the round-robin's results).
+
+    Attributes:
+        data: the training data.
+        learner: learner name.
+        grid: "small", "medium" or "full".
+        seed: the learner's random state.
+    """
+
+    data: TrainingData
+    learner: str
+    grid: str
+    seed: int
+
+
+def fit_saved(unit: SaveUnit) -> ResidualModel:
+    """`train_residual` on every usable throw of the unit's data."""
+    return train_residual(unit.data, learner=unit.learner, grid=unit.grid, seed=unit.seed)
+
+
+def _fit_unit(unit: FitUnit | SaveUnit) -> Any:
+    return fit_saved(unit) if isinstance(unit, SaveUnit) else fit_fold(unit)
+
+
+# CPU seconds of one grid candidate (its fits on the inner folds) by learner, on 711
+# training throws: the round-robin's units of `cell synth --seed 0` (865 throws, --grid
+# medium; rf 7.9, mlp 4.7, svr 3.5 CPU-s a unit of 4, 2 and 24 candidates, in joblib's
+# processes, one per core). Only the order the units start in reads them.
+CANDIDATE_CPU_S = {"rf": 1.97, "mlp": 2.34, "svr": 0.147}
+CANDIDATE_CPU_ROWS = 711
+CANDIDATE_CPU_POWER = {"rf": 1.0, "mlp": 1.0, "svr": 2.0}  # the SVR's kernel: rows squared
+
+
+def unit_cost(unit: FitUnit | SaveUnit) -> float:
+    """A unit's estimated CPU time [s]: its grid's candidates, each CANDIDATE_CPU_S
+    scaled by the usable throws the unit trains on (not by any time measured in the run)."""
+    from cell.residual.learners import GRIDS
+
+    data = unit.data
+    rows = data.usable
+    if isinstance(unit, FitUnit):
+        rows = rows & ~np.isin(data.groups, unit.fold.held_out)
+    n_candidates = int(np.prod([len(v) for v in GRIDS[unit.learner][unit.grid].values()]))
+    scale = (float(np.sum(rows)) / CANDIDATE_CPU_ROWS) ** CANDIDATE_CPU_POWER[unit.learner]
+    return n_candidates * CANDIDATE_CPU_S[unit.learner] * scale
+
+
 def _nominal(ee: Any) -> Callable[[ThrowBatch], Landing]:
     def predict(b: ThrowBatch) -> Landing:
         return predict_landing(b, ee, strict=False, check_stroke=False)
@@ -256,17 +309,20 @@ def _summary(name: str, results: list[FoldResult]) -> LearnerSummary:
 
 
 def _fit_in_processes(
-    units: list[FitUnit], jobs: int, done: Callable[[int, Any], None]
-) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, ResidualModel]]:
-    """`fit_fold` on every unit, `jobs` at a time in joblib's processes; results in
-    unit order. A whole fit (its grid search and its refit) runs in one process, so
-    the refits, which a grid search runs one at a time, overlap too."""
+    units: list[FitUnit | SaveUnit], jobs: int, done: Callable[[int, Any], None]
+) -> list[Any]:
+    """`fit_fold` / `fit_saved` on every unit, `jobs` at a time in joblib's processes;
+    results in unit order. A whole fit (its grid search and its refit) runs in one
+    process. The units start longest first (`unit_cost`, a fixed estimate), so the last
+    ones to finish are short and no core waits long for the other's last fit; `done` is
+    called as each finishes, in that order."""
     from joblib import Parallel, delayed
 
-    out = []
-    fits = Parallel(n_jobs=jobs, return_as="generator")(delayed(fit_fold)(u) for u in units)
-    for i, r in enumerate(fits):  # a joblib process's own grid searches run one fit at a time
-        out.append(r)
+    order = sorted(range(len(units)), key=lambda i: -unit_cost(units[i]))
+    out: list[Any] = [None] * len(units)
+    fits = Parallel(n_jobs=jobs, return_as="generator")(delayed(_fit_unit)(units[i]) for i in order)
+    for i, r in zip(order, fits, strict=True):  # a process's grid searches: one fit at a time
+        out[i] = r
         done(i, r)
     return out
 
@@ -303,24 +359,80 @@ def round_robin(
     Returns:
         learner name -> its summary.
     """
+    summary, _ = _round_robin(
+        data, learners, hold_out, grid, seed, predict, progress, workers, address, jobs, None
+    )
+    return summary
+
+
+def round_robin_and_save(
+    data: TrainingData,
+    *,
+    save: str,
+    learners: tuple[str, ...] = LEARNERS,
+    hold_out: int = 2,
+    grid: str = "full",
+    seed: int = 0,
+    predict: Callable[[ThrowBatch], Landing] | None = None,
+    progress: Callable[[str], None] | None = None,
+    workers: int = 1,
+    address: str | None = None,
+    jobs: int = 1,
+) -> tuple[dict[str, LearnerSummary], ResidualModel]:
+    """`round_robin`, and the learner `save` tuned and fitted on every usable throw
+    (`train_residual(data, learner=save, grid=grid, seed=seed)`, the model `cell learn`
+    saves) as one more unit of the same campaign: it runs beside the round-robin's fits,
+    not after them. The same table and model as the two one after the other (seeded).
+
+    Returns:
+        (learner name -> its summary, the saved learner's model).
+    """
+    summary, model = _round_robin(
+        data, learners, hold_out, grid, seed, predict, progress, workers, address, jobs, save
+    )
+    assert model is not None
+    return summary, model
+
+
+def _round_robin(
+    data: TrainingData,
+    learners: tuple[str, ...],
+    hold_out: int,
+    grid: str,
+    seed: int,
+    predict: Callable[[ThrowBatch], Landing] | None,
+    progress: Callable[[str], None] | None,
+    workers: int,
+    address: str | None,
+    jobs: int,
+    save: str | None,
+) -> tuple[dict[str, LearnerSummary], ResidualModel | None]:
     from cell.parallel import run_campaign
 
     usable_ids = sorted(set(data.groups[data.usable].tolist()))
     folds = round_robin_folds(usable_ids, hold_out=hold_out, seed=seed)
     observed = data.table.landed
     before_all = (predict or _nominal(data.ee))(data.batch).xy
-    units = [FitUnit(data, name, fold, grid, seed, predict) for name in learners for fold in folds]
+    rr_units = [
+        FitUnit(data, name, fold, grid, seed, predict) for name in learners for fold in folds
+    ]
+    units: list[FitUnit | SaveUnit] = [*rr_units]
+    if save is not None:
+        units.append(SaveUnit(data, save, grid, seed))
 
     def done(i: int, r: Any) -> None:
         if progress is not None:
             u = units[i]
-            progress(f"{u.learner} held out {', '.join(u.fold.held_out)}")
+            if isinstance(u, SaveUnit):
+                progress(f"{u.learner} on every object")
+            else:
+                progress(f"{u.learner} held out {', '.join(u.fold.held_out)}")
 
     if jobs > 1 and workers == 1 and not address:
         fits = _fit_in_processes(units, jobs, done)
     else:
         fits = run_campaign(
-            fit_fold,
+            _fit_unit,
             units,
             workers=workers,
             address=address,
@@ -328,10 +440,11 @@ def round_robin(
             on_result=done,
             progress=False,
         )
+    saved = fits.pop() if save is not None else None
     out: dict[str, LearnerSummary] = {}
     for name in learners:
         results: list[FoldResult] = []
-        for unit, (test, pred, after_xy, model) in zip(units, fits, strict=True):
+        for unit, (test, pred, after_xy, model) in zip(rr_units, fits, strict=True):
             if unit.learner != name:
                 continue
             err = (pred - data.targets.delta_stroke[test]) * 1000.0
@@ -350,4 +463,4 @@ def round_robin(
                 )
             )
         out[name] = _summary(name, results)
-    return out
+    return out, saved

@@ -181,7 +181,9 @@ def fit_learner(
     inner_splits: int = 4,
     seed: int = 0,
 ) -> FittedLearner:
-    """Tune a learner by grouped inner CV on (x, ΔL_s) and refit it on all of it.
+    """Tune a learner by grouped inner CV on (x, ΔL_s) and refit its choice on all of it,
+    when it beats the null candidates (no residual, a constant one) in that CV; else the
+    better null, fitted on all of it (the learner is then not refitted: nothing would read it).
 
     Args:
         name: one of LEARNERS.
@@ -220,7 +222,7 @@ def fit_learner(
         cv=cv,
         scoring="neg_mean_squared_error",
         n_jobs=None,  # 1, or the caller's joblib.parallel_config (cell learn: one per core)
-        refit=True,
+        refit=False,  # below, and only when the learner beats the null candidates
     )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -230,7 +232,7 @@ def fit_learner(
     # cannot beat them in the inner CV would only add its noise to the plan.
     null_mse = _null_mse(list(cv.split(x, y_mm, groups)), y_mm)
     null = min(null_mse, key=lambda k: null_mse[k])
-    if null_mse[null] <= best_mse:
+    if null_mse[null] <= best_mse:  # the learner's own refit would be thrown away: none
         from sklearn.dummy import DummyRegressor
         from sklearn.pipeline import Pipeline
 
@@ -242,9 +244,16 @@ def fit_learner(
             best_params={"null": null, "learner_cv_mse_mm2": best_mse, **search.best_params_},
             inner_cv_mse_mm2=null_mse[null],
         )
+    # GridSearchCV's refit=True, done here: its choice, cloned, fitted on all of (x, y)
+    from sklearn.base import clone
+
+    pipe = clone(search.estimator).set_params(**clone(search.best_params_, safe=False))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        pipe.fit(x, y_mm)
     return FittedLearner(
         name=name,
-        pipeline=search.best_estimator_,
+        pipeline=pipe,
         best_params=dict(search.best_params_),
         inner_cv_mse_mm2=best_mse,
     )
