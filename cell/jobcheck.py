@@ -27,10 +27,13 @@ __all__ = [
     "BIN_INSET_M",
     "STATION_HALF_M",
     "STROKE_RANGE_M",
+    "extents_mismatch",
+    "items_fit",
     "job_problems",
     "place_problems",
     "reach_problems",
     "station_problems",
+    "unsorted_warning",
 ]
 
 STATION_HALF_M = 0.12  # [m] half the pick station's square top (cell.sim.scene_build)
@@ -279,3 +282,54 @@ def job_problems(
             robot = load_robot(job.robot)
             warnings += place_problems(robot, job.bins, job.items, chosen, where)
     return out, warnings
+
+
+def extents_mismatch(shape: str, size: Sequence[float]) -> str:
+    """Why a sphere's or a cylinder's extents do not say one item ("" when they do): the
+    scene builds a sphere and a cylinder of diameter size_m[0] (cell.sim.items), the planner
+    holds all three extents."""
+    same = {"sphere": (0, 1, 2), "cylinder": (0, 1)}.get(shape, ())
+    if all(math.isclose(size[k], size[0], rel_tol=1e-3) for k in same):
+        return ""
+    what = (
+        "a sphere's three extents are its diameter"
+        if shape == "sphere"
+        else "a cylinder's x and y extents are its diameter, z its length"
+    )
+    return (
+        f"{list(size)} m: {what}; the scene would build a {shape} "
+        f"{size[0] * 1000:.0f} mm across and the planner hold another"
+    )
+
+
+def items_fit(path: str, items: Sequence[Any], bins: Sequence[Any]) -> list[str]:
+    """An error for each item narrower nowhere than its bin's opening: a box's (cylinder's,
+    sphere's) narrowest width is its smallest extent, and it cannot come to rest inside a
+    bin whose narrower side is less than that. Meshes are not checked (a mesh may be
+    narrower than its box's smallest extent)."""
+    by_id = {b.id: b for b in bins}
+    out = []
+    for it in items:
+        b = by_id.get(it.bin)
+        if b is None or it.obj.shape == "mesh":
+            continue
+        narrowest, opening = min(it.obj.size), min(b.size)
+        if narrowest > opening:
+            out.append(
+                f"{path}, line {it.line}: item {it.obj.name} to bin {b.id!r}: its narrowest "
+                f"extent, {narrowest * 1000:.0f} mm, is wider than the bin's opening, "
+                f"{opening * 1000:.0f} mm across: it cannot come to rest inside; widen the "
+                "bin or send the item to another bin"
+            )
+    return out
+
+
+def unsorted_warning(job: Any) -> tuple[str, ...]:
+    """A warning when limits.max_items leaves items of the job unsorted."""
+    listed = sum(it.count for it in job.items)
+    if listed <= job.max_items:
+        return ()
+    return (
+        f"{job.path}: limits.max_items is {job.max_items} and the job lists {listed} items: "
+        f"the first {job.max_items} are sorted, {listed - job.max_items} are left unsorted",
+    )

@@ -19,6 +19,7 @@ import yaml
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
 from cell.jobcell import cell_section
+from cell.jobcheck import extents_mismatch, items_fit, unsorted_warning
 from cell.jobschema import (
     BIN_KEYS,
     ITEM_KEYS,
@@ -191,28 +192,6 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
     return pick
 
 
-def _items_fit(path: str, items: list[ItemSpec], bins: list[BinSpec]) -> list[str]:
-    """An error for each item narrower nowhere than its bin's opening: a box's (cylinder's,
-    sphere's) narrowest width is its smallest extent, and it cannot come to rest inside a
-    bin whose narrower side is less than that. Meshes are not checked (a mesh may be
-    narrower than its box's smallest extent)."""
-    by_id = {b.id: b for b in bins}
-    out = []
-    for it in items:
-        b = by_id.get(it.bin)
-        if b is None or it.obj.shape == "mesh":
-            continue
-        narrowest, opening = min(it.obj.size), min(b.size)
-        if narrowest > opening:
-            out.append(
-                f"{path}, line {it.line}: item {it.obj.name} to bin {b.id!r}: its narrowest "
-                f"extent, {narrowest * 1000:.0f} mm, is wider than the bin's opening, "
-                f"{opening * 1000:.0f} mm across: it cannot come to rest inside; widen the "
-                "bin or send the item to another bin"
-            )
-    return out
-
-
 def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> BinSpec:
     """One bin, checked against the robot base and the bins before it.
 
@@ -342,21 +321,9 @@ def _item_object(
     size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
     if max(size) > 0.25:
         raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
-    # the scene builds a sphere and a cylinder of diameter size_m[0] (cell.sim.items), the
-    # planner holds all three extents: they must say the same item
-    same = {"sphere": (0, 1, 2), "cylinder": (0, 1)}.get(shape, ())
-    if any(not math.isclose(size[k], size[0], rel_tol=1e-3) for k in same):
-        what = (
-            "a sphere's three extents are its diameter"
-            if shape == "sphere"
-            else "a cylinder's x and y extents are its diameter, z its length"
-        )
-        raise c.fail(
-            it["size_m"],
-            f"{fp}.size_m",
-            f"{list(size)} m: {what}; the scene would build a {shape} "
-            f"{size[0] * 1000:.0f} mm across and the planner hold another",
-        )
+    bad_extents = extents_mismatch(shape, size)
+    if bad_extents:
+        raise c.fail(it["size_m"], f"{fp}.size_m", bad_extents)
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
 
 
@@ -448,17 +415,6 @@ def _where(job: Job, tree: Node, top: dict[str, Node]) -> dict[str, str]:
     return where
 
 
-def _unsorted_warning(job: Job) -> tuple[str, ...]:
-    """A warning when limits.max_items leaves items of the job unsorted."""
-    listed = sum(it.count for it in job.items)
-    if listed <= job.max_items:
-        return ()
-    return (
-        f"{job.path}: limits.max_items is {job.max_items} and the job lists {listed} items: "
-        f"the first {job.max_items} are sorted, {listed - job.max_items} are left unsorted",
-    )
-
-
 def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Job:
     """Validate a job given as YAML text: every error in one report.
 
@@ -512,7 +468,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         rotor_rpm=cell.rotor_rpm,
         base_speed_mps=cell.base_speed_mps,
     )
-    errors.messages += _items_fit(path, items, bins)
+    errors.messages += items_fit(path, items, bins)
     reach_warnings: list[str] = []
     if cell.platform == "arm":
         from cell.jobcheck import job_problems
@@ -520,7 +476,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         problems, reach_warnings = job_problems(job, _where(job, tree, top), reach=check_reach)
         errors.messages += problems
     errors.raise_all()
-    return replace(job, warnings=_unsorted_warning(job) + tuple(reach_warnings))
+    return replace(job, warnings=unsorted_warning(job) + tuple(reach_warnings))
 
 
 def load_job(path: str | Path) -> Job:
