@@ -8,14 +8,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cell.jobschema import CELL_KEYS, DRONE_KEYS, MOBILE_KEYS
+from cell.jobschema import BASE_SPEED_MAX_MPS, CELL_KEYS, DRONE_KEYS, MOBILE_KEYS
 from cell.kinds import EE_BACKENDS, PLATFORMS
 from cell.yamltree import Checker, Node
 
-__all__ = ["BASE_SPEED_MAX_MPS", "CellSpec", "cell_section"]
-
-# [m/s] the moving base's velocity limit (`cell.platforms.mobile.BaseLimits.velocity_mps`)
-BASE_SPEED_MAX_MPS = 1.5
+__all__ = ["CellSpec", "cell_section"]
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, unsorted_warning
 from cell.jobschema import (
     BIN_KEYS,
+    BIN_WALL_M,
     ITEM_KEYS,
     LIMIT_KEYS,
     PICK_KEYS,
@@ -36,7 +37,6 @@ __all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
 POLICIES = ("auto", "place", "throw")
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
-BIN_WALL_M = 0.01  # [m] a bin's wall and floor plate in the scene (`cell.sim.bins.BinSpec.wall`)
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 # The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
 # listed, or bin by bin (the items all at hand, as in a tote).

@@ -16,7 +16,15 @@ __all__ = [
     "PICK_KEYS",
     "TOP_KEYS",
     "job_keys",
+    "BIN_WALL_M",
+    "BASE_SPEED_MAX_MPS",
 ]
+
+# [m] a bin's wall and floor plate (the scene builds it so, `cell.sim.bins.BinSpec.wall`):
+# a rim must stand above it
+BIN_WALL_M = 0.01
+# [m/s] the moving base's velocity limit (`cell.platforms.mobile.BaseLimits.velocity_mps`)
+BASE_SPEED_MAX_MPS = 1.5
 
 TOP_KEYS = (
     "cell",

@@ -97,7 +97,7 @@ def check_the_ur3_reach() -> None:
     close(out, station, 2)
     assert reach == said
     page = "docs/jobs.md"
-    from cell.jobs import BIN_WALL_M
+    from cell.jobschema import BIN_WALL_M
     from cell.sim.bins import BinSpec
 
     (plate,) = quoted(page, r"above the bin's ([\d.]+) m floor plate")

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from cell.errors import InvalidParameter, JobError, LogFormatError
-from cell.jobcell import BASE_SPEED_MAX_MPS
-from cell.jobs import BIN_WALL_M, parse_job
+from cell.jobs import parse_job
+from cell.jobschema import BASE_SPEED_MAX_MPS, BIN_WALL_M
 from cell.log import read_throws_csv, read_tracks_csv, write_throws_csv
 from cell.platforms.mobile import BaseLimits
 from cell.robot.mount import load_mount

@@ -21,6 +21,7 @@ from cell.log.table import (
     REQUIRED_COLUMNS,
     ThrowTable,
     millimetres_hint,
+    other_separator,
     parse_cells,
 )
 
@@ -114,7 +115,6 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             header = reader.fieldnames or []
             for c in need:
                 if c not in header:
-                    one = len(header) == 1 and any(sep in header[0] for sep in ";\t|")
                     raise LogFormatError(
                         p,
                         None,
@@ -122,11 +122,12 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         "required column missing"
                         + (
                             ": the header is one column; a tracks file is comma-separated"
-                            if one
+                            if other_separator(header)
                             else ""
                         ),
                     )
             out: dict[str, list[list[float]]] = {}
+            lo, hi = RANGES["x_m"]  # a tracked position [m]: the log's positions' range
             for r, row in enumerate(reader, start=1):
                 vals = []
                 for c in need[1:]:
@@ -140,7 +141,6 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
                     if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
-                    lo, hi = RANGES["x_m"]  # a tracked position: as the log's positions
                     if c != "t_s" and math.isfinite(vals[-1]) and not lo <= vals[-1] <= hi:
                         raise LogFormatError(
                             p,

@@ -11,6 +11,7 @@ build their tables with it).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -32,6 +33,7 @@ __all__ = [
     "REQUIRED_COLUMNS",
     "ThrowTable",
     "millimetres_hint",
+    "other_separator",
     "parse_cells",
 ]
 
@@ -216,6 +218,16 @@ def millimetres_hint(v: float) -> str:
     return ""
 
 
+def other_separator(header: Sequence[str]) -> str:
+    """The separator a one-column CSV header was written with, as a message names it
+    ("';'", "tabs", "'|'"), where it holds one; "" otherwise (a spreadsheet's export in
+    another locale, read with commas as one column)."""
+    if len(header) != 1:
+        return ""
+    shown = {";": "';'", "\t": "tabs", "|": "'|'"}
+    return next((name for sep, name in shown.items() if sep in header[0]), "")
+
+
 def _cell(v: Any) -> str:
     if v is None:
         return ""
@@ -229,14 +241,13 @@ def _cell(v: Any) -> str:
 
 def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
-    seps = [sep for sep in (";", "\t", "|") if len(header) == 1 and sep in header[0]]
-    if missing and seps:
-        shown = {";": "';'", "\t": "tabs", "|": "'|'"}[seps[0]]
+    sep = other_separator(header)
+    if missing and sep:
         raise LogFormatError(
             path,
             None,
             None,
-            f"the header is one column separated by {shown}, not commas: a throw log is "
+            f"the header is one column separated by {sep}, not commas: a throw log is "
             "comma-separated, with '.' for the decimal point (docs/throw_log.md)",
         )
     if missing:

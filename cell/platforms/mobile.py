@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.errors import InvalidParameter, TrajectoryError
+from cell.jobschema import BASE_SPEED_MAX_MPS
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE, EndEffectorParams
 from cell.optimize import DEFAULT_BOUNDS, ThrowBounds, ThrowPlan, plan_throw
@@ -40,7 +41,7 @@ class BaseLimits:
         jerk_mps3: largest jerk [m/s³].
     """
 
-    velocity_mps: float = 1.5
+    velocity_mps: float = BASE_SPEED_MAX_MPS
     acceleration_mps2: float = 1.0
     jerk_mps3: float = 5.0
 

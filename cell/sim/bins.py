@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidParameter
+from cell.jobschema import BIN_WALL_M
 
 __all__ = ["BinSpec", "build_bin", "which_bin"]
 
@@ -35,7 +36,7 @@ class BinSpec:
     center_xy: tuple[float, float]
     size_xy: tuple[float, float]
     rim_height: float
-    wall: float = 0.01
+    wall: float = BIN_WALL_M
     yaw: float = 0.0
 
     def __post_init__(self) -> None:
