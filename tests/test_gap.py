@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import math
 
@@ -130,26 +132,72 @@ def test_measurement_phase_from_tracks(scale_run: tuple) -> None:
     assert d.report["verdict"]["effects"] == ["tracking_scale"]
 
 
-def test_cli_gap_writes_json_and_html(tmp_path, capsys) -> None:
+@pytest.fixture(scope="module")
+def stroke_offset_cli(tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    """`cell gap` run once on a stroke-offset campaign with every output asked for (the
+    JSON report, the HTML report, the Rerun recording): its log, its outputs and what it
+    printed, for the two tests that read them."""
+    tmp = tmp_path_factory.mktemp("gap_cli")
     camp = draw_campaign("stroke_offset", np.random.default_rng(21), n=160)
-    log = tmp_path / "throws.csv"
+    log = tmp / "throws.csv"
     write_throws_csv(camp.table, log)
-    params = tmp_path / "ee.yaml"
+    params = tmp / "ee.yaml"
     params.write_text("effects: {bounce: {inv_mu: 0.0}}\n")
-    js, html = tmp_path / "r.json", tmp_path / "r.html"
-    code = main(
-        ["gap", str(log), "--params", str(params), "--json", str(js), "--report", str(html)]
-    )
+    files = {k: tmp / f"r.{k}" for k in ("json", "html", "rrd")}
+    argv = ["gap", str(log), "--params", str(params), "--json", str(files["json"])]
+    argv += ["--report", str(files["html"]), "--record", str(files["rrd"])]
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(argv)
+    return code, out.getvalue(), log, files
+
+
+def test_cli_gap_writes_json_and_html(stroke_offset_cli: tuple, tmp_path) -> None:
+    code, out, log, files = stroke_offset_cli
     assert code == 0
-    out = capsys.readouterr().out
     assert "verdict" in out and "stroke_offset" in out
-    rep = _no_nan(js.read_text())
+    rep = _no_nan(files["json"].read_text())
     assert rep["verdict"]["effects"] == ["stroke_offset"]
-    text = html.read_text()
+    text = files["html"].read_text()
     assert text.count("data:image/png;base64,") == 3
     bad = tmp_path / "bad.yaml"
     bad.write_text("effects: {gremlins: {}}\n")
     assert main(["gap", str(log), "--params", str(bad)]) == 2
+
+
+def test_cli_gap_record_holds_every_throw_before_and_after_the_verdict(
+    stroke_offset_cli: tuple,
+) -> None:
+    """`cell gap --record` (read back with Rerun's reader): every throw before and after
+    the verdict; here, not in test_record_gap.py, to share `stroke_offset_cli`'s run."""
+    from cell.log import read_throws_csv
+    from cell.record.read import read_rows
+
+    F32 = 1e-6  # [m] Rerun stores positions as float32
+    code, out, log, files = stroke_offset_cli
+    assert code == 0
+    rrd = files["rrd"]
+    assert f"recording -> {rrd}" in out
+    rep = json.loads(files["json"].read_text())
+    rows = read_rows(rrd)
+    # the observed landings are the log's, in its order (read independently from the CSV)
+    table = read_throws_csv(log)
+    obs = np.asarray(rows["/world/landings/observed"][0]["Points3D:positions"])
+    assert obs.shape == (len(table), 3)
+    assert np.allclose(obs[:, :2], table.landed, atol=F32)
+    assert np.allclose(obs[:, 2], table.num("land_z_m"), atol=F32)
+    # one step per throw on the `throw` timeline; residuals = observed - model, per throw
+    steps = rows["/world/throw/observed"]
+    assert [r["throw"] for r in steps] == list(range(len(table)))
+    before = np.asarray([r["Points3D:positions"] for r in rows["/world/throw/model_before"]])[:, 0]
+    res_b = np.array([r["Scalars:scalars"] for r in rows["/gap/before_m"]])[:, 0]
+    res_a = np.array([r["Scalars:scalars"] for r in rows["/gap/after_m"]])[:, 0]
+    assert np.allclose(res_b, np.hypot(*(obs[:, :2] - before[:, :2]).T), atol=1e-5)
+    # the verdict's effect shrinks the residuals, as the report says
+    rms_b, rms_a = np.sqrt(np.mean(res_b**2)), np.sqrt(np.mean(res_a**2))
+    assert rep["verdict"]["effects"] == ["stroke_offset"] and rms_a < 0.5 * rms_b
+    assert rms_b == pytest.approx(rep["baseline"]["fit_rmse_m"], rel=1e-6)
+    assert "stroke_offset" in rows["/verdict"][0]["TextDocument:text"][0]
 
 
 def test_gap_record_draws_each_track_beside_the_model_flight(scale_run: tuple, tmp_path) -> None:

@@ -1,9 +1,9 @@
-"""Rerun recordings of `cell gap` and `cell calibrate`, read back with Rerun's reader;
-the predicted flight against the fast landing path; a missing rerun-sdk."""
+"""Rerun recordings of `cell calibrate`, read back with Rerun's reader (`cell gap`'s are
+read in test_gap.py, beside the diagnoses they record); the predicted flight against the
+fast landing path; a missing rerun-sdk."""
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 
@@ -11,9 +11,7 @@ import numpy as np
 import pytest
 
 from cell.cli import main
-from cell.gap.world import draw_campaign
 from cell.log import read_throws_csv
-from cell.log.csvio import write_throws_csv
 from cell.model.objects import ObjectParams
 from cell.model.params import DEFAULT_EE
 from cell.model.throw import ThrowBatch, predict_landing
@@ -40,35 +38,6 @@ def test_predicted_flight_starts_at_release_and_ends_on_the_fast_path_landing() 
     assert f[-1, 0] == pytest.approx(float(land.t_flight[0]), abs=1e-9)
     assert f[-1, 3] == pytest.approx(0.15, abs=1e-3)
     assert np.hypot(f[-1, 1] - land.x[0], f[-1, 2] - land.y[0]) < 2e-3
-
-
-def test_cli_gap_record_holds_every_throw_before_and_after_the_verdict(tmp_path, capsys) -> None:
-    camp = draw_campaign("stroke_offset", np.random.default_rng(21), n=160)
-    log = tmp_path / "throws.csv"
-    write_throws_csv(camp.table, log)
-    rrd, js = tmp_path / "gap.rrd", tmp_path / "gap.json"
-    assert main(["gap", str(log), "--json", str(js), "--record", str(rrd)]) == 0
-    assert f"recording -> {rrd}" in capsys.readouterr().out
-    rep = json.loads(js.read_text())
-    rows = read_rows(rrd)
-    # the observed landings are the log's, in its order (read independently from the CSV)
-    table = read_throws_csv(log)
-    obs = np.asarray(rows["/world/landings/observed"][0]["Points3D:positions"])
-    assert obs.shape == (len(table), 3)
-    assert np.allclose(obs[:, :2], table.landed, atol=F32)
-    assert np.allclose(obs[:, 2], table.num("land_z_m"), atol=F32)
-    # one step per throw on the `throw` timeline; residuals = observed - model, per throw
-    steps = rows["/world/throw/observed"]
-    assert _values(steps, "throw") == list(range(len(table)))
-    before = np.asarray(_values(rows["/world/throw/model_before"], "Points3D:positions"))[:, 0]
-    res_b = np.array(_values(rows["/gap/before_m"], "Scalars:scalars"))[:, 0]
-    res_a = np.array(_values(rows["/gap/after_m"], "Scalars:scalars"))[:, 0]
-    assert np.allclose(res_b, np.hypot(*(obs[:, :2] - before[:, :2]).T), atol=1e-5)
-    # the verdict's effect shrinks the residuals, as the report says
-    rms_b, rms_a = np.sqrt(np.mean(res_b**2)), np.sqrt(np.mean(res_a**2))
-    assert rep["verdict"]["effects"] == ["stroke_offset"] and rms_a < 0.5 * rms_b
-    assert rms_b == pytest.approx(rep["baseline"]["fit_rmse_m"], rel=1e-6)
-    assert "stroke_offset" in rows["/verdict"][0]["TextDocument:text"][0]
 
 
 def test_cli_calibrate_record_nominal_and_fitted_against_the_scene(tmp_path) -> None:
