@@ -112,8 +112,10 @@ def _calibrate(tmp_path, tag, capsys, *extra):
     from cell.cli import main
 
     files = {k: tmp_path / f"{tag}.{k}" for k in ("yaml", "csv", "sqlite")}
-    # 16 ad-hoc throws for the mass rule (the default 160 adds minutes, and no new path)
-    argv = ["calibrate", "--n", "16", "--adhoc", "16", "--seed", "4", "--json"]
+    # 8 ad-hoc throws for the mass rule, one chunk of cell.workflows.campaign.CHUNK (the
+    # campaign's 16 are the two chunks on two workers; the default 160 adds minutes, and
+    # no new path)
+    argv = ["calibrate", "--n", "16", "--adhoc", "8", "--seed", "4", "--json"]
     argv += ["-o", str(files["yaml"])]
     argv += ["--log", str(files["csv"]), "--db", str(files["sqlite"]), *extra]
     assert main(argv) == 0
