@@ -252,6 +252,7 @@ def check_the_gap_laws() -> None:
     from cell.gap.outliers import OUTLIER_P
     from cell.gap.propose import TERM_PENALTY as PROPOSAL_PENALTY
     from cell.gap.select import MIN_CUT
+    from cell.gap.wind_throw import LOGLIK_PENALTY
 
     page, doc = "docs/gap_laws.md", load_json("docs/figures/gap_check_other.json")
     (pen,) = quoted(page, r"raised by (\d+) % per extra term")
@@ -263,6 +264,9 @@ def check_the_gap_laws() -> None:
     )
     assert (int(two), float(p)) == (2, OUTLIER_P)
     close(sigma, math.sqrt(2 * math.log(int(n) / OUTLIER_P)), 1)
+    (ll_pen,) = quoted(page, r"`LOGLIK_PENALTY` = `2 ln\(1 \+ TERM_PENALTY\)` = ([\d.]+) nats")
+    close(ll_pen, LOGLIK_PENALTY, 3)
+    assert abs(LOGLIK_PENALTY - 2 * math.log(1 + TERM_PENALTY)) < 1e-12
     (pen,) = quoted(page, r"held-out folds with a (\d+) % penalty per term")
     close(pen, 100 * PROPOSAL_PENALTY, 0)
     (share,) = quoted(page, r"varying throw to throw; (\d+) % outliers")
