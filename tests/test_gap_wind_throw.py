@@ -8,7 +8,7 @@ import pytest
 
 from cell.gap.fit import fit_set
 from cell.gap.problem import build_problem
-from cell.gap.wind_throw import LAW, fit_marginal, wind_throw
+from cell.gap.wind_throw import LAW, REPEAT_LR, fit_marginal, repeat_test, wind_throw
 from cell.gap.world_other import draw_other_campaign
 from cell.log.table import ThrowTable
 from cell.model.effects import WindLevel
@@ -45,6 +45,27 @@ def test_the_marginal_fit_recovers_a_linear_random_effect_and_is_least_squares_w
     ols = np.linalg.lstsq(jac.reshape(-1, 2), y.ravel(), rcond=None)[0]
     assert s0 == 0.0 and m0 == pytest.approx(ols, abs=1e-9)
     assert ll1 > ll0 + 10
+
+
+def test_the_repeats_tell_a_spread_from_a_misfit_the_configuration_carries():
+    """Pairs of throws of one configuration (same J) drawn here: a wind per throw shows in
+    their differences; a wind response off by a factor per configuration (a model's drag
+    wrong per object) fits a spread on all throws just as well but cancels in the pairs."""
+    rng = np.random.default_rng(11)
+    k, mu, sig = 60, np.array([2.0, 0.0]), 0.01
+    jac = np.repeat(rng.uniform(0.02, 0.15, (k, 2, 2)) * rng.choice([-1, 1], (k, 2, 2)), 2, 0)
+    pairs = np.arange(2 * k).reshape(k, 2)
+    noise = sig * rng.standard_normal((2 * k, 2))
+    per_throw = mu + 0.6 * rng.standard_normal((2 * k, 2))
+    per_config = np.repeat(mu * rng.uniform(0.6, 1.4, (k, 1)), 2, 0)
+    for w, spread in ((per_throw, True), (per_config, False)):
+        y = np.einsum("nij,nj->ni", jac, w) + noise
+        _, s_all, _, ll1 = fit_marginal(y, jac)
+        assert s_all > 0.2 and ll1 > fit_marginal(y, jac, steady=True)[3] + 10
+        rep = repeat_test(y, jac, pairs)
+        assert (rep["lr"] > REPEAT_LR) == spread, rep
+        if spread:
+            assert rep["sd_mps"] == pytest.approx(0.6, rel=0.3)
 
 
 def test_a_wind_drawn_throw_to_throw_is_given_its_mean_and_spread():

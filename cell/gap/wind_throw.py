@@ -45,6 +45,8 @@ LOGLIK_PENALTY = 2.0 * float(np.log1p(TERM_PENALTY))  # [nats per throw] for the
 JAC_STEP_MPS = 0.05  # central-difference step of ∂ landing / ∂ wind [m/s]
 S_MIN_MPS = 1e-4  # the spread's lower bound in the fit [m/s]
 S_ZERO_MPS = 1e-3  # a fitted spread below this is none (the refinement's start off s = 0)
+MIN_PAIRS = 15  # repeat pairs the repeats' test needs (the floor's 30 degrees of freedom)
+REPEAT_LR = 2.71  # χ²₁'s 90 % point: a 5 % test of sd > 0 on its boundary (50:50 χ²₀, χ²₁)
 RELINEARISE = 1  # passes re-linearised at the fitted mean after the first at the steady fit
 _LN2PI = float(np.log(2.0 * np.pi))
 
@@ -183,6 +185,34 @@ def _heldout(prob: GapProblem, y: np.ndarray, jac: np.ndarray) -> tuple[np.ndarr
     return steady / k, vary / k
 
 
+def repeat_pairs(prob: GapProblem) -> np.ndarray:
+    """Disjoint pairs (k, 2) of throws logged as repeats of one configuration
+    (`cell.gap.noise`'s key: same object, stroke, pose, platform and plane)."""
+    from cell.gap.noise import _repeat_key
+
+    groups: dict[tuple, list[int]] = {}
+    for i, k in enumerate(_repeat_key(prob)):
+        groups.setdefault(k, []).append(i)
+    pairs = [(g[a], g[a + 1]) for g in groups.values() for a in range(0, len(g) - 1, 2)]
+    return np.array(pairs, int).reshape(-1, 2)
+
+
+def repeat_test(y: np.ndarray, jac: np.ndarray, pairs: np.ndarray) -> dict[str, Any]:
+    """The spread the repeats show: the difference of two throws of one configuration
+    keeps a wind drawn per throw (covariance 2σ² I + sd² (J_a J_aᵀ + J_b J_bᵀ)) and
+    cancels what the model misses on the configuration itself (a drag or a wind response
+    off by a factor per object grows with J just as a spread does). Fitted by maximum
+    likelihood (J_a, J_b taken as their mean), with the likelihood ratio of sd > 0."""
+    if len(pairs) < MIN_PAIRS:
+        return {"pairs": int(len(pairs)), "sd_mps": None, "lr": None}
+    a, b = pairs[:, 0], pairs[:, 1]
+    d = y[a] - y[b]
+    jm = np.sqrt(2.0) * 0.5 * (jac[a] + jac[b])
+    _, s1, _, ll1 = fit_marginal(d, jm)
+    ll0 = fit_marginal(d, jm, steady=True)[3]
+    return {"pairs": int(len(pairs)), "sd_mps": s1, "lr": float(2.0 * (ll1 - ll0))}
+
+
 def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] | None:
     """The throw-to-throw form of the verdict's wind, fitted and judged held-out.
 
@@ -215,7 +245,9 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
     d = h1 - h0
     gain = float(np.mean(d))
     lo, hi = np.percentile(d[_indices(d.size, prob.seed + 11, N_BOOT)].mean(axis=1), [2.5, 97.5])
-    chosen = bool(s > 0 and gain > LOGLIK_PENALTY and lo > 0)
+    reps = repeat_test(y, jac, repeat_pairs(prob))
+    shown = reps["lr"] is None or reps["lr"] > REPEAT_LR
+    chosen = bool(s > 0 and gain > LOGLIK_PENALTY and lo > 0 and shown)
     return {
         "law": LAW,
         "chosen": chosen,
@@ -234,6 +266,7 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
         "heldout_gain_per_throw": gain,
         "heldout_gain_ci95": [float(lo), float(hi)],
         "penalty_per_throw": LOGLIK_PENALTY,
+        "repeats": {**reps, "lr_needed": REPEAT_LR},
     }
 
 
