@@ -5,6 +5,7 @@ against the JSON `make figures` writes, rules and limits against the code's cons
 from __future__ import annotations
 
 import scipy.constants
+import scipy.stats
 
 from tests.figure_quotes import close, every, load_json, page_text, quoted
 
@@ -252,6 +253,7 @@ def check_the_gap_laws() -> None:
     from cell.gap.outliers import OUTLIER_P
     from cell.gap.propose import TERM_PENALTY as PROPOSAL_PENALTY
     from cell.gap.select import MIN_CUT
+    from cell.gap.wind_throw import LOGLIK_PENALTY, REPEAT_LR
 
     page, doc = "docs/gap_laws.md", load_json("docs/figures/gap_check_other.json")
     (pen,) = quoted(page, r"raised by (\d+) % per extra term")
@@ -263,6 +265,17 @@ def check_the_gap_laws() -> None:
     )
     assert (int(two), float(p)) == (2, OUTLIER_P)
     close(sigma, math.sqrt(2 * math.log(int(n) / OUTLIER_P)), 1)
+    (ll_pen,) = quoted(page, r"`LOGLIK_PENALTY` = `2 ln\(1 \+ TERM_PENALTY\)` = ([\d.]+) nats")
+    close(ll_pen, LOGLIK_PENALTY, 3)
+    assert abs(LOGLIK_PENALTY - 2 * math.log(1 + TERM_PENALTY)) < 1e-12
+    lr, point, level = quoted(
+        page,
+        r"`REPEAT_LR` = ([\d.]+), the (\d+) % point of χ² with one degree of\s+freedom: "
+        r"a (\d+) % test",
+    )
+    close(lr, REPEAT_LR, 2)
+    close(lr, scipy.stats.chi2.ppf(int(point) / 100, 1), 2)
+    assert 100 - int(point) == 2 * int(level)
     (pen,) = quoted(page, r"held-out folds with a (\d+) % penalty per term")
     close(pen, 100 * PROPOSAL_PENALTY, 0)
     (share,) = quoted(page, r"varying throw to throw; (\d+) % outliers")

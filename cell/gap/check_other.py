@@ -382,6 +382,7 @@ def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m:
         "outliers_true": len(true_out), "outliers_found": len(flagged & true_out),
         "outliers_false": len(flagged - true_out),
         "proposal": rep.get("proposal", {}).get("law"),
+        "wind_throw_to_throw": rep.get("wind_throw_to_throw"),
         "passes": bool(diag and phase_ok and params_ok and floor_ok), "seconds": secs,
     }  # fmt: skip
 

@@ -334,6 +334,9 @@ def diagnose(
     report["verdict"]["law_mean"] = (
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
     )
+    if chosen and verdict[0] not in ("none", "unknown") and "wind" in verdict:
+        tick("wind (throw to throw)")
+        _wind_throw_report(report, prob, tuple(chosen[-1].full.effects))
     return Diagnosis(
         report=report,
         baseline_residual=r0,
@@ -344,6 +347,30 @@ def diagnose(
         scores=scores,
         noise=nf,
     )
+
+
+def _wind_throw_report(report: dict[str, Any], prob: GapProblem,
+                       effects: tuple[Effect, ...]) -> None:  # fmt: skip
+    """The wind's throw-to-throw form (`cell.gap.wind_throw`) under `wind_throw_to_throw`;
+    where it stands for the wind, the verdict's wind is its mean and spread: law
+    `wind_i ~ N(mean, sd)`, params `x_mps`, `y_mps` (the mean; a vertical part keeps its
+    steady value) and `sd_mps`, with their 95 % intervals. The held-out RMSE and the
+    misses stay the steady fit's (the mean prediction's best in least squares)."""
+    from cell.gap.wind_throw import wind_throw
+
+    wt = wind_throw(prob, effects)
+    if wt is None:
+        return
+    v = report["verdict"]
+    report["wind_throw_to_throw"] = {**wt, "member": v["laws"].get("wind")}
+    if not wt["chosen"]:
+        return
+    v["params"]["wind"] = {**v["params"]["wind"], "x_mps": wt["mean_mps"][0],
+                           "y_mps": wt["mean_mps"][1], "sd_mps": wt["sd_mps"]}  # fmt: skip
+    v["laws"]["wind"] = wt["law"]
+    ci = v["params_ci95"].setdefault("wind", {})
+    ci.update({"x_mps": wt["mean_ci95_mps"][0], "y_mps": wt["mean_ci95_mps"][1],
+               "sd_mps": wt["sd_ci95_mps"]})  # fmt: skip
 
 
 def _law_params(e: Effect, ci: dict[str, list[float]] | None) -> dict[str, Any]:

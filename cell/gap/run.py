@@ -147,6 +147,12 @@ def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
     an unknown verdict leaves a structured miss, so its rows are those already out (pre)."""
     if d.report["verdict"]["effects"] == ["unknown"]:
         return pre.copy()
+    wind = d.report.get("wind_throw_to_throw")
+    if wind and wind["chosen"]:
+        # a wind drawn throw to throw: a miss its own spread explains is no outlier
+        from cell.gap.wind_throw import whitened_misses
+
+        return flag(whitened_misses(full, d.verdict_effects, wind))
     return flag(full.residual(np.arange(len(full)), d.verdict_effects))
 
 
