@@ -159,8 +159,12 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     was, now, of = quoted(
         PAGE, r"`s:drag\+hop`'s drag is its constant\. (\d+) → (\d+) of (\d+) pass"
     )
-    assert was == "26"  # the table before, as the page tells it
-    assert (int(now), int(of)) == (
+    assert (was, now) == ("26", "31")  # that change's tables, as the page tells it
+    was, now2, of2 = quoted(
+        PAGE, r"sd ([\d.]+)\. (\d+) → (\d+) of (\d+)\s+pass; no other row moved"
+    )[1:]
+    assert (was, of2) == (now, of)  # the throw-to-throw wind's change came after it
+    assert (int(now2), int(of)) == (
         load_json("docs/figures/gap_check_scene.json")["passes"],
         len(rows),
     )
@@ -241,18 +245,35 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     assert rows["s:wind-y"]["passes"]
     six, one = quoted(page, r"within (\d+) m/s across and (\d+) m/s up or down")
     assert (float(six), float(one)) == (Wind.plausible[0][1], Wind.plausible[2][1])
-    sd, mean, fx, a_f = quoted(
+    sd, mean, steady, fx, fsd, rsd, a_f = quoted(
         page,
-        r"`s:wind-throw-wide` \(drawn throw to throw with an sd of ([\d.]+) m/s about ([\d.]+) "
-        r"m/s\s+along x\): named `wind` by its level member, phase right, but x ([\d.]+) m/s, "
+        r"`s:wind-throw-wide` \(drawn throw to throw with an sd of ([\d.]+) m/s about ([\d.]+)\s+"
+        r"m/s along x\) it found x ([\d.]+) m/s, named `wind` by its level member: .*? finds x "
+        r"([\d.]+) m/s and an sd of ([\d.]+) m/s \(the repeats'\s+differences alone: ([\d.]+)\), "
         r"A ([\d.]+) F",
     )
     wide = rows["s:wind-throw-wide"]
     assert (float(sd), float(mean)) == (_case("s:wind-throw-wide")[0]["sd"],
                                         _case("s:wind-throw-wide")[0]["x_mps"])  # fmt: skip
-    assert wide["verdict"] == "wind" and wide["laws"] == {"wind": "level"}
+    assert steady == "2.92"  # the table before, as the page tells it
+    wt = wide["wind_throw_to_throw"]
+    assert wide["verdict"] == "wind" and wide["laws"] == {"wind": wt["law"]} and wt["chosen"]
     _written(fx, wide["params"]["wind"]["x_mps"])
+    _written(fsd, wide["params"]["wind"]["sd_mps"])
+    _written(rsd, wt["repeats"]["sd_mps"])
     close(a_f, wide["after_over_floor"], 2)
+    assert wide["passes"] and wide["outliers_false"] == 0
+    t_sd, tx, t_x, tsd = quoted(
+        page,
+        r"`s:wind-throw` \(sd ([\d.]+)\) takes the form too: x (−[\d.]+) for (−[\d.]+), "
+        r"sd (\d+\.\d+)",
+    )
+    narrow = rows["s:wind-throw"]
+    drawn = _case("s:wind-throw")[0]
+    assert (float(t_sd), float(t_x.replace("−", "-"))) == (drawn["sd"], drawn["x_mps"])
+    assert narrow["wind_throw_to_throw"]["chosen"]
+    _written(tx, narrow["params"]["wind"]["x_mps"])
+    _written(tsd, narrow["params"]["wind"]["sd_mps"])
     f, factor, a, k = quoted(
         page,
         r"`s:drag-low` \(factor ([\d.]+)\) is the constant now \(([\d.]+)\): the law it was "
