@@ -310,12 +310,22 @@ def check_the_gap_laws() -> None:
                         r"factor leaves, ([\d.]+) m")  # fmt: skip
     close(tool, miss["tool_floor_m"], 3)
     close(best, miss["after_m"], 3)
-    varying = [c for c in doc["campaigns"] if c["case"].endswith("-throw") and c["passes"]]
+    varying = [
+        c
+        for c in doc["campaigns"]
+        if c["case"].endswith("-throw") and c["passes"] and c["case"] != "o:wind-throw"
+    ]
     lo, hi, n = quoted(page, r"flagged as outliers \((\d+)–(\d+) rows of (\d+)\)")
     assert (int(lo), int(hi)) == (
         min(c["outliers_false"] for c in varying),
         max(c["outliers_false"] for c in varying),
     )
     assert all(c["after_over_floor"] < 1 for c in varying)
+    (a_f,) = quoted(page, r"no\s+row flagged in `o:wind-throw`, and A ([\d.]+) × the world's floor")
+    (wt,) = [c for c in doc["campaigns"] if c["case"] == "o:wind-throw"]
+    assert (
+        wt["passes"] and wt["outliers_false"] == 0 and wt["laws"]["wind"] == "wind_i ~ N(mean, sd)"
+    )
+    close(a_f, wt["after_over_floor"], 2)
     n_cli, workers = quoted(page, r"`cell gap check --worlds other --n (\d+) --workers (\d)")
     assert int(n) == int(n_cli) and int(workers) >= 1
