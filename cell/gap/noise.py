@@ -44,7 +44,7 @@ from cell.gap.problem import GapProblem
 from cell.kinds import PLATFORMS
 from cell.model.throw import Landing
 
-__all__ = ["NoiseFloor", "noise_floor", "features", "validated"]
+__all__ = ["NoiseFloor", "noise_floor", "features", "repeat_groups", "validated"]
 
 log = logging.getLogger(__name__)
 
@@ -114,13 +114,19 @@ def _repeat_key(prob: GapProblem) -> list[tuple]:
     return [(oid[i], *q[i].tolist()) for i in range(len(prob))]
 
 
-def _repeats(prob: GapProblem, r: np.ndarray) -> tuple[float, int]:
+def repeat_groups(prob: GapProblem) -> list[list[int]]:
+    """The throws' row indices grouped by configuration (same object, stroke, pose,
+    platform and plane, `_repeat_key`), in order of first appearance."""
     groups: dict[tuple, list[int]] = {}
     for i, k in enumerate(_repeat_key(prob)):
         groups.setdefault(k, []).append(i)
+    return list(groups.values())
+
+
+def _repeats(prob: GapProblem, r: np.ndarray) -> tuple[float, int]:
     ss = 0.0
     dof = 0
-    for ids in groups.values():
+    for ids in repeat_groups(prob):
         if len(ids) > 1:
             g = r[ids]
             ss += float(np.sum((g - g.mean(axis=0)) ** 2))

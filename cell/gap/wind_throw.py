@@ -35,6 +35,7 @@ import numpy as np
 from scipy.optimize import minimize
 
 from cell.gap.laws import TERM_PENALTY
+from cell.gap.noise import MIN_REPEAT_DOF, repeat_groups
 from cell.gap.problem import GapProblem
 from cell.model.effects import Effect
 
@@ -45,7 +46,7 @@ LOGLIK_PENALTY = 2.0 * float(np.log1p(TERM_PENALTY))  # [nats per throw] for the
 JAC_STEP_MPS = 0.05  # central-difference step of ∂ landing / ∂ wind [m/s]
 S_MIN_MPS = 1e-4  # the spread's lower bound in the fit [m/s]
 S_ZERO_MPS = 1e-3  # a fitted spread below this is none (the refinement's start off s = 0)
-MIN_PAIRS = 15  # repeat pairs the repeats' test needs (the floor's 30 degrees of freedom)
+MIN_PAIRS = MIN_REPEAT_DOF // 2  # repeat pairs the repeats' test needs: 2 axes each, the floor's
 REPEAT_LR = 2.71  # χ²₁'s 90 % point: a 5 % test of sd > 0 on its boundary (50:50 χ²₀, χ²₁)
 RELINEARISE = 1  # passes re-linearised at the fitted mean after the first at the steady fit
 _LN2PI = float(np.log(2.0 * np.pi))
@@ -188,12 +189,8 @@ def _heldout(prob: GapProblem, y: np.ndarray, jac: np.ndarray) -> tuple[np.ndarr
 def repeat_pairs(prob: GapProblem) -> np.ndarray:
     """Disjoint pairs (k, 2) of throws logged as repeats of one configuration
     (`cell.gap.noise`'s key: same object, stroke, pose, platform and plane)."""
-    from cell.gap.noise import _repeat_key
-
-    groups: dict[tuple, list[int]] = {}
-    for i, k in enumerate(_repeat_key(prob)):
-        groups.setdefault(k, []).append(i)
-    pairs = [(g[a], g[a + 1]) for g in groups.values() for a in range(0, len(g) - 1, 2)]
+    groups = repeat_groups(prob)
+    pairs = [(g[a], g[a + 1]) for g in groups for a in range(0, len(g) - 1, 2)]
     return np.array(pairs, int).reshape(-1, 2)
 
 
