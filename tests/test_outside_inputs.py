@@ -9,6 +9,7 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cell.errors import InvalidParameter, JobError, LogFormatError
@@ -319,3 +320,41 @@ def test_a_log_separated_otherwise_than_by_commas_is_said_to_be(
     tracks.write_text(sep.join(["throw_id", "t_s", "x_m", "y_m", "z_m"]) + "\n")
     with pytest.raises(LogFormatError, match="the header is one column; a tracks file is comma"):
         read_tracks_csv(tracks)
+
+
+# -- round 3 -------------------------------------------------------------------------------
+def test_a_campaign_of_configurations_each_thrown_a_dozen_times_has_a_noise_floor(
+    log_csv: Path, tmp_path: Path
+) -> None:
+    """20 release configurations each thrown 12 times (the landings scattered by 30 mm):
+    every throw's 10 nearest neighbours in the model's trajectory space are its own
+    repeats, at distance 0, and the neighbours' line fit (`np.polyfit` over 10 equal
+    distances) ended `cell gap` in a traceback (`LinAlgError: SVD did not converge`).
+    The estimate is now the repeat pairs' mean, which the repeats' own estimate checks."""
+    from cell.gap.noise import noise_floor
+    from cell.gap.problem import build_problem
+    from cell.model.params import DEFAULT_EE
+
+    rows = _rows(log_csv)[:20]
+    rng = np.random.default_rng(0)
+    rep = []
+    for k in range(12):
+        for r in rows:
+            dx, dy = (float(v) for v in rng.normal(0.0, 0.03, 2))
+            x, y = float(r["landed_x_m"]) + dx, float(r["landed_y_m"]) + dy
+            rep.append(
+                {
+                    **r,
+                    "throw_id": f"{r['throw_id']}-{k}",
+                    "landed_x_m": repr(x),
+                    "landed_y_m": repr(y),
+                }
+            )
+    prob = build_problem(read_throws_csv(_write(rep, tmp_path / "repeats.csv")), DEFAULT_EE)
+    idx = np.arange(len(prob))
+    nf = noise_floor(prob, prob.residual(idx), prob.landing(idx))
+    nn, reps = nf.neighbours_m, nf.repeats_m
+    assert np.isfinite(nn) and np.isfinite(reps)
+    # the scatter drawn: 30 mm per axis, ~42 mm in the plane; pairs of repeats see it too
+    assert 0.7 * reps <= nn <= 1.01 * reps
+    assert 0.03 <= reps <= 0.055

@@ -159,7 +159,12 @@ def _neighbours(prob: GapProblem, r: np.ndarray, land: Landing, kmax: int = 10) 
         other = np.where(j[:, k] != own, j[:, k], j[:, k - 1])
         gam.append(np.mean(np.sum((r - r[other]) ** 2, axis=1)) / 2)
         delta.append(np.mean(dist[:, k] ** 2))
-    slope, icpt = np.polyfit(delta, gam, 1)
+    if np.ptp(delta) <= 0.0:
+        # every throw's kmax nearest are repeats of it (distance 0): no slope to fit, the
+        # pairs' mean is the value at distance 0 (a line through one x is singular)
+        icpt = float(np.mean(gam))
+    else:
+        slope, icpt = np.polyfit(delta, gam, 1)
     # the intercept is noisy; keep it between half and all of the nearest-pair value
     return float(np.sqrt(np.clip(icpt, 0.5 * gam[0], gam[0])))
 
