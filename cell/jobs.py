@@ -29,9 +29,9 @@ from cell.jobschema import (
     TOP_KEYS,
     job_keys,
 )
-from cell.model.objects import SHAPES, ObjectParams
+from cell.model.objects import SHAPES, ObjectParams, denser_than_any_solid
 from cell.yamlsafe import check_yaml, read_yaml_text
-from cell.yamltree import Checker, Errors, Node, to_tree
+from cell.yamltree import Checker, Errors, Node, same_text, to_tree
 
 __all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
 
@@ -216,7 +216,7 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
                 f"missing '{req}' (a bin needs id, position_m [x, y], size_m [x, y], rim_height_m)",
             )
     bid = c.text(b["id"], f"{fp}.id")
-    if bid in ids:
+    if any(same_text(bid, other) for other in ids):
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
@@ -324,6 +324,9 @@ def _item_object(
     bad_extents = extents_mismatch(shape, size)
     if bad_extents:
         raise c.fail(it["size_m"], f"{fp}.size_m", bad_extents)
+    dense = denser_than_any_solid(mass, size)
+    if dense:
+        raise c.fail(it["mass_kg"], f"{fp}.mass_kg", dense)
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
 
 

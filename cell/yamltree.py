@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -16,7 +17,7 @@ import yaml
 
 from cell.errors import JobError
 
-__all__ = ["Checker", "Errors", "Node", "shown", "to_tree"]
+__all__ = ["Checker", "Errors", "Node", "same_text", "shown", "to_tree"]
 
 _T = TypeVar("_T")
 
@@ -57,6 +58,12 @@ def to_tree(node: yaml.Node, path: str) -> Node:
     return Node(value, line)
 
 
+def same_text(a: str, b: str) -> bool:
+    """`a` and `b` are the same text, written in the same or another Unicode normal form
+    (an `é` composed, or `e` and a combining accent: one name on screen)."""
+    return a == b or unicodedata.normalize("NFC", a) == unicodedata.normalize("NFC", b)
+
+
 def shown(value: Any, limit: int = 60) -> str:
     """A value as an error message quotes it: lists and mappings with their plain values
     (not the tree's nodes), cut to `limit` characters."""
@@ -78,7 +85,8 @@ class Checker:
         self.path = path
 
     def fail(self, node: Node, field_path: str, msg: str) -> JobError:
-        return JobError(f"{self.path}, line {node.line}, {field_path}: {msg}")
+        where = f", {field_path}" if field_path else " (the whole file)"
+        return JobError(f"{self.path}, line {node.line}{where}: {msg}")
 
     def mapping(self, node: Node, fp: str, allowed: dict[str, str]) -> dict[str, Node]:
         if not isinstance(node.value, dict):
@@ -124,6 +132,10 @@ class Checker:
         if not isinstance(v, str) or not v:
             raise self.fail(node, fp, f"{shown(v)} must be a non-empty text")
         if choices and v not in choices:
+            # the same text in another Unicode form (a decomposed é from another editor)
+            same = [ch for ch in choices if same_text(ch, v)]
+            if same:
+                return same[0]
             raise self.fail(node, fp, f"{v!r} is not valid; choose one of {', '.join(choices)}")
         return v
 

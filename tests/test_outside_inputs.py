@@ -358,3 +358,109 @@ def test_a_campaign_of_configurations_each_thrown_a_dozen_times_has_a_noise_floo
     # the scatter drawn: 30 mm per axis, ~42 mm in the plane; pairs of repeats see it too
     assert 0.7 * reps <= nn <= 1.01 * reps
     assert 0.03 <= reps <= 0.055
+
+
+def test_masses_in_grams_under_the_mass_range_are_refused_by_density(
+    log_csv: Path, tmp_path: Path
+) -> None:
+    """A log of 20 g cubes 30 mm across with the masses written in grams (`20`) was read as
+    20 kg cubes (under the 20 kg bound): `cell predict` put them 6 cm from the release
+    where they landed 2 m out, no word of the units. No solid is denser than osmium
+    (22,590 kg/m³) and an object's box bounds its volume: 20 kg in 27 cm³ is refused."""
+    rows = _rows(log_csv)
+    grams = [{**r, "mass_kg": repr(float(r["mass_kg"]) * 1000.0)} for r in rows]
+    light = [g for g in grams if float(g["mass_kg"]) <= 20.0]
+    assert light, "the campaign has no object of 20 g or less"
+    src = _write(light, tmp_path / "grams.csv")
+    with pytest.raises(LogFormatError) as e:
+        read_throws_csv(src)
+    first = light[0]
+    vol = float(first["size_x_m"]) * float(first["size_y_m"]) * float(first["size_z_m"])
+    msg = str(e.value)
+    assert "grams.csv, row 1, column 'mass_kg'" in msg
+    assert f"{float(first['mass_kg']) / vol:,.0f} kg/m³, denser than any solid" in msg
+    assert f"is it {float(first['mass_kg']) / 1000:g} kg written in grams?" in msg
+    # the same throws in kilograms are read; so is every catalogue object at its own mass
+    assert len(
+        read_throws_csv(
+            _write([r for r, g in zip(rows, grams, strict=True) if g in light], tmp_path / "kg.csv")
+        )
+    ) == len(light)
+    from cell.catalogue import catalogue
+    from cell.model.objects import MAX_DENSITY_KG_M3
+
+    densest = max(e.params.mass / float(np.prod(e.params.size)) for e in catalogue().values())
+    assert densest < MAX_DENSITY_KG_M3 / 10
+
+
+@pytest.mark.parametrize(
+    ("column", "scale", "said"),
+    [
+        ("mass_kg", 1000.0, "kg written in grams?"),
+        ("size_x_m", 1000.0, "m written in millimetres?"),
+        ("elevation_rad", 180.0 / np.pi, "in degrees?"),
+    ],
+)
+def test_a_column_in_another_unit_is_refused_naming_the_unit(
+    log_csv: Path, tmp_path: Path, column: str, scale: float, said: str
+) -> None:
+    """A mass in grams, an extent in millimetres or an elevation in degrees beyond its
+    range was refused as `75.0 is outside the valid range [0, 20]`, no word of the unit."""
+    rows = _rows(log_csv)
+    k = next(i for i, r in enumerate(rows) if abs(float(r[column]) * scale) > 2.0)
+    bad = [
+        {**r, column: repr(float(r[column]) * scale)} if i == k else r for i, r in enumerate(rows)
+    ]
+    with pytest.raises(LogFormatError) as e:
+        read_throws_csv(_write(bad, tmp_path / "unit.csv"))
+    assert f"row {k + 1}, column '{column}'" in str(e.value)
+    assert said in str(e.value)
+
+
+def test_an_item_denser_than_any_solid_is_refused_with_its_line() -> None:
+    """A 150 g item in a 25 x 25 x 10 mm box (24,000 kg/m³) passed the parser; its throws
+    would be logged with a mass the log reader refuses."""
+    job = BINS.replace("RIM", "0.15").replace(
+        "  - {object: cube50, bin: flat}\n",
+        "  - {shape: cuboid, mass_kg: 0.15, size_m: [0.025, 0.025, 0.01], bin: flat}\n",
+    )
+    with pytest.raises(JobError) as e:
+        parse_job(job, "dense.yaml", check_reach=False)
+    assert "dense.yaml, line 5, items[0].mass_kg: 0.15 kg in a 25 x 25 x 10 mm box" in str(e.value)
+    lighter = job.replace("mass_kg: 0.15", "mass_kg: 0.14")  # 22,400 kg/m³
+    assert parse_job(lighter, "dense.yaml", check_reach=False).items[0].obj.mass == 0.14
+
+
+def test_a_bin_named_in_another_unicode_form_is_the_same_bin() -> None:
+    """A bin `café` written composed and referred to decomposed (`e` + U+0301, as some
+    editors save it) was refused as `'café' is not valid; choose one of café`: two names
+    that look the same. The same text in either form is now the same id, also when a
+    second bin repeats it."""
+    import unicodedata
+
+    nfc, nfd = (unicodedata.normalize(f, "café") for f in ("NFC", "NFD"))
+    assert nfc != nfd
+    job = f"""\
+bins:
+  - {{id: "{nfc}", position_m: [1.5, 0.0], size_m: [0.30, 0.30], rim_height_m: 0.15}}
+items:
+  - {{object: cube50, bin: "{nfd}"}}
+routing: {{cube: "{nfd}"}}
+"""
+    parsed = parse_job(job, "cafe.yaml", check_reach=False)
+    assert [it.bin for it in parsed.items] == [nfc]
+    twice = job.replace(
+        "items:",
+        f'  - {{id: "{nfd}", position_m: [-1.5, 0.0], size_m: [0.30, 0.30], rim_height_m: 0.15}}\nitems:',
+    )
+    with pytest.raises(JobError, match=r"cafe.yaml, line 3, bins\[1\].id: bin id .* is used twice"):
+        parse_job(twice, "cafe.yaml", check_reach=False)
+    with pytest.raises(JobError, match="is not valid; choose one of"):
+        parse_job(job.replace(f'bin: "{nfd}"', 'bin: "cafe"'), "cafe.yaml", check_reach=False)
+
+
+def test_a_job_that_is_not_a_mapping_names_the_whole_file() -> None:
+    """A job written as a list was refused as `job.yaml, line 1, : must be a mapping`."""
+    with pytest.raises(JobError) as e:
+        parse_job("- bins\n- items\n", "list.yaml", check_reach=False)
+    assert str(e.value).startswith("list.yaml, line 1 (the whole file): must be a mapping")

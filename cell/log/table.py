@@ -19,7 +19,7 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.kinds import PLATFORMS
-from cell.model.objects import SHAPES, shape_code
+from cell.model.objects import SHAPES, denser_than_any_solid, shape_code
 from cell.model.throw import ThrowBatch
 
 __all__ = [
@@ -218,6 +218,21 @@ def millimetres_hint(v: float) -> str:
     return ""
 
 
+def _unit_hint(column: str, v: float) -> str:
+    """What to say of a value `v` beyond its column's range where another unit would put it
+    in range: positions or extents in millimetres, a mass in grams, an angle in degrees."""
+    lo, hi = RANGES[column]
+    if column in POSITION_COLUMNS:
+        return millimetres_hint(v)
+    if column.startswith("size_") and lo <= v / 1000.0 <= hi:
+        return f"; extents are in metres: is it {v / 1000.0:g} m written in millimetres?"
+    if column == "mass_kg" and lo <= v / 1000.0 <= hi:
+        return f"; is it {v / 1000.0:g} kg written in grams?"
+    if column.endswith("_rad") and lo <= math.radians(v) <= hi:
+        return f"; angles are in radians: is it {v:g}° ({math.radians(v):.4g} rad) in degrees?"
+    return ""
+
+
 def other_separator(header: Sequence[str]) -> str:
     """The separator a one-column CSV header was written with, as a message names it
     ("';'", "tabs", "'|'"), where it holds one; "" otherwise (a spreadsheet's export in
@@ -289,8 +304,7 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
                         path,
                         r,
                         c,
-                        f"{v} is outside the valid range [{lo:g}, {hi:g}]"
-                        + (millimetres_hint(v) if c in POSITION_COLUMNS else ""),
+                        f"{v} is outside the valid range [{lo:g}, {hi:g}]" + _unit_hint(c, v),
                     )
                 arr[r - 1] = v
             data[c] = arr
@@ -300,6 +314,12 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
         bad = np.flatnonzero(data[c] <= 0)
         if bad.size:
             raise LogFormatError(path, int(bad[0]) + 1, c, f"{data[c][bad[0]]} must be > 0")
+    sizes = np.c_[data["size_x_m"], data["size_y_m"], data["size_z_m"]]
+    for r, (m, sz) in enumerate(zip(data["mass_kg"], sizes, strict=True), start=1):
+        dense = denser_than_any_solid(float(m), sz)
+        if dense:
+            hint = f": is it {float(m) / 1000.0:g} kg written in grams?"
+            raise LogFormatError(path, r, "mass_kg", dense + hint)
     for r, s in enumerate(data["shape"], start=1):
         if s not in SHAPES:
             raise LogFormatError(

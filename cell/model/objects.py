@@ -8,6 +8,7 @@ the throw axis. All SI.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -22,10 +23,30 @@ __all__ = [
     "drag_area",
     "drag_coefficient",
     "inertia_diagonal",
+    "MAX_DENSITY_KG_M3",
+    "denser_than_any_solid",
 ]
 
 SHAPES = ("cube", "cuboid", "cylinder", "sphere", "mesh")
 DRAG_COEFFICIENT = {"cube": 1.05, "cuboid": 1.05, "cylinder": 0.82, "sphere": 0.47, "mesh": 1.0}
+# [kg/m³] osmium's 22,590 rounded up: no solid at room conditions is denser. An object's
+# box bounds its volume, so a mass over this times the box's volume is not a real object.
+MAX_DENSITY_KG_M3 = 22_600.0
+
+
+def denser_than_any_solid(mass_kg: float, size_m: Sequence[float]) -> str:
+    """What is impossible about `mass_kg` in a box of extents `size_m` [m] ("" if nothing):
+    the mass over the box's volume above `MAX_DENSITY_KG_M3` (a mass in grams, mostly)."""
+    vol = float(np.prod(np.asarray(size_m, dtype=float)))
+    if not vol > 0.0 or mass_kg <= MAX_DENSITY_KG_M3 * vol:
+        return ""
+    mm = " x ".join(f"{1000.0 * float(s):g}" for s in size_m)
+    return (
+        f"{mass_kg:g} kg in a {mm} mm box is {mass_kg / vol:,.0f} kg/m³, denser than any "
+        "solid (osmium: 22,590 kg/m³)"
+    )
+
+
 _CD_BY_CODE = np.array([DRAG_COEFFICIENT[s] for s in SHAPES])
 
 
