@@ -464,3 +464,26 @@ def test_a_job_that_is_not_a_mapping_names_the_whole_file() -> None:
     with pytest.raises(JobError) as e:
         parse_job("- bins\n- items\n", "list.yaml", check_reach=False)
     assert str(e.value).startswith("list.yaml, line 1 (the whole file): must be a mapping")
+
+
+def test_throws_the_diagnosis_calls_outliers_are_said_in_its_table() -> None:
+    """Tracks of which half rise in a straight line (a tracker's z drifting, not a flight):
+    `cell gap` called 16 of 40 throws outliers, fitted its verdict without them and printed
+    `verdict none: held-out 0.7336 → 0.7336 m` with no word of them (the JSON report's
+    `outliers` only): the table read as if the 40 throws were diagnosed."""
+    from cell.gap.report import format_table
+
+    report = json.loads((ROOT / "docs" / "scene_gap" / "nominal.json").read_text())
+    assert not any(ln.startswith("outliers ") for ln in format_table(report).splitlines())
+    rows = list(range(4, 42, 2))[:16]
+    report["outliers"] = {
+        "rows": rows,
+        "throw_ids": [f"t{r}" for r in rows],
+        "left_out_of_fit": 16,
+        "threshold_sigma": 4.07,
+    }
+    report["verdict"]["heldout_rmse_robust_m"] = 0.084
+    line = next(ln for ln in format_table(report).splitlines() if ln.startswith("outliers "))
+    assert f"16 of {report['throws']} throws miss by over 4.1 σ" in line
+    assert "rows 4, 6, 8, 10, 12 and 11 more" in line
+    assert "the verdict is fitted without them" in line and "held-out 0.0840 m" in line

@@ -68,6 +68,31 @@ def _tracks_set_aside(tracks: dict[str, Any]) -> list[str]:
     return [f"tracks           {', '.join(parts)}"]
 
 
+def _outliers(report: dict[str, Any]) -> list[str]:
+    """The table's line on the throws the diagnosis calls outliers (none: no line): how
+    many of all, their first rows, and how many the verdict was fitted without."""
+    out = report.get("outliers") or {}
+    rows = out.get("rows") or []
+    if not rows:
+        return []
+    shown = ", ".join(str(r) for r in rows[:5]) + (
+        f" and {len(rows) - 5} more" if len(rows) > 5 else ""
+    )
+    left = int(out.get("left_out_of_fit", 0))
+    robust = report["verdict"].get("heldout_rmse_robust_m")
+    return [
+        f"outliers         {len(rows)} of {report['throws']} throws miss by over "
+        f"{out.get('threshold_sigma', float('nan')):.1f} σ (rows {shown}; the JSON report's "
+        f"outliers)"
+        + (
+            f"; the verdict is fitted without {'them' if left == len(rows) else left}"
+            if left
+            else ""
+        )
+        + (f"; held-out {robust:.4f} m without them" if robust is not None else "")
+    ]
+
+
 def format_table(report: dict[str, Any]) -> str:
     """The report as a terminal table."""
     r = report
@@ -75,6 +100,7 @@ def format_table(report: dict[str, Any]) -> str:
     other = r.get("other_launcher_throws", 0)
     lines.append(f"throws           {r['throws']} ({other} from another launcher, from tracks)")
     lines.extend(_tracks_set_aside(r.get("tracks") or {}))
+    lines.extend(_outliers(r))
     nz = r.get("noise", {})
     val = nz.get("validated_m")
     with_val = val is not None and np.isfinite(val) and nz.get("validated_share", 0) > 0
