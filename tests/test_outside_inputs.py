@@ -487,3 +487,62 @@ def test_throws_the_diagnosis_calls_outliers_are_said_in_its_table() -> None:
     assert f"16 of {report['throws']} throws miss by over 4.1 σ" in line
     assert "rows 4, 6, 8, 10, 12 and 11 more" in line
     assert "the verdict is fitted without them" in line and "held-out 0.0840 m" in line
+
+
+@pytest.mark.parametrize(
+    ("scale", "offset", "said"),
+    [
+        (1000.0, 0.0, "is it 0.11 s written in milliseconds?"),
+        (1.0, 1.7e9, "a clock's time? t_s is the time since the throw's release command"),
+    ],
+)
+def test_track_times_in_milliseconds_or_a_clocks_time_are_refused(
+    tmp_path: Path, scale: float, offset: float, said: str
+) -> None:
+    """Track times written in milliseconds (0, 10, ..., 840) were read as a flight of
+    14 minutes: `cell gap` on 40 such tracks ran 60 CPU-s and more where the same tracks
+    in seconds take 9, no word of the unit. Unix clock times (1.7e9 s) too."""
+    t = [k / 100.0 for k in range(85)]
+    path = tmp_path / "tracks.csv"
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for ti in t:
+            w.writerow(
+                [
+                    "a",
+                    repr(ti * scale + offset),
+                    repr(3.0 * ti),
+                    "0.0",
+                    repr(1.0 + 3.0 * ti - 4.9 * ti * ti),
+                ]
+            )
+    with pytest.raises(LogFormatError) as e:
+        read_tracks_csv(path)
+    row = 1 if offset else 12  # 110 ms is the first time beyond 100 s read as seconds
+    assert f"tracks.csv, row {row}, column 't_s'" in str(e.value) and said in str(e.value)
+    seconds = tmp_path / "seconds.csv"
+    with open(seconds, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for ti in t:
+            w.writerow(["a", repr(ti - 0.5), "0.0", "0.0", "1.0"])  # before the release too
+    assert len(read_tracks_csv(seconds)["a"]) == len(t)
+
+
+def test_a_track_row_with_too_few_or_too_many_cells_is_said_to_be(tmp_path: Path) -> None:
+    """A track row cut short (`t0,0.05,0.1`) was refused as `column 'y_m': None is not a
+    number`, and one with a sixth cell was read, the cell dropped unsaid. Now both name the
+    row and the count, as the throw log does; trailing empty cells are still read, and a
+    time without its position is still a lost sample to `cell gap` (keep_lost)."""
+    head = "throw_id,t_s,x_m,y_m,z_m\n"
+    path = tmp_path / "tracks.csv"
+    for row, cells in (("t0,0.05,0.1", 3), ("t0,0.05,0.1,0.0,1.0,7", 6)):
+        path.write_text(head + "t0,0.0,0.0,0.0,1.0\n" + row + "\n")
+        with pytest.raises(LogFormatError) as e:
+            read_tracks_csv(path)
+        assert str(e.value).endswith(f"tracks.csv, row 2: has {cells} cells; the header has 5")
+    path.write_text(head + "t0,0.0,0.0,0.0,1.0,,\nt0,0.05,0.1,0.0,1.0,\n")
+    assert read_tracks_csv(path)["t0"].shape == (2, 4)
+    path.write_text(head + "t0,0.0,0.0,0.0,1.0\nt0,0.05\n")
+    assert np.isnan(read_tracks_csv(path, keep_lost=True)["t0"][1, 1:]).all()

@@ -91,6 +91,25 @@ def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
     tmp.replace(path)
 
 
+# [s] a track's samples lie within this of the release command: no throw of a cell flies
+# for minutes (from 100 m up a fall takes 4.5 s). Milliseconds or a clock's time lie beyond.
+MAX_TRACK_TIME_S = 100.0
+
+
+def _track_time_problem(t: float) -> str:
+    """What is wrong with a track sample's time `t` [s] ("" if nothing)."""
+    if abs(t) <= MAX_TRACK_TIME_S:
+        return ""
+    unit = (
+        f"is it {t / 1000.0:g} s written in milliseconds?"
+        if abs(t) / 1000.0 <= MAX_TRACK_TIME_S
+        else "a clock's time? t_s is the time since the throw's release command, in seconds"
+    )
+    return (
+        f"{t:g} s is outside the valid range [{-MAX_TRACK_TIME_S:g}, {MAX_TRACK_TIME_S:g}]: {unit}"
+    )
+
+
 _LOST = ("", "nan", "NaN", "NAN", "inf", "-inf")  # a position cell a tracker left lost
 
 
@@ -104,8 +123,9 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
 
     Raises:
         LogFormatError: a missing column, a non-numeric cell, a time (or, without
-            `keep_lost`, a position) that is not a finite number, a position beyond the
-            throw log's range (`RANGES`: ±100 m).
+            `keep_lost`, a position) that is not a finite number, a time beyond
+            `MAX_TRACK_TIME_S` of the release, a position beyond the throw log's range
+            (`RANGES`: ±100 m).
     """
     p = _readable(path)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
@@ -129,6 +149,15 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             out: dict[str, list[list[float]]] = {}
             lo, hi = RANGES["x_m"]  # a tracked position [m]: the log's positions' range
             for r, row in enumerate(reader, start=1):
+                extra = [x for x in row.get(None) or () if x.strip()]  # empty: trailing commas
+                # fewer cells than named: with keep_lost, a time without its position is a
+                # lost sample (dropped and said by the track check), else an error
+                short = None in row.values() and not (keep_lost and row["t_s"] is not None)
+                if extra or short:
+                    cells = len(header) + len(extra) - list(row.values()).count(None)
+                    raise LogFormatError(
+                        p, r, None, f"has {cells} cells; the header has {len(header)}"
+                    )
                 vals = []
                 for c in need[1:]:
                     cell = row[c]
@@ -141,6 +170,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
                     if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
+                    if c == "t_s" and _track_time_problem(vals[-1]):
+                        raise LogFormatError(p, r, c, _track_time_problem(vals[-1]))
                     if c != "t_s" and math.isfinite(vals[-1]) and not lo <= vals[-1] <= hi:
                         raise LogFormatError(
                             p,
