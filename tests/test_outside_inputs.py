@@ -546,3 +546,21 @@ def test_a_track_row_with_too_few_or_too_many_cells_is_said_to_be(tmp_path: Path
     assert read_tracks_csv(path)["t0"].shape == (2, 4)
     path.write_text(head + "t0,0.0,0.0,0.0,1.0\nt0,0.05\n")
     assert np.isnan(read_tracks_csv(path, keep_lost=True)["t0"][1, 1:]).all()
+
+
+def test_a_log_saved_as_utf16_or_latin1_is_said_to_be(log_csv: Path, tmp_path: Path) -> None:
+    """A log saved as a spreadsheet's 'Unicode text' (UTF-16) or in Latin-1 was refused as
+    `is not a readable CSV text file ('utf-8' codec can't decode byte 0xff in position 0:
+    invalid start byte)`: the encoding and the fix now said, the line of a stray byte too."""
+    text = log_csv.read_text()
+    utf16 = tmp_path / "utf16.csv"
+    utf16.write_bytes(text.encode("utf-16"))
+    with pytest.raises(LogFormatError, match="is UTF-16 text .*; save it as 'CSV UTF-8'"):
+        read_throws_csv(utf16)
+    lines = text.splitlines(keepends=True)
+    lines[7] = "x\u00e9" + lines[7]  # an é in Latin-1 on line 8
+    latin1 = tmp_path / "latin1.csv"
+    latin1.write_bytes("".join(lines).encode("latin-1"))
+    for read in (read_throws_csv, read_tracks_csv):
+        with pytest.raises(LogFormatError, match="is not UTF-8 text \\(byte 0xe9 on line 8"):
+            read(latin1)

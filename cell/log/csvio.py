@@ -53,9 +53,31 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
             rows = [row for row in reader if any(cell.strip() for cell in row)]
     except FileNotFoundError:
         raise LogFormatError(p, None, None, "no such file") from None
-    except (UnicodeDecodeError, csv.Error) as exc:
+    except UnicodeDecodeError:
+        raise LogFormatError(p, None, None, _not_utf8(p)) from None
+    except csv.Error as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
     return parse_cells(header, rows, p)
+
+
+def _not_utf8(path: str) -> str:
+    """Why a log is not UTF-8 text, and how to save it so: a UTF-16 file (a spreadsheet's
+    "Unicode text") by its byte-order mark, else the first line that is not UTF-8."""
+    with open(path, "rb") as fh:
+        start = fh.read(2)
+    if start in (b"\xff\xfe", b"\xfe\xff"):
+        what = "is UTF-16 text (a spreadsheet's 'Unicode text')"
+    else:
+        what = "is not UTF-8 text"
+        with open(path, "rb") as fh:  # line by line: no UTF-8 character spans a newline
+            for line, raw in enumerate(fh, start=1):
+                try:
+                    raw.decode("utf-8")
+                except UnicodeDecodeError as exc:
+                    bad = raw[exc.start : exc.start + 1].hex()
+                    what += f" (byte 0x{bad} on line {line}: Latin-1 or Windows-1252?)"
+                    break
+    return f"{what}; save it as 'CSV UTF-8' (docs/throw_log.md)"
 
 
 MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is refused unread
@@ -181,6 +203,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                             + millimetres_hint(vals[-1]),
                         )
                 out.setdefault(row["throw_id"], []).append(vals)
-    except (UnicodeDecodeError, csv.Error) as exc:
+    except UnicodeDecodeError:
+        raise LogFormatError(p, None, None, _not_utf8(p)) from None
+    except csv.Error as exc:
         raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
     return {k: np.asarray(sorted(v)) for k, v in out.items()}
