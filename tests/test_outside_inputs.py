@@ -555,12 +555,16 @@ def test_a_log_saved_as_utf16_or_latin1_is_said_to_be(log_csv: Path, tmp_path: P
     text = log_csv.read_text()
     utf16 = tmp_path / "utf16.csv"
     utf16.write_bytes(text.encode("utf-16"))
-    with pytest.raises(LogFormatError, match="is UTF-16 text .*; save it as 'CSV UTF-8'"):
+    with pytest.raises(
+        LogFormatError, match="not a readable CSV text file: UTF-16 .*; save it as 'CSV UTF-8'"
+    ):
         read_throws_csv(utf16)
     lines = text.splitlines(keepends=True)
     lines[7] = "x\u00e9" + lines[7]  # an é in Latin-1 on line 8
     latin1 = tmp_path / "latin1.csv"
     latin1.write_bytes("".join(lines).encode("latin-1"))
     for read in (read_throws_csv, read_tracks_csv):
-        with pytest.raises(LogFormatError, match="is not UTF-8 text \\(byte 0xe9 on line 8"):
+        with pytest.raises(
+            LogFormatError, match="not a readable CSV text file: not UTF-8 \\(byte 0xe9 on line 8"
+        ):
             read(latin1)

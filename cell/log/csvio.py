@@ -62,22 +62,25 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
 
 def _not_utf8(path: str) -> str:
     """Why a log is not UTF-8 text, and how to save it so: a UTF-16 file (a spreadsheet's
-    "Unicode text") by its byte-order mark, else the first line that is not UTF-8."""
+    "Unicode text") by its byte-order mark, a binary file by a NUL byte in its first 8 kB,
+    else the first line that is not UTF-8."""
     with open(path, "rb") as fh:
-        start = fh.read(2)
-    if start in (b"\xff\xfe", b"\xfe\xff"):
-        what = "is UTF-16 text (a spreadsheet's 'Unicode text')"
-    else:
-        what = "is not UTF-8 text"
-        with open(path, "rb") as fh:  # line by line: no UTF-8 character spans a newline
-            for line, raw in enumerate(fh, start=1):
-                try:
-                    raw.decode("utf-8")
-                except UnicodeDecodeError as exc:
-                    bad = raw[exc.start : exc.start + 1].hex()
-                    what += f" (byte 0x{bad} on line {line}: Latin-1 or Windows-1252?)"
-                    break
-    return f"{what}; save it as 'CSV UTF-8' (docs/throw_log.md)"
+        start = fh.read(8192)
+    what = "is not a readable CSV text file: "
+    if start[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return what + "UTF-16 (a spreadsheet's 'Unicode text'); save it as 'CSV UTF-8'"
+    if b"\x00" in start:
+        return what + "binary data (NUL bytes), not text"
+    what += "not UTF-8"
+    with open(path, "rb") as fh:  # line by line: no UTF-8 character spans a newline
+        for line, raw in enumerate(fh, start=1):
+            try:
+                raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                bad = raw[exc.start : exc.start + 1].hex()
+                what += f" (byte 0x{bad} on line {line}: Latin-1 or Windows-1252?)"
+                break
+    return what + "; save it as 'CSV UTF-8'"
 
 
 MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is refused unread
