@@ -1,12 +1,15 @@
 """The sort orchestrator in the PyBullet cell: full cycles, bad jobs, and the log."""
 
 import json
+import re
 import signal
 import sqlite3
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+import pytest
 
 from cell.cli import main
 from cell.jobs import parse_job
@@ -91,7 +94,14 @@ def test_run_json_summary_and_log(tmp_path):
         assert len(store) == 1
 
 
-def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path):
+@pytest.mark.parametrize(
+    ("signum", "code", "said"),
+    [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")],
+    ids=["ctrl-c", "sigterm"],
+)
+def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path, signum, code, said):
+    """Ctrl-C, or a SIGTERM (`kill`, `timeout`, a service manager), ends the run through
+    its `finally`: every throw already recorded kept, the log intact, what was done said."""
     job = tmp_path / "job.yaml"
     # many items: the run must still be going when the second throw is on record (the loop
     # no longer waits for each flight, and a short run could finish before the SIGINT)
@@ -123,16 +133,19 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path):
                 break
         assert n >= 2, "the run recorded no throws in time"
         assert proc.poll() is None, "the run ended before it could be interrupted"
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signum)
         _, err = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 130, err
-    assert "interrupted" in err
+    assert proc.returncode == code, err
+    assert said in err
     with ThrowStore(db) as store:
         kept = len(store)
     assert n <= kept < 20
+    said_kept = re.search(r"stopped after (\d+) of 20 items; (\d+) throws? kept in ", err)
+    assert said_kept, err
+    assert n <= int(said_kept[2]) <= kept
     with sqlite3.connect(db) as con:
         assert con.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
 

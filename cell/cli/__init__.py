@@ -12,7 +12,9 @@ import importlib
 import logging
 import os
 import re
+import signal
 import sys
+import threading
 from typing import Any, NoReturn
 
 import numpy as np
@@ -98,6 +100,16 @@ def json_spelling(argv: list[str]) -> list[str]:
     return out
 
 
+class Terminated(KeyboardInterrupt):
+    """A SIGTERM (`kill`, `timeout`, a service manager stopping the cell): the command
+    ends as Ctrl-C ends it, through every `finally` (the servos' torque off, the throw
+    log closed, what was done said), rather than dying where it stood."""
+
+
+def _terminate_as_interrupt(signum: int, frame: object) -> NoReturn:
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `cell` console script."""
     parser = build_parser()
@@ -109,6 +121,18 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
+    # the handler is put back after: a process that calls main() keeps its own
+    on_main = threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGTERM, _terminate_as_interrupt) if on_main else None
+    try:
+        return _run(args, parser)
+    finally:
+        if before is not None:
+            signal.signal(signal.SIGTERM, before)
+
+
+def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """The command, its errors said as one line each (`main`)."""
     from cell.cli.guard import check_args
 
     try:
@@ -118,9 +142,10 @@ def main(argv: list[str] | None = None) -> int:
     except CellError as exc:
         print(f"cell: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"cell {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"cell {args.command}: {how}", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     except BrokenPipeError:  # output piped into a reader that stopped (e.g. `| head`)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141

@@ -246,6 +246,17 @@ def _run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_HARDWARE_FAULT
+        except KeyboardInterrupt:
+            kept = (
+                f"; {plural(len(store), 'throw')} kept in {store.path}"
+                if store is not None
+                else " (--no-log: no throw recorded)"
+            )
+            print(
+                f"cell run: stopped after {len(done)} of {plural(total, 'item')}{kept}",
+                file=sys.stderr,
+            )
+            raise
         if args.snapshot:  # rendered now, written after the results are printed
             image = orch.scene.render()
         if rec is not None:
