@@ -19,7 +19,7 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.kinds import PLATFORMS
-from cell.model.objects import SHAPES, denser_than_any_solid, shape_code
+from cell.model.objects import MAX_DENSITY_KG_M3, SHAPES, denser_than_any_solid, shape_code
 from cell.model.throw import ThrowBatch
 
 __all__ = [
@@ -315,11 +315,15 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
         if bad.size:
             raise LogFormatError(path, int(bad[0]) + 1, c, f"{data[c][bad[0]]} must be > 0")
     sizes = np.c_[data["size_x_m"], data["size_y_m"], data["size_z_m"]]
-    for r, (m, sz) in enumerate(zip(data["mass_kg"], sizes, strict=True), start=1):
-        dense = denser_than_any_solid(float(m), sz)
-        if dense:
-            hint = f": is it {float(m) / 1000.0:g} kg written in grams?"
-            raise LogFormatError(path, r, "mass_kg", dense + hint)
+    # over whole columns (a log may hold millions of rows), then said for the first row
+    dense_rows = np.flatnonzero(data["mass_kg"] > MAX_DENSITY_KG_M3 * np.prod(sizes, axis=1))
+    if dense_rows.size:
+        k = int(dense_rows[0])
+        m = float(data["mass_kg"][k])
+        dense = denser_than_any_solid(m, sizes[k]) or f"{m:g} kg is denser than any solid"
+        raise LogFormatError(
+            path, k + 1, "mass_kg", f"{dense}: is it {m / 1000.0:g} kg written in grams?"
+        )
     for r, s in enumerate(data["shape"], start=1):
         if s not in SHAPES:
             raise LogFormatError(
