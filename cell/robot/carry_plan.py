@@ -19,10 +19,11 @@ from cell.robot.grip_hold import (
     GENTLE_SCALE,
     TILT_SLOWS_OVER,
     GripHold,
-    _point_motion,
     carry_use,
     grip_use,
+    motion_use,
     rest_force,
+    sampled_motion,
     tilt_use,
     uses,
 )
@@ -134,7 +135,8 @@ def _fastest_within(
         return best
     scales = (velocity_scale, acceleration_scale)
     shaped = _shaped(waypoints_q, robot, hold, bound, tilt, *scales) if shape else None
-    dilated = _Dilated(best[0], robot, hold, margin=tilt)
+    # the grip's use at full speed was read off the same samples the dilation scales
+    dilated = _Dilated(best[0], robot, hold, margin=tilt, motion=scaled.motion(1.0))
     best = scaled.fastest(bound, best, dilated)
     if best[1] > bound and tie > 0.0:
         # Not even a slow move keeps within the bound. Where the path at rest asks no
@@ -193,6 +195,8 @@ class _TimeScaled:
         self.velocity_scale, self.acceleration_scale = velocity_scale, acceleration_scale
         self.iterations = iterations
         self._planned: dict[float, tuple[Trajectory, float]] = {}
+        # each plan's `sampled_motion`, its use read off it (`_Dilated` scales 1.0's)
+        self._motion: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def attempt(self, s: float) -> tuple[Trajectory, float]:
         """The path planned at time scale s, and its use of the grip (`grip_use`; with
@@ -207,8 +211,16 @@ class _TimeScaled:
                 velocity_scale=self.velocity_scale * math.sqrt(s),
                 acceleration_scale=self.acceleration_scale * s,
             )
-            self._planned[s] = (tr, grip_use(tr, self.robot, self.hold, margin=self.margin))
+            motion = sampled_motion(tr, self.robot, self.hold)
+            self._planned[s] = (tr, motion_use(motion, self.hold, self.margin))
+            self._motion[s] = motion
         return self._planned[s]
+
+    def motion(self, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`sampled_motion` of the path `attempt` planned at time scale s (planned first if
+        it was not): the item's motion at `grip_use`'s 201 instants."""
+        self.attempt(s)
+        return self._motion[s]
 
     def gentle(self, bound: float) -> tuple[Trajectory, float]:
         """The path at GENTLE_SCALE of the limits and its use (logged: over `bound`)."""
@@ -278,10 +290,10 @@ class _Dilated:
         hold: GripHold,
         n: int = 201,
         margin: float | None = None,
+        motion: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     ) -> None:
-        ts = np.linspace(0.0, traj.duration, n)
-        qs, dqs, ddqs = traj.sample_many(ts)
-        a, alpha, rots = _point_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
+        # `motion`: the path's `sampled_motion` at n instants, where it was read already
+        a, alpha, rots = sampled_motion(traj, robot, hold, n) if motion is None else motion
         rt = np.transpose(rots, (0, 2, 1))
         self._motion = np.einsum("kij,kj->ki", rt, a)  # R⊤a_c, scales by s
         self._weight = np.einsum("kij,j->ki", rt, _GRAVITY)  # R⊤g, does not

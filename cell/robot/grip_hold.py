@@ -97,10 +97,26 @@ def item_motion(
     Returns:
         (f, alpha, rotations), shapes (k, 3), (k, 3), (k, 3, 3).
     """
-    a, alpha, rots = _point_motion(robot, qs, dqs, ddqs, offset_tcp_m)
+    return _in_tcp(*_point_motion(robot, qs, dqs, ddqs, offset_tcp_m))
+
+
+def _in_tcp(
+    a: np.ndarray, alpha: np.ndarray, rots: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`item_motion` from `_point_motion`'s (a, α, rotations): f = R⊤(a − g) and R⊤α."""
     rt = np.transpose(rots, (0, 2, 1))
     f = np.einsum("kij,kj->ki", rt, a - _GRAVITY)
     return f, np.einsum("kij,kj->ki", rt, alpha), rots
+
+
+def sampled_motion(
+    traj: Trajectory, robot: Robot, hold: GripHold, n: int = 201
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_point_motion` of the item's centre of mass at n instants evenly spread over the
+    trajectory, its ends included: what `grip_use` reads the grip's use from."""
+    ts = np.linspace(0.0, traj.duration, n)
+    qs, dqs, ddqs = traj.sample_many(ts)
+    return _point_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
 
 
 def grip_use(
@@ -110,9 +126,14 @@ def grip_use(
     `margin`, m |f| / F + |τ_x| / T (the tilt about y not counted); with it, the carry's
     use with the tilt (`carry_use`), which a carry keeps within 1/margin. ≤ 1 is within
     what the pads hold."""
-    ts = np.linspace(0.0, traj.duration, n)
-    qs, dqs, ddqs = traj.sample_many(ts)
-    f, alpha, rots = item_motion(robot, qs, dqs, ddqs, hold.offset_tcp_m)
+    return motion_use(sampled_motion(traj, robot, hold, n), hold, margin)
+
+
+def motion_use(
+    motion: tuple[np.ndarray, np.ndarray, np.ndarray], hold: GripHold, margin: float | None
+) -> float:
+    """`grip_use` from the samples `sampled_motion` gives."""
+    f, alpha, rots = _in_tcp(*motion)
     if margin is None:
         return float(np.max(uses(f, alpha, hold, tilt=False)))
     return carry_use(f, alpha, rest_force(rots), hold, margin)

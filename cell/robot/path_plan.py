@@ -3,7 +3,9 @@ waypoints, at rest at both ends."""
 
 from __future__ import annotations
 
+import functools
 import logging
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -66,6 +68,40 @@ def _spline_within(rb: Robot, keep: list[np.ndarray]) -> Any:
     return path
 
 
+# The spline through distinct waypoints and toppra's gridpoints along it, by the bytes of
+# the waypoints and the joint limits (or the TrajectoryError's message where the spline
+# leaves them): neither depends on the limit scales, and a carry plans the same waypoints
+# at several (`cell.robot.carry_plan.plan_carry`: at full speed, shaped by the grip, at
+# the bisection's scale or gently). Nothing reads into them: the gridpoints are read-only.
+# Bounded: cleared when full.
+_PATHS: dict[bytes, tuple[Any, np.ndarray] | str] = {}
+_PATHS_MAX = 64
+
+
+def _path_and_grid(rb: Robot, keep: list[np.ndarray]) -> tuple[Any, np.ndarray]:
+    """(`_spline_within`'s path, toppra's gridpoints along it), each made once for the
+    same waypoints [rad] and joint limits; TrajectoryError as `_spline_within`."""
+    lower, upper = rb.limits.lower, rb.limits.upper
+    key = b"".join(np.ascontiguousarray(v, dtype=float).tobytes() for v in (lower, upper, *keep))
+    found = _PATHS.get(key)
+    if found is None:
+        if len(_PATHS) >= _PATHS_MAX:
+            _PATHS.clear()
+        try:
+            path = _spline_within(rb, keep)
+        except TrajectoryError as exc:
+            found = str(exc)
+        else:
+            # toppra's own gridpoints (its TOPPRA's defaults), for every scale and margin
+            grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
+            grid.setflags(write=False)
+            found = (path, grid)
+        _PATHS[key] = found
+    if isinstance(found, str):
+        raise TrajectoryError(found)
+    return found
+
+
 # toppra's joint-limit constraints by their limits' bytes: building one formats its limits
 # into a description string (1.6 ms a pair, more than toppra's own planning of a short
 # path's grid takes); nothing in them changes once built. Bounded: cleared when full.
@@ -91,6 +127,105 @@ def _joint_limits(vlim: np.ndarray, alim: np.ndarray) -> tuple[Any, Any]:
         )
         _LIMIT_CONSTRAINTS[key] = found
     return found
+
+
+@functools.cache
+def _toppra_class() -> type:
+    """toppra 0.6's TOPPRA with the seidel solver and the constant-acceleration
+    parameterisation, its Python steps written leaner: the same solver calls with the same
+    numbers in the same order, and the same arithmetic, so the same trajectories bit for
+    bit (tests/test_toppra_setup.py compares them with toppra's own):
+
+    - set up as `ReachabilityAlgorithm.__init__` sets it up for a solver named "seidel"
+      and linear constraints (`ParameterizationAlgorithm`'s own set-up, then
+      `seidelWrapper(constraints, path, gridpoints, solve_lp1d=True)`), without its look
+      for the other solvers' packages (`available_solvers`: `importlib.util.find_spec` of
+      qpoases and cvxpy, which searches sys.path again on every plan whatever solver is
+      named: 1-2 ms a plan);
+    - the controllable sets (`compute_controllable_sets`) with its one step inline,
+      without two arrays made and checked for NaN a grid point;
+    - the forward pass's step (`_forward_step`) with the grid's steps read once, not
+      copied out of the solver a grid point;
+    - the parameterisation's times and path accelerations (`ParametrizeConstAccel`'s
+      `_process_parametrization`) over the whole grid at once: each the same two or
+      three operations on the same numbers, the times summed in order
+      (`np.add.accumulate`, as its loop adds them)."""
+    import toppra.algorithm as algo
+    from toppra.parametrizer import ParametrizeConstAccel
+    from toppra.solverwrapper.cy_seidel_solverwrapper import seidelWrapper
+
+    toppra_log = logging.getLogger("toppra.algorithm.reachabilitybased.reachability_algorithm")
+
+    class ConstAccel(ParametrizeConstAccel):  # type: ignore[misc]
+        def _process_parametrization(self) -> None:
+            ss, vs = self._ss, self._velocities
+            ds = ss[1:] - ss[:-1]
+            self._us = 0.5 * (self._xs[1:] - self._xs[:-1]) / ds
+            self._ts = np.concatenate(([0.0], np.add.accumulate(2 * ds / (vs[:-1] + vs[1:]))))
+
+    class Toppra(algo.TOPPRA):  # type: ignore[misc]
+        def __init__(
+            self, constraint_list: Sequence[Any], path: Any, gridpoints: np.ndarray
+        ) -> None:
+            algo.ParameterizationAlgorithm.__init__(
+                self,
+                constraint_list,
+                path,
+                gridpoints=gridpoints,
+                parametrizer="ParametrizeConstAccel",
+            )
+            self.parametrizer = ConstAccel
+            self.solver_wrapper = seidelWrapper(
+                self.constraints, self.path, self.gridpoints, solve_lp1d=True
+            )
+            self._deltas = self.solver_wrapper.get_deltas()
+            self._n_vars = self.solver_wrapper.get_no_vars()
+
+        def compute_controllable_sets(self, sdmin: float, sdmax: float) -> np.ndarray:
+            assert sdmin <= sdmax and 0 <= sdmin
+            n = self._N
+            k = np.zeros((n + 1, 2))
+            k[n] = [sdmin**2, sdmax**2]
+            sw = self.solver_wrapper
+            sw.setup_solver()
+            g_upper = np.zeros(self._n_vars)
+            g_upper[0] = 1e-9
+            g_upper[1] = -1
+            g_lower = -g_upper
+            solve = sw.solve_stagewise_optim
+            nan = np.nan
+            for i in range(n - 1, -1, -1):
+                lo, hi = k[i + 1, 0], k[i + 1, 1]
+                x_upper = solve(i, None, g_upper, nan, nan, lo, hi)[1]
+                x_lower = solve(i, None, g_lower, nan, nan, lo, hi)[1]
+                k[i, 0] = x_lower
+                k[i, 1] = x_upper
+                if k[i, 0] < 0:
+                    k[i, 0] = 0
+                if math.isnan(k[i, 0]) or math.isnan(k[i, 1]):
+                    toppra_log.warning(
+                        "A numerical error occurs: The controllable set at step "
+                        "[%d / %d] can't be computed.",
+                        i,
+                        n + 1,
+                    )
+                    return k
+            sw.close_solver()
+            return k
+
+        def _forward_step(self, i: int, x: float, k_next: np.ndarray) -> np.ndarray:
+            if math.isnan(x):
+                return np.array([np.nan, np.nan])
+            g_upper = np.zeros(self._n_vars)
+            g_upper[1] = -1
+            g_upper[0] = -2 * self._deltas[i]
+            return np.asarray(
+                self.solver_wrapper.solve_stagewise_optim(
+                    i, None, g_upper, x, x, k_next[0], k_next[1]
+                )
+            )
+
+    return Toppra
 
 
 def plan_path(
@@ -128,30 +263,20 @@ def plan_path(
         TrajectoryError: toppra found no parameterisation, or the spline leaves the joint
             limits between waypoints.
     """
-    import toppra.algorithm as algo
-
     rb = as_robot(robot)
     _check_scales(velocity_scale=velocity_scale, acceleration_scale=acceleration_scale)
     keep = _distinct_waypoints(rb, waypoints_q)
     q_start = keep[0]
-    path = _spline_within(rb, keep)
+    path, grid = _path_and_grid(rb, keep)
     vmax = rb.limits.velocity * velocity_scale
     amax = rb.limits.acceleration * acceleration_scale
-    # toppra's own gridpoints (its TOPPRA's defaults), proposed once for every margin
-    grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
     for margin in (0.98, 0.95, 0.9, 0.8):
         pc_vel, pc_acc = _joint_limits(
             np.c_[-vmax * margin, vmax * margin], np.c_[-amax * margin, amax * margin]
         )
-        inst = algo.TOPPRA(
-            [pc_vel, pc_acc, *constraints],
-            path,
-            gridpoints=grid,
-            # the solver toppra would choose (its first available), named: choosing it
-            # looks for the others' packages on every call (0.5 ms a plan)
-            solver_wrapper="seidel",
-            parametrizer="ParametrizeConstAccel",
-        )
+        # toppra's TOPPRA with the solver it would choose (its first available), seidel,
+        # and the constant-acceleration parameterisation
+        inst = _toppra_class()([pc_vel, pc_acc, *constraints], path, grid)
         raw = inst.compute_trajectory(0.0, 0.0)
         if raw is None:
             raise TrajectoryError(

@@ -88,7 +88,7 @@ class ToppraTrajectory(Trajectory):
 
         from cell.robot.toppra_bulk import const_accel_states
 
-        if type(self._traj) is ParametrizeConstAccel and ts.size > 0:
+        if isinstance(self._traj, ParametrizeConstAccel) and ts.size > 0:
             # `plan_path`'s: the same states, the parameterisation evaluated once
             q, dq, ddq = const_accel_states(self._traj, ts)
         else:
