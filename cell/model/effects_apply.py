@@ -127,11 +127,21 @@ def _flight_accel(
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
         per_throw["neg_k_extra"] = -k_extra
     rows = Rows(per_throw)
+    # made once per set of rows (`Rows`' rule: the integrator hands the same idx object
+    # while its rows stay the same): the parameters at those rows, and, without a
+    # downwash (which varies along the path), the air velocity, the same at every stage
+    held: dict[str, Any] = {"idx": None}
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
-        r = {**par, **rows(idx)}
-        w = np.empty_like(p)
-        w[:] = r["w"]
+        if idx is not held["idx"]:
+            held["idx"], held["r"], held["w"] = idx, {**par, **rows(idx)}, None
+        r = held["r"]
+        w = held["w"]
+        if w is None:
+            w = np.empty_like(p)
+            w[:] = r["w"]
+            if dw is None:  # never written below: handed out again at the next stage
+                held["w"] = w
         if dw is not None:
             rho = np.hypot(p[:, 0] - r["cx"], p[:, 1] - r["cy"])
             if jet:
@@ -183,9 +193,10 @@ def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
 
 
 def _norm(x: np.ndarray) -> np.ndarray:
-    """|x| of each row of x (m, 3): `np.linalg.norm(x, axis=1)`'s arithmetic, without its
-    per-call checks."""
-    return np.sqrt(np.add.reduce(x * x, axis=1))
+    """|x| of each row of x (m, 3): `np.linalg.norm(x, axis=1)`'s arithmetic ((x² + y²) + z²),
+    without its per-call checks, from x's columns (contiguous in the integrator's
+    column-major states)."""
+    return np.sqrt((x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1]) + x[:, 2] * x[:, 2])
 
 
 def flight_accel(

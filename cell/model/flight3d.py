@@ -93,6 +93,14 @@ class FlightResult:
     landed: np.ndarray
 
 
+def _speed_sq(rel: np.ndarray) -> np.ndarray:
+    """|rel|² of each row of rel (m, 3), from its columns: the sum `np.einsum("ij,ij->i")`
+    made before the states were kept column-major, in its order ((x² + z²) + y², its two-lane
+    accumulator), so the rates are bitwise the ones it gave (tests/test_flight_layout.py)."""
+    x, y, z = rel[:, 0], rel[:, 1], rel[:, 2]
+    return (x * x + z * z) + y * y
+
+
 def _rates(
     p: np.ndarray, v: np.ndarray, neg_k: np.ndarray, idx: np.ndarray, accel: Accel | None
 ) -> np.ndarray:
@@ -102,7 +110,7 @@ def _rates(
     else:
         w, extra = accel(p, v, idx)
     rel = v if w is None else v - w
-    a = (neg_k * np.sqrt(np.einsum("ij,ij->i", rel, rel)))[:, None] * rel
+    a = (neg_k * np.sqrt(_speed_sq(rel)))[:, None] * rel
     a[:, 2] -= G
     if extra is not None:
         a += extra
@@ -115,7 +123,7 @@ def acceleration(
     """dv/dt [m/s², W] at these states (gravity, drag in the air flow, extra effects)."""
     idx = np.arange(position.shape[0])
     neg_k = -np.asarray(k, float)
-    return _rates(np.asarray(position, float), np.asarray(velocity, float), neg_k, idx, accel)
+    return _rates(_column_major(position), _column_major(velocity), neg_k, idx, accel)
 
 
 def _rk4(
@@ -140,6 +148,18 @@ def _rk4(
 # Rows whose flight is over stay in the batch (their steps cost little beside NumPy's
 # per-call overhead) until fewer than this share of the rows integrated still fly.
 _KEEP_SHARE = 0.5
+
+
+def _column_major(a: np.ndarray) -> np.ndarray:
+    """A copy of the (m, 3) states a, laid out column by column (Fortran order): each
+    component contiguous, so the rates' column reads and per-row scalings run over
+    contiguous memory (NumPy's elementwise results keep their operands' layout)."""
+    return np.array(a, float, order="F")
+
+
+def _keep(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The rows of column-major states a (m, 3) where rows is True, column-major still."""
+    return np.asarray(a.T[:, rows].T)
 
 
 def fly(
@@ -171,8 +191,8 @@ def fly(
     n = position.shape[0]
     t_start = np.broadcast_to(np.asarray(t0, float), (n,))
     idx = np.arange(n)
-    p = np.array(position, float)
-    v = np.array(velocity, float)
+    p = _column_major(position)
+    v = _column_major(velocity)
     neg_k = -np.broadcast_to(np.asarray(k, float), (n,))
     lz = np.broadcast_to(np.asarray(land_z, float), (n,))
     flying = np.ones(n, bool)
@@ -192,7 +212,7 @@ def fly(
         n_flying = int(np.count_nonzero(flying))
         t += step
         if n_flying < _KEEP_SHARE * idx.size:
-            idx, p, v = idx[flying], p1[flying], v1[flying]
+            idx, p, v = idx[flying], _keep(p1, flying), _keep(v1, flying)
             neg_k, lz, flying = neg_k[flying], lz[flying], flying[flying]
         else:
             p, v = p1, v1
@@ -239,8 +259,8 @@ def sample_path(
     out = np.full((n, m, 3), np.nan)
     t_end = np.nanmax(np.where(np.isfinite(t_rel), t_rel, -1.0), axis=1)
     idx = np.arange(n)[t_end >= 0]
-    p = np.asarray(position, float)[idx]
-    v = np.asarray(velocity, float)[idx]
+    p = _column_major(np.asarray(position, float)[idx])
+    v = _column_major(np.asarray(velocity, float)[idx])
     neg_k = -np.broadcast_to(np.asarray(k, float), (n,))[idx]
     tr, te = t_rel[idx], t_end[idx]
     t = 0.0
@@ -258,7 +278,8 @@ def sample_path(
         # rows past their last sample stay until fewer than the share go on
         going = te >= t
         if np.count_nonzero(going) < _KEEP_SHARE * idx.size:
-            idx, p, v, neg_k, tr, te = (a[going] for a in (idx, p1, v1, neg_k, tr, te))
+            idx, neg_k, tr, te = (a[going] for a in (idx, neg_k, tr, te))
+            p, v = _keep(p1, going), _keep(v1, going)
         else:
             p, v = p1, v1
     return out
