@@ -17,7 +17,9 @@ For each tracked throw:
 * landing: the touchdown the track leads to (the nominal flight from the state fitted to
   the last samples) against the logged landing point;
 * measurement: the whole track's apparent gravity against g; a tracking system off in
-  scale shows a gravity off by the same factor for every object.
+  scale shows a gravity off by the same factor for every object, so it is called one
+  only where two objects or more show it (on one object a spinning ball's lift looks
+  the same).
 """
 
 from __future__ import annotations
@@ -329,15 +331,21 @@ def _launch_share(
     return launch_m, launch_z, speed_pct
 
 
+MIN_SCALE_OBJECTS = 2  # objects (of 3 tracked throws or more) a tracker's scale is seen on
+
+
 def _apparent_gravity(
     prob: GapProblem, fit: TrackFit, idx: np.ndarray
-) -> tuple[float, float, float, bool]:
-    """The tracks' apparent gravity, and whether it shows a measurement gap (off g by more
-    than 1.5 % and 4 standard errors, alike for every object).
+) -> tuple[float, float, float, int, bool]:
+    """The tracks' apparent gravity, and whether it shows a measurement gap: off g by more
+    than 1.5 % and 4 standard errors, alike for every object, on MIN_SCALE_OBJECTS objects
+    or more. On one object a gravity off g may be that object's own flight (a spinning
+    ball's lift, a drag the model misses), which only another object, flying otherwise
+    under the same tracker, tells from the tracker's scale.
 
     Returns:
-        (median ratio to g, its standard error, the spread of the objects' medians,
-        whether it is a measurement gap).
+        (median ratio to g, its standard error, the spread of the objects' medians, the
+        number of objects compared, whether it is a measurement gap).
     """
     g = fit.g_ratio[idx]
     g = g[np.isfinite(g)]
@@ -353,9 +361,10 @@ def _apparent_gravity(
     measurement = (
         np.isfinite(g_med)
         and abs(g_med - 1) > max(0.015, 4 * g_se)
+        and len(per_obj) >= MIN_SCALE_OBJECTS
         and spread < 0.3 * abs(g_med - 1)
     )
-    return g_med, g_se, spread, bool(measurement)
+    return g_med, g_se, spread, len(per_obj), bool(measurement)
 
 
 def _sideways(
@@ -415,7 +424,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     p_last = sample_path(fit.p0[idx], fit.v0[idx], kk, t_rel, step=prob.step)[:, 0, :]
     flight_m = _rms(np.linalg.norm(p_last - fit.p1[idx], axis=1))
     landing_m = _rms(np.linalg.norm(prob.observed[idx] - end_land, axis=1))
-    g_med, g_se, spread, measurement = _apparent_gravity(prob, fit, idx)
+    g_med, g_se, spread, n_obj, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
     top = max(finite, key=lambda p: finite[p]) if finite else None
@@ -430,6 +439,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "g_ratio": g_med,
         "g_ratio_se": g_se,
         "g_ratio_object_spread": spread,
+        "g_ratio_objects": n_obj,
         "measurement": measurement,
         "launch_z": launch_z,
         "flight_z": flight_z,
