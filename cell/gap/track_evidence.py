@@ -72,8 +72,10 @@ def evidence(r: dict[str, Any]) -> str:
     parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
     if r.get("g_ratio_objects", 2) >= 2:
         spread = f"spread over objects {r['g_ratio_object_spread']:.3f}"
-    else:  # nothing to compare: a gravity off g there may be the object's own flight
+    elif r.get("g_ratio_off"):  # nothing to compare it with: it may be the object's own
         spread = "one object: a tracker's scale and the object's own lift look alike"
+    else:
+        spread = "one object"
     parts.append(f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, {spread})")
     if np.isfinite(r.get("drag_ratio", float("nan"))):
         parts.append(

@@ -336,7 +336,7 @@ MIN_SCALE_OBJECTS = 2  # objects (of 3 tracked throws or more) a tracker's scale
 
 def _apparent_gravity(
     prob: GapProblem, fit: TrackFit, idx: np.ndarray
-) -> tuple[float, float, float, int, bool]:
+) -> tuple[float, float, float, int, bool, bool]:
     """The tracks' apparent gravity, and whether it shows a measurement gap: off g by more
     than 1.5 % and 4 standard errors, alike for every object, on MIN_SCALE_OBJECTS objects
     or more. On one object a gravity off g may be that object's own flight (a spinning
@@ -345,7 +345,7 @@ def _apparent_gravity(
 
     Returns:
         (median ratio to g, its standard error, the spread of the objects' medians, the
-        number of objects compared, whether it is a measurement gap).
+        number of objects compared, whether it is off g, whether it is a measurement gap).
     """
     g = fit.g_ratio[idx]
     g = g[np.isfinite(g)]
@@ -358,13 +358,9 @@ def _apparent_gravity(
         if go.size >= 3:
             per_obj.append(np.median(go))
     spread = float(np.std(per_obj)) if len(per_obj) >= 2 else 0.0
-    measurement = (
-        np.isfinite(g_med)
-        and abs(g_med - 1) > max(0.015, 4 * g_se)
-        and len(per_obj) >= MIN_SCALE_OBJECTS
-        and spread < 0.3 * abs(g_med - 1)
-    )
-    return g_med, g_se, spread, len(per_obj), bool(measurement)
+    off = bool(np.isfinite(g_med) and abs(g_med - 1) > max(0.015, 4 * g_se))
+    measurement = off and len(per_obj) >= MIN_SCALE_OBJECTS and spread < 0.3 * abs(g_med - 1)
+    return g_med, g_se, spread, len(per_obj), off, bool(measurement)
 
 
 def _sideways(
@@ -424,7 +420,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     p_last = sample_path(fit.p0[idx], fit.v0[idx], kk, t_rel, step=prob.step)[:, 0, :]
     flight_m = _rms(np.linalg.norm(p_last - fit.p1[idx], axis=1))
     landing_m = _rms(np.linalg.norm(prob.observed[idx] - end_land, axis=1))
-    g_med, g_se, spread, n_obj, measurement = _apparent_gravity(prob, fit, idx)
+    g_med, g_se, spread, n_obj, g_off, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
     top = max(finite, key=lambda p: finite[p]) if finite else None
@@ -440,6 +436,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "g_ratio_se": g_se,
         "g_ratio_object_spread": spread,
         "g_ratio_objects": n_obj,
+        "g_ratio_off": g_off,
         "measurement": measurement,
         "launch_z": launch_z,
         "flight_z": flight_z,
