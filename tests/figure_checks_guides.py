@@ -4,6 +4,8 @@ against the JSON `make figures` writes, rules and limits against the code's cons
 
 from __future__ import annotations
 
+import math
+
 import scipy.constants
 import scipy.stats
 
@@ -38,8 +40,10 @@ def check_the_gap_tracks_rules() -> None:
     assert float(rms) == 100 * MAX_FIT_RMS_M
     (need,) = quoted(page, r"`cell gap` says it needs at least (\d+)")
     assert int(need) == MIN_THROWS
-    from cell.gap.tracks import MIN_SCALE_OBJECTS
+    from cell.gap.tracks import DOWN_COS, MIN_SCALE_OBJECTS
 
+    (deg,) = quoted(page, r"the fit with drag finds gravity over (\d+)° from −z")
+    close(str(math.cos(math.radians(float(deg)))), DOWN_COS, 9)
     (two,) = quoted(page, r"only where (two) objects or more show it alike")
     assert {"two": 2}[two] == MIN_SCALE_OBJECTS
 

@@ -276,3 +276,23 @@ def test_tennicam_cell_gap_one_object_is_no_measurement_gap(tmp_path) -> None:  
     ts = [c for c in rep["candidates"] if c["effect"] == "tracking_scale"]
     assert ts and "on one object" in ts[0]["refused"]
     assert "tracking_scale" not in rep["verdict"]["effects"]
+
+
+def test_tennicam_in_a_y_up_frame_is_refused_naming_the_frame(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    """The launcher's flights written in a frame with y up (a camera's convention: the
+    axes y and z swapped): every track named "is z up?", and `cell gap` says in one line
+    that no throw is left and why (exit 2), where it gave a diagnosis on an apparent
+    gravity of 0.1 g before."""
+    from tests.real_tracks import tennicam_log
+
+    rows, tracks = tennicam_log()
+    rows = rows[::2][:20]
+    for r in rows:
+        r["y_m"], r["z_m"] = r["z_m"], r["y_m"]
+        r["landed_y_m"], r["land_z_m"] = r["land_z_m"], r["landed_y_m"]
+    y_up = {r["throw_id"]: tracks[r["throw_id"]][:, [0, 1, 3, 2]] for r in rows}
+    throws, tpath = write_log(rows, y_up, tmp_path)
+    assert main(["gap", str(throws), "--tracks", str(tpath)]) == 2
+    err = capsys.readouterr().err
+    assert "cell: error:" in err and "20 of 20 tracks unusable" in err
+    assert "gravity towards -y" in err and "is z up?" in err and "Traceback" not in err

@@ -94,6 +94,8 @@ class TrackFit:
 
 
 MAX_FIT_RMS_M = 0.03  # [m] a track the whole-track fit misses by more is not one free flight
+DOWN_COS = 0.5  # the gravity a track's fit finds points within 60° of -z, if z is up
+DOWN_MIN_G = 0.5  # ... judged where it is this many g or more (a frame's up is then clear)
 _CACHE: dict[tuple[str, float, bytes], tuple] = {}
 _CACHE_MAX = 5000
 
@@ -161,12 +163,35 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             bad.append({"throw_id": str(throw_ids[i]), "why": why})
             samples[i] = None
             continue
+        not_down = _not_down_z(row)
+        if not_down:
+            bad.append({"throw_id": str(throw_ids[i]), "why": not_down})
+            samples[i] = None
+            continue
         for key, val in row.items():
             out[key][i] = val
         if hv is not None:
             out["halves"][:, :, i] = hv
         out["t1"][i], out["p1"][i], out["v1"][i], _ = end
     return TrackFit(samples=samples, unusable=tuple(bad), mended=tuple(mended), **out)
+
+
+def _not_down_z(row: dict[str, Any]) -> str | None:
+    """Why a track's whole-track fit is no flight in a z-up frame (None: it is): the
+    gravity it finds, (0, 0, -G) plus its free constant acceleration, drag apart, points
+    over 60° away from -z (a frame with y up, say)."""
+    if not np.isfinite(row["g_ratio"]):
+        return None  # too short a span to tell gravity
+    gvec = np.asarray(row["a0"], float) + np.array([0.0, 0.0, -G])
+    size = float(np.linalg.norm(gvec))
+    if size < DOWN_MIN_G * G or -gvec[2] >= DOWN_COS * size:
+        return None
+    axis = int(np.argmax(np.abs(gvec)))
+    towards = f"{'-' if gvec[axis] < 0 else '+'}{'xyz'[axis]}"
+    return (
+        f"no descent under gravity along z: the fit with drag finds gravity towards {towards} "
+        f"({size:.1f} m/s²); is z up?"
+    )
 
 
 def launch_arrays(
