@@ -62,11 +62,6 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) ->
         return None
     if eff.phase == "measurement":
         if not tracks.get("measurement"):
-            if tracks.get("g_ratio_off") and tracks.get("g_ratio_objects", 2) < 2:
-                return (
-                    f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g on one object: "
-                    "its own lift, not told from a tracker's scale"
-                )
             return f"the tracks' apparent gravity is {tracks['g_ratio']:.3f} g: no measurement gap"
         if isinstance(eff, TrackingScale):
             g = tracks["g_ratio"]

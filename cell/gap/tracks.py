@@ -17,9 +17,8 @@ For each tracked throw:
 * landing: the touchdown the track leads to (the nominal flight from the state fitted to
   the last samples) against the logged landing point;
 * measurement: the whole track's apparent gravity against g; a tracking system off in
-  scale shows a gravity off by the same factor for every object, so it is called one
-  only where two objects or more show it (on one object a spinning ball's lift looks
-  the same).
+  scale shows a gravity off by the same factor for every object (on one object a
+  spinning ball's lift looks the same: the evidence says so).
 """
 
 from __future__ import annotations
@@ -356,17 +355,15 @@ def _launch_share(
     return launch_m, launch_z, speed_pct
 
 
-MIN_SCALE_OBJECTS = 2  # objects (of 3 tracked throws or more) a tracker's scale is seen on
-
-
 def _apparent_gravity(
     prob: GapProblem, fit: TrackFit, idx: np.ndarray
 ) -> tuple[float, float, float, int, bool, bool]:
     """The tracks' apparent gravity, and whether it shows a measurement gap: off g by more
-    than 1.5 % and 4 standard errors, alike for every object, on MIN_SCALE_OBJECTS objects
-    or more. On one object a gravity off g may be that object's own flight (a spinning
-    ball's lift, a drag the model misses), which only another object, flying otherwise
-    under the same tracker, tells from the tracker's scale.
+    than 1.5 % and 4 standard errors, alike for every object. On one object a gravity off
+    g may as well be that object's own flight (a spinning ball's lift), which only another
+    object flying under the same tracker would tell from the tracker's scale: it is still
+    called a measurement gap (a tracks-only launcher of one object off in scale is common,
+    and refused it was named a drag), and the evidence says the two look alike.
 
     Returns:
         (median ratio to g, its standard error, the spread of the objects' medians, the
@@ -384,7 +381,7 @@ def _apparent_gravity(
             per_obj.append(np.median(go))
     spread = float(np.std(per_obj)) if len(per_obj) >= 2 else 0.0
     off = bool(np.isfinite(g_med) and abs(g_med - 1) > max(0.015, 4 * g_se))
-    measurement = off and len(per_obj) >= MIN_SCALE_OBJECTS and spread < 0.3 * abs(g_med - 1)
+    measurement = off and spread < 0.3 * abs(g_med - 1)
     return g_med, g_se, spread, len(per_obj), off, bool(measurement)
 
 
