@@ -4,6 +4,8 @@ against the JSON `make figures` writes, rules and limits against the code's cons
 
 from __future__ import annotations
 
+import math
+
 import scipy.constants
 import scipy.stats
 
@@ -38,6 +40,10 @@ def check_the_gap_tracks_rules() -> None:
     assert float(rms) == 100 * MAX_FIT_RMS_M
     (need,) = quoted(page, r"`cell gap` says it needs at least (\d+)")
     assert int(need) == MIN_THROWS
+    from cell.gap.tracks import DOWN_COS
+
+    (deg,) = quoted(page, r"the fit with drag finds gravity over (\d+)° from −z")
+    close(str(math.cos(math.radians(float(deg)))), DOWN_COS, 9)
 
 
 def check_the_real_tracks() -> None:
@@ -141,6 +147,72 @@ def check_the_real_table_tennis() -> None:
     close(kcell, tt["cell_drag_ratio_median"], 2)
     close(kind, tt["second_drag_ratio_median"], 2)
     assert int(n10) == tt["flights"] and tt["unusable"] == 0
+
+
+def check_the_real_launcher_flights() -> None:
+    page, doc = "docs/gap-tracks.md", load_json("docs/figures/real_tracks.json")
+    tc = doc["tennicam"]
+    n, hz, jit, gaps = quoted(
+        page,
+        r"BSD-3-Clause; (\d+) flights of one ball, tracked at (\d+) Hz with the tracker's own "
+        r"time stamps, jittered by ([\d.]+) ms, and (\d+) gaps of missing frames",
+    )
+    assert int(n) == tc["flights"] == tc["episodes"]
+    close(hz, 1 / tc["frame_period_s"], 0)
+    close(jit, 1000 * tc["stamp_jitter_s"], 1)
+    assert int(gaps) == tc["missing_frame_gaps"]
+    skip, dmm, mg, cd, kr, knom, speed, g, glo, ghi = quoted(
+        page,
+        r"from ([\d.]+) s after the ball is first seen to its bounce\) finds the drag of a (\d+) "
+        r"mm, ([\d.]+) g sphere of C_d ([\d.]+) \(([\d.]+) × ([\d.]+) m⁻¹\), a launch at "
+        r"([\d.]+) m/s, and the ball coming down at ([\d.]+) g \(([\d.]+)–([\d.]+) g flight",
+    )
+    close(skip, tc["second_skip_frames"] * tc["frame_period_s"], 1)
+    assert (float(dmm), float(mg)) == (1000 * tc["diameter_m"], 1000 * tc["mass_kg"])
+    from cell.model.objects import DRAG_COEFFICIENT
+
+    assert float(cd) == DRAG_COEFFICIENT["sphere"]
+    close(kr, tc["second_drag_ratio_median"], 2)
+    close(knom, tc["k_nominal_per_m"], 3)
+    close(speed, tc["second_speed_mps_median"], 1)
+    close(g, tc["second_g_ratio_median"], 3)
+    close(glo, tc["second_g_ratio"][0], 3)
+    close(ghi, tc["second_g_ratio"][1], 3)
+    gc, kc, rms, dropped = quoted(
+        page,
+        r"apparent gravity ([\d.]+) g, a drag ([\d.]+) ×, the tracks fitted within ([\d.]+) mm "
+        r"RMS, the first (\d+) samples dropped",
+    )
+    close(gc, tc["cell_g_ratio"], 3)
+    close(kc, tc["cell_drag_ratio"], 2)
+    close(rms, 1000 * tc["cell_fit_rms_m"], 1)
+    close(dropped, tc["cell_dropped_median"], 0)
+    assert tc["unusable"] == 0
+    gap = tc["gap"]
+    tr = gap["tracks"]
+    assert tr["g_ratio_objects"] == 1 and tr["g_ratio_off"] and tr["measurement"]
+    assert gap["where"]["phase"] == "measurement"
+    assert (
+        "one object: a tracker's scale and the object's own lift look alike"
+        in (gap["where"]["evidence"])
+    )
+    bend, early, z = quoted(
+        page, r"the tracks bend ([\d.]+) cm off the nominal flight and come down ([\d.]+) ms "
+        r"early, z (\d+)\)",
+    )  # fmt: skip
+    close(bend, 100 * tr["bend_m"], 1)
+    close(early, -tr["flight_time_ms"], 1)
+    close(z, -tr["flight_time_z"], 0)
+    held, floor, spin = quoted(
+        page,
+        r"gives `unknown`: held-out ([\d.]+) m against a noise floor of ([\d.]+) m, spin the "
+        r"best partial explanation \(([\d.]+) m\)",
+    )
+    assert gap["verdict"]["effects"] == ["unknown"]
+    assert gap["verdict"]["partial_effects"] == ["spin"]
+    close(held, gap["baseline"]["heldout_rmse_m"], 3)
+    close(floor, gap["noise_floor_m"], 3)
+    close(spin, gap["verdict"]["heldout_rmse_m"], 3)
 
 
 # -- docs/identify_evidence.md ---------------------------------------------------------------

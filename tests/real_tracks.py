@@ -116,3 +116,51 @@ def tabletennis_flights(cut_bounce: bool = True) -> dict[str, np.ndarray]:
         a[:, 0] -= a[0, 0]
         res[key] = a[: _first_bounce(a[:, 3])] if cut_bounce else a
     return res
+
+
+TC_BALL_MASS_KG = 0.0027  # a regulation 40 mm table-tennis ball (the source gives none)
+TC_BALL_DIAMETER_M = 0.040
+TC_AXIS_FRAMES = 10  # the first frames whose chord gives a flight's logged throw axis
+
+
+def tennicam_flights(cut_bounce: bool = True) -> dict[str, np.ndarray]:
+    """{"e01": (k, 4) t [s] (the tracker's time stamps, from the first frame), x, y, z [m]}:
+    the launcher's ball in MPI-IS's table-tennis lab, each flight up to (not including) its
+    first bounce on the table when `cut_bounce` (the frame the converter found it at: the
+    lowest frame of the first dip below 0.9 m), else with the 15 frames after it."""
+    out: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "tabletennis_tennicam" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            out.setdefault(f"e{int(r['episode']):02d}", []).append(
+                [int(r["t_ns"]) * 1e-9] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    res = {}
+    for key, v in out.items():
+        a = np.asarray(v)
+        res[key] = a[: len(a) - 16] if cut_bounce else a
+    return res
+
+
+def tennicam_log() -> tuple[list[dict], dict[str, np.ndarray]]:
+    """The launcher's flights as a throw log of another launcher (no stroke) and their
+    tracks: time 0 at the first frame the ball is seen, the release there, the throw axis
+    the chord of the first 10 frames, the landing the ball's centre at its first bounce on
+    the plane at that height; the track stops the frame before the bounce."""
+    rows, tracks = [], {}
+    uncut = tennicam_flights(cut_bounce=False)
+    for tid, tr in tennicam_flights().items():
+        p = tr[:, 1:4]
+        d = p[TC_AXIS_FRAMES - 1] - p[0]
+        bounce = uncut[tid][len(tr), 1:4]
+        rows.append({
+            "throw_id": tid, "object_id": "tt_ball", "shape": "sphere",
+            "mass_kg": TC_BALL_MASS_KG, "size_x_m": TC_BALL_DIAMETER_M,
+            "size_y_m": TC_BALL_DIAMETER_M, "size_z_m": TC_BALL_DIAMETER_M, "stroke_m": "",
+            "x_m": p[0, 0], "y_m": p[0, 1], "z_m": p[0, 2],
+            "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+            "land_z_m": bounce[2], "landed_x_m": bounce[0], "landed_y_m": bounce[1],
+        })  # fmt: skip
+        tracks[tid] = tr
+    return rows, tracks

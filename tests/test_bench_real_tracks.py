@@ -7,8 +7,15 @@ from __future__ import annotations
 import numpy as np
 
 from cell.bench import bench_real_tracks as brt
-from tests.real_tracks import jugglebot_log, tabletennis_flights
-from tests.test_gap_real_tracks import CLEAN_TT, SKIP, _independent, _independent_tt
+from tests.real_tracks import jugglebot_log, tabletennis_flights, tennicam_log
+from tests.test_gap_real_tracks import (
+    CLEAN_TT,
+    SKIP,
+    TC_SKIP,
+    _independent,
+    _independent_tc,
+    _independent_tt,
+)
 
 
 def test_the_bench_reads_the_tracks_as_the_tests_do() -> None:
@@ -26,6 +33,11 @@ def test_the_bench_reads_the_tracks_as_the_tests_do() -> None:
     for tid in tt:
         np.testing.assert_array_equal(tt[tid], tt_t[tid])
     assert brt.JB_SKIP == SKIP
+    rows, tracks = brt._tennicam_log()
+    rows_t, tracks_t = tennicam_log()
+    assert rows == rows_t and tracks.keys() == tracks_t.keys() and brt.TC_SKIP == TC_SKIP
+    for tid in tracks:
+        np.testing.assert_array_equal(tracks[tid], tracks_t[tid])
 
 
 def test_the_bench_second_fit_is_the_tests_independent_fit() -> None:
@@ -36,3 +48,7 @@ def test_the_bench_second_fit_is_the_tests_independent_fit() -> None:
     flight = tabletennis_flights()[CLEAN_TT[0]]
     mine_tt = brt._fit(flight[:, 0], flight[:, 1:4], False)
     np.testing.assert_allclose(mine_tt, _independent_tt(flight), rtol=1e-6, atol=1e-9)
+    _, tracks_c = tennicam_log()
+    tr = tracks_c["e07"]
+    mine_tc = brt._fit(tr[TC_SKIP:, 0] - tr[TC_SKIP, 0], tr[TC_SKIP:, 1:4], False)
+    np.testing.assert_allclose(mine_tc, _independent_tc(tr)[0], rtol=1e-6, atol=1e-9)

@@ -21,6 +21,7 @@ from tests.figure_checks_guides import (
     check_the_gap_laws,
     check_the_gap_tracks_rules,
     check_the_identify_evidence,
+    check_the_real_launcher_flights,
     check_the_real_table_tennis,
     check_the_real_tracks,
 )
@@ -422,6 +423,7 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_gap_tracks_rules,
     check_the_real_tracks,
     check_the_real_table_tennis,
+    check_the_real_launcher_flights,
     check_the_identify_evidence,
     check_the_cli_limits,
     check_the_layout_sets,

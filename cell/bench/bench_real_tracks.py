@@ -1,13 +1,15 @@
 """What the whole-track fit and `cell gap` find on the real tracked flights shipped under
 tests/data/ (docs/gap-tracks.md quotes these figures).
 
-Two public sets (each folder has its LICENSE and a README saying where it came from):
-Jugglebot's Ball Butler (`jugglebot_mocap`, 300 Hz motion capture, two sessions) and
+Three public sets (each folder has its LICENSE and a README saying where it came from):
+Jugglebot's Ball Butler (`jugglebot_mocap`, 300 Hz motion capture, two sessions),
 table-tennis balls from a ball machine (`tabletennis_3cam`, three-camera triangulation,
-time base 120 Hz). Per set: cell's whole-track fit (`cell.gap.tracks.fit_tracks`), a
-second fit written here without `cell.gap` (scipy `solve_ivp` + `least_squares`: start
-state, gravity and a drag constant k free), and for Jugglebot `cell gap` itself on the
-flights as a throw log of another launcher with their tracks.
+time base 120 Hz) and from MPI-IS's ball launcher (`tabletennis_tennicam`, 180 Hz with
+the tracker's own time stamps, frames missing). Per set: cell's whole-track fit
+(`cell.gap.tracks.fit_tracks`), a second fit written here without `cell.gap` (scipy
+`solve_ivp` + `least_squares`: start state, gravity and a drag constant k free), and for
+Jugglebot and the launcher's flights `cell gap` itself on the flights as a throw log of
+another launcher with their tracks.
 
     python -m cell.bench.bench_real_tracks [--json OUT.json]
 
@@ -32,7 +34,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-__all__ = ["jugglebot", "main", "tabletennis"]
+__all__ = ["jugglebot", "main", "tabletennis", "tennicam"]
 
 DATA = Path(__file__).resolve().parents[2] / "tests" / "data"
 G0 = 9.80665  # [m/s²] standard gravity
@@ -47,6 +49,9 @@ TT_DIAMETER_M = 0.040
 TT_CD = 0.47  # a sphere's drag coefficient, for the table-tennis ball's nominal drag
 TT_RHO = 1.204  # [kg/m³] air at 20 °C, the same
 TT_CLEAN = ("tt2", "tt5", "tt6", "tt7", "tt8", "tt9")  # flights whose first stretch is clean
+TC_AFTER_BOUNCE = 15  # frames the shipped slice keeps after each flight's first bounce
+TC_AXIS_FRAMES = 10  # the first frames whose chord gives a flight's logged throw axis
+TC_SKIP = 18  # frames the second fit skips: 0.1 s, the ball is clear of the launcher
 
 
 def _jugglebot_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
@@ -225,11 +230,113 @@ def tabletennis() -> dict[str, Any]:
     }
 
 
+def _tennicam_frames() -> dict[str, np.ndarray]:
+    """{"e01": (k, 5) frame number, t [s] (time stamp from the first), x, y, z [m]}: each
+    shipped episode, its bounce and the 15 frames after it included."""
+    eps: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "tabletennis_tennicam" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            eps.setdefault(f"e{int(r['episode']):02d}", []).append(
+                [float(r["frame"]), int(r["t_ns"]) * 1e-9]
+                + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    return {key: np.asarray(v) for key, v in eps.items()}
+
+
+def _tennicam_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
+    """The launcher's flights as a throw log of another launcher (no stroke) and their
+    tracks, up to the frame before the first bounce: time 0 at the first frame, the release
+    there, the throw axis the chord of the first 10 frames, the landing the ball's centre at
+    the bounce on the plane at that height."""
+    rows, tracks = [], {}
+    for tid, f in _tennicam_frames().items():
+        tr = f[: len(f) - TC_AFTER_BOUNCE - 1, 1:5]
+        p = tr[:, 1:4]
+        d = p[TC_AXIS_FRAMES - 1] - p[0]
+        bounce = f[len(tr), 2:5]
+        rows.append({
+            "throw_id": tid, "object_id": "tt_ball", "shape": "sphere", "mass_kg": TT_MASS_KG,
+            "size_x_m": TT_DIAMETER_M, "size_y_m": TT_DIAMETER_M, "size_z_m": TT_DIAMETER_M,
+            "stroke_m": "", "x_m": p[0, 0], "y_m": p[0, 1], "z_m": p[0, 2],
+            "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+            "land_z_m": bounce[2], "landed_x_m": bounce[0], "landed_y_m": bounce[1],
+        })  # fmt: skip
+        tracks[tid] = tr
+    return rows, tracks
+
+
+def tennicam() -> dict[str, Any]:
+    """The tracker's timing (frame period, time-stamp jitter, missing frames), cell's track
+    fit and the second fit on every flight up to its bounce, and `cell gap` on all of
+    them."""
+    from cell.cli import main as cell_main
+    from cell.gap.run import _k_of
+    from cell.gap.tracks import fit_tracks
+    from cell.log.table import ThrowTable
+
+    frames = _tennicam_frames()
+    periods, jitter, missing, samples = [], [], 0, 0
+    for f in frames.values():
+        c = np.polyfit(f[:, 0] - f[0, 0], f[:, 1], 1)
+        periods.append(c[0])
+        jitter.append(np.std(f[:, 1] - np.polyval(c, f[:, 0] - f[0, 0])))
+        missing += int(np.sum(np.diff(f[:, 0]) > 1))
+        samples += len(f)
+    rows, tracks = _tennicam_log()
+    table = ThrowTable.from_records(rows)
+    ids = table.text("throw_id")
+    k = _k_of(table)
+    fit = fit_tracks(ids, tracks, k)
+    ind = []
+    for tid in ids:
+        tr = tracks[tid]
+        ind.append(_fit(tr[TC_SKIP:, 0] - tr[TC_SKIP, 0], tr[TC_SKIP:, 1:4], False))
+    a = np.array(ind)
+    g_ind, k_ind = a[:, 6] / G0, a[:, 7]
+    speed = np.linalg.norm(a[:, 3:6], axis=1)
+    with tempfile.TemporaryDirectory() as tmp:
+        _write_log(rows, tracks, Path(tmp))
+        out = Path(tmp) / "gap.json"
+        args = ["gap", f"{tmp}/throws.csv", "--tracks", f"{tmp}/tracks.csv", "--json", str(out)]
+        with redirect_stdout(StringIO()):
+            rc = cell_main(args)
+        if rc != 0:
+            raise RuntimeError(f"cell gap on the launcher's flights exited {rc}")
+        gap = json.loads(out.read_text())
+    return {
+        "episodes": len(frames),
+        "samples": samples,
+        "flights": len(ids),
+        "flight_samples": sum(len(t) for t in tracks.values()),
+        "frame_period_s": float(np.median(periods)),
+        "stamp_jitter_s": float(np.median(jitter)),
+        "missing_frame_gaps": missing,
+        "mass_kg": TT_MASS_KG,
+        "diameter_m": TT_DIAMETER_M,
+        "k_nominal_per_m": float(k[0]),
+        "second_skip_frames": TC_SKIP,
+        "second_g_ratio_median": float(np.median(g_ind)),
+        "second_g_ratio": _span(g_ind),
+        "second_drag_ratio_median": float(np.median(k_ind) / k[0]),
+        "second_speed_mps_median": float(np.median(speed)),
+        "second_velocity_mps_median": [float(x) for x in np.median(a[:, 3:6], axis=0)],
+        "drag_over_gravity": float(np.median(k_ind * speed**2 / (g_ind * G0))),
+        "cell_g_ratio": float(np.median(fit.g_ratio)),
+        "cell_drag_ratio": float(np.median(fit.drag_ratio)),
+        "cell_fit_rms_m": float(np.median(fit.rms_m)),
+        "cell_dropped_median": float(np.median(fit.dropped)),
+        "unusable": len(fit.unusable),
+        "gap": gap,
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m cell.bench.bench_real_tracks")
     p.add_argument("--json", metavar="PATH", help="write the figures as JSON to PATH")
     a = p.parse_args(argv)
-    doc = {"jugglebot": jugglebot(), "tabletennis": tabletennis()}
+    doc = {"jugglebot": jugglebot(), "tabletennis": tabletennis(), "tennicam": tennicam()}
     text = json.dumps(doc, indent=1)
     print(text)
     if a.json:

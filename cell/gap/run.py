@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.errors import InvalidInput
 from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
 from cell.gap.outliers import flag, threshold_sq
@@ -244,10 +245,19 @@ def diagnose_log(
     if tracks:
         fit_all = fit_tracks(table.text("throw_id"), tracks, _k_of(table))
         launch = launch_arrays(fit_all)
-    full = build_problem(
-        table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed,
-        validation=validation,
-    )  # fmt: skip
+    try:
+        full = build_problem(
+            table, ee, base_effects=base_effects, objects=objects, launch=launch, seed=seed,
+            validation=validation,
+        )  # fmt: skip
+    except InvalidInput as exc:
+        if tracks and fit_all.unusable:  # say why the tracks did not give the launches
+            u = fit_all.unusable
+            raise InvalidInput(
+                f"{exc}; {len(u)} of {len(tracks)} tracks unusable, e.g. {u[0]['throw_id']}: "
+                f"{u[0]['why']}"
+            ) from exc
+        raise
     pre = np.zeros(len(full), bool)
     prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
     post = _flags(full, pre, d)

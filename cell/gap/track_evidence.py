@@ -70,10 +70,13 @@ def evidence(r: dict[str, Any]) -> str:
             f"their launch states (z {r['flight_time_z']:.1f})"
         )
     parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
-    parts.append(
-        f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, spread over "
-        f"objects {r['g_ratio_object_spread']:.3f})"
-    )
+    if r.get("g_ratio_objects", 2) >= 2:
+        spread = f"spread over objects {r['g_ratio_object_spread']:.3f}"
+    elif r.get("g_ratio_off"):  # nothing to compare it with: it may be the object's own
+        spread = "one object: a tracker's scale and the object's own lift look alike"
+    else:
+        spread = "one object"
+    parts.append(f"apparent gravity is {r['g_ratio']:.3f} g (±{r['g_ratio_se']:.3f}, {spread})")
     if np.isfinite(r.get("drag_ratio", float("nan"))):
         parts.append(
             f"the whole tracks, integrated with drag, fit within {r['track_fit_rms_m'] * 1000:.1f}"

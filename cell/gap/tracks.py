@@ -17,7 +17,8 @@ For each tracked throw:
 * landing: the touchdown the track leads to (the nominal flight from the state fitted to
   the last samples) against the logged landing point;
 * measurement: the whole track's apparent gravity against g; a tracking system off in
-  scale shows a gravity off by the same factor for every object.
+  scale shows a gravity off by the same factor for every object (on one object a
+  spinning ball's lift looks the same: the evidence says so).
 """
 
 from __future__ import annotations
@@ -92,6 +93,8 @@ class TrackFit:
 
 
 MAX_FIT_RMS_M = 0.03  # [m] a track the whole-track fit misses by more is not one free flight
+DOWN_COS = 0.5  # the gravity a track's fit finds points within 60° of -z, if z is up
+DOWN_MIN_G = 0.5  # ... judged where it is this many g or more (a frame's up is then clear)
 _CACHE: dict[tuple[str, float, bytes], tuple] = {}
 _CACHE_MAX = 5000
 
@@ -159,12 +162,35 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             bad.append({"throw_id": str(throw_ids[i]), "why": why})
             samples[i] = None
             continue
+        not_down = _not_down_z(row)
+        if not_down:
+            bad.append({"throw_id": str(throw_ids[i]), "why": not_down})
+            samples[i] = None
+            continue
         for key, val in row.items():
             out[key][i] = val
         if hv is not None:
             out["halves"][:, :, i] = hv
         out["t1"][i], out["p1"][i], out["v1"][i], _ = end
     return TrackFit(samples=samples, unusable=tuple(bad), mended=tuple(mended), **out)
+
+
+def _not_down_z(row: dict[str, Any]) -> str | None:
+    """Why a track's whole-track fit is no flight in a z-up frame (None: it is): the
+    gravity it finds, (0, 0, -G) plus its free constant acceleration, drag apart, points
+    over 60° away from -z (a frame with y up, say)."""
+    if not np.isfinite(row["g_ratio"]):
+        return None  # too short a span to tell gravity
+    gvec = np.asarray(row["a0"], float) + np.array([0.0, 0.0, -G])
+    size = float(np.linalg.norm(gvec))
+    if size < DOWN_MIN_G * G or -gvec[2] >= DOWN_COS * size:
+        return None
+    axis = int(np.argmax(np.abs(gvec)))
+    towards = f"{'-' if gvec[axis] < 0 else '+'}{'xyz'[axis]}"
+    return (
+        f"no descent under gravity along z: the fit with drag finds gravity towards {towards} "
+        f"({size:.1f} m/s²); is z up?"
+    )
 
 
 def launch_arrays(
@@ -331,13 +357,17 @@ def _launch_share(
 
 def _apparent_gravity(
     prob: GapProblem, fit: TrackFit, idx: np.ndarray
-) -> tuple[float, float, float, bool]:
-    """The tracks' apparent gravity, and whether it shows a measurement gap (off g by more
-    than 1.5 % and 4 standard errors, alike for every object).
+) -> tuple[float, float, float, int, bool, bool]:
+    """The tracks' apparent gravity, and whether it shows a measurement gap: off g by more
+    than 1.5 % and 4 standard errors, alike for every object. On one object a gravity off
+    g may as well be that object's own flight (a spinning ball's lift), which only another
+    object flying under the same tracker would tell from the tracker's scale: it is still
+    called a measurement gap (a tracks-only launcher of one object off in scale is common,
+    and refused it was named a drag), and the evidence says the two look alike.
 
     Returns:
-        (median ratio to g, its standard error, the spread of the objects' medians,
-        whether it is a measurement gap).
+        (median ratio to g, its standard error, the spread of the objects' medians, the
+        number of objects compared, whether it is off g, whether it is a measurement gap).
     """
     g = fit.g_ratio[idx]
     g = g[np.isfinite(g)]
@@ -350,12 +380,9 @@ def _apparent_gravity(
         if go.size >= 3:
             per_obj.append(np.median(go))
     spread = float(np.std(per_obj)) if len(per_obj) >= 2 else 0.0
-    measurement = (
-        np.isfinite(g_med)
-        and abs(g_med - 1) > max(0.015, 4 * g_se)
-        and spread < 0.3 * abs(g_med - 1)
-    )
-    return g_med, g_se, spread, bool(measurement)
+    off = bool(np.isfinite(g_med) and abs(g_med - 1) > max(0.015, 4 * g_se))
+    measurement = off and spread < 0.3 * abs(g_med - 1)
+    return g_med, g_se, spread, len(per_obj), off, bool(measurement)
 
 
 def _sideways(
@@ -415,7 +442,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     p_last = sample_path(fit.p0[idx], fit.v0[idx], kk, t_rel, step=prob.step)[:, 0, :]
     flight_m = _rms(np.linalg.norm(p_last - fit.p1[idx], axis=1))
     landing_m = _rms(np.linalg.norm(prob.observed[idx] - end_land, axis=1))
-    g_med, g_se, spread, measurement = _apparent_gravity(prob, fit, idx)
+    g_med, g_se, spread, n_obj, g_off, measurement = _apparent_gravity(prob, fit, idx)
     shares = {"launch": launch_m, "flight": flight_land_m, "landing": landing_m}
     finite = {kk_: v for kk_, v in shares.items() if np.isfinite(v)}
     top = max(finite, key=lambda p: finite[p]) if finite else None
@@ -430,6 +457,8 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "g_ratio": g_med,
         "g_ratio_se": g_se,
         "g_ratio_object_spread": spread,
+        "g_ratio_objects": n_obj,
+        "g_ratio_off": g_off,
         "measurement": measurement,
         "launch_z": launch_z,
         "flight_z": flight_z,

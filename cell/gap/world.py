@@ -116,10 +116,16 @@ TRUTHS = (
 )
 
 
-def throw_records(n: int, rng: np.random.Generator, *, repeats: int = 2) -> list[dict]:
+def throw_records(
+    n: int, rng: np.random.Generator, *, repeats: int = 2, objects: tuple[str, ...] = ()
+) -> list[dict]:
     """n throws (configurations thrown `repeats` times each), as log records without
-    landings."""
-    cat = [e for e in catalogue().values() if e.set in ("thesis14", "fig33")]
+    landings; of the catalogue's `objects` by name (empty: the thesis' and figure 3.3's)."""
+    cat = [
+        e
+        for name, e in catalogue().items()
+        if (name in objects if objects else e.set in ("thesis14", "fig33"))
+    ]
     strokes = np.linspace(DEFAULT_EE.stroke_min, DEFAULT_EE.stroke_max, 9)
     elevations = np.radians([5.0, 20.0, 35.0, 50.0])
     recs: list[dict] = []

@@ -40,6 +40,7 @@ def draw_tracked_campaign(
     landing_noise_m: float = 0.01,
     track_noise_m: float = 0.003,
     ee: EndEffectorParams = DEFAULT_EE,
+    objects: tuple[str, ...] = (),
 ) -> TrackedCampaign:
     """Draw throws with tracks.
 
@@ -52,8 +53,9 @@ def draw_tracked_campaign(
         landing_noise_m: per-axis scatter of the logged landing [m].
         track_noise_m: per-axis scatter of each track sample [m].
         ee: the end-effector.
+        objects: the catalogue's objects thrown, by name (empty: `throw_records`' own).
     """
-    recs = throw_records(n, rng)
+    recs = throw_records(n, rng, objects=objects)
     stub = ThrowTable.from_records([{**r, "landed_x_m": 0.0, "landed_y_m": 0.0} for r in recs])
     batch = stub.to_batch()
     rpm = stub.num("rotor_rpm")
