@@ -121,7 +121,6 @@ def _span(a: np.ndarray) -> list[float]:
 
 def jugglebot() -> dict[str, Any]:
     """cell's track fit and the second fit per session, and `cell gap` on all flights."""
-    from cell.cli import main as cell_main
     from cell.gap.run import _k_of
     from cell.gap.tracks import fit_tracks
     from cell.log.table import ThrowTable
@@ -151,15 +150,7 @@ def jugglebot() -> dict[str, Any]:
             "cell_drag_ratio": float(np.median(fit.drag_ratio[sel])),
             "cell_sideways_mps2": float(np.linalg.norm(np.median(fit.a0[sel, :2], axis=0))),
         }
-    with tempfile.TemporaryDirectory() as tmp:
-        _write_log(rows, tracks, Path(tmp))
-        out = Path(tmp) / "gap.json"
-        args = ["gap", f"{tmp}/throws.csv", "--tracks", f"{tmp}/tracks.csv", "--json", str(out)]
-        with redirect_stdout(StringIO()):
-            rc = cell_main(args)
-        if rc != 0:
-            raise RuntimeError(f"cell gap on the Jugglebot flights exited {rc}")
-        gap = json.loads(out.read_text())
+    gap = _cell_gap(rows, tracks, "Jugglebot flights")
     return {
         "rate_hz": JB_HZ,
         "throws": len(ids),
@@ -271,7 +262,6 @@ def tennicam() -> dict[str, Any]:
     """The tracker's timing (frame period, time-stamp jitter, missing frames), cell's track
     fit and the second fit on every flight up to its bounce, and `cell gap` on all of
     them."""
-    from cell.cli import main as cell_main
     from cell.gap.run import _k_of
     from cell.gap.tracks import fit_tracks
     from cell.log.table import ThrowTable
@@ -296,15 +286,7 @@ def tennicam() -> dict[str, Any]:
     a = np.array(ind)
     g_ind, k_ind = a[:, 6] / G0, a[:, 7]
     speed = np.linalg.norm(a[:, 3:6], axis=1)
-    with tempfile.TemporaryDirectory() as tmp:
-        _write_log(rows, tracks, Path(tmp))
-        out = Path(tmp) / "gap.json"
-        args = ["gap", f"{tmp}/throws.csv", "--tracks", f"{tmp}/tracks.csv", "--json", str(out)]
-        with redirect_stdout(StringIO()):
-            rc = cell_main(args)
-        if rc != 0:
-            raise RuntimeError(f"cell gap on the launcher's flights exited {rc}")
-        gap = json.loads(out.read_text())
+    gap = _cell_gap(rows, tracks, "launcher's flights")
     return {
         "episodes": len(frames),
         "samples": samples,
@@ -330,6 +312,22 @@ def tennicam() -> dict[str, Any]:
         "unusable": len(fit.unusable),
         "gap": gap,
     }
+
+
+def _cell_gap(rows: list[dict[str, Any]], tracks: dict[str, np.ndarray], what: str) -> Any:
+    """`cell gap`'s JSON report on the flights as a throw log with their tracks, written
+    to a temporary folder (RuntimeError naming `what` if it does not exit 0)."""
+    from cell.cli import main as cell_main
+
+    with tempfile.TemporaryDirectory() as tmp:
+        _write_log(rows, tracks, Path(tmp))
+        out = Path(tmp) / "gap.json"
+        args = ["gap", f"{tmp}/throws.csv", "--tracks", f"{tmp}/tracks.csv", "--json", str(out)]
+        with redirect_stdout(StringIO()):
+            rc = cell_main(args)
+        if rc != 0:
+            raise RuntimeError(f"cell gap on the {what} exited {rc}")
+        return json.loads(out.read_text())
 
 
 def main(argv: list[str] | None = None) -> int:
