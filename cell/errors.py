@@ -7,6 +7,7 @@ valid. Each also subclasses the matching builtin so callers may catch either.
 from __future__ import annotations
 
 __all__ = [
+    "plural",
     "CellError",
     "InvalidParameter",
     "InvalidInput",
@@ -27,6 +28,11 @@ __all__ = [
     "GraspLost",
     "CannotGrip",
 ]
+
+
+def plural(n: int, word: str, words: str | None = None) -> str:
+    """`n` and the word as a person writes them: "1 object", "3 objects", "0 objects"."""
+    return f"{n} {word if n == 1 else (words or word + 's')}"
 
 
 class CellError(Exception):

@@ -101,14 +101,28 @@ def test_none_within_noise() -> None:
 
 
 def test_other_launcher_from_tracks() -> None:
-    """No stroke logged: launch from the tracks, the landing effect still found."""
+    """No stroke logged: launch from the tracks, the landing effect still found. Five
+    landings logged 0.6 m off are outliers, and every throw is still counted as from
+    another launcher, the outliers among them said apart (the count was taken after the
+    outliers were left out: 155 of 160)."""
+    from cell.gap.report import format_table
+
     camp = draw_tracked_campaign((Bounce(0.3),), np.random.default_rng(4), n=160)
     assert np.all(np.isnan(camp.table.num("stroke_m")))
     with pytest.raises(InvalidInput, match="stroke or a track"):
         diagnose_log(camp.table, DEFAULT_EE)  # without tracks nothing can be said
-    d, _ = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
+    x = camp.table.num("landed_x_m").copy()
+    moved = [7, 40, 81, 120, 150]
+    x[moved] += 0.6
+    d, _ = diagnose_log(camp.table.with_columns({"landed_x_m": x}), DEFAULT_EE, tracks=camp.tracks)
     rep = d.report
-    assert rep["other_launcher_throws"] == rep["throws"] > 100
+    assert rep["outliers"]["rows"] == [i + 1 for i in moved]
+    assert rep["other_launcher_throws"] == rep["throws"] == len(camp.table) > 100
+    assert rep["outliers"]["other_launcher"] == len(moved)
+    n = rep["throws"]
+    assert f"throws           {n} ({n} from another launcher, from tracks, 5 of them outliers)" in (
+        format_table(rep)
+    )
     assert rep["verdict"]["effects"] == ["bounce"]
     assert rep["where"]["phase"] == "landing"
     assert all(c["phase"] != "launch" for c in rep["candidates"])

@@ -101,7 +101,9 @@ def test_run_json_summary_and_log(tmp_path):
 )
 def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path, signum, code, said):
     """Ctrl-C, or a SIGTERM (`kill`, `timeout`, a service manager), ends the run through
-    its `finally`: every throw already recorded kept, the log intact, what was done said."""
+    its `finally`: every throw already recorded kept, the log intact, what was done said,
+    and --json PATH holds the summary of the items finished, marked interrupted (it wrote
+    nothing before)."""
     job = tmp_path / "job.yaml"
     # many items: the run must still be going when the second throw is on record (the loop
     # no longer waits for each flight, and a short run could finish before the SIGINT)
@@ -110,7 +112,7 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path, signum,
     proc = subprocess.Popen(
         # the release search and the turn are not what is checked: off, for speed
         [sys.executable, "-m", "cell", "run", str(job), "--db", str(db)]
-        + ["--no-cycle-search", "--no-turn-release"],
+        + ["--no-cycle-search", "--no-turn-release", "--json", str(tmp_path / "run.json")],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -146,6 +148,10 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path, signum,
     said_kept = re.search(r"stopped after (\d+) of 20 items; (\d+) throws? kept in ", err)
     assert said_kept, err
     assert n <= int(said_kept[2]) <= kept
+    part = json.loads((tmp_path / "run.json").read_text())
+    assert part["interrupted"] is True and part["items_planned"] == 20
+    assert part["items"] == len(part["results"]) == int(said_kept[1])
+    assert part["in_bin"] == sum(r["in_bin"] for r in part["results"])
     with sqlite3.connect(db) as con:
         assert con.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
 

@@ -568,3 +568,97 @@ def test_a_log_saved_as_utf16_or_latin1_is_said_to_be(log_csv: Path, tmp_path: P
             LogFormatError, match="not a readable CSV text file: not UTF-8 \\(byte 0xe9 on line 8"
         ):
             read(latin1)
+
+
+def test_tracks_with_no_fall_under_gravity_are_named_unusable() -> None:
+    """A track rising in a straight line (a tracker's z drifting) and a flight whose time
+    stamps run at twice its time (frames at 100 Hz stamped as 50 Hz: apparent gravity
+    0.25 g) were fitted as flights, a free constant acceleration absorbing gravity, and
+    their throws ended as outliers. They are named unusable, the apparent gravity said,
+    with what to check; the same flight with its own time stamps is used (1 g)."""
+    from cell.gap.tracks import GRAVITY_MIN_G, fit_tracks
+    from cell.model.params import G
+
+    rng = np.random.default_rng(3)
+    t = np.arange(60) / 100.0
+    p0, v0 = np.array([0.5, 0.1, 0.8]), np.array([2.0, 0.5, 3.0])
+    fall = p0 + v0 * t[:, None] - 0.5 * G * np.c_[0 * t, 0 * t, t * t]
+    line = p0 + v0 * t[:, None]
+    noise = rng.normal(0.0, 0.002, (3, t.size, 3))
+    tracks = {
+        "flight": np.c_[t, fall + noise[0]],
+        "line": np.c_[t, line + noise[1]],
+        "slow_clock": np.c_[2.0 * t, fall + noise[2]],
+    }
+    fit = fit_tracks(list(tracks), tracks, np.zeros(3))
+    why = {u["throw_id"]: u["why"] for u in fit.unusable}
+    assert set(why) == {"line", "slow_clock"}
+    assert abs(fit.g_ratio[0] - 1.0) < 0.05
+    for tid, g in (("line", 0.0), ("slow_clock", 0.25)):
+        assert "no flight under gravity" in why[tid] and "is z up?" in why[tid]
+        assert "t_s in seconds" in why[tid]
+        said = float(why[tid].split("apparent gravity of ")[1].split(" g")[0])
+        assert abs(said - g) < 0.05 and said < GRAVITY_MIN_G
+
+
+def test_counts_of_one_are_written_in_the_singular(log_csv: Path) -> None:
+    """One track per file (one throw tracked) was refused with "only 1 throw(s) can be
+    diagnosed"; an object of one throw was "1 throw(s), too few to refit". Each count is
+    written as a person writes it."""
+    from cell.errors import InvalidInput
+    from cell.gap.problem import build_problem
+    from cell.identify.refit import ObjectRefit
+    from cell.identify.select import ObjectChoice
+    from cell.model.params import DEFAULT_EE
+
+    table = read_throws_csv(log_csv)
+    x = table.num("landed_x_m").copy()
+    x[1:] = np.nan  # one throw with its landing logged
+    with pytest.raises(InvalidInput) as e:
+        build_problem(table.with_columns({"landed_x_m": x}), DEFAULT_EE)
+    assert "only 1 throw can be diagnosed" in str(e.value)
+    nan = float("nan")
+    assert "cube30: 1 throw, too few" in ObjectRefit("cube30", 1, False, nan, nan, nan, nan).line()
+    assert ObjectChoice("cube30", 1, 0.0).reason().startswith("1 throw: too few")
+
+
+def test_a_cell_of_200_kb_is_refused_by_row_and_column(log_csv: Path, tmp_path: Path) -> None:
+    """A text of 200,000 characters pasted into a cell was refused with the csv module's
+    "field larger than field limit (131072)", naming neither row nor column."""
+    rows = _rows(log_csv)
+    rows[2]["object_id"] = "x" * 200_000
+    with pytest.raises(LogFormatError) as e:
+        read_throws_csv(_write(rows, tmp_path / "big.csv"))
+    msg = str(e.value)
+    assert "row 3, column 'object_id': a cell of 200,000 characters, over the 131,072" in msg
+    tracks = tmp_path / "tracks.csv"
+    with open(tracks, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for k in range(6):
+            w.writerow(["t0" if k != 4 else "y" * 200_000, k / 100.0, 0.1 * k, 0.0, 1.0])
+    with pytest.raises(LogFormatError) as e:
+        read_tracks_csv(tracks)
+    assert "row 5, column 'throw_id': a cell of 200,000 characters" in str(e.value)
+    assert csv.field_size_limit() == 131_072  # the limit is put back
+
+
+def test_tracks_set_aside_for_one_reason_with_figures_are_said_once() -> None:
+    """Twenty straight-line tracks, each set aside with its own apparent gravity in its
+    words, were listed as twenty reasons of one track each ("… 0.16 g … (1); … 0.041 g …
+    (1); … (1); 17 other reasons"); they are one reason of 20 tracks, the first's words
+    given."""
+    from cell.gap.report import format_table
+
+    report = json.loads((ROOT / "docs" / "scene_gap" / "nominal.json").read_text())
+    report["tracks"] = {
+        "unusable": [
+            {"throw_id": f"t{i}", "why": f"no flight under gravity: apparent gravity {i / 100} g"}
+            for i in range(20)
+        ]
+        + [{"throw_id": f"s{i}", "why": "too short: 2 samples"} for i in range(3)],
+        "mended": [],
+    }
+    line = next(ln for ln in format_table(report).splitlines() if ln.startswith("tracks "))
+    assert "23 set aside, unused: no flight under gravity (20, e.g. apparent gravity 0.0 g)" in line
+    assert "too short: 2 samples (3)" in line and "other reasons" not in line

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -232,6 +233,7 @@ def _run(args: argparse.Namespace) -> int:
             if not args.quiet:  # a line per item, on a terminal or not; stdout is the table
                 print(_item_line(r, len(done), total), file=sys.stderr, flush=True)
 
+        t_wall = time.perf_counter()
         try:
             summary = orch.run(progress)
         except HardwareError as exc:
@@ -256,6 +258,7 @@ def _run(args: argparse.Namespace) -> int:
                 f"cell run: stopped after {len(done)} of {plural(total, 'item')}{kept}",
                 file=sys.stderr,
             )
+            _partial_json(args, done, total, time.perf_counter() - t_wall)
             raise
         if args.snapshot:  # rendered now, written after the results are printed
             image = orch.scene.render()
@@ -281,6 +284,25 @@ def _run(args: argparse.Namespace) -> int:
         print("cell run: no item came to rest in its target bin", file=sys.stderr)
         return EXIT_NOTHING_SORTED
     return 0
+
+
+def _partial_json(args: argparse.Namespace, done: list[Any], total: int, wall_s: float) -> None:
+    """With --json, the summary of the items finished before an interrupt, marked
+    `"interrupted": true` with `items_planned` (the job's items), where --json asks for it;
+    said on stderr when written to a file."""
+    if not getattr(args, "json", None):
+        return
+    from cell.results import summarise
+
+    doc = {**summarise(list(done), wall_s).as_dict(), "interrupted": True, "items_planned": total}
+    if json_to_stdout(args):
+        print_json(doc)
+        return
+    write_json(args, doc)
+    print(
+        f"cell run: the {plural(len(done), 'item')} finished written to {args.json}",
+        file=sys.stderr,
+    )
 
 
 def _refit(args: argparse.Namespace, job: Any) -> Any:

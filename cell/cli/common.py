@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from cell.catalogue import get_object
-from cell.errors import InvalidInput, InvalidParameter
+from cell.errors import InvalidInput, InvalidParameter, plural
 from cell.model.objects import SHAPES, ObjectParams
 from cell.parallel import add_campaign_args  # --workers N, --ray-address ADDR
 
@@ -172,11 +172,6 @@ def report(args: argparse.Namespace, doc: Any, lines: Iterable[str]) -> int:
         print(line)
     write_json(args, doc)
     return 0
-
-
-def plural(n: int, word: str, words: str | None = None) -> str:
-    """`n` and the word as a person writes them: "1 object", "3 objects", "0 objects"."""
-    return f"{n} {word if n == 1 else (words or word + 's')}"
 
 
 def human(v: Any) -> str:

@@ -14,7 +14,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from cell.errors import InvalidInput
+from cell.errors import InvalidInput, plural
 from cell.log.table import ThrowTable
 from cell.model.effects import Effect, TrackingScale
 from cell.model.effects_apply import flight_accel, predict_with_effects
@@ -243,10 +243,12 @@ def build_problem(
         usable &= has_stroke
     dropped = int(n - usable.sum())
     if dropped:
-        log.warning("%d throw(s) dropped: no landing logged, or no stroke and no track", dropped)
+        log.warning(
+            "%s dropped: no landing logged, or no stroke and no track", plural(dropped, "throw")
+        )
     if usable.sum() < 10:
         raise InvalidInput(
-            f"{table.path or 'throw log'}: only {int(usable.sum())} throw(s) can be diagnosed "
+            f"{table.path or 'throw log'}: only {plural(int(usable.sum()), 'throw')} can be diagnosed "
             "(need ≥ 10 with a logged landing and either a stroke or a track)"
         )
     idx = np.flatnonzero(usable)

@@ -50,17 +50,24 @@ def _fmt_params(p: dict[str, float]) -> str:
 
 def _tracks_set_aside(tracks: dict[str, Any]) -> list[str]:
     """The table's line on the tracks given that the diagnosis could not use or mended
-    (none: no line), each reason with how many tracks it covers, the commonest first."""
+    (none: no line), each reason with how many tracks it covers, the commonest first; a
+    reason whose words differ by track (its figures) by its kind, the words before ':', and
+    its first track's."""
     bad, mended = tracks.get("unusable", []), tracks.get("mended", [])
     if not bad and not mended:
         return []
     parts = []
     if bad:
-        why: dict[str, int] = {}
+        kinds: dict[str, list[str]] = {}
         for b in bad:
-            why[b["why"]] = why.get(b["why"], 0) + 1
-        top = sorted(why.items(), key=lambda kv: -kv[1])
-        shown = "; ".join(f"{w} ({n})" for w, n in top[:3])
+            kinds.setdefault(b["why"].split(":")[0], []).append(b["why"])
+        top = sorted(kinds.items(), key=lambda kv: -len(kv[1]))
+        shown = "; ".join(
+            f"{whys[0]} ({len(whys)})"
+            if len(set(whys)) == 1
+            else f"{kind} ({len(whys)}, e.g.{whys[0][len(kind) + 1 :]})"
+            for kind, whys in top[:3]
+        )
         more = f"; {len(top) - 3} other reasons" if len(top) > 3 else ""
         parts.append(f"{len(bad)} set aside, unused: {shown}{more}")
     if mended:
@@ -98,7 +105,12 @@ def format_table(report: dict[str, Any]) -> str:
     r = report
     lines = []
     other = r.get("other_launcher_throws", 0)
-    lines.append(f"throws           {r['throws']} ({other} from another launcher, from tracks)")
+    other_out = (r.get("outliers") or {}).get("other_launcher", 0)
+    lines.append(
+        f"throws           {r['throws']} ({other} from another launcher, from tracks"
+        + (f", {other_out} of them outliers" if other_out else "")
+        + ")"
+    )
     lines.extend(_tracks_set_aside(r.get("tracks") or {}))
     lines.extend(_outliers(r))
     nz = r.get("noise", {})

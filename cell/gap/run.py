@@ -291,5 +291,7 @@ def diagnose_log(
     where["worst"] = worst_conditions(rows, rep["baseline"]["heldout_rmse_m"])
     rep["where"] = where
     rep["conditions"] = rows
-    rep["other_launcher_throws"] = int((~prob.has_stroke).sum())
+    # counted on every throw, as `throws` is: the outliers among them said apart
+    rep["other_launcher_throws"] = int((~full.has_stroke).sum())
+    rep["outliers"]["other_launcher"] = int((~full.has_stroke & flagged).sum())
     return d, prob

@@ -95,6 +95,13 @@ class TrackFit:
 MAX_FIT_RMS_M = 0.03  # [m] a track the whole-track fit misses by more is not one free flight
 DOWN_COS = 0.5  # the gravity a track's fit finds points within 60° of -z, if z is up
 DOWN_MIN_G = 0.5  # ... judged where it is this many g or more (a frame's up is then clear)
+# [g] the apparent gravity a free flight's whole-track fit finds (the size of (0, 0, -G) plus
+# its free constant acceleration) lies within these: the shipped real tracks 0.98-1.29 g,
+# the check world's tracked campaigns 0.67 g (a tracker's scale 0.7) to 9.5 g (a drone's
+# downwash of 35 m/s on light objects); outside, the track is no flight under gravity as
+# given (a straight line, positions or times in other units, a frame's drift)
+GRAVITY_MIN_G = 0.5
+GRAVITY_MAX_G = 20.0
 _CACHE: dict[tuple[str, float, bytes], tuple] = {}
 _CACHE_MAX = 5000
 
@@ -162,7 +169,7 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             bad.append({"throw_id": str(throw_ids[i]), "why": why})
             samples[i] = None
             continue
-        not_down = _not_down_z(row)
+        not_down = _implausible_gravity(row) or _not_down_z(row)
         if not_down:
             bad.append({"throw_id": str(throw_ids[i]), "why": not_down})
             samples[i] = None
@@ -173,6 +180,23 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             out["halves"][:, :, i] = hv
         out["t1"][i], out["p1"][i], out["v1"][i], _ = end
     return TrackFit(samples=samples, unusable=tuple(bad), mended=tuple(mended), **out)
+
+
+def _implausible_gravity(row: dict[str, Any]) -> str | None:
+    """Why a track's whole-track fit is no flight under gravity (None: it may be): the
+    gravity it finds, (0, 0, -G) plus its free constant acceleration, drag apart, is under
+    GRAVITY_MIN_G or over GRAVITY_MAX_G g in size."""
+    if not np.isfinite(row["g_ratio"]):
+        return None  # too short a span to tell gravity
+    size = float(np.linalg.norm(np.asarray(row["a0"], float) + np.array([0.0, 0.0, -G]))) / G
+    if GRAVITY_MIN_G <= size <= GRAVITY_MAX_G:
+        return None
+    what = "a straight line, no fall" if size < GRAVITY_MIN_G else "a fall far faster than g"
+    return (
+        f"no flight under gravity: the fit with drag finds an apparent gravity of {size:.2g} g "
+        f"({size * G:.3g} m/s², a free flight's is within {GRAVITY_MIN_G:g}-{GRAVITY_MAX_G:g} g): "
+        f"{what}; are x_m, y_m, z_m in metres, t_s in seconds, and is z up?"
+    )
 
 
 def _not_down_z(row: dict[str, Any]) -> str | None:

@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.optimize import least_squares
 
-from cell.errors import InvalidParameter
+from cell.errors import InvalidParameter, plural
 from cell.identify.directions import Analysis, Direction, analyse, intervals, parameter_names
 from cell.identify.problem import (
     EE_NAMES,
@@ -451,7 +451,7 @@ def _identify(
     note = (
         f"identified by two-stage maximum-likelihood least squares (Algorithm 1, residuals "
         f"weighted by the documented landing noise) from {len(data)} throws of "
-        f"{len(objects)} objects: {it} iteration(s), "
+        f"{plural(len(objects), 'object')}: {plural(it, 'iteration')}, "
         f"{'converged' if st.converged else 'stopped at max_iter'}; landing RMSE on the fitted "
         f"throws {rmse_start:.4f} m -> {rmse_fit:.4f} m; identified: "
         + ", ".join(EE_NAMES)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cell.errors import InvalidInput
+from cell.errors import InvalidInput, plural
 from cell.log.table import ThrowTable
 from cell.model.band import band_angle, band_stretch
 from cell.model.objects import ObjectParams
@@ -210,7 +210,7 @@ class ThrowData:
                 "landed_y_m; identification needs the stroke and the observed landing"
             )
         if not ok.all():
-            log.info("%d throw(s) without stroke or landing left out", int((~ok).sum()))
+            log.info("%s without stroke or landing left out", plural(int((~ok).sum()), "throw"))
         rows = np.flatnonzero(ok)
         sub = table.take(rows)
         ids = sub.text("object_id")

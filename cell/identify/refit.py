@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from cell.errors import InvalidInput
+from cell.errors import InvalidInput, plural
 from cell.identify.algorithm import IdentifyOptions, _stage2
 from cell.identify.problem import ThrowData
 from cell.log.table import REQUIRED_COLUMNS, ThrowTable
@@ -59,7 +59,7 @@ class ObjectRefit:
     def line(self) -> str:
         """One line for a person: throws, RMSE before -> after, effective mass."""
         if not self.refitted:
-            return f"{self.object_id}: {self.throws} throw(s), too few to refit; kept"
+            return f"{self.object_id}: {plural(self.throws, 'throw')}, too few to refit; kept"
         return (
             f"{self.object_id}: {self.throws} throws, landing RMSE {self.rmse_before_m:.3f} m "
             f"-> {self.rmse_after_m:.3f} m, effective mass {self.mass_before_kg * 1000:.1f} g "
@@ -227,7 +227,7 @@ def _refit(
     if refitted:
         note = (
             (note + "; " if note else "")
-            + f"η_o of {len(refitted)} object(s) refitted (stage 2, η_ee fixed) from "
+            + f"η_o of {plural(len(refitted), 'object')} refitted (stage 2, η_ee fixed) from "
             + f"{sum(r.throws for r in refitted)} throws of {table.path or 'a throw log'}: "
             + ", ".join(
                 f"{r.object_id} RMSE {r.rmse_before_m:.3f} -> {r.rmse_after_m:.3f} m"

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.errors import plural
 from cell.identify.problem import ThrowData
 from cell.model.params import EndEffectorParams
 
@@ -56,7 +57,7 @@ class ObjectChoice:
         """Why, in one line."""
         nominal = self.scores.get(0.0, float("nan"))
         if not self.scores:
-            return f"{self.throws} throw(s): too few to cross-validate; " + (
+            return f"{plural(self.throws, 'throw')}: too few to cross-validate; " + (
                 "kept" if self.kept else f"fitted with the default prior σ {self.prior_std:g}"
             )
         if self.kept:

@@ -56,8 +56,50 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
     except UnicodeDecodeError:
         raise LogFormatError(p, None, None, _not_utf8(p)) from None
     except csv.Error as exc:
-        raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
+        raise _csv_error(p, exc, blank=lambda row: not any(c.strip() for c in row)) from None
     return parse_cells(header, rows, p)
+
+
+def _csv_error(p: str, exc: csv.Error, blank: Any) -> LogFormatError:
+    """The error for a file the csv module refused: a cell over its field limit (a text or
+    a file pasted into a cell) by row and column, found by reading the file again with the
+    limit lifted; else the csv module's own words. `blank(row)`: a row the reader skips
+    (not counted in the row numbers)."""
+    limit = csv.field_size_limit()
+    plain = LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})")
+    if "field larger than field limit" not in str(exc):
+        return plain
+
+    def why(cell: str) -> str:
+        return (
+            f"a cell of {len(cell):,} characters, over the {limit:,} a CSV cell may hold (a "
+            "text or a file pasted into a cell?); a cell holds one value"
+        )
+
+    try:
+        csv.field_size_limit(2**31 - 1)
+        with open(p, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            header = next(reader, [])
+            j = _long(header, limit)
+            if j:
+                return LogFormatError(p, None, None, f"the header's cell {j}: {why(header[j - 1])}")
+            rows = (row for row in reader if not blank(row))
+            for r, row in enumerate(rows, start=1):
+                j = _long(row, limit)
+                if j:
+                    col = header[j - 1].strip() if j <= len(header) else f"cell {j}"
+                    return LogFormatError(p, r, col, why(row[j - 1]))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        pass
+    finally:
+        csv.field_size_limit(limit)
+    return plain
+
+
+def _long(row: list[str], limit: int) -> int:
+    """The 1-based index of the first cell over `limit` characters (0: none)."""
+    return next((j for j, c in enumerate(row, 1) if len(c) > limit), 0)
 
 
 def _not_utf8(path: str) -> str:
@@ -209,5 +251,5 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
     except UnicodeDecodeError:
         raise LogFormatError(p, None, None, _not_utf8(p)) from None
     except csv.Error as exc:
-        raise LogFormatError(p, None, None, f"is not a readable CSV text file ({exc})") from None
+        raise _csv_error(p, exc, blank=lambda row: row == []) from None
     return {k: np.asarray(sorted(v)) for k, v in out.items()}

@@ -28,7 +28,7 @@ from urllib.parse import quote
 
 import numpy as np
 
-from cell.errors import InvalidInput, LogFormatError
+from cell.errors import InvalidInput, LogFormatError, plural
 from cell.infile import check_input_file, check_path_length
 from cell.log.table import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
 
@@ -332,7 +332,7 @@ class ThrowStore:
                     "INSERT INTO tracks VALUES (?, ?, ?, ?, ?)",
                     [(tid, *map(float, row)) for row in np.asarray(arr, float).reshape(-1, 4)],
                 )
-        log.info("%s: %d throw(s) committed from %s", self.path, n, source)
+        log.info("%s: %s committed from %s", self.path, plural(n, "throw"), source)
         return n
 
     # -- reading ------------------------------------------------------------------

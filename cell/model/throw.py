@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidParameter, NoLanding
+from cell.errors import InvalidParameter, NoLanding, plural
 from cell.model.band import push_force
 from cell.model.integrate import plane_crossing, rk4_step
 from cell.model.objects import ObjectParams, drag_area, drag_coefficient
@@ -420,7 +420,7 @@ def no_landing_error(bad: np.ndarray, batch: ThrowBatch) -> NoLanding:
     i = int(bad[0])
     err = NoLanding(
         f"throw {i} never crosses its landing plane z = {batch.land_z[i]:.3f} m while descending "
-        f"(released at z = {batch.position[i, 2]:.3f} m); {bad.size} throw(s) in all. "
+        f"(released at z = {batch.position[i, 2]:.3f} m); {plural(int(bad.size), 'throw')} in all. "
         "Lower the landing plane or raise the release."
     )
     err.indices = bad  # type: ignore[attr-defined]
