@@ -256,3 +256,55 @@ def test_the_null_case_on_cubes_throws_the_flight_cases_objects(monkeypatch):
             cs.check_scene_case(cs.scene_cases((name,))[0])
     matched = cs.matched_objects(load_params(scene_params_path()))
     assert matched and seen == [(matched, {}), (matched, {}), (None, {})]
+
+
+def test_a_scene_throw_logs_the_crossing_and_the_rest_of_its_own_track(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """What `throw_plan` logs, against each item's track recorded after every physics step
+    by a scene of its own: the crossing of the landing plane going down interpolated by
+    `cell.sim.settle.crossing` and the velocity on the step after it; with a bounce, the
+    position on the last step, reached once the item was slower than REST_SPEED for
+    REST_STEPS steps after the crossing (or REST_WAIT_S after it)."""
+    import cell.gap.world_scene as ws
+    from cell.sim.settle import crossing
+
+    tracks: list[tuple[int, list[tuple[float, ...]]]] = []
+
+    class Recording(ws.EffectScene):
+        def spawn_item(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+            item = super().spawn_item(*args, **kwargs)
+            tracks.append((item.body, []))
+            return item
+
+        def step(self, n: int = 1) -> None:
+            super().step(n)
+            body, track = tracks[-1]
+            if any(it.body == body for it in self.items):
+                p, _ = self.client.getBasePositionAndOrientation(body)
+                v, _ = self.client.getBaseVelocity(body)
+                track.append((self.t, *p, *v))
+
+    monkeypatch.setattr(ws, "EffectScene", Recording)
+    plan = ws.draw_plan(2, np.random.default_rng(5), repeats=1, objects=("cube30",))
+    wind = {"kind": "wind", "form": "const", "x_mps": 1.0, "y_mps": -0.5}
+    bounce = {"kind": "bounce", "form": "contact", "restitution": 0.3, "friction": 0.4}
+    for effects in ([wind], [wind, bounce]):
+        tracks.clear()
+        xy, _, vc = ws.throw_plan(plan, effects, 3)
+        assert len(tracks) == len(plan)
+        for i, (_, track) in enumerate(tracks):
+            a = np.array(track)
+            x, y, t = crossing(a[:, :4], ws.LAND_Z_M)
+            k = int(np.searchsorted(a[:, 0], t))  # the step after the crossing
+            assert a[k - 1, 3] > ws.LAND_Z_M >= a[k, 3]
+            np.testing.assert_array_equal(vc[i], a[k, 4:7])
+            if len(effects) == 1:
+                assert xy[i] == pytest.approx([x, y], abs=1e-12)
+                assert len(a) == k + 1  # the flight stopped at the crossing
+                continue
+            np.testing.assert_array_equal(xy[i], a[-1, 1:3])
+            slow = np.linalg.norm(a[k:, 4:7], axis=1) < ws.REST_SPEED
+            waited = a[-1, 0] - t > ws.REST_WAIT_S - 2e-3
+            assert waited or (slow[-ws.REST_STEPS :].all() and len(slow) >= ws.REST_STEPS)
+            assert len(a) > k + ws.REST_STEPS - 1

@@ -125,22 +125,28 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
             yaw = float(kick.get("yaw_k", 0.0)) * th.stroke
             sc.launch_error(item, yaw, float(kick.get("speed_k", 0.0)) * th.stroke)
         sc.set_timestep(sc.dt_s)
-        prev = sc.item_position(item)
+        # the item's state read as PyBullet's tuples of floats each step (NumPy only at the
+        # crossing and for the rest test, the operations the arrays did), its velocity only
+        # once it is used: at the crossing and, with `rest`, after it
+        cl, body = sc.client, item.body
+        prev = cl.getBasePositionAndOrientation(body)[0]
         cross: tuple[np.ndarray, float, np.ndarray] | None = None
         slow = 0
         while sc.t - t0 < 8.0:
             sc.step()
-            p = sc.item_position(item)
-            v = sc.item_velocity(item)[0]
+            p = cl.getBasePositionAndOrientation(body)[0]
             if cross is None and prev[2] > LAND_Z_M >= p[2]:
                 s = (prev[2] - LAND_Z_M) / (prev[2] - p[2])
-                cross = (prev[:2] + s * (p[:2] - prev[:2]), sc.t - sc.dt_s * (1 - s) - t0, v)
+                a, b = np.asarray(prev[:2], float), np.asarray(p[:2], float)
+                v = np.asarray(cl.getBaseVelocity(body)[0], float)
+                cross = (a + s * (b - a), sc.t - sc.dt_s * (1 - s) - t0, v)
                 if not rest:
                     return cross
             if cross is not None:
+                v = np.asarray(cl.getBaseVelocity(body)[0], float)
                 slow = slow + 1 if np.linalg.norm(v) < REST_SPEED else 0
                 if slow >= REST_STEPS or sc.t - t0 > cross[1] + REST_WAIT_S:
-                    return p[:2].copy(), cross[1], cross[2]
+                    return np.asarray(p[:2], float), cross[1], cross[2]
             if p[2] < -1.0:
                 break
             prev = p

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from cell.model.objects import ObjectParams
-from cell.sim.drag import apply_drag, speed
+from cell.sim.drag import speed
 from cell.sim.scene import CellScene
 
 __all__ = ["RHO", "STATION_XY", "EffectScene"]
@@ -77,21 +77,40 @@ class EffectScene(CellScene):
                 w[2] -= centre * math.exp(-((r / width) ** 2))
         return w
 
+    def _air_z_drop(self, px: float, py: float, pz: float) -> float:
+        """The rotor jet's downward air speed at a point [m/s] (what `air` takes off the
+        steady flow's z), 0.0 above the rotor or without a jet: the same operations, in
+        the same order, on plain floats."""
+        src, rpm, jet = self.jet  # type: ignore[misc]
+        depth = src[2] - pz
+        if not depth > 0.0:
+            return 0.0
+        r = math.hypot(px - src[0], py - src[1])
+        width = float(jet["radius_m"]) + 0.2 * depth
+        centre = float(jet["w_mps"]) * rpm / 5000.0 / (1.0 + depth / float(jet["core_m"]))
+        return centre * math.exp(-((r / width) ** 2))
+
     def _item_forces(self) -> None:
         """Before each physics step, on every item: the effect's force, the air drag taken
         on the velocity relative to the air (`air`) with this world's factor, the scene's
         own drag cancelled, plus the side force; then the scene's own drag (not on an item
         kept in a bin). The item's position and velocity are read once for both, on plain
         floats: each component the same products and sums, in the same order, as the
-        vectors gave."""
+        vectors gave. The steady flow and the side force are read as floats once a step;
+        |v| is taken once for both forces (the scene's drag -c |v| v is the cancelling
+        term's negation, `cell.sim.drag.apply_drag`'s bits: (-c)·s = -(c·s) exactly)."""
         cl, kept = self.client, self._kept
-        sx, sy, sz = self.side_mps2
+        sx, sy, sz = self.side_mps2.tolist()
+        ax, ay, az = self.wind.tolist()
+        jet = self.jet is not None
+        world = cl.WORLD_FRAME
         for it in self.items:
-            pos, _ = cl.getBasePositionAndOrientation(it.body)
-            vel, _ = cl.getBaseVelocity(it.body)
+            body = it.body
+            pos, _ = cl.getBasePositionAndOrientation(body)
+            vel, _ = cl.getBaseVelocity(body)
             vx, vy, vz = vel
-            wx, wy, wz = self.air(pos)
-            rx, ry, rz = vx - wx, vy - wy, vz - wz
+            wz = az - self._air_z_drop(*pos) if jet else az
+            rx, ry, rz = vx - ax, vy - ay, vz - wz
             cd, area = _cd_area(it.obj)
             c_f = self.drag_factor * 0.5 * RHO * cd * area  # [kg/m]
             k_air = -c_f * speed(np.array((rx, ry, rz)))
@@ -103,6 +122,9 @@ class EffectScene(CellScene):
                 k_air * rz + k_own * vz + m * sz,
             ]
             if f[0] != 0.0 or f[1] != 0.0 or f[2] != 0.0:
-                cl.applyExternalForce(it.body, -1, f, pos, cl.WORLD_FRAME)
-            if it.body not in kept:
-                apply_drag(cl, it.body, it.drag_c, pos, vel)
+                cl.applyExternalForce(body, -1, f, pos, world)
+            if body not in kept:
+                k = -k_own  # apply_drag's -c |v|
+                g = [k * vx, k * vy, k * vz]
+                if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
+                    cl.applyExternalForce(body, -1, g, pos, world)

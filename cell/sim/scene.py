@@ -384,7 +384,8 @@ class CellScene:
                 self._item_forces()
                 cl.stepSimulation()
                 self.t += self._dt_now
-                watch.sample_trackers(self)
+                if self._trackers:  # none while nothing is tracked
+                    watch.sample_trackers(self)
         finally:
             self._count_wall(t0)
 
