@@ -46,6 +46,7 @@ import numpy as np
 from cell.catalogue import catalogue
 from cell.errors import NoLanding
 from cell.sim.effect_scene import EffectScene
+from cell.sim.scene import item_linear_xyz, item_xyz
 
 __all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign"]
 
@@ -128,22 +129,21 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
         # the item's state read as PyBullet's tuples of floats each step (NumPy only at the
         # crossing and for the rest test, the operations the arrays did), its velocity only
         # once it is used: at the crossing and, with `rest`, after it
-        cl, body = sc.client, item.body
-        prev = cl.getBasePositionAndOrientation(body)[0]
+        prev = item_xyz(sc, item)
         cross: tuple[np.ndarray, float, np.ndarray] | None = None
         slow = 0
         while sc.t - t0 < 8.0:
             sc.step()
-            p = cl.getBasePositionAndOrientation(body)[0]
+            p = item_xyz(sc, item)
             if cross is None and prev[2] > LAND_Z_M >= p[2]:
                 s = (prev[2] - LAND_Z_M) / (prev[2] - p[2])
                 a, b = np.asarray(prev[:2], float), np.asarray(p[:2], float)
-                v = np.asarray(cl.getBaseVelocity(body)[0], float)
+                v = np.asarray(item_linear_xyz(sc, item), float)
                 cross = (a + s * (b - a), sc.t - sc.dt_s * (1 - s) - t0, v)
                 if not rest:
                     return cross
             if cross is not None:
-                v = np.asarray(cl.getBaseVelocity(body)[0], float)
+                v = np.asarray(item_linear_xyz(sc, item), float)
                 slow = slow + 1 if np.linalg.norm(v) < REST_SPEED else 0
                 if slow >= REST_STEPS or sc.t - t0 > cross[1] + REST_WAIT_S:
                     return np.asarray(p[:2], float), cross[1], cross[2]

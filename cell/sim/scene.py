@@ -475,3 +475,15 @@ class CellScene:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def item_xyz(scene: CellScene, item: Item) -> tuple[float, float, float]:
+    """The item's centre of mass now [m, W], as PyBullet's tuple of floats: a flight
+    loop's read every step, without an array made (`CellScene.item_position`'s values)."""
+    return scene.client.getBasePositionAndOrientation(item.body)[0]
+
+
+def item_linear_xyz(scene: CellScene, item: Item) -> tuple[float, float, float]:
+    """The item's linear velocity now [m/s, W], as PyBullet's tuple of floats
+    (`CellScene.item_velocity`'s first)."""
+    return scene.client.getBaseVelocity(item.body)[0]
