@@ -157,11 +157,7 @@ def jugglebot() -> dict[str, Any]:
         "mass_kg": JB_MASS_KG,
         "diameter_m": JB_DIAMETER_M,
         "sessions": sessions,
-        "cell_g_ratio": float(np.median(fit.g_ratio)),
-        "cell_drag_ratio": float(np.median(fit.drag_ratio)),
-        "cell_fit_rms_m": float(np.median(fit.rms_m)),
-        "cell_dropped_median": float(np.median(fit.dropped)),
-        "unusable": len(fit.unusable),
+        **_cell_fit(fit),
         "gap": gap,
     }
 
@@ -305,12 +301,20 @@ def tennicam() -> dict[str, Any]:
         "second_speed_mps_median": float(np.median(speed)),
         "second_velocity_mps_median": [float(x) for x in np.median(a[:, 3:6], axis=0)],
         "drag_over_gravity": float(np.median(k_ind * speed**2 / (g_ind * G0))),
+        **_cell_fit(fit),
+        "gap": gap,
+    }
+
+
+def _cell_fit(fit: Any) -> dict[str, Any]:
+    """The medians of cell's whole-track fit over a set's flights (`fit_tracks`' TrackFit)
+    and how many tracks it could not use."""
+    return {
         "cell_g_ratio": float(np.median(fit.g_ratio)),
         "cell_drag_ratio": float(np.median(fit.drag_ratio)),
         "cell_fit_rms_m": float(np.median(fit.rms_m)),
         "cell_dropped_median": float(np.median(fit.dropped)),
         "unusable": len(fit.unusable),
-        "gap": gap,
     }
 
 

@@ -169,7 +169,7 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             bad.append({"throw_id": str(throw_ids[i]), "why": why})
             samples[i] = None
             continue
-        not_down = _implausible_gravity(row) or _not_down_z(row)
+        not_down = _no_flight_under_gravity(row)
         if not_down:
             bad.append({"throw_id": str(throw_ids[i]), "why": not_down})
             samples[i] = None
@@ -182,31 +182,24 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
     return TrackFit(samples=samples, unusable=tuple(bad), mended=tuple(mended), **out)
 
 
-def _implausible_gravity(row: dict[str, Any]) -> str | None:
-    """Why a track's whole-track fit is no flight under gravity (None: it may be): the
-    gravity it finds, (0, 0, -G) plus its free constant acceleration, drag apart, is under
-    GRAVITY_MIN_G or over GRAVITY_MAX_G g in size."""
-    if not np.isfinite(row["g_ratio"]):
-        return None  # too short a span to tell gravity
-    size = float(np.linalg.norm(np.asarray(row["a0"], float) + np.array([0.0, 0.0, -G]))) / G
-    if GRAVITY_MIN_G <= size <= GRAVITY_MAX_G:
-        return None
-    what = "a straight line, no fall" if size < GRAVITY_MIN_G else "a fall far faster than g"
-    return (
-        f"no flight under gravity: the fit with drag finds an apparent gravity of {size:.2g} g "
-        f"({size * G:.3g} m/s², a free flight's is within {GRAVITY_MIN_G:g}-{GRAVITY_MAX_G:g} g): "
-        f"{what}; are x_m, y_m, z_m in metres, t_s in seconds, and is z up?"
-    )
-
-
-def _not_down_z(row: dict[str, Any]) -> str | None:
-    """Why a track's whole-track fit is no flight in a z-up frame (None: it is): the
-    gravity it finds, (0, 0, -G) plus its free constant acceleration, drag apart, points
-    over 60° away from -z (a frame with y up, say)."""
+def _no_flight_under_gravity(row: dict[str, Any]) -> str | None:
+    """Why a track's whole-track fit is no flight under gravity in a z-up frame (None: it
+    may be one). The gravity it finds is (0, 0, -G) plus its free constant acceleration,
+    drag apart; not judged where the span is too short to tell gravity (`g_ratio` NaN).
+    Its size is under GRAVITY_MIN_G or over GRAVITY_MAX_G g (a straight line, other units),
+    or, being DOWN_MIN_G g or more, it points over 60° away from -z (a frame with y up)."""
     if not np.isfinite(row["g_ratio"]):
         return None  # too short a span to tell gravity
     gvec = np.asarray(row["a0"], float) + np.array([0.0, 0.0, -G])
     size = float(np.linalg.norm(gvec))
+    if not GRAVITY_MIN_G <= size / G <= GRAVITY_MAX_G:
+        g = size / G
+        what = "a straight line, no fall" if g < GRAVITY_MIN_G else "a fall far faster than g"
+        return (
+            f"no flight under gravity: the fit with drag finds an apparent gravity of {g:.2g} g "
+            f"({g * G:.3g} m/s², a free flight's is within {GRAVITY_MIN_G:g}-{GRAVITY_MAX_G:g} "
+            f"g): {what}; are x_m, y_m, z_m in metres, t_s in seconds, and is z up?"
+        )
     if size < DOWN_MIN_G * G or -gvec[2] >= DOWN_COS * size:
         return None
     axis = int(np.argmax(np.abs(gvec)))
