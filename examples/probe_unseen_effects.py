@@ -433,12 +433,13 @@ def format_rows(rows: list[dict[str, Any]]) -> str:
 def markdown_rows(rows: list[dict[str, Any]]) -> str:
     """The rows as docs/gap_laws.md's table (every number in code quotes)."""
     out = [
-        "| case | verdict | where | E / F_w | F_w [m] | B [m] | A / F_w | law or proposal | judged |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| case | verdict | where | E / F_w | F_w [m] | F [m] | B [m] | A / F_w | law or proposal "
+        "| judged |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         if r["verdict"] == "traceback":
-            out.append(f"| `{r['case']}` | traceback | | | | | | | NOT OK |")
+            out.append(f"| `{r['case']}` | traceback | | | | | | | | NOT OK |")
             continue
         law = "; ".join(f"{k}: {v}" for k, v in r["laws"].items())
         if r["verdict"] == "unknown":
@@ -451,8 +452,9 @@ def markdown_rows(rows: list[dict[str, Any]]) -> str:
         out.append(
             f"| `{r['case']}` | {r['verdict']} | {r['where']} "
             f"| `{r['effect_m'] / r['world_floor_m']:.1f}` | `{r['world_floor_m']:.3f}` "
+            f"| `{r['tool_floor_m']:.3f}` "
             f"| `{r['baseline_m']:.3f}` | `{r['after_over_floor']:.2f}` "
-            f"| {'`' + law + '`' if law else ''} | {r['judged']}: {r['why']} |"
+            f"| {'`' + law + '`' if law else ''} | {r['judged']} |"
         )
     return "\n".join(out)
 
