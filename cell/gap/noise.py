@@ -3,9 +3,10 @@
 Three estimates of it:
 
 * repeats: throws logged with the same object, stroke, pose, platform and
-  plane are repeats; the pooled spread of their misses about each group's
-  mean is the scatter itself (unbiased, with Σ(n_g - 1) degrees of freedom).
-  When there are enough repeats, this is F.
+  plane, in the same session (`session`, where the log has it), are repeats;
+  the pooled spread of their misses about each group's mean is the scatter
+  itself (unbiased, with Σ(n_g - 1) degrees of freedom). When there are
+  enough repeats, this is F.
 * neighbours (the Gamma test): half the mean squared difference of the misses
   of the k-th nearest throws, against their mean squared distance, for
   k = 1…10, extrapolated to distance zero. The distance is taken in the space
@@ -111,12 +112,15 @@ def _repeat_key(prob: GapProblem) -> list[tuple]:
         )
     ).astype(np.int64)
     oid = t.text("object_id")
-    return [(oid[i], *q[i].tolist()) for i in range(len(prob))]
+    # throws of two sessions are no repeats: a band changed or a launcher set up again
+    # between them moves every landing of the second, which is no scatter
+    sess = t.text("session") if "session" in t.columns else [""] * len(prob)
+    return [(oid[i], sess[i], *q[i].tolist()) for i in range(len(prob))]
 
 
 def repeat_groups(prob: GapProblem) -> list[list[int]]:
     """The throws' row indices grouped by configuration (same object, stroke, pose,
-    platform and plane, `_repeat_key`), in order of first appearance."""
+    platform and plane, in the same session, `_repeat_key`), in order of first appearance."""
     groups: dict[tuple, list[int]] = {}
     for i, k in enumerate(_repeat_key(prob)):
         groups.setdefault(k, []).append(i)

@@ -8,11 +8,20 @@ landing is linear in its coefficient θ near θ = 0:
 | launch | speed error (× 1, stroke, mass or width) | the launch velocity relative to the base scaled by 1 + θ·c |
 | launch | elevation error (× 1, stroke, mass or width) | the launch velocity turned up by θ·c [rad] |
 | launch | azimuth error (× 1, stroke, mass or width) | the launch velocity turned about the vertical by θ·c [rad] |
+| launch | speed, elevation, azimuth error × order | the same, growing over the log: order = 0 at its first throw, 1 at its last (by `time_s` where every row has it, else by row) |
+| launch | speed, elevation, azimuth error × session | the same, in every session but the first (`session`, 2 to MAX_SESSIONS of them) |
 | flight | force x, force y | a constant acceleration θ [m/s²] along world x or y |
 | flight | along ∝ v, ∝ v² | an acceleration θ·v, θ·|v|·v along the velocity |
 | flight | across ∝ v, ∝ v² | θ·v, θ·|v|·v turned 90° about the vertical (horizontal, to the left) |
 | flight | up ∝ v² | θ·|v|² upwards |
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
+| measurement | shift ∝ v with k < 0 (its interval below 0) | the landing logged −k s before the touchdown: no slide ends behind it, a tracker lagging does |
+| landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
+
+A log's drift (a band wearing, a motor warming) and its sessions (a band changed, a
+launcher set up again) are common on a real cell and outside the vocabulary, so the
+launch terms also come in the throw's order over the log and in its session; a surface
+off level is a landing plane's height growing with x or y.
 
 A covariate enters the library only where it takes at least `cell.gap.laws.MIN_LEVELS`
 values in the log (with two objects, terms in their mass, their size and the constant
@@ -44,7 +53,7 @@ from cell.model.effects_apply import flight_accel
 from cell.model.flight3d import fly
 from cell.model.throw import drag_constant
 
-__all__ = ["propose", "library"]
+__all__ = ["propose", "library", "log_covariates"]
 
 TERM_PENALTY = 0.03  # held-out RMSE raised by this share per term
 COVS = {"1": None, "stroke_m": "stroke", "mass_kg": "mass", "size_x_m": "width"}
@@ -52,6 +61,9 @@ H_ANGLE = 1e-3
 H_SPEED = 1e-3
 H_ACC = 0.05
 COLLINEAR_TOL = 0.01  # a term less than this share independent of the terms before it is out
+SHIFT_V = "landing shift [s] = k · v_h"
+MAX_SESSIONS = 6  # a log of more sessions than this has no session terms (its order terms stay)
+MIN_VZ = 0.5  # [m/s] a landing plane's terms are nil for throws descending slower than this
 
 
 def _cov(prob: GapProblem, name: str) -> np.ndarray:
@@ -86,6 +98,34 @@ def independent(a: np.ndarray, tol: float = COLLINEAR_TOL) -> np.ndarray:
             keep[j] = True
             basis = np.c_[basis, rest / left]
     return keep
+
+
+def log_covariates(prob: GapProblem) -> dict[str, np.ndarray]:
+    """The throw-order and session covariates of a log (name -> values over its throws).
+
+    `order` runs from 0 at the first throw to 1 at the last: by `time_s` where every
+    diagnosed row has one (and they differ), else by the rows' order in the log. A
+    `session = s` indicator is there for each session but the first (in order of
+    appearance) where the log has 2 to MAX_SESSIONS sessions, each of 2 throws or more."""
+    t = prob.table
+    n = len(prob)
+    out: dict[str, np.ndarray] = {}
+    if n < 2:
+        return out
+    order = np.arange(n, dtype=float)
+    if "time_s" in t.columns:
+        ts = np.asarray(t.num("time_s"), float)
+        if np.all(np.isfinite(ts)) and np.ptp(ts) > 0:
+            order = ts
+    out["order"] = (order - order.min()) / np.ptp(order)
+    if "session" in t.columns:
+        sess = t.text("session")
+        names = list(dict.fromkeys(sess))
+        counts = [sess.count(s) for s in names]
+        if 2 <= len(names) <= MAX_SESSIONS and min(counts) >= 2:
+            for s in names[1:]:
+                out[f"[session = {s}]"] = np.array([x == s for x in sess], float)
+    return out
 
 
 def _turn(v: np.ndarray, vb: np.ndarray, d_el: np.ndarray, d_az: np.ndarray) -> np.ndarray:
@@ -131,8 +171,9 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
         cols.append(np.nan_to_num((xy - x0) / h))
 
     zero = np.zeros(len(b))
-    for c in covariates(prob):
-        cv = _cov(prob, c)
+    in_log = log_covariates(prob)
+    for c in covariates(prob) + list(in_log):
+        cv = in_log[c] if c in in_log else _cov(prob, c)
         tail = "" if c == "1" else f" · {c}"
         rel = v1 - b.base_velocity
         add("launch", f"speed error [share] = k{tail}", land_xy(v1 + H_SPEED * cv[:, None] * rel),
@@ -166,10 +207,19 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
     for name, fn in flight:
         add("flight", name, land_xy(v1, fn), H_ACC)
     vh = np.nan_to_num(land.impact_velocity[:, :2])
-    terms.append({"phase": "landing", "term": "landing shift [s] = k · v_h"})
+    terms.append({"phase": "landing", "term": SHIFT_V})
     cols.append(vh)
     terms.append({"phase": "landing", "term": "landing shift [s²/m] = k · |v_h| v_h"})
     cols.append(np.linalg.norm(vh, axis=1)[:, None] * vh)
+    # the surface θ·c above the logged plane: the item crosses it Δz / v_z earlier
+    vz = np.nan_to_num(land.impact_velocity[:, 2])
+    down = vz < -MIN_VZ
+    per_m = np.where(down[:, None], vh / np.where(down, vz, -1.0)[:, None], 0.0)
+    xy_land = np.nan_to_num(x0)
+    planes = (("", np.ones(len(b))), (" · x_m", xy_land[:, 0]), (" · y_m", xy_land[:, 1]))
+    for name, at in planes:
+        terms.append({"phase": "landing", "term": f"landing plane height [m] = k{name}"})
+        cols.append(per_m * at[:, None])
     return terms, np.stack(cols, axis=2)
 
 
@@ -258,6 +308,11 @@ def propose(
          "rms_m": float(abs(th[on[i]]) * norm[i] * np.sqrt(2))}
         for i in order
     ]  # fmt: skip
+    for t in out_terms:
+        if t["term"] == SHIFT_V and t["k_ci95"][1] < 0:
+            # a rest point behind the touchdown along the flight: no slide ends there; it
+            # is where the item was -k s before touchdown, a tracker logging late
+            t["phase"] = "measurement"
     phases = [t["phase"] for t in out_terms]
     return {
         "law": " + ".join(

@@ -49,6 +49,22 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
     if v == ["unknown"]:
         plausible = [c for c in rep["candidates"] if not c.get("refused")]
         best = (plausible or rep["candidates"] or [None])[0]
+        prop = rep.get("proposal") or {}
+        if prop.get("law") and (
+            best is None or prop["heldout_rmse_after_m"] < best["heldout_rmse_m"]
+        ):
+            # the proposed law explains more than any effect of the vocabulary: its phase
+            # is where the gap lies, not the phase of a partial effect that cut less
+            return {
+                "phase": prop["phase"],
+                "evidence": (
+                    f"no tracks; no named effect explains the landing misses; the proposed "
+                    f"law ({prop['phase']}: {prop['law']}) takes the held-out RMSE to "
+                    f"{prop['heldout_rmse_after_m']:.3f} m, below the best partial effect's "
+                    + (f"{best['heldout_rmse_m']:.3f} m" if best else "none")
+                    + f" (noise floor {rep['noise_floor_m']:.3f} m)"
+                ),
+            }
         if best is None:
             return {"phase": "unknown", "evidence": "no effect could be tried"}
         return {
