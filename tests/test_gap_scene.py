@@ -311,3 +311,65 @@ def test_a_scene_throw_logs_the_crossing_and_the_rest_of_its_own_track(
             waited = a[-1, 0] - t > ws.REST_WAIT_S - 2e-3
             assert waited or (slow[-ws.REST_STEPS :].all() and len(slow) >= ws.REST_STEPS)
             assert len(a) > k + ws.REST_STEPS - 1
+
+
+def _median_gravity(camp) -> float:  # type: ignore[no-untyped-def]
+    """The median apparent gravity / G of a campaign's tracks (`cell.gap.tracks`)."""
+    from cell.gap.run import _k_of
+    from cell.gap.tracks import fit_tracks
+    from cell.log.table import ThrowTable
+
+    table = ThrowTable.from_records(camp.records)
+    fit = fit_tracks(table.text("throw_id"), camp.tracks, _k_of(table))
+    return float(np.nanmedian(fit.g_ratio))
+
+
+def test_the_scene_tracks_show_a_trackers_scale_as_its_apparent_gravity():
+    """With `track_noise_m` the scene logs each throw's flight as the tracker sees it
+    (positions scaled about the origin, late by its latency): a whole-track fit finds an
+    apparent gravity of s · g, and logging the tracks moves no landing."""
+    from cell.params import load_params, scene_params_path
+
+    path = scene_params_path()
+    assert path is not None
+    mp = load_params(path)
+    objs = ("sphere55", "cube50")
+    tracker = [{"kind": "tracker", "form": "const", "scale": 1.03, "latency_s": 0.02}]
+    for effects, s in (([], 1.0), (tracker, 1.03)):
+        camp = draw_scene_campaign(effects, np.random.default_rng(4), mp, n=20, objects=objs,
+                                   track_noise_m=0.003)  # fmt: skip
+        assert camp.tracks is not None and len(camp.tracks) == len(camp.records)
+        assert _median_gravity(camp) == pytest.approx(s, abs=0.005)
+        for r in camp.records:
+            t = camp.tracks[r["throw_id"]]
+            assert np.all(np.diff(t[:, 0]) > 0) and t[-1, 0] <= r["t_flight_s"]
+    bare = draw_scene_campaign(tracker, np.random.default_rng(4), mp, n=20, objects=objs)
+    assert bare.tracks is None and bare.records == camp.records
+
+
+def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g():
+    """Balls rolling on after the landing (`s:bounce-roll`'s world, no tracker scale): on
+    the landings alone a tracker scale (1.057 here) fits part of the roll and nothing
+    refuses it; the scene's tracks show g (1.002), and the scale is refused, alone and
+    beside the bounce (`cell.gap.select.refusal`)."""
+    from cell.gap.run import diagnose_log
+    from cell.log.table import ThrowTable
+    from cell.params import load_params, scene_params_path
+
+    path = scene_params_path()
+    assert path is not None
+    mp = load_params(path)
+    roll = {"kind": "bounce", "form": "contact", "restitution": 0.05, "friction": 1.0,
+            "rolling_m": 0.05}  # fmt: skip
+    camp = draw_scene_campaign([roll], np.random.default_rng(2), mp, n=32,
+                               objects=("sphere40", "sphere55", "sphere70"),
+                               track_noise_m=0.003)  # fmt: skip
+    d, _ = diagnose_log(ThrowTable.from_records(camp.records), mp.ee, objects=mp.objects,
+                        tracks=camp.tracks, validation=mp.validation)  # fmt: skip
+    rep = d.report
+    assert "tracking_scale" not in rep["verdict"]["effects"]
+    (ts,) = [c for c in rep["candidates"] if c["effect"] == "tracking_scale"]
+    assert ts["refused"] and "apparent gravity is 1.00" in ts["refused"], ts["refused"]
+    pairs = {k: t for k, t in rep["tests"].items() if "tracking_scale" in k}
+    assert pairs and all("tracking_scale: the tracks' apparent" in t["refused"]
+                         for t in pairs.values()), pairs  # fmt: skip

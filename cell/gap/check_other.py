@@ -342,7 +342,8 @@ def check_other_case(case: dict[str, Any]) -> dict[str, Any]:
 def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m: float,
                    outliers: tuple[int, ...], *, ee: Any = DEFAULT_EE,
                    objects: dict[str, Any] | None = None,
-                   validation: Any = None) -> dict[str, Any]:  # fmt: skip
+                   validation: Any = None,
+                   tracks: dict[str, np.ndarray] | None = None) -> dict[str, Any]:  # fmt: skip
     """Write a case's campaign to a throw log, read it back, diagnose it blind against the
     model as configured (`ee`, `objects`, the parameter file's `validation`) and judge the
     verdict.
@@ -357,7 +358,9 @@ def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m:
         write_throws_csv(ThrowTable.from_records(records), path)
         table = read_throws_csv(path)
     t0 = time.perf_counter()
-    d, _ = diagnose_log(table, ee, objects=objects, seed=case["seed"], validation=validation)
+    d, _ = diagnose_log(
+        table, ee, objects=objects, seed=case["seed"], validation=validation, tracks=tracks
+    )
     secs = time.perf_counter() - t0
     rep = d.report
     v = rep["verdict"]

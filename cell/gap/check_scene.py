@@ -255,7 +255,8 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
     camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
     judged = {**case, "expect": _measured(case["expect"], camp.truth)}
     row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
-                         objects=mp.objects, validation=mp.validation)  # fmt: skip
+                         objects=mp.objects, validation=mp.validation,
+                         tracks=camp.tracks)  # fmt: skip
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
             "world_floor0_m": camp.floor0_m, "world_repeat_sd_m": list(camp.repeat_sd_m),
             "world_effect_m": camp.effect_m,

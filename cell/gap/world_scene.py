@@ -13,7 +13,7 @@ item as forces and contacts, never as a formula on the landing:
 | launch | as the item leaves the pads its velocity is turned by yaw_k · stroke about the vertical and scaled by 1 + speed_k · stroke (outside the vocabulary) | stroke |
 | side_force | a constant horizontal force m · (x_mps2, y_mps2) on the item in flight (outside the vocabulary) | const |
 | bounce | the landing is where the item comes to rest on the floor, whose restitution and lateral friction are set (changeDynamics) | contact |
-| tracker | the tracker's recorded positions are `scale` times the true ones about the origin and `latency_s` late | const |
+| tracker | the tracker's recorded positions (the landings, and the flights' samples where tracks are logged) are `scale` times the true ones about the origin and `latency_s` late | const |
 
 The scene applies its own drag −c·|v|·v to every item (c = ½ ρ C_d A, `cell.sim.drag`);
 this world adds, before each physics step, the force that turns it into the effect's:
@@ -21,7 +21,9 @@ this world adds, before each physics step, the force that turns it into the effe
 
 A landing with bounce is logged where the item rests, or where it still rolls 3 s
 after it crossed the landing plane. A tracker's landing scatter (`noise_m` per axis) and, optionally, outliers (landings
-moved 0.3–1 m, mis-logged) are added to the logged landings.
+moved 0.3–1 m, mis-logged) are added to the logged landings. Optionally
+(`track_noise_m`), the tracker's samples of each flight are logged too: the item's position
+at 100 Hz from the release down to the landing plane, with a scatter per axis per sample.
 
 The launcher does not repeat to the bit: each throw's true stroke is the logged one
 times (1 + ε), ε ~ N(0, `JITTER_REL`) drawn per throw (the same draw with and without
@@ -105,11 +107,14 @@ def draw_plan(n: int, rng: np.random.Generator, *, repeats: int = 2, drone_share
     return [cfg[i] for i in rng.permutation(len(cfg))[:n]]
 
 
-def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] | None = None
+def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] | None = None,
+         path: list[tuple[float, float, float, float]] | None = None
          ) -> tuple[np.ndarray, float, np.ndarray]:  # fmt: skip
     """Throw once: (logged point xy [m] — the crossing of LAND_Z_M, or the rest point with
     `rest` —, the crossing time [s since release], the crossing's velocity [m/s]). `kick`
-    (a launch effect) turns and scales the item's velocity as it leaves the pads."""
+    (a launch effect) turns and scales the item's velocity as it leaves the pads. `path`,
+    if given, receives (t [s since release], x, y, z [m]) after every physics step of the
+    flight, up to the step that crosses the landing plane."""
     from cell.workflows.campaign import ReleasePose
 
     pf = ReleasePose(sc, ee, th.object_id, th.stroke, th.p0, th.elevation, th.azimuth)
@@ -135,6 +140,8 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
         while sc.t - t0 < 8.0:
             sc.step()
             p = item_xyz(sc, item)
+            if path is not None and cross is None:
+                path.append((sc.t - t0, *p))
             if cross is None and prev[2] > LAND_Z_M >= p[2]:
                 s = (prev[2] - LAND_Z_M) / (prev[2] - p[2])
                 a, b = np.asarray(prev[:2], float), np.asarray(p[:2], float)
@@ -157,13 +164,16 @@ def _one(sc: EffectScene, ee: Any, th: Throw, rest: bool, kick: dict[str, Any] |
 
 
 def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int,
-               jitter_rel: float = JITTER_REL, *, rows: np.ndarray | None = None
+               jitter_rel: float = JITTER_REL, *, rows: np.ndarray | None = None,
+               paths: dict[int, np.ndarray] | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Throw every planned throw (or the `rows` of it, a mask; NaN for the others) in a
     fresh EffectScene with `effects` on: (true logged points (n, 2) [m], crossing times
     (n,) [s], crossing velocities (n, 3) [m/s]); NaN for a throw that did not land. The
     tracker is not applied here. Each throw's stroke is jittered by a relative sd
-    `jitter_rel`, drawn from `seed` alone (the same draws whatever the effects and rows)."""
+    `jitter_rel`, drawn from `seed` alone (the same draws whatever the effects and rows).
+    `paths`, if given, receives each landed throw's flight by row (`_one`'s `path`, (k, 4)):
+    recording it moves nothing."""
     from cell.endeffector.factory import make_end_effector
 
     rng = np.random.default_rng(seed)
@@ -197,7 +207,12 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int,
                 continue
             try:
                 thj = replace(th, stroke=th.stroke * float(jit[i]))
-                xy[i], tl[i], vc[i] = _one(sc, ee, thj, rest=bo is not None, kick=kick)
+                pth: list[tuple[float, float, float, float]] | None = (
+                    [] if paths is not None else None
+                )
+                xy[i], tl[i], vc[i] = _one(sc, ee, thj, rest=bo is not None, kick=kick, path=pth)
+                if paths is not None and pth:
+                    paths[i] = np.asarray(pth, float)
             except NoLanding:
                 continue
     finally:
@@ -224,6 +239,8 @@ class SceneCampaign:
         effect_m: how far the effects move the logged points [m]: the RMS 2-D distance
             between the true points with the effects (scaled by a tracker's scale) and
             the same throws without them, over the inlier rows (no tracker scatter).
+        tracks: the tracker's samples of each logged flight {throw_id: (k, 4) t, x, y, z}
+            (`_tracks`), or None where the campaign logs landings only.
     """
 
     records: list[dict[str, Any]]
@@ -234,6 +251,33 @@ class SceneCampaign:
     floor0_m: float = float("nan")
     repeat_sd_m: tuple[float, float] = (float("nan"), float("nan"))
     effect_m: float = float("nan")
+    tracks: dict[str, np.ndarray] | None = None
+
+
+TRACK_RATE_HZ = 100.0  # [Hz] the tracker's samples of a flight (as `cell.gap.world_tracks`)
+
+
+def _tracks(paths: dict[int, np.ndarray], ok: np.ndarray, scale: float, lat: float,
+            noise_m: float, seed: int) -> dict[str, np.ndarray]:  # fmt: skip
+    """The tracker's samples of each logged throw's flight {throw_id: (k, 4) t [s since
+    the push began], x, y, z [m]}: the scene's positions at TRACK_RATE_HZ from the release
+    to the landing plane, `scale` times the true ones about the origin, `lat` late, with a
+    scatter `noise_m` per axis per sample (drawn from `seed` alone)."""
+    rng = np.random.default_rng([seed, 58])
+    out: dict[str, np.ndarray] = {}
+    for i in np.flatnonzero(ok):
+        pth = paths.get(int(i))
+        if pth is None:
+            continue
+        pth = pth[pth[:, 3] > LAND_Z_M]
+        if len(pth) < 2:
+            continue
+        grid = np.arange(np.ceil(pth[0, 0] * TRACK_RATE_HZ), pth[-1, 0] * TRACK_RATE_HZ + 1e-9)
+        k = np.searchsorted(pth[:, 0], grid / TRACK_RATE_HZ).clip(0, len(pth) - 1)
+        smp = pth[np.unique(k)]
+        xyz = scale * smp[:, 1:] + rng.normal(0.0, noise_m, smp[:, 1:].shape)
+        out[f"s{i:04d}"] = np.c_[smp[:, 0] + lat, xyz]
+    return out
 
 
 def repeat_var(plan: list[Throw], xy: np.ndarray, use: np.ndarray) -> float:
@@ -323,13 +367,17 @@ def _untouched(plan: list[Throw], effects: list[dict[str, Any]]) -> np.ndarray:
 def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator, params: Any,
                         *, n: int = 160, noise_m: float = 0.025, outliers: float = 0.0,
                         repeats: int = 2, drone_share: float = 0.0,
-                        objects: tuple[str, ...] | None = None) -> SceneCampaign:  # fmt: skip
+                        objects: tuple[str, ...] | None = None,
+                        track_noise_m: float | None = None) -> SceneCampaign:  # fmt: skip
     """Throw a campaign in the scene with `effects` on (see the module table), and the same
     throws without them for the floor. `params` is the model as configured
-    (`cell.params.ModelParams`)."""
+    (`cell.params.ModelParams`). With `track_noise_m` [m] the campaign also logs the
+    tracker's samples of every flight (`SceneCampaign.tracks`, `_tracks`); without it, none
+    (the scene check's campaigns log landings only)."""
     plan = draw_plan(n, rng, repeats=repeats, drone_share=drone_share, objects=objects)
     seed = int(rng.integers(2**31))
-    xy, tl, vc = throw_plan(plan, effects, seed)
+    paths: dict[int, np.ndarray] | None = {} if track_noise_m is not None else None
+    xy, tl, vc = throw_plan(plan, effects, seed, paths=paths)
     # a throw no effect acts on in the scene (a jet on an arm's throw; a tracker acts on
     # the logged points only) is the same throw without the effects: thrown once (PyBullet
     # repeats a throw to the bit, wherever it comes in a scene's sequence)
@@ -373,6 +421,11 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         floor0_m=f0,
         repeat_sd_m=(float(np.sqrt(v_eff)), float(np.sqrt(v_none))),
         effect_m=float(np.sqrt(np.mean(np.sum(moved**2, axis=1)))),
+        tracks=(
+            _tracks(paths, ok, scale, lat, track_noise_m, seed)
+            if paths is not None and track_noise_m is not None
+            else None
+        ),
     )
 
 
