@@ -68,6 +68,7 @@ figures: install
 	$(BIN)/python -m cell.bench.bench_real_tracks --json $(FIG)/real_tracks.json > /dev/null
 	$(BIN)/cell gap check --worlds other --n 240 --workers 2 --json $(FIG)/gap_check_other.json
 	$(BIN)/cell gap check --worlds scene --n 80 --workers 2 --json $(FIG)/gap_check_scene.json
+	$(BIN)/python examples/probe_unseen_effects.py --json $(FIG)/probe_unseen.json > /dev/null
 	$(BIN)/python examples/11_gap_scene_table.py $(FIG)/gap_check_scene.json > $(TMP)/gap_scene_table.md
 	$(BIN)/python -m cell.gap.scene_repeats s:bounce-slide s:bounce-slide-mu03 s:bounce-hop s:bounce-hop-mu05 s:bounce-roll s:bounce-roll-one --jitters 0.0001,0.01 --json $(FIG)/gap_scene_repeats.json > /dev/null
 	$(BIN)/cell bench --json > $(FIG)/bench.json

@@ -218,3 +218,28 @@ def check_the_scene_gap() -> None:
     close(rmse, nominal["baseline"]["heldout_rmse_m"], 2)
     close(before, ident["baseline"]["heldout_rmse_m"], 3)
     close(after, v["heldout_rmse_m"], 3)
+
+
+def check_the_probe() -> None:
+    """docs/gap_laws.md's probe table and the README's count are those of
+    docs/figures/probe_unseen.json (examples/probe_unseen_effects.py --json)."""
+    probe = load_json("docs/figures/probe_unseen.json")
+    rows = every(
+        "docs/gap_laws.md",
+        r"\| `([a-z_0-9]+)` \| ([a-z_+]+) \| ([a-z]+) \| `([\d.]+)` \| `([\d.]+)` \| `([\d.]+)` "
+        r"\| `([\d.]+)` \| `([\d.]+)` \| [^\n]*\| (OK|PARTIAL|NOT OK) \|",
+    )
+    by_case = {r["case"]: r for r in probe["rows"]}
+    assert [r[0] for r in rows] == list(by_case)
+    for case, verdict, where, effect, floor_w, floor, base, ratio, judged in rows:
+        r = by_case[case]
+        assert (verdict, where, judged) == (r["verdict"], r["where"], r["judged"])
+        close(effect, r["effect_m"] / r["world_floor_m"], 1)
+        close(floor_w, r["world_floor_m"], 3)
+        close(floor, r["tool_floor_m"], 3)
+        close(base, r["baseline_m"], 3)
+        close(ratio, r["after_over_floor"], 2)
+    ok, total = quoted("README.md", r"\| (\d+) of (\d+) cases OK \(`unknown` with the world")
+    assert (int(ok), int(total)) == (sum(r["ok"] for r in probe["rows"]), len(probe["rows"]))
+    (n,) = quoted("docs/gap_laws.md", r"`(\d+)` throws a case over")
+    assert {int(n)} == {probe["n"]}
