@@ -342,7 +342,7 @@ def check_the_gap_scene_prose() -> None:
     # the run
     cases, n, n_free, workers, secs = quoted(
         page,
-        r"\((\d+) cases, (\d+) throws each plus (\d+) effect-free; (\d) Ray workers .*? the "
+        r"\((\d+) cases, (\d+) throws each plus (\d+) effect-free; (\d) (?:Ray )?workers? .*? the "
         r"diagnoses alone (\d+) s\)",
     )
     assert int(cases) == doc["total"] == len(rows)
@@ -424,8 +424,11 @@ def _check_what_passes(page: str, rows: dict[str, dict[str, Any]]) -> None:
     _as_written(fy, _term(rows["s:side-force"], r"force y \[m/s²\] = ([\d.-]+)(?: \+|$)"))
     assert float(wy) == _case("s:side-force")[0]["y_mps2"]
     _as_written(fx, _term(rows["s:side-force-x"], r"force x \[m/s²\] = ([\d.-]+)"))
-    for c in ("s:side-force-x", "s:launch-yaw-stroke"):
-        assert " + " not in rows[c]["proposal"], c  # one term
+    assert " + " not in rows["s:launch-yaw-stroke"]["proposal"]  # one term
+    terms_x = rows["s:side-force-x"]["proposal"].split(" + ")
+    at_x = [i for i, t in enumerate(terms_x) if t.startswith("force x")][0]
+    (nth,) = quoted(page, r"the force along x the (\w+), on top of the partial wind")
+    assert nth == ("first", "second", "third", "fourth", "fifth", "sixth")[at_x]
     assert float(wx.replace("−", "-")) == _case("s:side-force-x")[0]["x_mps2"]
     _as_written(
         yaw, _term(rows["s:launch-yaw-stroke"], r"azimuth error \[rad\] = ([\d.]+) · stroke")
