@@ -4,7 +4,6 @@ imports nothing of the model or the fit)."""
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +19,7 @@ from cell.gap.world_other import OBJECTS, Throws, draw_other_campaign, landings
 from cell.log.table import ThrowTable
 from cell.model.effects import BandMass, Bounce, BounceImpact, BounceRolling, ReleasePitch
 from cell.model.params import DEFAULT_EE
+from tests.source_imports import imported_modules
 
 # MODEL.md golden values: object, stroke, release, elevation/azimuth [deg], base velocity,
 # land_z, landed x, y [m], flight time [s]
@@ -43,13 +43,8 @@ def _problem(effects, *, n=240, seed=3, **kw):
 
 def test_other_world_shares_no_code_and_meets_the_golden_values():
     src = Path(__file__).parents[1] / "cell" / "gap" / "world_other.py"
-    imports = [
-        a.name if isinstance(node, ast.Import) else node.module
-        for node in ast.walk(ast.parse(src.read_text()))
-        if isinstance(node, ast.Import | ast.ImportFrom)
-        for a in (node.names if isinstance(node, ast.Import) else [node])
-    ]
-    assert all(not str(m).startswith("cell") for m in imports), imports
+    imports = imported_modules(src)
+    assert all(not m.startswith("cell") for m in imports), imports
     g = GOLDEN
     th = Throws(
         obj=np.array([r[0] for r in g]),

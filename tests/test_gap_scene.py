@@ -3,29 +3,19 @@ physically (`cell.gap.world_scene`), diagnosed blind by `cell gap`."""
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from cell.gap.world_scene import EffectScene, draw_scene_campaign, matched_objects
+from tests.source_imports import imported_modules
 
 pytest.importorskip("pybullet")
 
 
-def _imports(path: Path) -> list[str]:
-    tree = ast.parse(path.read_text())
-    return [
-        a.name if isinstance(node, ast.Import) else str(node.module)
-        for node in ast.walk(tree)
-        if isinstance(node, ast.Import | ast.ImportFrom)
-        for a in (node.names if isinstance(node, ast.Import) else [node])
-    ]
-
-
 def test_scene_world_shares_nothing_with_the_fit():
-    mods = _imports(Path(__file__).parents[1] / "cell" / "gap" / "world_scene.py")
+    mods = imported_modules(Path(__file__).parents[1] / "cell" / "gap" / "world_scene.py")
     assert not [m for m in mods if m.startswith(("cell.gap", "cell.model.effects"))], mods
 
 

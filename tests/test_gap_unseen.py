@@ -5,7 +5,6 @@ terms for a log's drift and sessions, a landing surface off level and a tracker 
 
 from __future__ import annotations
 
-import ast
 import importlib.util
 import math
 from pathlib import Path
@@ -17,6 +16,7 @@ from cell.gap.propose import propose
 from cell.gap.run import diagnose_log
 from cell.log.csvio import read_throws_csv
 from cell.model.params import DEFAULT_EE
+from tests.source_imports import imported_modules
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "examples/probe_unseen_effects.py"
@@ -33,13 +33,8 @@ def _log(case: str, tmp_path: Path, n: int = 160, seed: int = 0):
 
 
 def test_the_probe_world_shares_no_code_with_the_cell():
-    imports = [
-        a.name if isinstance(node, ast.Import) else node.module
-        for node in ast.walk(ast.parse(SCRIPT.read_text()))
-        if isinstance(node, ast.Import | ast.ImportFrom)
-        for a in (node.names if isinstance(node, ast.Import) else [node])
-    ]
-    assert all(not str(m).startswith("cell") for m in imports), imports
+    imports = imported_modules(SCRIPT)
+    assert all(not m.startswith("cell") for m in imports), imports
 
 
 def test_two_sessions_are_no_repeats_and_their_step_is_proposed(tmp_path):
