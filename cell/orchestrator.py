@@ -253,6 +253,7 @@ class Orchestrator(
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
+        self._timed_n = 0  # release candidates timed in this decision (`release_budget`)
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
@@ -357,6 +358,7 @@ class Orchestrator(
         self._approach_memo.clear()
         self._approach_plans.clear()
         self._plan_memo.clear()
+        self._timed_n = 0
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m

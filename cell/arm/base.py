@@ -70,6 +70,13 @@ class ArmBase:
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]
+    _timed_n: int = 0  # release candidates timed in this decision (`Orchestrator.decide`)
+
+    def _budget_spent(self) -> bool:
+        """Has this decision timed `ArmTuning.release_budget` release candidates or more
+        (`ReleaseChoice._release_search`)? Never where the budget is None."""
+        most = self.tuning.release_budget
+        return most is not None and self._timed_n >= most
 
     if TYPE_CHECKING:  # the parts call each other through the facade that joins them
 

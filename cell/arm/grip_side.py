@@ -193,6 +193,8 @@ class GripSideChoice(ArmBase):
             beat = None  # the first side's estimate: a later side's release that cannot
             if best is not None and best[1].cost is not None and not best[1].cost[0]:
                 beat = best[1].cost[1]  # beat it is not timed (`Planner._plan`)
+                if self._budget_spent():
+                    break  # a throw that holds in hand, the budget spent (`release_budget`)
             try:
                 choice = self._plan(side.obj, target, index, side.stroke_max_m, beat)
             except (UnreachableTarget, IKFailed, CannotGrip) as exc:

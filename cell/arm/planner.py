@@ -97,6 +97,8 @@ class Planner(ArmBase):
         for tiers in (steep, ((ordinary, False), (shrunk, True))):
             best: ThrowChoice | None = None
             for facing in () if not tiers else (None,) if turned is None else (None, turned):
+                if self._to_beat(best) is not None and self._budget_spent():
+                    break  # a release that holds in hand, the budget spent (`release_budget`)
                 try:
                     r = self._plan_facing(
                         obj,
@@ -209,6 +211,8 @@ class Planner(ArmBase):
             for k, bounds in enumerate(tier):
                 if found and (first_kept or not self._lower_bounds_wanted(found[0])):
                     break  # the first reached is kept
+                if self._beat(found) is not None and self._budget_spent():
+                    break  # a release that holds in hand, the budget spent (`release_budget`)
                 try:
                     found.append(
                         self._plan_in(

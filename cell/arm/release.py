@@ -114,7 +114,11 @@ class ReleaseChoice(ArmBase):
         ranked by (`_rank_bound_s`: with `release_rank_way`, the way back planned) is
         worked out only where the candidate might be ranked before those taken so far
         (`_Ranked`, by `_rank_floor_s`, a bound on that bound): the same order, fewer ways
-        back planned (tests/test_release_rank_lazy.py)."""
+        back planned (tests/test_release_rank_lazy.py). With `ArmTuning.release_budget`,
+        once the decision has timed that many candidates (`_timed_n`, every search of it
+        counted) and a release that holds is in hand (here or `beat`), no more are timed:
+        the soonest timed is kept, or (False, ∞) where it is `beat`'s
+        (tests/test_release_budget.py)."""
         level = self._turns_if_rolled(obj, stroke)
         a = float(plan.azimuth_rad)
         found = self._release_candidates(tcp, plan, stroke, obj)
@@ -136,6 +140,9 @@ class ReleaseChoice(ArmBase):
                 break  # nor can any after it
             if most and timed >= most:
                 break  # the soonest-bounded ones timed: the rest are not (`release_timed_max`)
+            if soonest < math.inf and self._budget_spent():
+                pruned = True  # a release that holds is in hand: no more are timed
+                break  # (`release_budget`)
             self._frame = (a, roll)
             try:
                 if best is not None and not best[0][0][0]:
@@ -149,6 +156,7 @@ class ReleaseChoice(ArmBase):
                 continue
             t = t_cycle + self.tuning.approach_weight * t_approach
             timed += 1
+            self._timed_n += 1
             slips = level and not self._swing_holds(
                 [over[1], *way, q_rel], (obj, stroke), plan.elevation_rad
             )

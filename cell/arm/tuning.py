@@ -155,6 +155,16 @@ class ArmTuning:
             (docs/HISTORY.md, 2026-11-29, fifth round). Over all 20 tune layouts at 0.5:
             612/638, 1,472 items per hour, 1,386 in real time; at None 616/638, 1,499 and
             1,420: None, every bounds searched, is the default; 0.5 is kept to measure.
+        release_budget: with the release search, a decision's work budget: once it has
+            timed this many release candidates (each a carry timed as the cell makes it,
+            counted over every grip side, facing and release bounds it searches) and has
+            a release that holds, it times no more and searches no further facing, release
+            bounds or grip side, keeping the soonest release it timed; before it has one
+            it goes on as without a budget, so no item is left without a throw it would
+            have had. A count, not a clock: the same decisions on any machine. None: no
+            budget (every search as before). The demo's throws time 2-7 candidates a
+            decision (the chosen one timed 1st-7th: docs/HISTORY.md, 2026-12-01, branch
+            plan21).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
             bounced out of a 55 mm rim bin),
@@ -247,6 +257,7 @@ class ArmTuning:
     release_rank_way: bool = True
     release_timed_max_lower: int | None = 1
     release_lower_room_s: float | None = None
+    release_budget: int | None = None
     face_turn_max_rad: float = math.radians(90.0)
     face_min_off_rad: float = math.radians(30.0)
     face_throw_stretch: float = 1.10
