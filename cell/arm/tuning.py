@@ -163,7 +163,11 @@ class ArmTuning:
             it goes on as without a budget, so no item is left without a throw it would
             have had. A count, not a clock: the same decisions on any machine. None: no
             budget (every search as before). The demo's throws time 2-7 candidates a
-            decision (the chosen one timed 1st-7th: docs/HISTORY.md, 2026-12-01, branch
+            decision, the chosen one first timed 1st-7th; tune layout 0's 1-12. At 3 the
+            demo's decide CPU p95 2.09 -> 1.34 s (24/24, 1,508 -> 1,538 items per hour),
+            but tune layout 0 (Panda and UR5) 1,401 -> 1,278 items per hour (65/66 both);
+            at 5 the demo's p95 2.02 s, tune layout 0's Panda 1,435 -> 1,369: None is the
+            default, the constant kept to measure (docs/HISTORY.md, 2026-12-01, branch
             plan21).
         face_turn_max_rad: [rad] a throw's release turns from its bin toward the pick station
             at most this far (random layout 16: turned up to 90°, six 60 mm cylinders
