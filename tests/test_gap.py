@@ -35,7 +35,9 @@ def _no_nan(text: str) -> dict:
 
 @pytest.fixture(scope="module")
 def band_mass_run(tmp_path_factory: pytest.TempPathFactory) -> tuple:
-    camp = draw_campaign("band_mass", np.random.default_rng(11), n=260)
+    # 160 throws: A 0.96-0.99 F, the band mass 0.4-2.3 % off, the floor 1-4 % over the
+    # scatter, the shuffled mass losing 0.39-0.45 of the gain (seeds 11, 0, 1)
+    camp = draw_campaign("band_mass", np.random.default_rng(11), n=160)
     d, prob = diagnose_log(camp.table, DEFAULT_EE)
     return camp, d, prob, tmp_path_factory.mktemp("gap")
 

@@ -194,10 +194,12 @@ def test_per_object_law_is_learned_and_shrunk():
 
 
 def test_launch_effect_and_landing_slide_are_found_as_a_pair():
+    # 200 throws: the pair on seeds 3, 0, 1, band mass 0.01998-0.02004 kg, τ 0.049-0.051 s,
+    # the robust held-out RMSE 1.003-1.009 x the floor
     _, camp, table = _problem(
         [{"kind": "band_mass", "form": "const", "value": 0.02},
          {"kind": "slide", "form": "const", "tau_s": 0.05}],
-        n=300,
+        n=200,
     )  # fmt: skip
     d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
     v = d.report["verdict"]
@@ -301,7 +303,8 @@ def test_a_wind_with_a_vertical_part_is_given_it():
     across (a vertical part within the plausible 1 m/s): the member with it stands."""
     from cell.model.effects import Wind
 
-    prob, camp, _ = _problem([])
+    # 120 throws: the member with it, z -0.66 to -0.72 m/s (seeds 3, 0, 1, 2)
+    prob, camp, _ = _problem([], n=120)
     wind = Wind(-1.5, 2.0, -0.7)
     land = prob.landing(np.arange(len(prob)), (wind,))
     xy = np.c_[land.x, land.y] + np.random.default_rng(4).normal(0, 0.012, (len(prob), 2))
