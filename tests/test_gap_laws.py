@@ -429,3 +429,34 @@ def test_a_law_in_the_stroke_that_one_object_alone_follows_is_refused():
     assert min(forms, key=forms.__getitem__) == lin, rows  # the best on random folds
     assert rows[f"{lin}, {OBJECTS_OUT}"] > rows[f"constant, {OBJECTS_OUT}"], rows
     assert type(best.full.effects[-1]) is BandMass, rows
+
+
+@pytest.mark.parametrize(("off_m", "kept"), [(-0.6, False), (-0.1, True)])
+def test_a_landing_plane_further_off_than_any_cells_is_not_proposed(off_m, kept):
+    """Throws landed by the model on a surface off_m [m] from the logged plane: 0.1 m off
+    is proposed as a plane height of -0.1 m; 0.6 m off is more than any cell's floor is
+    (`cell.gap.propose.PLANE_MAX_M`): the term is left out, listed with its value, and the
+    law is fitted without it (a floor that far off is no cell's: the term stands for
+    something else, as a slide's on the scene's bounce logs)."""
+    from cell.gap.propose import PLANE_CONST, PLANE_MAX_M
+
+    _, camp, table = _problem([], n=160)
+    recs = camp.records
+    true = ThrowTable.from_records([{**r, "land_z_m": r["land_z_m"] + off_m} for r in recs])
+    land = build_problem(true, DEFAULT_EE, seed=0).landing(np.arange(len(recs)))
+    xy = np.c_[land.x, land.y] + np.random.default_rng(5).normal(0, 0.012, (len(recs), 2))
+    recs = [{**r, "landed_x_m": float(p[0]), "landed_y_m": float(p[1])}
+            for r, p in zip(recs, xy, strict=True)]  # fmt: skip
+    prob = build_problem(ThrowTable.from_records(recs), DEFAULT_EE, seed=0)
+    prop, _ = propose(prob, (), camp.floor_m)
+    k = {t["term"]: t["k"] for t in prop["terms"]}
+    assert abs(off_m) > PLANE_MAX_M or kept
+    if kept:
+        assert k[PLANE_CONST] == pytest.approx(off_m, rel=0.15), prop["law"]
+        assert "implausible_left_out" not in prop
+    else:
+        assert PLANE_CONST not in k, prop["law"]
+        (out,) = prop["implausible_left_out"]
+        # the term is linear in the height: 0.6 m off reads as 0.41 m, still beyond the bound
+        assert out["term"] == PLANE_CONST and off_m < out["k"] < -PLANE_MAX_M, out
+        assert all(abs(v) <= PLANE_MAX_M for t, v in k.items() if "plane" in t), prop["law"]
