@@ -15,11 +15,13 @@ Verdict rules:
   with the first when one alone leaves a real gap; it joins only for the cut it adds
   over the first effect refitted from the pair's solution);
 * an effect is a family of laws (`cell.model.effects.FAMILIES`): every member is
-  fitted and scored, and the one that predicts held-out throws best stands for
-  the effect;
+  fitted and scored, and the one that predicts held-out throws best, with a penalty
+  per term more than the family's fewest, stands for the effect;
 * an effect's one parameter may follow a law of the throw (`cell.gap.laws`: constant,
   proportional or linear in the stroke, mass or grip width, or one value per object),
-  chosen by held-out RMSE with a penalty per extra term when the effect joins;
+  chosen by held-out RMSE with a penalty per extra term when the effect joins; the
+  other effects whose constant alone would have joined first get their law too, and
+  one whose law cuts MIN_CUT of what the first leaves replaces it (`Selection.rival_law`);
 * an effect is refused (does not join, and the report says why) when a parameter
   sits at a bound, when its value is one no real cell has (outside the effect's
   plausible range), or when the tracks contradict it: its phase carries less than

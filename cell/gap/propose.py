@@ -64,6 +64,11 @@ COLLINEAR_TOL = 0.01  # a term less than this share independent of the terms bef
 SHIFT_V = "landing shift [s] = k · v_h"
 MAX_SESSIONS = 6  # a log of more sessions than this has no session terms (its order terms stay)
 MIN_VZ = 0.5  # [m/s] a landing plane's terms are nil for throws descending slower than this
+# [m] the largest height a landing plane's constant term may give: the tool's own worlds
+# land on planes at 0 and 0.25 m (`cell.gap.world`), so a throw logged onto the other one
+# is 0.25 m off; a surface further off its logged height than that is no cell's
+PLANE_MAX_M = 0.25
+PLANE_CONST = "landing plane height [m] = k"
 
 
 def _cov(prob: GapProblem, name: str) -> np.ndarray:
@@ -266,6 +271,28 @@ def propose(
     terms = [t for t, f in zip(terms, free, strict=True) if f]
     a_all = a_all[:, free]
     y_all = r.reshape(-1)
+    out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
+    out["collinear_left_out"] = left_out
+    at = [t["term"] for t in terms].index(PLANE_CONST) if PLANE_CONST in [
+        t["term"] for t in terms] else None  # fmt: skip
+    if at is not None and any(t["term"] == PLANE_CONST and abs(t["k"]) > PLANE_MAX_M
+                              for t in out["terms"]):  # fmt: skip
+        # a floor further off its logged height than any cell's: the term stands for
+        # something else; the law is fitted again without it
+        own = [t for t in out["terms"] if t["term"] == PLANE_CONST][0]["k"]
+        rest = [j for j in range(len(terms)) if j != at]
+        out, miss = _sparse_law(prob, [terms[j] for j in rest], a_all[:, rest], y_all, keep,
+                                floor_m)  # fmt: skip
+        out["collinear_left_out"] = left_out
+        out["implausible_left_out"] = [{"term": PLANE_CONST, "k": float(own)}]
+    return out, miss
+
+
+def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
+                y_all: np.ndarray, keep: np.ndarray, floor_m: float
+                ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+    """The sparse law of the misses y_all (2n,) over the library's columns a_all (2n, p),
+    its threshold chosen on held-out folds of the throws in `keep` (`propose`)."""
     rows_keep = np.repeat(keep, 2)
     a, y = a_all[rows_keep], y_all[rows_keep]
     base_rmse = float(np.sqrt(np.mean(y * y) * 2))
@@ -294,8 +321,7 @@ def propose(
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
         return {"law": None, "terms": [], "heldout_rmse_before_m": base_rmse,
-                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0,
-                "collinear_left_out": left_out}, miss  # fmt: skip
+                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0}, miss  # fmt: skip
     e = y - a @ th
     s2 = float(e @ e) / max(y.size - on.size, 1)
     cov = s2 * np.linalg.pinv(a[:, on].T @ a[:, on])
@@ -325,5 +351,4 @@ def propose(
         "heldout_rmse_after_m": ho,
         "shrink_pct": 100.0 * (1.0 - ho / base_rmse) if base_rmse > 0 else 0.0,
         "within_floor": bool(ho <= 1.3 * floor_m),
-        "collinear_left_out": left_out,
     }, miss

@@ -118,11 +118,19 @@ def at_bound(eff: Effect) -> list[str]:
 
 def member_rank_of(sc: Score) -> tuple[bool, float]:
     """How a family member's score ranks among its family's (lower is better): stretched
-    (at a bound or implausible) last, then by held-out RMSE [m]. A member with a term
-    more (the wind's vertical part) stands for the effect only where that term predicts
-    held-out throws better and stays within its plausible range."""
+    (at a bound or implausible) last, then by held-out RMSE [m] raised by
+    `cell.gap.laws.TERM_PENALTY` per term more than the family's fewest (the rule a law
+    of the throw pays for its terms). A member with a term more (the wind's vertical
+    part) stands for the effect only where that term predicts held-out throws better by
+    more than the penalty and stays within its plausible range."""
+    from cell.gap.laws import TERM_PENALTY
+
     eff = sc.full.effects[-1]
-    return bool(at_bound(eff) or eff.implausible()), sc.heldout_rmse_m
+    fewest = min(len(c.bounds) for c in FAMILIES.get(eff.name, (type(eff),)))
+    extra = max(len(type(eff).bounds) - fewest, 0)
+    return bool(at_bound(eff) or eff.implausible()), sc.heldout_rmse_m * (
+        1.0 + TERM_PENALTY * extra
+    )
 
 
 def classes_names(classes: list[type[Effect]]) -> tuple[str, ...]:
@@ -185,6 +193,64 @@ class Selection:
                 self.members[e.name] = type(e)
         return out
 
+    def rival_law(self, first: Score, base_sq: np.ndarray) -> Score:
+        """The first effect to join, or a rival that beats it once the rival's own law is
+        chosen (`cell.gap.laws`). The effects are ranked alone at their constant form; an
+        effect whose parameter grows with a logged quantity (a drag growing with the
+        stroke) can rank below one whose constant mimics it, and a partner is only sought
+        where the first leaves a real gap. Each other effect of LAW_BASES alone whose
+        constant passes over the baseline (base_sq [m²] per throw) has its law chosen; a
+        rival whose chosen form is not its constant replaces the first effect when, with
+        that form, it passes over the baseline (the permutation control shuffling the
+        law's covariate) and over the first effect (it cuts MIN_CUT of what the first
+        leaves, with a bootstrap interval above zero). A rival's test over the baseline
+        is recorded under its name, over the first effect under `"<effect> (<law>) over
+        <first>"`."""
+        from cell.gap.laws import LAW_BASES, choose_law
+
+        if len(public(first.names)) != 1:
+            return first
+        have = first.names[-1]
+        best = first
+        for sc in self.ranked:
+            eff = sc.full.effects[-1]
+            if eff.name == have or eff.name not in LAW_BASES or len(public(sc.names)) != 1:
+                continue
+            if self.refuse(sc) or not self._passes_quiet(base_sq, sc):
+                continue
+            law, tried = choose_law(self.prob, sc, self.tick)
+            form = law.full.effects[-1]
+            if not getattr(type(form), "law_base", None):
+                continue
+            t = self._test(best.heldout, law)
+            why = self.refuse(law)
+            if why:
+                t["refused"] = why
+            ok = t["passes"] and not why and self.passes(base_sq, law)
+            t["passes"] = bool(ok)
+            self.tests[f"{form.name} ({form.law}) over {'+'.join(public(best.names))}"] = t
+            if ok:
+                self.law_tries.update(tried)
+                self.members[eff.name] = type(form)
+                best = law
+        return best
+
+    def _test(self, prev_sq: np.ndarray, cand: Score) -> dict[str, Any]:
+        """The cut of a candidate over the misses before it (prev_sq [m²] per throw): at
+        least MIN_CUT of the held-out RMSE left, with a bootstrap interval above zero."""
+        prev = float(np.sqrt(prev_sq.mean()))
+        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=self.prob.seed)
+        return {
+            "cut_m": cut,
+            "cut_ci_m": [lo, hi],
+            "cut_share": cut / prev if prev > 0 else 0.0,
+            "passes": bool(cut >= MIN_CUT * prev and lo > 0),
+        }
+
+    def _passes_quiet(self, prev_sq: np.ndarray, cand: Score) -> bool:
+        """Whether a candidate's cut over prev_sq passes (`_test`), unrecorded."""
+        return bool(self._test(prev_sq, cand)["passes"])
+
     def prune(self, cand: Score) -> Score:
         """The set without any earlier effect that, once the laws are chosen, no longer
         cuts MIN_CUT of what the others leave with a bootstrap interval above zero
@@ -235,18 +301,14 @@ class Selection:
         }
         return survive
 
-    def passes(self, prev_sq: np.ndarray, cand: Score) -> bool:
+    def passes(self, prev_sq: np.ndarray, cand: Score, key: str | None = None) -> bool:
         """Whether a candidate set joins over the misses before it (prev_sq [m²] per
         throw): it cuts MIN_CUT of the held-out RMSE left with a bootstrap interval above
-        zero, is not refused and survives the permutation control. Records the tests."""
-        prev = float(np.sqrt(prev_sq.mean()))
-        cut, lo, hi = bootstrap_cut(prev_sq, cand.heldout, seed=self.prob.seed)
-        t: dict[str, Any] = {
-            "cut_m": cut,
-            "cut_ci_m": [lo, hi],
-            "cut_share": cut / prev if prev > 0 else 0.0,
-        }
-        ok = cut >= MIN_CUT * prev and lo > 0
+        zero, is not refused and survives the permutation control. Records the tests
+        (under `key`, or the set's names joined by "+")."""
+        t = self._test(prev_sq, cand)
+        cut = t["cut_m"]
+        ok = bool(t.pop("passes"))
         why = self.refuse(cand)
         if why:
             t["refused"] = why
@@ -255,7 +317,7 @@ class Selection:
         if ok and newest.hangs_on is not None:
             ok = ok and self._survives_permutation(cand, cut, t)
         t["passes"] = bool(ok)
-        self.tests["+".join(public(cand.names))] = t
+        self.tests[key or "+".join(public(cand.names))] = t
         return ok
 
     def join(self, base_sq: np.ndarray) -> tuple[list[Score], np.ndarray]:
@@ -273,7 +335,7 @@ class Selection:
         cur_sq = base_sq
         for s in self.ranked:
             if self.passes(cur_sq, s):
-                s = self.learn_law(s)
+                s = self.rival_law(self.learn_law(s), base_sq)
                 chosen.append(s)
                 cur_sq = s.heldout
                 break
