@@ -155,7 +155,7 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     )
     assert over == ("1.32", "1.32", "1.31", "1.43")  # the table before, as the page tells it
     assert rows["s:bounce-roll"]["verdict"] == "bounce+tracking_scale"
-    assert not rows["s:bounce-roll"]["passes"] and not rows["s:drag-stroke"]["passes"]
+    assert not rows["s:bounce-roll"]["passes"]
     was, now, of = quoted(
         PAGE, r"`s:drag\+hop`'s drag is its constant\. (\d+) → (\d+) of (\d+) pass"
     )
@@ -164,10 +164,15 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
         PAGE, r"sd ([\d.]+)\. (\d+) → (\d+) of (\d+)\s+pass; no other row moved"
     )[1:]
     assert (was, of2) == (now, of)  # the throw-to-throw wind's change came after it
-    assert (int(now2), int(of)) == (
+    assert now2 == "32"  # that change's table, as the page tells it
+    was3, now3, of3 = quoted(PAGE, r"(\d+) → (\d+) of (\d+) pass; `s:wind-y`, `s:downwash\+wind`")
+    assert (was3, of3) == (now2, of)  # the rival's law came after it
+    assert (int(now3), int(of)) == (
         load_json("docs/figures/gap_check_scene.json")["passes"],
         len(rows),
     )
+    for c in ("s:wind-y", "s:downwash+wind", "s:wind-all-objects"):
+        assert rows[c]["laws"] == {"wind": "level"}, c
     assert "drag_scale" not in rows["s:drag+hop"]["laws"] and rows["s:drag+hop"]["passes"]
     from cell.gap.select import VERDICT_RATIO
 
@@ -204,7 +209,7 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     # change, after them, is checked with today's count in `_check_the_jet`)
     assert (old, new, s1, m1) == ("24", "21", "4.70", "8.63")
     assert total == "42"  # the cases of that step (a null case was added after it)
-    close(s2, bs["after_over_floor"], 2)
+    assert s2 == "2.14"  # that step's table, as the page tells it
     mu3 = rows["s:bounce-slide-mu03"]
     law, m_before, m_after = quoted(
         PAGE, r"`s:bounce-slide-mu03` is given `([^`]+)`, its A / F ([\d.]+) → ([\d.]+) \(still"
@@ -225,9 +230,17 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     every_obj = rows["s:wind-all-objects"]["params"]["wind"]
     fx, fy, tx, ty, lo, hi = quoted(
         page,
-        r"phase right, but ([\d.]+)/−([\d.]+) m/s for ([\d.]+)/−([\d.]+): the\s+calibrated "
+        r"phase right, at ([\d.]+)/−([\d.]+) m/s for ([\d.]+)/−([\d.]+): the\s+calibrated "
         r"objects' drag constants are ([\d.]+)–([\d.]+) × the scene's",
     )
+    assert rows["s:wind-all-objects"]["passes"] and rows["s:wind-all-objects"]["laws"] == {
+        "wind": "level"
+    }
+    a, k = quoted(page, r"`factor = a \+ k · stroke_m` with a ([\d.]+), k ([\d.]+) /m,\s+cuts")
+    ds = rows["s:drag-stroke"]
+    assert ds["passes"] and ds["laws"] == {"drag_scale": "factor = a + k · stroke_m"}
+    _written(a, ds["params"]["drag_scale"]["a"])
+    _written(k, ds["params"]["drag_scale"]["k"])
     _written(fx, every_obj["x_mps"])
     _written(fy, -every_obj["y_mps"])
     eff = _case("s:wind-all-objects")[0]
@@ -283,7 +296,6 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     assert float(f) == _case("s:drag-low")[0]["value"] and dl["passes"] and not dl["laws"]
     _written(factor, dl["params"]["drag_scale"]["factor"])
     assert (a, k) == ("0.793", "−8.77")  # the table before, as the page tells it
-    assert rows["s:drag-stroke"]["verdict"] == "stroke_offset"
     dw = rows["s:downwash"]
     radius, moved, scatter = quoted(
         page,
@@ -336,7 +348,9 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     close(t4, 100 * rows["s:bounce-slide-mu03"]["param_errors"]["bounce.tau_s"], 0)
     _written(m4, rows["s:bounce-slide-mu03"]["world_truth"]["tau_s"])
     assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
-    (above,) = quoted(page, r"but A stays above ([\d.]+) × F: a\s+block that tumbles")
+    (above,) = quoted(
+        page, r"but A stays above ([\d.]+) × F or the verdict misses: a\s+block that tumbles"
+    )
     from tests.figure_checks_scene import check_the_edge_and_the_changes
 
     check_the_edge_and_the_changes(rows, float(above))
