@@ -253,7 +253,6 @@ class Orchestrator(
         self._approach_memo: dict[tuple[Any, ...], float] = {}
         self._approach_plans: dict[tuple[Any, ...], tuple[Any, str]] = {}  # `_approach_plan`
         self._plan_memo: dict[tuple[Any, ...], Any] = {}  # paths and carries (`_planned`)
-        self._timed_n = 0  # release candidates timed in this decision (`release_budget`)
         self._placing = False  # the item carried is to be placed (carry_hold)
 
     def _probe_meshes(self) -> None:
@@ -353,12 +352,7 @@ class Orchestrator(
         """Place (a bin within the job's place reach, or the job's policy) or throw, and
         the throw's plan, made before the pick: the end-effector grasps at the stroke it
         will throw with, so the item sits on the band carriage as the plan assumes."""
-        self._ik_memo.clear()
-        self._ik_warm.clear()
-        self._approach_memo.clear()
-        self._approach_plans.clear()
-        self._plan_memo.clear()
-        self._timed_n = 0
+        self._new_decision()
         dist = math.hypot(*target.position)
         place = self.job.policy == "place" or (
             self.job.policy == "auto" and dist <= self.job.place_reach_m

@@ -70,7 +70,18 @@ class ArmBase:
     _approach_memo: dict[tuple[Any, ...], float]
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]
-    _timed_n: int = 0  # release candidates timed in this decision (`Orchestrator.decide`)
+    _timed_n: int = 0  # release candidates timed in this decision (`_new_decision`)
+
+    def _new_decision(self) -> None:
+        """Forget what a decision keeps only for itself (`Orchestrator.decide` calls it
+        first): its IK answers and warm starts, approaches timed, paths and carries planned,
+        and the release candidates it has timed (`release_budget`)."""
+        self._ik_memo.clear()
+        self._ik_warm.clear()
+        self._approach_memo.clear()
+        self._approach_plans.clear()
+        self._plan_memo.clear()
+        self._timed_n = 0
 
     def _budget_spent(self) -> bool:
         """Has this decision timed `ArmTuning.release_budget` release candidates or more
