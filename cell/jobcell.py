@@ -4,6 +4,7 @@ read (`cell.jobs.parse_job` calls `cell_section`)."""
 
 from __future__ import annotations
 
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -83,7 +84,18 @@ def _cell_file(c: Checker, cell: dict[str, Node], key: str, base: Path) -> str:
             f"cell.{key}",
             f"file {p} does not exist (relative to the current folder or to {base})",
         )
+    _regular(c, cell[key], f"cell.{key}", full)
     return str(full)
+
+
+def _regular(c: Checker, node: Node, fp: str, full: Path) -> None:
+    """JobError when the path that exists is not a regular file (a folder, a device, a
+    FIFO), said as such: told from `os.stat` alone, nothing opened."""
+    from cell.infile import kind_of
+
+    mode = full.stat().st_mode
+    if not stat.S_ISREG(mode):
+        raise c.fail(node, fp, f"{full} is {kind_of(mode)}; give a file")
 
 
 def _robot(c: Checker, cell: dict[str, Node], base: Path) -> str:
@@ -102,8 +114,9 @@ def _robot(c: Checker, cell: dict[str, Node], base: Path) -> str:
         node, fp = cell["mount"], "cell.mount"
         p = Path(c.text(node, fp)).expanduser()
         full = p if p.is_absolute() else base / p
-        if not full.is_file():
+        if not full.exists():
             raise c.fail(node, fp, f"mount file {p} does not exist (relative to {base})")
+        _regular(c, node, fp, full)
         ref = str(full.resolve())
     else:
         node, fp = cell.get("robot", Node("panda", 0)), "cell.robot"

@@ -29,7 +29,7 @@ from cell.jobschema import (
     TOP_KEYS,
     job_keys,
 )
-from cell.model.objects import SHAPES, ObjectParams, denser_than_any_solid
+from cell.model.objects import SHAPES, ObjectParams, denser_than_any_solid, lighter_than_air
 from cell.yamlsafe import check_yaml, read_yaml_text
 from cell.yamltree import Checker, Errors, Node, same_text, to_tree
 
@@ -324,7 +324,7 @@ def _item_object(
     bad_extents = extents_mismatch(shape, size)
     if bad_extents:
         raise c.fail(it["size_m"], f"{fp}.size_m", bad_extents)
-    dense = denser_than_any_solid(mass, size)
+    dense = denser_than_any_solid(mass, size) or lighter_than_air(mass, size)
     if dense:
         raise c.fail(it["mass_kg"], f"{fp}.mass_kg", dense)
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]

@@ -33,7 +33,7 @@ from typing import Any
 import yaml
 
 from cell.errors import InvalidInput, InvalidParameter
-from cell.model.objects import ObjectParams
+from cell.model.objects import ObjectParams, denser_than_any_solid, lighter_than_air
 from cell.model.params import EndEffectorParams
 from cell.yamlsafe import read_yaml_text, safe_load
 
@@ -135,6 +135,7 @@ def _turned_from_catalogue(obj: ObjectParams) -> bool:
 
 MAX_FILE_MASS_KG = 1000.0  # [kg] an object of a parameter file: beyond is a typo (1e300)
 MAX_FILE_SIZE_M = 10.0  # [m]
+OBJECT_KEYS = ("shape", "mass_kg", "size_m")  # an object of a parameter file, as saved
 
 
 def scene_params_path() -> str | None:
@@ -173,6 +174,9 @@ def load_params(path: str | Path | None) -> ModelParams:
         try:
             if not isinstance(spec, dict):
                 raise TypeError(f"{spec!r} is not a mapping")
+            extra = sorted(str(k) for k in set(spec) - set(OBJECT_KEYS))
+            if extra:
+                raise ValueError(f"unknown key(s) {extra}; valid: {', '.join(OBJECT_KEYS)}")
             objects[str(oid)] = ObjectParams(
                 shape=str(spec["shape"]),
                 mass=float(spec["mass_kg"]),
@@ -185,6 +189,9 @@ def load_params(path: str | Path | None) -> ModelParams:
                     f"mass {o.mass:g} kg, size {max(o.size):g} m: an absurd magnitude; valid are "
                     f"masses up to {MAX_FILE_MASS_KG:g} kg and extents up to {MAX_FILE_SIZE_M:g} m"
                 )
+            impossible = denser_than_any_solid(o.mass, o.size) or lighter_than_air(o.mass, o.size)
+            if impossible:
+                raise ValueError(f"mass_kg: {impossible}")
         except (KeyError, TypeError, ValueError, InvalidParameter) as exc:
             raise InvalidInput(
                 f"{p}: objects.{oid}: {exc}; each object needs shape, mass_kg, size_m [3 numbers]"

@@ -69,7 +69,21 @@ def check_yaml(text: str, path: str) -> None:
                 if nodes > MAX_NODES:
                     raise InvalidInput(f"{path}: more than {MAX_NODES} values; too large to read")
     except yaml.YAMLError as exc:
-        raise InvalidInput(f"{path}: not valid YAML ({exc})") from None
+        raise InvalidInput(yaml_error(path, exc)) from None
+
+
+def yaml_error(path: str, exc: yaml.YAMLError) -> str:
+    """The parser's error as one line naming the file, line and column (a tab, which
+    YAML never takes for indentation, said as such)."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None)
+    if mark is None or not problem:
+        return f"{path}: not valid YAML ({exc})"
+    where = f"{path}, line {mark.line + 1}, column {mark.column + 1}"
+    if "'\\t'" in problem:
+        return f"{where}: not valid YAML: a tab; YAML indents with spaces, never tabs"
+    context = getattr(exc, "context", None)
+    return f"{where}: not valid YAML: {problem}" + (f" ({context})" if context else "")
 
 
 def read_yaml_text(path: str | Path, what: str) -> str:

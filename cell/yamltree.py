@@ -64,6 +64,36 @@ def same_text(a: str, b: str) -> bool:
     return a == b or unicodedata.normalize("NFC", a) == unicodedata.normalize("NFC", b)
 
 
+# Characters that show nothing on screen: controls, format characters (a zero-width
+# space, a byte-order mark, a direction mark), private-use and unassigned code points,
+# line and paragraph separators
+_UNSEEN = frozenset(("Cc", "Cf", "Co", "Cn", "Zl", "Zp"))
+
+
+def unseen_problem(text: str) -> str:
+    """What makes `text` look like another text on screen ("" if nothing): a character
+    that shows nothing (named by its code point), or a space at either end."""
+    for i, ch in enumerate(text):
+        if unicodedata.category(ch) in _UNSEEN:
+            name = unicodedata.name(ch, "a control or unassigned character")
+            return (
+                f"holds an invisible character, U+{ord(ch):04X} {name}, at position {i + 1}: "
+                "write it without (pasted from a web page or a spreadsheet?)"
+            )
+    if not text.strip():
+        return "is blank; give a name"
+    if text != text.strip():
+        return "begins or ends with a space: write it without"
+    return ""
+
+
+def on_screen(text: str) -> str:
+    """`text` with every character that shows nothing written as its code point."""
+    return "".join(
+        f"<U+{ord(ch):04X}>" if unicodedata.category(ch) in _UNSEEN else ch for ch in text
+    )
+
+
 def shown(value: Any, limit: int = 60) -> str:
     """A value as an error message quotes it: lists and mappings with their plain values
     (not the tree's nodes), cut to `limit` characters."""
@@ -131,12 +161,17 @@ class Checker:
         v = node.value
         if not isinstance(v, str) or not v:
             raise self.fail(node, fp, f"{shown(v)} must be a non-empty text")
+        unseen = unseen_problem(v)
+        if unseen:
+            raise self.fail(node, fp, f"{on_screen(v)!r} {unseen}")
         if choices and v not in choices:
             # the same text in another Unicode form (a decomposed é from another editor)
             same = [ch for ch in choices if same_text(ch, v)]
             if same:
                 return same[0]
-            raise self.fail(node, fp, f"{v!r} is not valid; choose one of {', '.join(choices)}")
+            raise self.fail(
+                node, fp, f"{v!r} is not valid; choose one of {', '.join(map(on_screen, choices))}"
+            )
         return v
 
     def vector(self, node: Node, fp: str, n: int, *, positive: bool = False) -> tuple[float, ...]:

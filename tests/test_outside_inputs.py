@@ -662,3 +662,265 @@ def test_tracks_set_aside_for_one_reason_with_figures_are_said_once() -> None:
     line = next(ln for ln in format_table(report).splitlines() if ln.startswith("tracks "))
     assert "23 set aside, unused: no flight under gravity (20, e.g. apparent gravity 0.0 g)" in line
     assert "too short: 2 samples (3)" in line and "other reasons" not in line
+
+
+# -- round five: inputs of kinds the rounds before did not try ----------------------------
+ONE_BIN = """\
+bins:
+  - {id: ID, position_m: [1.5, 0.0], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube50, bin: near}
+"""
+
+
+def test_an_id_with_an_invisible_character_or_only_spaces_is_refused_by_field() -> None:
+    """A bin id `near` with a zero-width space pasted after it was refused only at its
+    item as "'near' is not valid; choose one of near": two names the screen shows alike.
+    An id of spaces only was accepted. Both are now refused at the id, the character
+    named by its code point, and the item's choices show it."""
+    with pytest.raises(JobError) as e:
+        parse_job(ONE_BIN.replace("ID", '"near\\u200b"'), "zw.yaml", check_reach=False)
+    msg = str(e.value)
+    assert "zw.yaml, line 2, bins[0].id: 'near<U+200B>' holds an invisible character, U+200B" in msg
+    assert "items[0].bin: 'near' is not valid; choose one of near<U+200B>" in msg
+    with pytest.raises(JobError, match=r"line 2, bins\[0\].id: '   ' is blank"):
+        parse_job(ONE_BIN.replace("ID", '"   "'), "blank.yaml", check_reach=False)
+    with pytest.raises(JobError, match="begins or ends with a space"):
+        parse_job(ONE_BIN.replace("ID", '"near "'), "space.yaml", check_reach=False)
+    assert (
+        parse_job(ONE_BIN.replace("ID", "near"), "ok.yaml", check_reach=False).bins[0].id == "near"
+    )
+
+
+def test_a_tab_in_a_job_is_named_with_its_line_and_column() -> None:
+    """A job indented with a tab was refused quoting PyYAML's three-line scanner error
+    ("found character '\\t' that cannot start any token in "<unicode string>" ...")."""
+    job = ONE_BIN.replace("ID", "near").replace("  - {id", "\t- {id")
+    with pytest.raises(JobError) as e:
+        parse_job(job, "tab.yaml", check_reach=False)
+    assert str(e.value) == (
+        "tab.yaml, line 2, column 1: not valid YAML: a tab; YAML indents with spaces, never tabs"
+    )
+
+
+def test_a_mount_file_that_is_a_folder_is_said_to_be_one(tmp_path: Path) -> None:
+    """`cell.mount: arms` (a folder) was refused as "mount file arms does not exist"."""
+    (tmp_path / "arms").mkdir()
+    job = "cell: {mount: arms}\n" + ONE_BIN.replace("ID", "near")
+    with pytest.raises(JobError, match=r"line 1, cell.mount: .*arms is a folder; give a file"):
+        parse_job(job, str(tmp_path / "job.yaml"), check_reach=False)
+    job = "cell: {params: arms}\n" + ONE_BIN.replace("ID", "near")
+    with pytest.raises(JobError, match=r"line 1, cell.params: .*arms is a folder; give a file"):
+        parse_job(job, str(tmp_path / "job.yaml"), check_reach=False)
+
+
+def test_an_item_lighter_than_the_air_it_displaces_is_refused_with_its_line() -> None:
+    """A 1 µg cube of 50 mm (8e-6 kg/m³) passed the parser and failed in the grip
+    (`grasp_failed`: "the fingers did not close"); no real object is lighter than the
+    air (1.2 kg/m³), and a parameter file's such object made `cell predict` blame the
+    log's landing plane. The catalogue's lightest is 178 kg/m³."""
+    from cell.model.objects import MIN_DENSITY_KG_M3
+
+    job = ONE_BIN.replace("ID", "near").replace(
+        "{object: cube50, bin: near}",
+        "{shape: cube, mass_kg: 1.0e-9, size_m: [0.05, 0.05, 0.05], bin: near}",
+    )
+    with pytest.raises(JobError) as e:
+        parse_job(job, "light.yaml", check_reach=False)
+    assert "light.yaml, line 4, items[0].mass_kg: 1e-09 kg in a 50 x 50 x 50 mm box" in str(e.value)
+    assert "lighter than the air" in str(e.value)
+    least = 1.01 * MIN_DENSITY_KG_M3 * 0.05**3  # just over the bound
+    ok = job.replace("1.0e-9", repr(least))
+    assert parse_job(ok, "light.yaml", check_reach=False).items[0].obj.mass == least
+
+
+def _scene_params() -> dict:
+    import yaml
+
+    return yaml.safe_load((ROOT / "robots" / "cell_scene" / "ee_params.yaml").read_text())
+
+
+@pytest.mark.parametrize(
+    ("change", "said"),
+    [
+        ({"friction": 0.5}, "unknown key(s) ['friction']; valid: shape, mass_kg, size_m"),
+        ({"mass_kg": 50.0}, "denser than any solid"),
+        ({"mass_kg": 1e-9}, "lighter than the air"),
+    ],
+)
+def test_a_parameter_files_object_with_an_unknown_key_or_impossible_mass_is_refused(
+    tmp_path: Path, change: dict, said: str
+) -> None:
+    """A parameter file's object with an extra key was read with the key dropped; one of
+    50 kg in a 50 mm box (394,000 kg/m³) or of 1 µg was read, and `cell predict` with
+    the 1 µg one blamed the log: "never crosses its landing plane"."""
+    import yaml
+
+    from cell.errors import InvalidInput
+    from cell.params import load_params
+
+    raw = _scene_params()
+    raw["objects"]["cube50"].update(change)
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    with pytest.raises(InvalidInput) as e:
+        load_params(path)
+    assert f"{path}: objects.cube50: " in str(e.value)
+    assert said in str(e.value)
+
+
+def test_a_throw_log_or_tracks_with_a_second_header_row_say_so(
+    log_csv: Path, tmp_path: Path
+) -> None:
+    """Two logs written one after the other (`cat a.csv b.csv`, or a second run's header
+    in another column order) were refused as "row 25, column 'mass_kg': 'mass_kg' is not
+    a number" (reordered: "'landed_y_m' is not a number")."""
+    rows = _rows(log_csv)
+    text = log_csv.read_text()
+    twice = tmp_path / "twice.csv"
+    twice.write_text(text + text.replace("synth", "again"))
+    with pytest.raises(LogFormatError, match=f"row {len(rows) + 1}: is a header row again"):
+        read_throws_csv(twice)
+    reordered = tmp_path / "reordered.csv"
+    with open(reordered, "w", newline="") as fh:
+        fh.write(text)
+        w = csv.DictWriter(fh, fieldnames=list(rows[0])[::-1])
+        w.writeheader()
+        w.writerows(rows)
+    with pytest.raises(LogFormatError, match=f"row {len(rows) + 1}: is a header row again"):
+        read_throws_csv(reordered)
+    track = "throw_id,t_s,x_m,y_m,z_m\n" + "".join(
+        f"{rows[0]['throw_id']},{0.05 * k:.2f},{0.1 * k:.2f},0.0,{0.6 + 0.2 * k:.2f}\n"
+        for k in range(4)
+    )
+    tracks = tmp_path / "tracks.csv"
+    tracks.write_text(track + track)
+    with pytest.raises(LogFormatError, match="row 5: is a header row again"):
+        read_tracks_csv(tracks)
+
+
+def _obj(tmp_path: Path, name: str, text: str) -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+TETRA_V = "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        (
+            TETRA_V + "f 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 99\n",
+            "line 8: a face names vertex 99; the file has 4",
+        ),
+        (TETRA_V + "f 0 1 2\nf 1 2 4\n", "line 5: a face names vertex 0, and 4 come before it"),
+        ("v 0 0\n" + TETRA_V[8:] + "f 1 2 3\n", "line 1: a vertex needs three finite numbers"),
+        ("v nan 0 0\n" + TETRA_V[8:] + "f 1 2 3\n", "line 1: a vertex needs three finite numbers"),
+    ],
+)
+def test_a_mesh_whose_faces_or_vertices_are_not_valid_is_refused_by_line(
+    tmp_path: Path, text: str, said: str
+) -> None:
+    """A log's mesh (the `mesh` column, read by `cell learn` for the shape descriptors)
+    with a face past its vertices ended `cell learn` in an IndexError traceback; a face
+    naming vertex 0 (OBJ counts from 1) in one too, where it did not wrap silently to the
+    last vertex; a vertex of two numbers in a ValueError traceback; a NaN vertex in
+    "its faces have no area"."""
+    from cell.errors import InvalidInput
+    from cell.residual.cloud import read_obj_mesh
+
+    path = _obj(tmp_path, "m.obj", text)
+    with pytest.raises(InvalidInput) as e:
+        read_obj_mesh(path)
+    assert str(e.value).startswith(f"mesh {path}, {said}")
+    verts, tris = read_obj_mesh(_obj(tmp_path, "ok.obj", TETRA_V + "f 1 2 3\nf -4 -3 -1\n"))
+    assert verts.shape == (4, 3) and tris.tolist() == [[0, 1, 2], [0, 1, 3]]
+
+
+def test_a_mesh_over_its_size_bound_is_refused_unread(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A 112 MB OBJ (3 million vertices) was read into 900 MB of memory in 15 CPU-s;
+    a mesh is now bounded at MAX_MESH_BYTES (32 MiB; pybullet_data's largest is 10 MB),
+    here lowered to 1 kB on a 2 kB file."""
+    from cell.errors import InvalidInput
+    from cell.residual import cloud
+
+    monkeypatch.setattr(cloud, "MAX_MESH_BYTES", 1000)
+    path = _obj(tmp_path, "big.obj", TETRA_V * 60 + "f 1 2 3\n")
+    with pytest.raises(
+        InvalidInput, match=r"big.obj: \d+ bytes; a mesh file \(OBJ\) is at most 1000"
+    ):
+        cloud.read_obj_mesh(path)
+
+
+def _model_file(path: Path, meta_text: str, pad_bytes: int = 0) -> Path:
+    """A residual model file as `ResidualModel.save` lays it out, its metadata text given;
+    `pad_bytes` spaces in its schema (valid JSON, unpacking far beyond the file)."""
+    import zipfile
+
+    import skops.io as sio
+    from sklearn.linear_model import LinearRegression
+
+    from cell.residual.model import FORMAT
+
+    pipe = LinearRegression().fit([[0.0], [1.0]], [0.0, 1.0])
+    sio.dump({"format": FORMAT, "meta": meta_text, "pipeline": pipe}, path)
+    if pad_bytes:
+        src = zipfile.ZipFile(path)
+        members = {i.filename: src.read(i) for i in src.infolist()}
+        src.close()
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+            for name, data in members.items():
+                if name == "schema.json":
+                    data = data[:-1] + b" " * pad_bytes + data[-1:]
+                z.writestr(name, data)
+    return path
+
+
+def _meta(**change: object) -> str:
+    from cell.model.params import EndEffectorParams
+    from cell.residual.features import FEATURE_NAMES
+
+    meta = {
+        "learner": "svr",
+        "feature_names": list(FEATURE_NAMES),
+        "training_objects": ["cube50"],
+        "ee": EndEffectorParams().as_dict(),
+        "sklearn_version": "0",
+        "best_params": {},
+        "n_train": 3,
+        "n_excluded": 0,
+        "identified_objects": [],
+    }
+    meta.update(change)
+    return json.dumps(meta)
+
+
+def test_a_residual_model_with_huge_counts_or_unpacking_past_its_bound_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A model file whose metadata says `n_train: 1e400` ended in an OverflowError
+    traceback; one whose schema unpacked from 1.6 MB to 1.6 GB was read whole (3.3 GB
+    resident, 45 CPU-s). The bound (MAX_MODEL_UNPACKED_BYTES, 256 MiB) is lowered here to
+    100 kB on a member of 200 kB."""
+    from cell.errors import InvalidInput
+    from cell.residual import model
+
+    huge = _model_file(tmp_path / "huge.skops", _meta().replace('"n_train": 3', '"n_train": 1e400'))
+    with pytest.raises(InvalidInput, match="metadata is missing or not valid .*infinity"):
+        model.ResidualModel.load(huge)
+    half = _model_file(tmp_path / "half.skops", _meta(n_train=2.5))
+    with pytest.raises(InvalidInput, match="metadata n_train: 2.5 must be a whole number"):
+        model.ResidualModel.load(half)
+    monkeypatch.setattr(model, "MAX_MODEL_UNPACKED_BYTES", 100_000)
+    bomb = _model_file(tmp_path / "bomb.skops", _meta(), pad_bytes=200_000)
+    assert bomb.stat().st_size < 20_000
+    with pytest.raises(
+        InvalidInput, match=r"bomb.skops: unpacks to 2\d\d,\d{3} bytes, over the 100,000"
+    ):
+        model.ResidualModel.load(bomb)
+    monkeypatch.setattr(model, "MAX_MODEL_UNPACKED_BYTES", 10_000_000)
+    assert model.ResidualModel.load(bomb).n_train == 3

@@ -15,6 +15,7 @@ import numpy as np
 from cell.errors import InvalidInput, LogFormatError
 from cell.infile import check_input_file
 from cell.log.table import (
+    HEADER_AGAIN,
     NUMERIC_COLUMNS,
     PLATFORMS,
     RANGES,
@@ -220,6 +221,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                 # fewer cells than named: with keep_lost, a time without its position is a
                 # lost sample (dropped and said by the track check), else an error
                 short = None in row.values() and not (keep_lost and row["t_s"] is not None)
+                if sorted((row.get(c) or "").strip() for c in header) == sorted(header):
+                    raise LogFormatError(p, r, None, HEADER_AGAIN)
                 if extra or short:
                     cells = len(header) + len(extra) - list(row.values()).count(None)
                     raise LogFormatError(

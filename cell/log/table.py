@@ -254,6 +254,13 @@ def _cell(v: Any) -> str:
     return str(v)
 
 
+# a data row that is the header again (its names, in any order)
+HEADER_AGAIN = (
+    "is a header row again (two files written one after the other?); keep the first "
+    "header only, and check the throw ids of the two are distinct"
+)
+
+
 def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     sep = other_separator(header)
@@ -275,7 +282,10 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
     pos = {c: i for i, c in enumerate(header)}
     n = len(rows)
     data: dict[str, Any] = {}
+    names = sorted(header)
     for r, row in enumerate(rows, start=1):
+        if row[0].strip() in pos and sorted(x.strip() for x in row) == names:
+            raise LogFormatError(path, r, None, HEADER_AGAIN)
         if len(row) != len(header):
             raise LogFormatError(
                 path, r, None, f"has {len(row)} cells; the header has {len(header)}"

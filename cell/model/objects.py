@@ -25,6 +25,8 @@ __all__ = [
     "inertia_diagonal",
     "MAX_DENSITY_KG_M3",
     "denser_than_any_solid",
+    "MIN_DENSITY_KG_M3",
+    "lighter_than_air",
 ]
 
 SHAPES = ("cube", "cuboid", "cylinder", "sphere", "mesh")
@@ -44,6 +46,26 @@ def denser_than_any_solid(mass_kg: float, size_m: Sequence[float]) -> str:
     return (
         f"{mass_kg:g} kg in a {mm} mm box is {mass_kg / vol:,.0f} kg/m³, denser than any "
         "solid (osmium: 22,590 kg/m³)"
+    )
+
+
+# [kg/m³] an object whose mass over its box's volume is under this is lighter than the
+# air (1.2 kg/m³) its box would displace: a balloon, or a mass written in another unit;
+# the catalogue's lightest is 178 kg/m³ (o6_bottle), a random job's ad-hoc items 150
+MIN_DENSITY_KG_M3 = 1.0
+
+
+def lighter_than_air(mass_kg: float, size_m: Sequence[float]) -> str:
+    """What is impossible about `mass_kg` in a box of extents `size_m` [m] ("" if nothing):
+    the mass over the box's volume under `MIN_DENSITY_KG_M3`."""
+    vol = float(np.prod(np.asarray(size_m, dtype=float)))
+    if not vol > 0.0 or mass_kg >= MIN_DENSITY_KG_M3 * vol:
+        return ""
+    mm = " x ".join(f"{1000.0 * float(s):g}" for s in size_m)
+    return (
+        f"{mass_kg:g} kg in a {mm} mm box is {mass_kg / vol:.3g} kg/m³, lighter than the "
+        f"air it would displace (1.2 kg/m³): it would float, not fall; the least valid is "
+        f"{MIN_DENSITY_KG_M3 * vol:.3g} kg ({MIN_DENSITY_KG_M3:g} kg/m³ of its box)"
     )
 
 

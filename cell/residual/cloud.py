@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.errors import InvalidInput
+from cell.infile import check_input_file
 from cell.model.objects import SHAPES
 
 __all__ = [
@@ -74,32 +75,71 @@ class ObjectGeometry:
     grip_yaw: float = 0.0
 
 
+# [B] the largest mesh file read: pybullet_data's largest OBJ (a whole scene) is 10 MB;
+# a mesh is read into Python lists, some 8 times its size in memory
+MAX_MESH_BYTES = 32 * 1024 * 1024
+
+
 def read_obj_mesh(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (n, 3) and triangles (m, 3, int) of a Wavefront OBJ file.
 
     Polygons are fan-triangulated; `v/vt/vn` and negative indices are understood.
 
     Raises:
-        InvalidInput: unreadable file, or no vertices or no faces.
+        InvalidInput: not a regular file or over `MAX_MESH_BYTES`, unreadable, a vertex
+            without three finite numbers, a face naming a vertex the file does not have
+            (OBJ counts from 1; negative counts back from the last), or no vertices or no
+            faces; naming the line.
     """
+    p = check_input_file(path, "mesh file (OBJ)", MAX_MESH_BYTES)
     verts: list[list[float]] = []
     tris: list[list[int]] = []
+    n = 0
+    top = (-1, 0)  # the highest vertex a face names (from 0), and its line
+
+    def bad(msg: str) -> InvalidInput:
+        return InvalidInput(f"mesh {p}, line {n}: {msg}")
+
     try:
-        with open(path) as fh:
-            for line in fh:
+        with open(p) as fh:
+            for n, line in enumerate(fh, start=1):  # noqa: B007 (`bad` reads n)
                 if line.startswith("v "):
-                    verts.append([float(v) for v in line.split()[1:4]])
+                    xyz = line.split()[1:4]
+                    try:
+                        v = [float(x) for x in xyz]
+                    except ValueError:
+                        raise bad(f"vertex {xyz} is not three numbers") from None
+                    if len(v) != 3 or not all(math.isfinite(x) for x in v):
+                        raise bad(f"a vertex needs three finite numbers, not {xyz}")
+                    verts.append(v)
                 elif line.startswith("f "):
                     idx = []
                     for tok in line.split()[1:]:
-                        i = int(tok.split("/")[0])
-                        idx.append(i - 1 if i > 0 else len(verts) + i)
+                        try:
+                            i = int(tok.split("/")[0])
+                        except ValueError:
+                            raise bad(f"face vertex {tok!r} is not a whole number") from None
+                        k = i - 1 if i > 0 else len(verts) + i
+                        if i == 0 or k < 0:
+                            raise bad(
+                                f"a face names vertex {i}, and {len(verts)} come before it "
+                                "(OBJ counts vertices from 1; -1 is the last before)"
+                            )
+                        if k > top[0]:
+                            top = (k, n)
+                        idx.append(k)
                     for k in range(1, len(idx) - 1):
                         tris.append([idx[0], idx[k], idx[k + 1]])
+    except InvalidInput:
+        raise
     except (OSError, ValueError) as exc:
-        raise InvalidInput(f"mesh {path}: not a readable OBJ file ({exc})") from None
+        raise InvalidInput(f"mesh {p}: not a readable OBJ file ({exc})") from None
     if not verts or not tris:
-        raise InvalidInput(f"mesh {path}: needs vertices and faces (v and f lines)")
+        raise InvalidInput(f"mesh {p}: needs vertices and faces (v and f lines)")
+    if top[0] >= len(verts):
+        raise InvalidInput(
+            f"mesh {p}, line {top[1]}: a face names vertex {top[0] + 1}; the file has {len(verts)}"
+        )
     return np.asarray(verts, float), np.asarray(tris, int)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import logging
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,6 +44,8 @@ log = logging.getLogger(__name__)
 
 FORMAT = "cell-residual/2"  # skops container: {format, meta (JSON), pipeline}
 MAX_MODEL_BYTES = 64 * 1024 * 1024  # [B] a random forest of the full grid is ~5 MB
+# [B] what its members may unpack to: skops reads each whole into memory
+MAX_MODEL_UNPACKED_BYTES = 4 * MAX_MODEL_BYTES
 # Types outside scikit-learn's own estimators that the project's learners are built of; skops
 # trusts sklearn's estimators by default and lists anything else for the loader to judge.
 TRUSTED_TYPES = (
@@ -147,6 +150,7 @@ class ResidualModel:
 
         p = check_input_file(path, "residual model file", MAX_MODEL_BYTES)
         not_ours = f"{p}: not a residual model file (expected one written by `cell learn`"
+        _check_unpacked_size(p)
         try:
             untrusted = set(sio.get_untrusted_types(file=p))
         except Exception as exc:  # a pickle, a zip of something else, garbage: never loaded
@@ -179,8 +183,18 @@ class ResidualModel:
                 n_excluded=int(meta["n_excluded"]),
                 identified_objects=tuple(meta["identified_objects"]),
             )
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InvalidInput(f"{p}: residual model metadata is incomplete ({exc})") from None
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise InvalidInput(
+                f"{p}: residual model metadata is missing or not valid ({exc}); retrain it "
+                "with `cell learn`"
+            ) from None
+        for key in ("n_train", "n_excluded"):
+            v = meta[key]
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise InvalidInput(
+                    f"{p}: residual model metadata {key}: {v!r} must be a whole number ≥ 0; "
+                    "retrain it with `cell learn`"
+                )
         if model.feature_names != FEATURE_NAMES:
             raise InvalidInput(
                 f"{p}: made with another feature set ({len(model.feature_names)} features); "
@@ -194,6 +208,23 @@ class ResidualModel:
                 sklearn.__version__,
             )
         return model
+
+
+def _check_unpacked_size(p: Path) -> None:
+    """Refuse a model file whose members unpack to more than `MAX_MODEL_UNPACKED_BYTES`
+    (a zip bomb: a small file that would fill the memory when skops reads it), by the
+    sizes its zip directory declares (Python's zip reader stops at those and refuses a
+    member that runs longer). Not a zip: left to skops' own refusal."""
+    try:
+        with zipfile.ZipFile(p) as z:
+            unpacked = sum(info.file_size for info in z.infolist())
+    except (zipfile.BadZipFile, OSError, ValueError):
+        return
+    if unpacked > MAX_MODEL_UNPACKED_BYTES:
+        raise InvalidInput(
+            f"{p}: unpacks to {unpacked:,} bytes, over the {MAX_MODEL_UNPACKED_BYTES:,} a "
+            "residual model file may (a compressed bomb, or not a file `cell learn` wrote)"
+        )
 
 
 def _plain(v: Any) -> Any:
