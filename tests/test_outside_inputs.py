@@ -924,3 +924,29 @@ def test_a_residual_model_with_huge_counts_or_unpacking_past_its_bound_is_refuse
         model.ResidualModel.load(bomb)
     monkeypatch.setattr(model, "MAX_MODEL_UNPACKED_BYTES", 10_000_000)
     assert model.ResidualModel.load(bomb).n_train == 3
+
+
+def test_a_throw_too_light_for_the_push_model_names_its_mass_not_the_plane(
+    log_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 0.1 g cube of 30 mm (3.7 kg/m³, lighter than any catalogue object, heavier than
+    the air): the model's push diverges (a launch velocity of 1e122 m/s, then NaN) and
+    `cell predict` blamed the landing plane: "the landing plane z = 0.0 m is above the
+    whole flight". It now names the mass."""
+    rows = _rows(log_csv)
+    rows[4].update(mass_kg="0.0001", size_x_m="0.03", size_y_m="0.03", size_z_m="0.03")
+    src = _write(rows, tmp_path / "light.csv")
+    assert cell_exit(["predict", str(src), "-o", str(tmp_path / "p.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "row 5, column 'mass_kg'" in err and "push diverges for 0.0001 kg" in err
+
+
+def test_a_log_row_lighter_than_the_air_is_refused_by_row(log_csv: Path, tmp_path: Path) -> None:
+    """A row of 1 µg in a 30 mm cube was read (a mass need only be above 0); it is
+    refused as the job's item and the parameter file's object are."""
+    rows = _rows(log_csv)
+    rows[2].update(mass_kg="1e-9", size_x_m="0.03", size_y_m="0.03", size_z_m="0.03")
+    with pytest.raises(
+        LogFormatError, match=r"row 3, column 'mass_kg': 1e-09 kg in a 30 x 30 x 30"
+    ):
+        read_throws_csv(_write(rows, tmp_path / "air.csv"))

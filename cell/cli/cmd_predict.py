@@ -12,6 +12,10 @@ from cell.log import read_throws_csv, write_throws_csv
 from cell.model import predict_landing
 from cell.params import load_params
 
+# [m/s] a launch faster than any the log may record (its velocities' range, RANGES) is
+# the push model diverging (an item of a fraction of a gram), not a flight
+MAX_LAUNCH_SPEED_MPS = 100.0
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("predict", help="add predicted landings to a throw log (docs/throw_log.md)")
@@ -51,6 +55,17 @@ def run(args: argparse.Namespace) -> int:
         land = predict_landing(batch, mp.ee, strict=False, check_stroke=False)
     if not land.landed.all():
         i = int(np.flatnonzero(~land.landed)[0])
+        speed = float(np.linalg.norm(land.launch_velocity[i]))
+        if not speed <= MAX_LAUNCH_SPEED_MPS:
+            raise LogFormatError(
+                args.throws,
+                i + 1,
+                "mass_kg",
+                f"throw {table.data['throw_id'][i]}: the end-effector model's push diverges "
+                f"for {batch.mass[i]:g} kg at the stroke {batch.stroke[i]:g} m (a launch "
+                f"speed of {speed:.3g} m/s, and no landing): an item this light is beyond the "
+                "model",
+            )
         z0, zl = float(batch.position[i, 2]), float(batch.land_z[i])
         # blame the column a user most likely got wrong: a release below the floor (z = 0 in
         # the world frame) is the release height's fault, otherwise the landing plane's

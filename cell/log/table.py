@@ -19,7 +19,14 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.kinds import PLATFORMS
-from cell.model.objects import MAX_DENSITY_KG_M3, SHAPES, denser_than_any_solid, shape_code
+from cell.model.objects import (
+    MAX_DENSITY_KG_M3,
+    MIN_DENSITY_KG_M3,
+    SHAPES,
+    denser_than_any_solid,
+    lighter_than_air,
+    shape_code,
+)
 from cell.model.throw import ThrowBatch
 
 __all__ = [
@@ -334,6 +341,12 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
         raise LogFormatError(
             path, k + 1, "mass_kg", f"{dense}: is it {m / 1000.0:g} kg written in grams?"
         )
+    light_rows = np.flatnonzero(data["mass_kg"] < MIN_DENSITY_KG_M3 * np.prod(sizes, axis=1))
+    if light_rows.size:
+        k = int(light_rows[0])
+        m = float(data["mass_kg"][k])
+        light = lighter_than_air(m, sizes[k]) or f"{m:g} kg is lighter than the air"
+        raise LogFormatError(path, k + 1, "mass_kg", light)
     for r, s in enumerate(data["shape"], start=1):
         if s not in SHAPES:
             raise LogFormatError(
