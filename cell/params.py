@@ -32,7 +32,7 @@ from typing import Any
 
 import yaml
 
-from cell.errors import InvalidInput, InvalidParameter
+from cell.errors import InvalidInput, InvalidParameter, plural
 from cell.model.objects import ObjectParams, denser_than_any_solid, lighter_than_air
 from cell.model.params import EndEffectorParams
 from cell.yamlsafe import read_yaml_text, safe_load
@@ -161,7 +161,9 @@ def load_params(path: str | Path | None) -> ModelParams:
     valid = {"end_effector", "objects", "effects", "mass_rule", "note", "validation"}
     unknown = sorted(set(raw) - valid)
     if unknown:
-        raise InvalidInput(f"{p}: unknown key(s) {unknown}; valid: {sorted(valid)}")
+        raise InvalidInput(
+            f"{p}: {plural(len(unknown), 'unknown key')} {unknown}; valid: {sorted(valid)}"
+        )
     for key in ("end_effector", "objects", "effects"):
         if not isinstance(raw.get(key) or {}, dict):
             raise InvalidInput(
@@ -176,7 +178,9 @@ def load_params(path: str | Path | None) -> ModelParams:
                 raise TypeError(f"{spec!r} is not a mapping")
             extra = sorted(str(k) for k in set(spec) - set(OBJECT_KEYS))
             if extra:
-                raise ValueError(f"unknown key(s) {extra}; valid: {', '.join(OBJECT_KEYS)}")
+                raise ValueError(
+                    f"{plural(len(extra), 'unknown key')} {extra}; valid: {', '.join(OBJECT_KEYS)}"
+                )
             objects[str(oid)] = ObjectParams(
                 shape=str(spec["shape"]),
                 mass=float(spec["mass_kg"]),

@@ -743,7 +743,7 @@ def _scene_params() -> dict:
 @pytest.mark.parametrize(
     ("change", "said"),
     [
-        ({"friction": 0.5}, "unknown key(s) ['friction']; valid: shape, mass_kg, size_m"),
+        ({"friction": 0.5}, "1 unknown key ['friction']; valid: shape, mass_kg, size_m"),
         ({"mass_kg": 50.0}, "denser than any solid"),
         ({"mass_kg": 1e-9}, "lighter than the air"),
     ],

@@ -9,7 +9,7 @@ import math
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
-from cell.errors import InvalidParameter
+from cell.errors import InvalidParameter, plural
 
 __all__ = ["EndEffectorParams", "G", "RHO_AIR", "DEFAULT_EE", "aero_factor_kg_per_m"]
 
@@ -119,7 +119,8 @@ class EndEffectorParams:
         unknown = sorted(set(values) - valid)
         if unknown:
             raise InvalidParameter(
-                f"{where}: unknown end-effector parameter(s) {unknown}; valid: {sorted(valid)}"
+                f"{where}: {plural(len(unknown), 'unknown end-effector parameter')} {unknown}; "
+                f"valid: {sorted(valid)}"
             )
         numbers: dict[str, float] = {}
         for k, v in values.items():

@@ -37,7 +37,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
-from cell.errors import InvalidParameter
+from cell.errors import InvalidParameter, plural
 
 __all__ = ["EEGeometry", "DEFAULT_GEOMETRY", "DRIVEN_JOINTS", "load_ee_geometry"]
 
@@ -126,7 +126,7 @@ def _floats(text: str | None, n: int, what: str, path: Path) -> tuple[float, ...
     except ValueError:
         vals = ()
     if len(vals) != n or not all(math.isfinite(v) for v in vals):
-        raise InvalidParameter(f"{path}: {what} must be {n} finite number(s), got {text!r}")
+        raise InvalidParameter(f"{path}: {what} must be {plural(n, 'finite number')}, got {text!r}")
     return vals
 
 
