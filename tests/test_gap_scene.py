@@ -363,3 +363,47 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show
     pairs = {k: t for k, t in rep["tests"].items() if "tracking_scale" in k}
     assert pairs and all("tracking_scale: the tracks' apparent" in t["refused"]
                          for t in pairs.values()), pairs  # fmt: skip
+
+
+def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_across_show_none():
+    """Balls rolling on (`s:bounce-roll`'s world, no tracker scale, landings only): a scale
+    fitted beside the impact law takes part of the roll along the flight, and no gate of the
+    effects alone refuses it; across the impact velocity, where a roll moves no landing, the
+    misses show no scale, and the pair is refused (`cell.gap.select.across_refusal`). The same
+    landings scaled by 1.03 about the origin (a tracker at 1.03, made here, not fitted): the
+    misses across show 1.03 within 3 standard errors and the pair may join."""
+    from cell.gap.fit import Score, fit_set
+    from cell.gap.problem import build_problem
+    from cell.gap.select import Selection, across_refusal, across_scale, refusal
+    from cell.log.table import ThrowTable
+    from cell.model.effects import BounceImpact, TrackingScale
+    from cell.params import load_params, scene_params_path
+
+    path = scene_params_path()
+    assert path is not None
+    mp = load_params(path)
+    roll = {"kind": "bounce", "form": "contact", "restitution": 0.05, "friction": 1.0,
+            "rolling_m": 0.05}  # fmt: skip
+    camp = draw_scene_campaign([roll], np.random.default_rng(2), mp, n=32,
+                               objects=("sphere40", "sphere55", "sphere70"))  # fmt: skip
+    for s_true in (1.0, 1.03):
+        recs = [{**r, "landed_x_m": s_true * r["landed_x_m"],
+                 "landed_y_m": s_true * r["landed_y_m"]} for r in camp.records]  # fmt: skip
+        prob = build_problem(ThrowTable.from_records(recs), mp.ee, objects=mp.objects,
+                             validation=mp.validation)  # fmt: skip
+        fit = fit_set(prob, [BounceImpact, TrackingScale], np.arange(len(prob)))[0]
+        assert all(refusal(e, None) is None for e in fit.effects), fit.effects
+        s, se, used = across_scale(prob, fit.effects)
+        assert used == len(prob) and 0.0 < se < 0.02, (s, se, used)
+        pair = Score(names=("bounce", "tracking_scale"), full=fit,
+                     heldout=np.zeros(len(prob)), heldout_rmse_m=0.0)  # fmt: skip
+        sel = Selection(prob, [], {}, {}, None, 0.0, lambda _: None)
+        if s_true == 1.0:
+            # the pair's scale is off 1 by more than the misses across allow
+            assert abs(fit.effects[1].params()["scale_factor"] - s) > se, (fit.effects, s, se)
+            assert abs(s - 1.0) < 1.96 * se, (s, se)
+            why = sel.refuse(pair)
+            assert why and "across the impact velocity" in why, why
+        else:
+            assert abs(s - s_true) < 3 * se and abs(s - 1.0) > 1.96 * se, (s, se)
+            assert across_refusal(prob, fit.effects) is None and sel.refuse(pair) is None

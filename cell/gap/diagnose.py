@@ -27,7 +27,9 @@ Verdict rules:
   plausible range), or when the tracks contradict it: its phase carries less than
   AGREE_SHARE of the largest phase share of the landing miss the tracks show, a
   measurement effect without an apparent gravity off g, or a tracking scale off the
-  tracks' apparent gravity ratio by more than SCALE_AGREE.
+  tracks' apparent gravity ratio by more than SCALE_AGREE; a tracking scale beside a
+  landing effect is refused where the landing misses across the impact velocity show no
+  scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
+    ACROSS_Z,
     AGREE_SHARE,
     MIN_CUT,
     PERM_SHARE,
@@ -268,6 +271,7 @@ def _rules() -> dict[str, float]:
     return {
         "agree_share": AGREE_SHARE,
         "scale_agree": SCALE_AGREE,
+        "across_z": ACROSS_Z,
         "none_ratio": NONE_RATIO,
         "verdict_ratio": VERDICT_RATIO,
         "min_cut_share": MIN_CUT,
