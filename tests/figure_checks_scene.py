@@ -154,7 +154,7 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
         PAGE, r"`unknown` at ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+) × the repeats' floor"
     )
     assert over == ("1.32", "1.32", "1.31", "1.43")  # the table before, as the page tells it
-    assert rows["s:bounce-roll"]["verdict"] == "bounce+tracking_scale"
+    assert rows["s:bounce-roll"]["verdict"] == "bounce+stroke_offset"
     assert not rows["s:bounce-roll"]["passes"]
     was, now, of = quoted(
         PAGE, r"`s:drag\+hop`'s drag is its constant\. (\d+) → (\d+) of (\d+) pass"
@@ -333,15 +333,16 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     _check_the_jet(page, rows)
     b1, m1, sc, b3, m3, mu3, t4, m4 = quoted(
         page,
-        r"\(1/μ ([\d.]+) against ([\d.]+) by the impact law for the balls of `s:bounce-roll`, "
-        r"where a tracking scale of ([\d.]+) joins beside it; ([\d.]+) against ([\d.]+) with "
+        r"\(1/μ by the impact law within (\d+) % of the world's ([\d.]+) over the log for the "
+        r"balls of\s+`s:bounce-roll`, where a stroke offset of (−[\d.]+) mm joins beside it; "
+        r"([\d.]+) against ([\d.]+) with "
         r"outliers; for blocks at μ ([\d.]+) `[^`]+`, its mean over the log within (\d+) % of "
         r"the world's τ ([\d.]+)\)",
     )
     roll = rows["s:bounce-roll"]
-    _written(b1, roll["params"]["bounce"]["inv_mu_imp"])
+    close(b1, 100 * roll["param_errors"]["bounce.inv_mu_imp"], 0)
     _written(m1, roll["world_truth"]["inv_mu_imp"])
-    _written(sc, roll["params"]["tracking_scale"]["scale_factor"])
+    close(sc.replace("−", "-"), 1000 * roll["params"]["stroke_offset"]["delta_m"], 1)
     _written(b3, rows["s:bounce-hop+outliers"]["params"]["bounce"]["inv_mu"])
     _written(m3, rows["s:bounce-hop+outliers"]["world_truth"]["inv_mu"])
     # a law in the mass, judged on its mean over the log (`verdict.law_mean`)
@@ -358,7 +359,7 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         page,
         r"the bouncy floor at μ ([\d.]+)\s+\(`s:bounce-hop-mu05`\) to A ([\d.]+) F \(still "
         r"`unknown`: over ([\d.]+) × the tool's floor\) and the\s+balls to ([\d.]+) F \(named "
-        r"`bounce\+tracking_scale`, the scale spurious\); one ball size\s+\(`s:bounce-roll-one`\) "
+        r"`bounce\+stroke_offset`, the offset spurious\); one ball size\s+\(`s:bounce-roll-one`\) "
         r"stays at ([\d.]+) F",
     )
     assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
@@ -388,7 +389,14 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     )
     assert (was5, was_roll) == ("1.65", "1.22")  # the table before the impact law
     close(now5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
-    close(now_roll, roll["after_over_floor"], 2)
+    assert now_roll == "1.15"  # the table after the impact law, as the page tells it
+    was_roll2, now_roll2 = quoted(
+        page,
+        r"`s:bounce-roll` is `bounce\+stroke_offset` at\s+([\d.]+) F \(it was "
+        r"`bounce\+tracking_scale` at ([\d.]+) F\)",
+    )[::-1]
+    assert was_roll2 == now_roll  # the table before the rule across the impact velocity
+    close(now_roll2, roll["after_over_floor"], 2)
     (sh,) = quoted(page, r"the bounce alone, its 1/μ\s+([\d.]+) absorbing the scale")
     _written(sh, rows["s:scale+hop"]["params"]["bounce"]["inv_mu"])
 
