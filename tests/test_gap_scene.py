@@ -4,6 +4,7 @@ physically (`cell.gap.world_scene`), diagnosed blind by `cell gap`."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -337,13 +338,9 @@ def test_the_scene_tracks_show_a_trackers_scale_as_its_apparent_gravity():
     assert bare.tracks is None and bare.records == camp.records
 
 
-def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g():
-    """Balls rolling on after the landing (`s:bounce-roll`'s world, no tracker scale): on
-    the landings alone a tracker scale (1.057 here) fits part of the roll and nothing
-    refuses it; the scene's tracks show g (1.002), and the scale is refused, alone and
-    beside the bounce (`cell.gap.select.refusal`)."""
-    from cell.gap.run import diagnose_log
-    from cell.log.table import ThrowTable
+def _balls_rolling(**options: Any) -> tuple[Any, Any]:
+    """The scene's parameters and 32 throws of three balls that roll on after the landing
+    (`s:bounce-roll`'s world, no tracker scale), `options` to `draw_scene_campaign`."""
     from cell.params import load_params, scene_params_path
 
     path = scene_params_path()
@@ -353,7 +350,19 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show
             "rolling_m": 0.05}  # fmt: skip
     camp = draw_scene_campaign([roll], np.random.default_rng(2), mp, n=32,
                                objects=("sphere40", "sphere55", "sphere70"),
-                               track_noise_m=0.003)  # fmt: skip
+                               **options)  # fmt: skip
+    return mp, camp
+
+
+def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g():
+    """Balls rolling on after the landing (`s:bounce-roll`'s world, no tracker scale): on
+    the landings alone a tracker scale (1.057 here) fits part of the roll and nothing
+    refuses it; the scene's tracks show g (1.002), and the scale is refused, alone and
+    beside the bounce (`cell.gap.select.refusal`)."""
+    from cell.gap.run import diagnose_log
+    from cell.log.table import ThrowTable
+
+    mp, camp = _balls_rolling(track_noise_m=0.003)
     d, _ = diagnose_log(ThrowTable.from_records(camp.records), mp.ee, objects=mp.objects,
                         tracks=camp.tracks, validation=mp.validation)  # fmt: skip
     rep = d.report
@@ -377,15 +386,8 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_acro
     from cell.gap.select import Selection, across_refusal, across_scale, refusal
     from cell.log.table import ThrowTable
     from cell.model.effects import BounceImpact, TrackingScale
-    from cell.params import load_params, scene_params_path
 
-    path = scene_params_path()
-    assert path is not None
-    mp = load_params(path)
-    roll = {"kind": "bounce", "form": "contact", "restitution": 0.05, "friction": 1.0,
-            "rolling_m": 0.05}  # fmt: skip
-    camp = draw_scene_campaign([roll], np.random.default_rng(2), mp, n=32,
-                               objects=("sphere40", "sphere55", "sphere70"))  # fmt: skip
+    mp, camp = _balls_rolling()
     for s_true in (1.0, 1.03):
         recs = [{**r, "landed_x_m": s_true * r["landed_x_m"],
                  "landed_y_m": s_true * r["landed_y_m"]} for r in camp.records]  # fmt: skip
