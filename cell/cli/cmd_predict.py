@@ -9,12 +9,13 @@ import numpy as np
 from cell.cli.common import plural
 from cell.errors import LogFormatError
 from cell.log import read_throws_csv, write_throws_csv
+from cell.log.table import RANGES
 from cell.model import predict_landing
 from cell.params import load_params
 
 # [m/s] a launch faster than any the log may record (its velocities' range, RANGES) is
 # the push model diverging (an item of a fraction of a gram), not a flight
-MAX_LAUNCH_SPEED_MPS = 100.0
+MAX_LAUNCH_SPEED_MPS = RANGES["vx_mps"][1]
 
 
 def register(sub: argparse._SubParsersAction) -> None:

@@ -24,6 +24,7 @@ from cell.log.table import (
     millimetres_hint,
     other_separator,
     parse_cells,
+    repeats_header,
 )
 
 __all__ = [
@@ -216,12 +217,14 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                     )
             out: dict[str, list[list[float]]] = {}
             lo, hi = RANGES["x_m"]  # a tracked position [m]: the log's positions' range
+            names = sorted(header)  # a row that is the header again (`repeats_header`)
             for r, row in enumerate(reader, start=1):
                 extra = [x for x in row.get(None) or () if x.strip()]  # empty: trailing commas
                 # fewer cells than named: with keep_lost, a time without its position is a
                 # lost sample (dropped and said by the track check), else an error
                 short = None in row.values() and not (keep_lost and row["t_s"] is not None)
-                if sorted((row.get(c) or "").strip() for c in header) == sorted(header):
+                first = (row.get(header[0]) or "").strip()
+                if first in names and repeats_header((row.get(c) for c in header), names):
                     raise LogFormatError(p, r, None, HEADER_AGAIN)
                 if extra or short:
                     cells = len(header) + len(extra) - list(row.values()).count(None)

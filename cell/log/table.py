@@ -11,7 +11,7 @@ build their tables with it).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -268,6 +268,12 @@ HEADER_AGAIN = (
 )
 
 
+def repeats_header(cells: Iterable[str | None], names: list[str]) -> bool:
+    """Whether a data row's `cells` are the header's names again, in any order (`names`:
+    the header, sorted; a missing cell is empty): two files appended one after the other."""
+    return sorted((c or "").strip() for c in cells) == names
+
+
 def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTable:
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     sep = other_separator(header)
@@ -291,7 +297,7 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
     data: dict[str, Any] = {}
     names = sorted(header)
     for r, row in enumerate(rows, start=1):
-        if row[0].strip() in pos and sorted(x.strip() for x in row) == names:
+        if row[0].strip() in pos and repeats_header(row, names):
             raise LogFormatError(path, r, None, HEADER_AGAIN)
         if len(row) != len(header):
             raise LogFormatError(
@@ -333,7 +339,8 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
             raise LogFormatError(path, int(bad[0]) + 1, c, f"{data[c][bad[0]]} must be > 0")
     sizes = np.c_[data["size_x_m"], data["size_y_m"], data["size_z_m"]]
     # over whole columns (a log may hold millions of rows), then said for the first row
-    dense_rows = np.flatnonzero(data["mass_kg"] > MAX_DENSITY_KG_M3 * np.prod(sizes, axis=1))
+    volume = np.prod(sizes, axis=1)  # [m³] each row's box
+    dense_rows = np.flatnonzero(data["mass_kg"] > MAX_DENSITY_KG_M3 * volume)
     if dense_rows.size:
         k = int(dense_rows[0])
         m = float(data["mass_kg"][k])
@@ -341,7 +348,7 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
         raise LogFormatError(
             path, k + 1, "mass_kg", f"{dense}: is it {m / 1000.0:g} kg written in grams?"
         )
-    light_rows = np.flatnonzero(data["mass_kg"] < MIN_DENSITY_KG_M3 * np.prod(sizes, axis=1))
+    light_rows = np.flatnonzero(data["mass_kg"] < MIN_DENSITY_KG_M3 * volume)
     if light_rows.size:
         k = int(light_rows[0])
         m = float(data["mass_kg"][k])
