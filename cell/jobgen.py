@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from cell.catalogue import catalogue
-from cell.jobs import ROBOT_BASE_CLEARANCE_M
+from cell.jobbins import ROBOT_BASE_CLEARANCE_M
 
 __all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "facing_half_range_rad"]
 

@@ -9,7 +9,6 @@ line and the field path and says what would be valid.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -18,6 +17,12 @@ import yaml
 
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
+from cell.jobbins import (
+    ROBOT_BASE_CLEARANCE_M,
+    capacity_warnings,
+    light_item_warnings,
+    placement_problem,
+)
 from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, unsorted_warning
 from cell.jobschema import (
@@ -30,13 +35,20 @@ from cell.jobschema import (
     job_keys,
 )
 from cell.model.objects import SHAPES, ObjectParams, denser_than_any_solid, lighter_than_air
-from cell.yamlsafe import check_yaml, read_yaml_text
+from cell.yamlsafe import check_yaml, compose, read_yaml_text
 from cell.yamltree import Checker, Errors, Node, same_text, to_tree
 
-__all__ = ["BinSpec", "ItemSpec", "Job", "job_keys", "load_job", "parse_job"]
+__all__ = [
+    "ROBOT_BASE_CLEARANCE_M",
+    "BinSpec",
+    "ItemSpec",
+    "Job",
+    "job_keys",
+    "load_job",
+    "parse_job",
+]
 
 POLICIES = ("auto", "place", "throw")
-ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
 MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 # The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
 # listed, or bin by bin (the items all at hand, as in a tote).
@@ -132,11 +144,6 @@ class Job:
         return out
 
 
-def _footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
-    """Whether two axis-aligned bin footprints (centre [x, y] m, size [x, y] m) share area."""
-    return all(abs(pos_a[k] - pos_b[k]) < (size_a[k] + size_b[k]) / 2 for k in (0, 1))
-
-
 def _job_tree(text: str, path: str) -> Node:
     """The job's YAML as a tree of nodes with their lines.
 
@@ -148,7 +155,7 @@ def _job_tree(text: str, path: str) -> Node:
     except InvalidInput as exc:
         raise JobError(str(exc)) from None
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        root = compose(text)
     except yaml.YAMLError as exc:
         raise JobError(f"{path}: not valid YAML: {exc}") from None
     if root is None:
@@ -228,23 +235,9 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
             f"{rim} m is not above the bin's floor plate, {BIN_WALL_M} m thick: give a rim "
             f"higher than {BIN_WALL_M} m",
         )
-    near = math.hypot(*pos) - math.hypot(size[0] / 2, size[1] / 2)
-    if near < ROBOT_BASE_CLEARANCE_M:
-        raise c.fail(
-            b["position_m"],
-            f"{fp}.position_m",
-            f"the bin reaches within {max(near, 0):.2f} m of the robot base at the "
-            f"origin; keep every bin at least {ROBOT_BASE_CLEARANCE_M} m away",
-        )
-    for other in bins:
-        if _footprints_overlap(pos, size, other.position, other.size):
-            raise c.fail(
-                b["position_m"],
-                f"{fp}.position_m",
-                f"bin {bid!r} overlaps bin {other.id!r} (footprints {tuple(size)} m at "
-                f"{tuple(pos)} and {tuple(other.size)} m at {tuple(other.position)}); "
-                "an item landing in one would be scored in the other: move them apart",
-            )
+    clash = placement_problem(bid, pos, size, bins)
+    if clash:
+        raise c.fail(b["position_m"], f"{fp}.position_m", clash)
     return BinSpec(bid, pos, size, rim)  # type: ignore[arg-type]
 
 
@@ -320,7 +313,13 @@ def _item_object(
     mass = c.number(it["mass_kg"], f"{fp}.mass_kg", lo=0.0, hi=2.0, strict_lo=True)
     size = c.vector(it["size_m"], f"{fp}.size_m", 3, positive=True)
     if max(size) > 0.25:
-        raise c.fail(it["size_m"], f"{fp}.size_m", "extents above 0.25 m do not fit the grip")
+        mm = max(size) <= 250.0 and min(size) >= 1.0  # each a plausible extent in mm
+        raise c.fail(
+            it["size_m"],
+            f"{fp}.size_m",
+            f"extents above 0.25 m do not fit the grip (the largest here {max(size):g} m)"
+            + (f": is it {[s_ / 1000.0 for s_ in size]} m written in millimetres?" if mm else ""),
+        )
     bad_extents = extents_mismatch(shape, size)
     if bad_extents:
         raise c.fail(it["size_m"], f"{fp}.size_m", bad_extents)
@@ -479,7 +478,9 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         problems, reach_warnings = job_problems(job, _where(job, tree, top), reach=check_reach)
         errors.messages += problems
     errors.raise_all()
-    return replace(job, warnings=unsorted_warning(job) + tuple(reach_warnings))
+    warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
+    warnings += tuple(reach_warnings)
+    return replace(job, warnings=warnings)
 
 
 def load_job(path: str | Path) -> Job:

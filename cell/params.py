@@ -1,7 +1,8 @@
 """Parameter files: the end-effector's η_ee, identified objects' η_o, and
 switched-on model effects, as YAML.
 
-    end_effector: {Ke1: 114.6, ...}      # any subset; the rest are defaults
+    end_effector: {Ke1: 114.6, ...}      # any subset; the rest the reference values,
+                                          # each named in a warning on stderr
     objects:                              # optional identified η_o by object id
       cube50: {shape: cube, mass_kg: 0.06, size_m: [0.05, 0.05, 0.05]}
     effects: {band_mass: {mass_kg: 0.01}} # optional (see cell.model.effects)
@@ -26,7 +27,8 @@ every item is planned with the same model of the scene.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+import sys
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -170,7 +172,8 @@ def load_params(path: str | Path | None) -> ModelParams:
                 f"{p}: {key}: {raw[key]!r} must be a mapping "
                 + ("of parameter name to number" if key == "end_effector" else "by name")
             )
-    ee = EndEffectorParams.from_dict(raw.get("end_effector") or {}, where=f"{p}: end_effector")
+    given = raw.get("end_effector") or {}
+    ee = EndEffectorParams.from_dict(given, where=f"{p}: end_effector")
     objects: dict[str, ObjectParams] = {}
     for oid, spec in (raw.get("objects") or {}).items():
         try:
@@ -209,7 +212,7 @@ def load_params(path: str | Path | None) -> ModelParams:
         effects_from_mapping(effects)  # validate names, parameters and ranges now
     except InvalidParameter as exc:
         raise InvalidInput(f"{p}: {exc}") from None
-    return ModelParams(
+    out = ModelParams(
         ee=ee,
         objects=objects,
         effects=effects,
@@ -217,6 +220,34 @@ def load_params(path: str | Path | None) -> ModelParams:
         mass_rule=_mass_rule(raw.get("mass_rule"), p),
         validation=_validation(raw.get("validation"), p),
     )
+    missing = [f.name for f in fields(EndEffectorParams) if f.name not in given]
+    if missing:  # said once the file is read whole: a refused file is not warned of too
+        _warn_once(p, defaulted_warning(p, missing, ee))
+    return out
+
+
+# the unit of each end-effector parameter, for the messages
+_EE_UNITS = {"phi": " rad", "Ke3": " N/m³", "Ke2": " N/m²", "Ke1": " N/m", "C": " N", "dt": " s"}
+_WARNED: set[tuple[str, str]] = set()
+
+
+def defaulted_warning(path: str, missing: list[str], ee: EndEffectorParams) -> str:
+    """The warning for a parameter file whose end_effector leaves out the keys `missing`:
+    each key and the reference value it takes (the thesis' values, not the scene's)."""
+    taken = ", ".join(f"{k} = {getattr(ee, k):g}{_EE_UNITS.get(k, ' m')}" for k in missing)
+    n_all = len(fields(EndEffectorParams))
+    return (
+        f"{path}: end_effector gives {n_all - len(missing)} of its {n_all} parameters; "
+        f"{plural(len(missing), 'reference value')} taken (the thesis' end-effector, not the "
+        f"scene's calibrated robots/cell_scene/ee_params.yaml): {taken}"
+    )
+
+
+def _warn_once(path: str, message: str) -> None:
+    """Print `message` as a warning on standard error, once per file and message."""
+    if (path, message) not in _WARNED:
+        _WARNED.add((path, message))
+        print(f"cell: warning: {message}", file=sys.stderr)
 
 
 MAX_VALIDATION_M = 1.0  # [m] a held-out RMS miss beyond is no calibrated model (or a typo)

@@ -30,6 +30,7 @@ class Node:
         self.line = line
 
 
+_WITH_UNIT = re.compile(r"\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\W\d_]+[/^²³\w]*\s*")
 _SCIENTIFIC = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
 _SAFE_TAGS = frozenset(t for t in yaml.SafeLoader.yaml_constructors if t)
 
@@ -53,8 +54,8 @@ def to_tree(node: yaml.Node, path: str) -> Node:
         return Node(out, line)
     if isinstance(node, yaml.SequenceNode):
         return Node([to_tree(v, path) for v in node.value], line)
-    # resolve the scalar with the safe constructor alone
-    value = yaml.SafeLoader("").construct_object(node, deep=True)  # type: ignore[no-untyped-call]
+    # resolve the scalar with the safe constructor alone (no reader nor parser built for it)
+    value = yaml.constructor.SafeConstructor().construct_object(node, deep=True)  # type: ignore[no-untyped-call]
     return Node(value, line)
 
 
@@ -123,10 +124,17 @@ class Checker:
             raise self.fail(node, fp, f"must be a mapping with keys {sorted(allowed)}")
         for k, v in node.value.items():
             if k not in allowed:
+                # `{mass_kg: 0,05}` is two entries, mass_kg 0 and a key 05 of no value
+                comma = (
+                    f" (a decimal comma? in {{…}} YAML reads `N,{k}` as the number N and a key "
+                    f"{k}: write N.{k})"
+                    if k.isdigit() and v.value is None
+                    else ""
+                )
                 raise self.fail(
                     v,
                     f"{fp}.{k}" if fp else k,
-                    f"unknown key {k!r}; valid keys here: {', '.join(sorted(allowed))}",
+                    f"unknown key {k!r}{comma}; valid keys here: {', '.join(sorted(allowed))}",
                 )
         return node.value
 
@@ -143,7 +151,8 @@ class Checker:
         if isinstance(v, str) and _SCIENTIFIC.fullmatch(v.strip()):
             v = float(v)  # YAML 1.1 reads 5e-2 (no dot) as text; the parameter loader does not
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-            raise self.fail(node, fp, f"{shown(v)} must be a number")
+            raise self.fail(node, fp, f"{shown(v)} must be a {'finite ' * _nonfinite(v)}number"
+                            + _quoted_number(v))  # fmt: skip
         v = float(v)
         if lo is not None and (v <= lo if strict_lo else v < lo):
             raise self.fail(node, fp, f"{v} must be {'>' if strict_lo else '≥'} {lo}")
@@ -154,11 +163,17 @@ class Checker:
     def integer(self, node: Node, fp: str, lo: int, hi: int) -> int:
         v = node.value
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            raise self.fail(node, fp, f"{shown(v)} must be a whole number from {lo} to {hi}")
+            raise self.fail(
+                node, fp, f"{shown(v)} must be a whole number from {lo} to {hi}" + _quoted_number(v)
+            )
         return int(v)
 
     def text(self, node: Node, fp: str, choices: tuple[str, ...] | None = None) -> str:
         v = node.value
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            raise self.fail(
+                node, fp, f"{shown(v)} is a number; this is a name: write it in quotes, '{v}'"
+            )
         if not isinstance(v, str) or not v:
             raise self.fail(node, fp, f"{shown(v)} must be a non-empty text")
         unseen = unseen_problem(v)
@@ -181,6 +196,29 @@ class Checker:
             self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
             for i, x in enumerate(node.value)
         )
+
+
+def _nonfinite(v: Any) -> bool:
+    """Is `v` a number that is not finite (.inf, .nan)?"""
+    return isinstance(v, float) and not math.isfinite(v)
+
+
+def _quoted_number(v: Any) -> str:
+    """What to say of a text that reads as a number ("" for anything else): in quotes,
+    YAML keeps it text."""
+    if not isinstance(v, str):
+        return ""
+    if _WITH_UNIT.fullmatch(v):
+        return (
+            " (a number with a unit: the unit is the key's, _m metres, _kg kilograms, _s "
+            "seconds, _mps m/s; write the number alone, in that unit)"
+        )
+    try:
+        if not math.isfinite(float(v.strip())):
+            return ""
+    except ValueError:
+        return ""
+    return " (it is in quotes, so YAML reads it as text: write it without the quotes)"
 
 
 class Errors:

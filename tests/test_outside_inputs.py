@@ -930,15 +930,17 @@ def test_a_throw_too_light_for_the_push_model_names_its_mass_not_the_plane(
     log_csv: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A 0.1 g cube of 30 mm (3.7 kg/m³, lighter than any catalogue object, heavier than
-    the air): the model's push diverges (a launch velocity of 1e122 m/s, then NaN) and
+    the air): the model's push diverged (a launch velocity of 1e122 m/s, then NaN) and
     `cell predict` blamed the landing plane: "the landing plane z = 0.0 m is above the
-    whole flight". It now names the mass."""
+    whole flight". The push now converges (`push_steps`), to a launch faster than any a
+    log records: refused, naming the mass."""
     rows = _rows(log_csv)
     rows[4].update(mass_kg="0.0001", size_x_m="0.03", size_y_m="0.03", size_z_m="0.03")
     src = _write(rows, tmp_path / "light.csv")
     assert cell_exit(["predict", str(src), "-o", str(tmp_path / "p.csv")]) == 2
     err = capsys.readouterr().err
-    assert "row 5, column 'mass_kg'" in err and "push diverges for 0.0001 kg" in err
+    assert "row 5, column 'mass_kg'" in err and "launches 0.0001 kg at " in err
+    assert "faster than the 100 m/s a log's velocities may be" in err
 
 
 def test_a_log_row_lighter_than_the_air_is_refused_by_row(log_csv: Path, tmp_path: Path) -> None:

@@ -177,7 +177,11 @@ def _outputs(args: argparse.Namespace, names: dict[str, str]) -> list[tuple[str,
     command = getattr(args, "command", None)
     for dest, flag in OUTPUT_DESTS.items():
         value = getattr(args, dest, None)
-        if isinstance(value, str) and value and value != "-":
+        if isinstance(value, str) and not value.strip():  # `-o ""`, `-o "$UNSET"`
+            raise InvalidInput(
+                f"{names.get(dest, flag)} {value!r}: an empty path; give a file name"
+            )
+        if isinstance(value, str) and value != "-":
             outs.append((dest, names.get(dest, flag), value))
     if command == "log" and getattr(args, "log_command", None) == "export" and args.tracks:
         outs.append(("tracks", "--tracks", args.tracks))

@@ -68,12 +68,21 @@ def check_track(raw: object) -> CheckedTrack:
     if arr.shape[0] and np.any(np.diff(arr[:, 0]) < 0):
         notes.append("samples not in time order (sorted)")
         arr = arr[np.argsort(arr[:, 0], kind="stable")]
+    n_rep = 0
     if arr.shape[0] > 1:
         rep = np.r_[False, np.diff(arr[:, 0]) <= 0]
         if rep.any():
-            notes.append(f"{int(rep.sum())} repeated time stamps (later ones dropped)")
+            n_rep = int(rep.sum())
+            notes.append(f"{n_rep} repeated time stamps (later ones dropped)")
             arr = arr[~rep]
     why = _unusable(arr)
+    if why and n_rep:  # a time column copied down, or written at a coarse resolution
+        n = arr.shape[0] + n_rep
+        why = (
+            f"{why}, once {n_rep} of its {n} samples were dropped for repeating a time "
+            f"stamp ({arr.shape[0]} distinct t_s from {arr[0, 0]:g} s): is t_s filled in "
+            "for every sample, to the millisecond?"
+        )
     return CheckedTrack(None if why else arr, why, tuple(notes))
 
 

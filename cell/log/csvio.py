@@ -52,6 +52,8 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
                 header = [h.strip() for h in next(reader)]
             except StopIteration:
                 raise LogFormatError(p, None, None, "is empty; a header row is required") from None
+            if any("\x00" in h for h in header):  # UTF-16 without its mark reads as UTF-8
+                raise LogFormatError(p, None, None, _not_utf8(p))
             rows = [row for row in reader if any(cell.strip() for cell in row)]
     except FileNotFoundError:
         raise LogFormatError(p, None, None, "no such file") from None
@@ -111,8 +113,16 @@ def _not_utf8(path: str) -> str:
     with open(path, "rb") as fh:
         start = fh.read(8192)
     what = "is not a readable CSV text file: "
+    save = "; save it as 'CSV UTF-8'"
+    if start[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):
+        return what + "UTF-32" + save
     if start[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        return what + "UTF-16 (a spreadsheet's 'Unicode text'); save it as 'CSV UTF-8'"
+        return what + "UTF-16 (a spreadsheet's 'Unicode text')" + save
+    # text of ASCII characters in UTF-16 without its byte-order mark: every other byte NUL
+    even, odd = start[0::2], start[1::2]
+    if len(start) >= 4 and (set(even) == {0} or set(odd) == {0}):
+        order = "big" if set(even) == {0} else "little"
+        return what + f"UTF-16 ({order}-endian, without a byte-order mark)" + save
     if b"\x00" in start:
         return what + "binary data (NUL bytes), not text"
     what += "not UTF-8"
@@ -202,6 +212,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
         with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             header = reader.fieldnames or []
+            if any("\x00" in h for h in header):  # UTF-16 without its mark reads as UTF-8
+                raise LogFormatError(p, None, None, _not_utf8(p))
             for c in need:
                 if c not in header:
                     raise LogFormatError(

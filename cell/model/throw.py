@@ -32,7 +32,7 @@ import numpy as np
 
 from cell.errors import InvalidParameter, NoLanding, plural
 from cell.model.band import push_force
-from cell.model.integrate import plane_crossing, rk4_step
+from cell.model.integrate import PUSH_STEPS, plane_crossing, push_steps, rk4_step
 from cell.model.objects import ObjectParams, drag_area, drag_coefficient
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.planar import flight_planar, flight_planar_one
@@ -50,7 +50,7 @@ __all__ = [
     "no_landing_error",
 ]
 
-_PUSH_STEPS = 2  # RK4 steps across the ~12 ms push (drag changes little in it)
+_PUSH_STEPS = PUSH_STEPS
 _FLIGHT_STEP = 0.07  # [s] largest planar RK4 step after the push
 
 
@@ -249,7 +249,7 @@ def launch_state(
     push: np.ndarray | None = None,
     push_mass: np.ndarray | None = None,
     axis: np.ndarray | None = None,
-    steps: int = _PUSH_STEPS,
+    steps: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Integrate the push phase t ∈ [0, Δt] in 3-D.
 
@@ -259,7 +259,8 @@ def launch_state(
         push: f_o [N] per throw; computed from the band law when None.
         push_mass: the mass the push drives [kg]; the object's mass when None.
         axis: the throw axis per throw, shape (n, 3); from elevation/azimuth when None.
-        steps: RK4 steps across the push.
+        steps: RK4 steps across the push; None: `_PUSH_STEPS`, more where the drag is
+            stiff (`push_steps`).
 
     Returns:
         (position, velocity) at t = Δt, each shape (n, 3), world frame.
@@ -273,6 +274,8 @@ def launch_state(
     ax, ay, az = u[:, 0] * scale, u[:, 1] * scale, u[:, 2] * scale - G
     px, py, pz = (batch.position[:, j].copy() for j in range(3))
     vx, vy, vz = (batch.base_velocity[:, j].copy() for j in range(3))
+    if steps is None:
+        steps = push_steps(kk, np.abs(scale) + G, batch.base_velocity, ee.dt)
     h = ee.dt / steps
 
     def acc(wx: np.ndarray, wy: np.ndarray, wz: np.ndarray) -> tuple[np.ndarray, ...]:

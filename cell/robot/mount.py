@@ -282,21 +282,78 @@ def load_mount(ref: str) -> MountSpec:
     )
 
 
-def _chain(root: ET.Element, flange: str) -> list[ET.Element]:
-    """The joints from the URDF's root link down to `flange`, base first."""
-    parent_joint = {}
+def _chain(root: ET.Element, flange: str, where: str) -> list[ET.Element]:
+    """The joints from the URDF's root link down to `flange`, base first.
+
+    Raises:
+        InvalidParameter: a link hanging from two joints, or joints in a loop (a URDF is a
+            tree), named.
+    """
+    parent_joint: dict[str, ET.Element] = {}
     for j in root.findall("joint"):
         child = j.find("child")
         if child is not None:
-            parent_joint[child.get("link", "")] = j
+            name = child.get("link", "")
+            if name in parent_joint:
+                raise InvalidParameter(
+                    f"{where}: field 'arm_urdf': link {name!r} is the child of two joints, "
+                    f"{parent_joint[name].get('name', '')!r} and {j.get('name', '')!r}; a URDF "
+                    "is a tree, each link below one joint"
+                )
+            parent_joint[name] = j
     chain: list[ET.Element] = []
+    seen = {flange}
     link = flange
-    while link in parent_joint and len(chain) < 1000:
+    while link in parent_joint:
         j = parent_joint[link]
         chain.append(j)
         p = j.find("parent")
         link = p.get("link", "") if p is not None else ""
+        if link in seen:
+            loop = " -> ".join(repr(x.get("name", "")) for x in chain[::-1])
+            raise InvalidParameter(
+                f"{where}: field 'arm_urdf': its joints form a loop through link {link!r} "
+                f"({loop}); a URDF is a tree with one root link"
+            )
+        seen.add(link)
     return chain[::-1]
+
+
+def _check_limits(root: ET.Element, joints: tuple[str, ...], where: str) -> None:
+    """InvalidParameter naming the joint when an arm joint of the URDF has no usable limits:
+    a revolute or prismatic joint needs <limit> with lower < upper and a velocity > 0, a
+    continuous one a velocity > 0, each a finite number (the planner reads them all)."""
+    by_name = {j.get("name", ""): j for j in root.findall("joint")}
+    for name in joints:
+        j = by_name[name]
+        kind = j.get("type", "")
+        need = ("velocity",) if kind == "continuous" else ("lower", "upper", "velocity")
+        lim = j.find("limit")
+        what = f"{where}: field 'arm_urdf': joint {name!r} ({kind})"
+        if lim is None:
+            raise InvalidParameter(
+                f"{what} has no <limit>; it needs one with {', '.join(need)} (rad, rad/s)"
+            )
+        vals = {}
+        for k in need:
+            try:
+                vals[k] = float(lim.get(k, ""))
+            except ValueError:
+                vals[k] = math.nan
+            if not math.isfinite(vals[k]):
+                said = (
+                    f"has no {k}" if lim.get(k) is None else f"{k}={lim.get(k)!r} is not a number"
+                )
+                raise InvalidParameter(
+                    f"{what}: its <limit> {said}; it needs {', '.join(need)}, each a finite number"
+                )
+        if not vals["velocity"] > 0.0:
+            raise InvalidParameter(f"{what}: its velocity limit {vals['velocity']} must be > 0")
+        if kind != "continuous" and not vals["lower"] < vals["upper"]:
+            raise InvalidParameter(
+                f"{what}: its position limits lower={vals['lower']} and upper={vals['upper']} "
+                "are the wrong way round or equal; lower must be under upper"
+            )
 
 
 def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
@@ -341,13 +398,16 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
             f"{where}: field 'arm_joints': {unknown} are not movable joints of "
             f"{arm_path.name}; its movable joints: {', '.join(movable)}"
         )
-    chain = [j.get("name", "") for j in _chain(root, spec.flange) if j.get("type") in _MOVABLE]
+    chain = [
+        j.get("name", "") for j in _chain(root, spec.flange, where) if j.get("type") in _MOVABLE
+    ]
     if chain != list(spec.arm_joints):
         raise InvalidParameter(
             f"{where}: fields 'arm_joints' and 'flange': the movable joints from the base to "
             f"flange {spec.flange!r} are {chain}, not {list(spec.arm_joints)}; list those "
             "joints in order, or name the link the tool is bolted to (below the last joint)"
         )
+    _check_limits(root, spec.arm_joints, where)
     _check_home(spec, root)
     return arm_path, root
 
