@@ -319,3 +319,38 @@ def test_a_number_written_as_text_or_a_name_as_a_number_is_said_so(item: str, sa
     "7 must be a non-empty text"."""
     with pytest.raises(JobError, match=said):
         parse_job(_job(item=item), "j.yaml", check_reach=False)
+
+
+def test_a_track_id_padded_or_with_an_invisible_character(tmp_path: Path) -> None:
+    """Track ids written `t1 ` (a spreadsheet's padding) matched no throw of the log, whose
+    own cells are read stripped: every track "no throw with this id" and `cell gap`
+    refused the log. They are now read stripped too. An id holding a zero-width space
+    was said as "t1​: no throw with this id", the character unseen: now it is named."""
+    from cell.gap.track_check import check_tracks
+
+    t = np.linspace(0.0, 0.6, 40)
+    rows = "".join(f"t1 ,{x:.3f},{0.5 * x:.3f},0.0,{1.0 + 2.0 * x - 4.9 * x * x:.4f}\n" for x in t)
+    f = tmp_path / "tracks.csv"
+    f.write_text("throw_id,t_s,x_m,y_m,z_m\n" + rows)
+    tracks = read_tracks_csv(f)
+    assert list(tracks) == ["t1"]
+    usable, bad, _ = check_tracks(["t1"], tracks)
+    assert list(usable) == ["t1"] and not bad
+    usable, bad, _ = check_tracks(["t1"], {"t1\u200b": tracks["t1"]})
+    assert not usable and bad[0]["throw_id"] == "t1<U+200B>"
+    assert "U+200B ZERO WIDTH SPACE" in bad[0]["why"]
+
+
+def test_a_log_cell_with_a_decimal_comma_or_a_unit_says_so(tmp_path: Path) -> None:
+    """A quoted '0,06' or '60 g' in `mass_kg` was "is not a number" alone."""
+    log = tmp_path / "ok.csv"
+    write_throws_csv(draw_campaign(default_world(), Campaign(n=12), seed=3), log)
+    head, *rows = log.read_text().splitlines()
+    col = head.split(",").index("mass_kg")
+    for cell, said in (('"0,06"', "decimal point: 0.06"), ("60 g", "a number with a unit")):
+        cells = rows[2].split(",")
+        cells[col] = cell
+        bad = tmp_path / "bad.csv"
+        bad.write_text("\n".join([head, rows[0], rows[1], ",".join(cells)]) + "\n")
+        with pytest.raises(LogFormatError, match=f"row 3, column 'mass_kg': .*{said}"):
+            read_throws_csv(bad)

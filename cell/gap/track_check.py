@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cell.yamltree import on_screen, unseen_problem
+
 __all__ = ["MIN_SAMPLES", "MIN_SPAN_S", "CheckedTrack", "check_track", "check_tracks"]
 
 MIN_SAMPLES = 8  # a whole-track fit frees up to 9 parameters from 3 coordinates per sample
@@ -131,7 +133,11 @@ def check_tracks(
     known = set(throw_ids)
     for tid, raw in (tracks or {}).items():
         if tid not in known:
-            bad.append({"throw_id": str(tid), "why": "no throw with this id in the throw log"})
+            why = "no throw with this id in the throw log"
+            unseen = unseen_problem(str(tid))  # a character that shows nothing, said
+            if unseen.startswith("holds"):
+                why += f": {on_screen(str(tid))!r} {unseen}"
+            bad.append({"throw_id": on_screen(str(tid)), "why": why})
             continue
         c = check_track(raw)
         mended.extend({"throw_id": str(tid), "note": nt} for nt in c.notes)

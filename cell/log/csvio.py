@@ -22,6 +22,7 @@ from cell.log.table import (
     REQUIRED_COLUMNS,
     ThrowTable,
     millimetres_hint,
+    number_text_hint,
     other_separator,
     parse_cells,
     repeats_header,
@@ -252,7 +253,9 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                     try:
                         vals.append(float(cell))
                     except (TypeError, ValueError):
-                        raise LogFormatError(p, r, c, f"{cell!r} is not a number") from None
+                        raise LogFormatError(
+                            p, r, c, f"{cell!r} is not a number" + number_text_hint(cell.strip())
+                        ) from None
                     if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
                     if c == "t_s" and _track_time_problem(vals[-1]):
@@ -265,7 +268,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                             f"{vals[-1]} is outside the valid range [{lo:g}, {hi:g}]"
                             + millimetres_hint(vals[-1]),
                         )
-                out.setdefault(row["throw_id"], []).append(vals)
+                # padded ids read as the log reads its own (its cells stripped)
+                out.setdefault(row["throw_id"].strip(), []).append(vals)
     except UnicodeDecodeError:
         raise LogFormatError(p, None, None, _not_utf8(p)) from None
     except csv.Error as exc:

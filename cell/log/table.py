@@ -11,6 +11,7 @@ build their tables with it).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -225,6 +226,23 @@ def millimetres_hint(v: float) -> str:
     return ""
 
 
+_DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")
+_WITH_UNIT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\W\d_][/^²³\w]*")
+
+
+def number_text_hint(cell: str) -> str:
+    """What to say of a cell that is not a number but looks like one written another way
+    ("" otherwise): a decimal comma, or a number with its unit."""
+    if _DECIMAL_COMMA.fullmatch(cell):
+        return f" (a decimal comma? numbers take a decimal point: {cell.replace(',', '.')})"
+    if _WITH_UNIT.fullmatch(cell):
+        return (
+            " (a number with a unit: the unit is the column's, _m metres, _kg kilograms, _s "
+            "seconds, _rad radians, _mps m/s; write the number alone, in that unit)"
+        )
+    return ""
+
+
 def _unit_hint(column: str, v: float) -> str:
     """What to say of a value `v` beyond its column's range where another unit would put it
     in range: positions or extents in millimetres, a mass in grams, an angle in degrees."""
@@ -316,7 +334,9 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
                 try:
                     v = float(s)
                 except ValueError:
-                    raise LogFormatError(path, r, c, f"{s!r} is not a number") from None
+                    raise LogFormatError(
+                        path, r, c, f"{s!r} is not a number" + number_text_hint(s)
+                    ) from None
                 if not math.isfinite(v):
                     raise LogFormatError(path, r, c, f"{s!r} is not a finite number")
                 if c in NONNEGATIVE and v < 0:
