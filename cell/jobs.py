@@ -227,13 +227,13 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
-    rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", lo=0.0, hi=1.0, strict_lo=True)
-    if rim <= BIN_WALL_M:
+    rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", hi=1.0)
+    if rim <= BIN_WALL_M:  # 0 and below too: the valid range is the plate's thickness up
         raise c.fail(
             b["rim_height_m"],
             f"{fp}.rim_height_m",
             f"{rim} m is not above the bin's floor plate, {BIN_WALL_M} m thick: give a rim "
-            f"higher than {BIN_WALL_M} m",
+            f"higher than {BIN_WALL_M} m (and at most 1.0 m)",
         )
     clash = placement_problem(bid, pos, size, bins)
     if clash:

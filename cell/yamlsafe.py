@@ -17,6 +17,7 @@ refuses and the Python parser takes is read by the Python parser. A 30,000-item 
 from __future__ import annotations
 
 import copy
+import re
 import threading
 from collections import OrderedDict
 from pathlib import Path
@@ -46,8 +47,28 @@ _MEMO: OrderedDict[str, Any] = OrderedDict()
 _MEMO_TEXTS = 32
 _MEMO_BYTES = 64_000
 _MEMO_LOCK = threading.Lock()
-# libyaml's loader, None when PyYAML was built without it (the Python parser then does all)
-_FAST: Any = getattr(yaml, "CSafeLoader", None)
+
+
+def _without_base60(loader: Any) -> Any:
+    """`loader` resolving no YAML 1.1 base-60 number: PyYAML reads `1:30` as the integer
+    90 and `1:30.5` as 90.5, which no one writing a job means (YAML 1.2 dropped them); so
+    a scalar with a colon resolves to text, which a number's field refuses by name."""
+    resolvers = {
+        first: [
+            (tag, re.compile("(?!.*:)" + rx.pattern, rx.flags))
+            if tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
+            else (tag, rx)
+            for tag, rx in rules
+        ]
+        for first, rules in loader.yaml_implicit_resolvers.items()
+    }
+    return type(f"{loader.__name__}NoBase60", (loader,), {"yaml_implicit_resolvers": resolvers})
+
+
+# PyYAML's Python loader, and libyaml's (None when PyYAML was built without it: the Python
+# parser then does all), each without the base-60 numbers
+_SLOW: Any = _without_base60(yaml.SafeLoader)
+_FAST: Any = _without_base60(yaml.CSafeLoader) if hasattr(yaml, "CSafeLoader") else None
 
 
 def check_yaml(text: str, path: str) -> None:
@@ -69,7 +90,7 @@ def check_yaml(text: str, path: str) -> None:
         except yaml.YAMLError:
             pass  # worded by the Python parser, below
     try:
-        _check_events(yaml.parse(text, Loader=yaml.SafeLoader), path)
+        _check_events(yaml.parse(text, Loader=_SLOW), path)
     except yaml.YAMLError as exc:
         raise InvalidInput(yaml_error(path, exc)) from None
 
@@ -108,7 +129,7 @@ def compose(text: str) -> yaml.Node | None:
             return yaml.compose(text, Loader=_FAST)  # type: ignore[no-any-return]
         except yaml.YAMLError:
             pass
-    return yaml.compose(text, Loader=yaml.SafeLoader)  # type: ignore[no-any-return]
+    return yaml.compose(text, Loader=_SLOW)  # type: ignore[no-any-return]
 
 
 def yaml_error(path: str, exc: yaml.YAMLError) -> str:
@@ -185,4 +206,4 @@ def _load(text: str) -> Any:
             return yaml.load(text, Loader=_FAST)  # noqa: S506 - CSafeLoader is the safe loader
         except yaml.YAMLError:
             pass
-    return yaml.safe_load(text)
+    return yaml.load(text, Loader=_SLOW)  # noqa: S506 - SafeLoader without base 60

@@ -21,6 +21,7 @@ from cell.log.table import (
     RANGES,
     REQUIRED_COLUMNS,
     ThrowTable,
+    log_number,
     millimetres_hint,
     number_text_hint,
     other_separator,
@@ -251,7 +252,7 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         vals.append(math.nan)  # a lost sample: the track check drops it
                         continue
                     try:
-                        vals.append(float(cell))
+                        vals.append(log_number(cell.strip()))
                     except (TypeError, ValueError):
                         raise LogFormatError(
                             p, r, c, f"{cell!r} is not a number" + number_text_hint(cell.strip())

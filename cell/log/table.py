@@ -40,6 +40,7 @@ __all__ = [
     "RANGES",
     "REQUIRED_COLUMNS",
     "ThrowTable",
+    "log_number",
     "millimetres_hint",
     "other_separator",
     "parse_cells",
@@ -227,7 +228,18 @@ def millimetres_hint(v: float) -> str:
 
 
 _DECIMAL_COMMA = re.compile(r"[-+]?\d+,\d+")
+_DIGIT_GROUPS = re.compile(r"[-+]?[0-9][0-9_]*(\.[0-9_]*)?([eE][-+]?[0-9]+)?")
 _WITH_UNIT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\W\d_][/^²³\w]*")
+
+
+def log_number(cell: str) -> float:
+    """A log's number cell (stripped) as `float`, which also takes forms no CSV writer
+    makes and a reader is likely to misread: digit-group underscores (`0.0_6` is 0.06 to
+    Python) and digits of other scripts (`٣`, full-width `３`). ValueError for those, as
+    for any text that is not a number."""
+    if "_" in cell or not cell.isascii():
+        raise ValueError(cell)
+    return float(cell)
 
 
 def number_text_hint(cell: str) -> str:
@@ -235,6 +247,8 @@ def number_text_hint(cell: str) -> str:
     ("" otherwise): a decimal comma, or a number with its unit."""
     if _DECIMAL_COMMA.fullmatch(cell):
         return f" (a decimal comma? numbers take a decimal point: {cell.replace(',', '.')})"
+    if "_" in cell and _DIGIT_GROUPS.fullmatch(cell):
+        return f" (digit groups? write the digits alone: {cell.replace('_', '')})"
     if _WITH_UNIT.fullmatch(cell):
         return (
             " (a number with a unit: the unit is the column's, _m metres, _kg kilograms, _s "
@@ -332,7 +346,7 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
                         continue
                     raise LogFormatError(path, r, c, "is empty; a number is required")
                 try:
-                    v = float(s)
+                    v = log_number(s)
                 except ValueError:
                     raise LogFormatError(
                         path, r, c, f"{s!r} is not a number" + number_text_hint(s)
