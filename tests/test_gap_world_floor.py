@@ -72,3 +72,21 @@ def test_a_row_is_judged_against_the_world_floor_on_the_rows_its_robust_error_co
     assert row["after_over_floor"] == pytest.approx(row["after_robust_m"] / f_kept, rel=1e-12)
     assert row["plain_over_floor"] == pytest.approx(row["after_m"] / f_every, rel=1e-12)
     assert row["floor_ok"] == (row["after_robust_m"] <= FLOOR_RATIO * f_kept)
+
+
+def test_an_injected_outlier_is_never_in_the_other_worlds_floor():
+    """5 % of the landings moved 0.3-1 m (mis-logged): by hand, the floor is the RMS distance
+    of the other rows' logged landings from the deterministic world, whether or not the
+    tool's kept rows leave the moved ones out."""
+    camp = draw_other_campaign([], np.random.default_rng(5), n=80, outliers=0.05)
+    assert len(camp.outliers) == 4
+    landed = np.array([[r["landed_x_m"], r["landed_y_m"]] for r in camp.records])
+    sq = np.sum((landed - camp.reference_xy) ** 2, axis=1)
+    inl = [i for i in range(len(sq)) if i not in camp.outliers]
+    assert camp.floor_on() == pytest.approx(np.sqrt(np.mean(sq[inl])), rel=1e-12)
+    assert camp.floor_on() == camp.floor_m
+    keep = np.ones(len(sq), bool)
+    keep[list(camp.outliers)] = False
+    assert camp.floor_on(keep) == camp.floor_on()
+    keep[inl[0]] = False
+    assert camp.floor_on(keep) == pytest.approx(np.sqrt(np.mean(sq[inl[1:]])), rel=1e-12)
