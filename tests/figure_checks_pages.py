@@ -112,7 +112,7 @@ def check_the_ur3_reach() -> None:
 # -- docs/gap_scene.md: the table ------------------------------------------------------------
 _ROW = (
     r"\n\| (s:[\w+.-]+) \| ([\w+]+) \| ([\w+]+) \| ([^|]+) \| ((?:[^|\\]|\\\|)+) \| ([\d.]+) "
-    r"\(F (\d+) mm(?:, F0 (\d+))?\) \| (yes|no) \|(?=\n)"
+    r"\(F (\d+) mm(?:, F0 (\d+))?(?:; (\d+) with the flagged rows)?\) \| (yes|no) \|(?=\n)"
 )
 
 
@@ -153,7 +153,7 @@ def check_the_gap_scene_table() -> None:
     for m in ms:
         note(page, m)
         row = rows[m.group(1)]
-        assert (m.group(2), m.group(3), m.group(9)) == (
+        assert (m.group(2), m.group(3), m.group(10)) == (
             row["truth"],
             row["verdict"],
             "yes" if row["passes"] else "no",
@@ -162,9 +162,12 @@ def check_the_gap_scene_table() -> None:
         assert m.group(4) == phases
         _check_parameters(page, m, row)
         close(m.group(6), row["after_over_floor"], 2)
-        close(m.group(7), 1000 * row["world_floor_m"], 0)
+        # the floor A was judged against: on the rows A was counted on (flagged rows out)
+        close(m.group(7), 1000 * row["world_floor_kept_m"], 0)
         if m.group(8) is not None:  # F0 beside F where the effect's scatter raises it
-            close(m.group(8), 1000 * row["world_floor0_m"], 0)
+            close(m.group(8), 1000 * row["world_floor0_kept_m"], 0)
+        if m.group(9) is not None:  # F on every row where the flagged rows move it
+            close(m.group(9), 1000 * row["world_floor_m"], 0)
     passes, total, diag, phase, params, ratio, floor = quoted(
         page,
         r"\n(\d+)/(\d+) pass; diagonal (\d+), phase (\d+), parameters (\d+), A ≤ ([\d.]+) F (\d+)\n",

@@ -42,7 +42,7 @@ def check_the_launch_jitter_and_floor(rows: dict[str, dict[str, Any]]) -> None:
     close(lo, min(free), 0)
     close(hi, max(free), 0)
     (zero,) = quoted(PAGE, r"F² = F0² \+ max\((\d), V_effect − V_none\)")
-    assert int(zero) == 0 and "max(0.0, extra)" in inspect.getsource(ws.draw_scene_campaign)
+    assert int(zero) == 0 and "max(0.0, extra)" in inspect.getsource(ws.FloorRows.floors)
     for r in rows.values():  # the formula, as the rows carry it
         eff, none = r["world_repeat_sd_m"]
         f0 = r["world_floor0_m"]
@@ -189,12 +189,17 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     dh_drag = [e for e in _case("s:drag+hop") if e["kind"] == "drag_scale"]
     assert [float(world)] == [e["value"] for e in dh_drag]
     bs = rows["s:bounce-slide"]
-    a, tool, af, f = quoted(PAGE, r"\(`s:bounce-slide`: A (\d+) mm\s+against the tool's floor of "
-                            r"(\d+) mm, and A / F ([\d.]+) with F (\d+) mm\)")  # fmt: skip
+    a, tool, af, f, kept, every = quoted(
+        PAGE, r"\(`s:bounce-slide`: A (\d+) mm\s+against the tool's floor of (\d+) mm, and A / F "
+        r"([\d.]+) with F (\d+) mm on the (\d+) throws kept;\s+the two it flags are the world's "
+        r"own longest slides, and with them F is (\d+) mm\)")  # fmt: skip
     _mm(a, bs["after_robust_m"])
     _mm(tool, bs["tool_floor_m"])
     close(af, bs["after_over_floor"], 2)
-    _mm(f, bs["world_floor_m"])
+    assert bs["judged"] == "after_robust_m / world_floor_kept_m"
+    _mm(f, bs["world_floor_kept_m"])
+    assert int(kept) == bs["throws"] - len(bs["outlier_rows"]) and len(bs["outlier_rows"]) == 2
+    _mm(every, bs["world_floor_m"])
     (short,) = quoted(PAGE, r"called\s+`stroke_offset` \(a stroke read (−[\d.]+) mm short\)")
     _mm(
         short.replace("−", "-"), rows["s:launch-speed-stroke"]["params"]["stroke_offset"]["delta_m"]

@@ -118,3 +118,17 @@ def test_a_floor_raised_by_the_effects_own_scatter_shows_its_effect_free_part() 
     assert scene_row(row).endswith("| 1.10 (F 84 mm, F0 36) | yes |")
     row.update(world_floor_m=0.0425, world_floor0_m=0.0421)
     assert scene_row(row).endswith("| 1.10 (F 42 mm) | yes |")
+
+
+def test_a_floor_on_the_kept_rows_is_shown_with_the_floor_on_every_row() -> None:
+    """The ratio is judged on the floor counted on the rows A was counted on; where the
+    flagged rows move the floor by a millimetre or more, the floor with them is beside it."""
+    row = {
+        "case": "s:bounce-slide", "truth": "bounce", "verdict": "unknown",
+        "phases": {}, "params": {}, "laws": {}, "world_truth": {},
+        "after_over_floor": 1.55, "world_floor_m": 0.0837, "world_floor0_m": 0.0363,
+        "world_floor_kept_m": 0.0501, "world_floor0_kept_m": 0.0360, "passes": False,
+    }  # fmt: skip
+    assert scene_row(row).endswith("| 1.55 (F 50 mm, F0 36; 84 with the flagged rows) | no |")
+    row.update(world_floor_kept_m=0.0835, world_floor0_kept_m=0.0362)
+    assert scene_row(row).endswith("| 1.55 (F 84 mm, F0 36) | no |")

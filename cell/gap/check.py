@@ -111,6 +111,8 @@ class CheckRow:
     params: dict[str, Any]
     case: str = ""
     where: str = ""
+    after_robust_m: float = float("nan")
+    outliers_flagged: int = 0
 
     @property
     def correct(self) -> bool:
@@ -166,6 +168,8 @@ def check_case(case: dict[str, Any]) -> dict[str, Any]:
         "noise_floor_m": rep["noise_floor_m"],
         "baseline_m": B,
         "after_m": rep["verdict"]["heldout_rmse_m"],
+        "after_robust_m": rep["verdict"].get("heldout_rmse_robust_m", float("nan")),
+        "outliers_flagged": len(rep.get("outliers", {}).get("rows", [])),
         "shrink_found_pct": rep["verdict"]["shrink_pct"],
         "shrink_allowed_pct": 100.0 * (1.0 - scatter / B) if truth != "none" else 0.0,
         "scatter_m": scatter,

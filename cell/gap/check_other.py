@@ -6,14 +6,17 @@ law in the diagnosis' terms). A case passes when the verdict names the effects r
 (diagonal), every effect's phase is right, every expected parameter is within 30 % of
 the world's (a tracking scale within 0.5 %; a constant the tool gave per object: every
 object's value), and the verdict's robust held-out RMSE is
-within 1.3 × the world's own floor (its landings without scatter and without throw-to-
-throw variation; outliers left out).
+within 1.3 × the world's own floor (the logged landings' RMS distance from the world
+without scatter and without throw-to-throw variation) counted on the rows that RMSE was
+counted on: the rows the tool flags left out, and the injected outliers (mis-logged, no
+part of the world's noise) never counted.
 """
 
 from __future__ import annotations
 
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -25,8 +28,8 @@ from cell.log.csvio import read_throws_csv, write_throws_csv
 from cell.log.table import ThrowTable
 from cell.model.params import DEFAULT_EE
 
-__all__ = ["OTHER_CASES", "FAST_OTHER", "check_other_case", "judge_campaign", "other_cases", "run_other_check",
-           "other_json", "format_other"]  # fmt: skip
+__all__ = ["OTHER_CASES", "FAST_OTHER", "check_other_case", "judge_campaign", "kept_rows",
+           "other_cases", "run_other_check", "other_json", "format_other"]  # fmt: skip
 
 PARAM_TOL = 0.30
 SCALE_TOL = 0.005
@@ -336,10 +339,19 @@ def check_other_case(case: dict[str, Any]) -> dict[str, Any]:
     (`judge_campaign`)."""
     rng = np.random.default_rng(case["world_seed"])
     camp = draw_other_campaign(case["effects"], rng, n=case["n"], **case["options"])
-    return judge_campaign(case, camp.records, camp.floor_m, camp.outliers)
+    return judge_campaign(case, camp.records, camp.floor_on, camp.outliers)
 
 
-def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m: float,
+def kept_rows(n: int, flagged: list[int]) -> np.ndarray:
+    """The mask over a log's n records of the rows the robust held-out RMSE is counted on:
+    every row but those flagged (`flagged`: rows, 1 = the first data row)."""
+    keep = np.ones(n, bool)
+    keep[np.asarray(flagged, int) - 1] = False
+    return keep
+
+
+def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]],
+                   floor_on: Callable[[np.ndarray | None], float],
                    outliers: tuple[int, ...], *, ee: Any = DEFAULT_EE,
                    objects: dict[str, Any] | None = None,
                    validation: Any = None,
@@ -348,10 +360,17 @@ def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m:
     model as configured (`ee`, `objects`, the parameter file's `validation`) and judge the
     verdict.
 
+    `floor_on(keep)` is the world's floor [m] counted on the records `keep` (a mask; every
+    record when None), an injected outlier never counted. The robust held-out RMSE (the
+    flagged rows left out) is judged against the floor on the rows it was counted on
+    (`world_floor_kept_m`: a flagged row out, and with it its repeat's share of the
+    repeats' scatter); the plain one (every row) against the floor on every row
+    (`world_floor_m`), which judges only where the report has no robust RMSE (`judged`).
+
     Returns:
         The row as a plain dict: the verdict, its phases, parameters and their errors, the
-        world's floor and the tool's, the robust held-out RMSE, the outliers flagged
-        against the true ones, and whether it passes.
+        world's floors and the tool's, the held-out RMSEs plain and robust, the outliers
+        flagged against the true ones, and whether it passes.
     """
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "throws.csv"
@@ -369,21 +388,31 @@ def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]], floor_m:
     phases = v.get("phases", {})
     phase_ok = all(phases.get(e) == p for e, p in case["phases"].items())
     params_ok, errs = _params_ok(case["expect"], v.get("params", {}), v.get("law_mean"))
-    after = v.get("heldout_rmse_robust_m", v["heldout_rmse_m"])
+    rows = sorted(rep.get("outliers", {}).get("rows", []))
+    floor_m = floor_on(None)
+    floor_kept = floor_on(kept_rows(len(records), rows))
+    robust = "heldout_rmse_robust_m" in v
+    after = v["heldout_rmse_robust_m"] if robust else v["heldout_rmse_m"]
+    judge_floor = floor_kept if robust else floor_m
     diag = verdict == case["truth"]
-    floor_ok = case["truth"] in ("none", "unknown") or after <= FLOOR_RATIO * floor_m
-    flagged = set(rep.get("outliers", {}).get("rows", []))
+    floor_ok = case["truth"] in ("none", "unknown") or after <= FLOOR_RATIO * judge_floor
+    flagged = set(rows)
     true_out = {i + 1 for i in outliers}  # rows: 1 = first data row
     return {
         "case": case["name"], "truth": case["truth"], "verdict": verdict,
         "diagonal": bool(diag), "phases": phases, "phase_ok": bool(phase_ok),
         "laws": v.get("laws", {}), "params": v.get("params", {}), "param_errors": errs,
         "params_ok": bool(params_ok), "world_floor_m": floor_m,
+        "world_floor_kept_m": floor_kept,
         "tool_floor_m": rep["noise_floor_m"], "baseline_m": rep["baseline"]["heldout_rmse_m"],
         "after_m": v["heldout_rmse_m"], "after_robust_m": after,
-        "after_over_floor": after / floor_m, "floor_ok": bool(floor_ok),
+        "after_over_floor": after / judge_floor,
+        "plain_over_floor": v["heldout_rmse_m"] / floor_m,
+        "judged": ("after_robust_m / world_floor_kept_m" if robust
+                   else "after_m / world_floor_m"),
+        "floor_ok": bool(floor_ok),
         "outliers_true": len(true_out), "outliers_found": len(flagged & true_out),
-        "outliers_false": len(flagged - true_out),
+        "outliers_false": len(flagged - true_out), "outlier_rows": rows,
         "proposal": rep.get("proposal", {}).get("law"),
         "wind_throw_to_throw": rep.get("wind_throw_to_throw"),
         "passes": bool(diag and phase_ok and params_ok and floor_ok), "seconds": secs,

@@ -9,7 +9,9 @@ identified objects and its validation on held-out throws included). A bounce's p
 tool chose. Judged as `cell.gap.check_other` judges (`judge_campaign`): diagonal, phase,
 parameters within 30 % (a scale within 0.5 %), robust held-out RMSE within 1.3 × the
 world's own floor (the same throws without the effect, against the configured model,
-with the scatter the effect itself adds between repeats: `cell.gap.world_scene`).
+with the scatter the effect itself adds between repeats: `cell.gap.world_scene`) counted
+on the rows that RMSE was counted on (a flagged row and its repeat's share of the repeats'
+scatter out; an injected outlier never counted).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.check_other import judge_campaign
+from cell.gap.check_other import judge_campaign, kept_rows
 from cell.gap.world_scene import draw_scene_campaign, matched_objects
 
 __all__ = ["SCENE_CASES", "FAST_SCENE", "scene_cases", "check_scene_case", "run_scene_check"]
@@ -254,11 +256,13 @@ def check_scene_case(case: dict[str, Any]) -> dict[str, Any]:
         objects = matched_objects(mp)
     camp = draw_scene_campaign(case["effects"], rng, mp, n=case["n"], objects=objects, **opts)
     judged = {**case, "expect": _measured(case["expect"], camp.truth)}
-    row = judge_campaign(judged, camp.records, camp.floor_m, camp.outliers, ee=mp.ee,
-                         objects=mp.objects, validation=mp.validation,
-                         tracks=camp.tracks)  # fmt: skip
+    row = judge_campaign(judged, camp.records, lambda keep: camp.floors(keep)[0],
+                         camp.outliers, ee=mp.ee, objects=mp.objects,
+                         validation=mp.validation, tracks=camp.tracks)  # fmt: skip
+    kept0 = camp.floors(kept_rows(len(camp.records), row["outlier_rows"]))[1]
     return {**row, "world_truth": camp.truth, "tracker_noise_m": camp.noise_m,
-            "world_floor0_m": camp.floor0_m, "world_repeat_sd_m": list(camp.repeat_sd_m),
+            "world_floor0_m": camp.floor0_m, "world_floor0_kept_m": kept0,
+            "world_repeat_sd_m": list(camp.repeat_sd_m),
             "world_effect_m": camp.effect_m,
             "throws": len(camp.records), "objects": list(objects or ["thesis14"])}  # fmt: skip
 

@@ -4,9 +4,10 @@
 Parameters found are printed to 3 significant figures (a per-object law's value for each
 object by the object's name); a world's parameter in brackets
 (the case's setting, or a bounce's as measured in the world, `world_truth`); A / world
-floor to 2 decimals and the floor F in mm (with F0, the effect-free throws' part,
-where the effect's own repeat scatter raises F by 1 mm or more); a proposal by its number of terms and its first
-two terms."""
+floor to 2 decimals and the floor F in mm, both on the rows A was counted on (the rows the
+tool flags left out; with F0, the effect-free throws' part, where the effect's own repeat
+scatter raises F by 1 mm or more, and F on every row where the flagged rows move it by
+1 mm or more); a proposal by its number of terms and its first two terms."""
 
 from __future__ import annotations
 
@@ -65,10 +66,15 @@ def _params(row: dict[str, Any]) -> str:
 
 
 def _floor(row: dict[str, Any]) -> str:
-    """F in mm, and F0 (the effect-free throws' alone) where the effect's own repeat
-    scatter raises it by a millimetre or more."""
-    f, f0 = 1000 * row["world_floor_m"], 1000 * row.get("world_floor0_m", float("nan"))
-    return f"F {f:.0f} mm" + (f", F0 {f0:.0f}" if f - f0 >= 1.0 else "")
+    """F in mm on the rows A was counted on (the flagged rows left out), and F0 (the
+    effect-free throws' alone) where the effect's own repeat scatter raises it by a
+    millimetre or more; F on every row beside it where the flagged rows move it by as
+    much."""
+    every = 1000 * row["world_floor_m"]
+    f = 1000 * row.get("world_floor_kept_m", row["world_floor_m"])
+    f0 = 1000 * row.get("world_floor0_kept_m", row.get("world_floor0_m", float("nan")))
+    text = f"F {f:.0f} mm" + (f", F0 {f0:.0f}" if f - f0 >= 1.0 else "")
+    return text + (f"; {every:.0f} with the flagged rows" if abs(every - f) >= 1.0 else "")
 
 
 def scene_row(row: dict[str, Any]) -> str:

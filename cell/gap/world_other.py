@@ -343,15 +343,34 @@ class OtherCampaign:
     Attributes:
         records: one dict per logged throw (docs/throw_log.md columns).
         floor_m: RMS distance [m] of the logged inlier landings from the deterministic
-            world (the same world with no scatter and no throw-to-throw variation).
+            world (the same world with no scatter and no throw-to-throw variation): every
+            row but the injected outliers (`floor_on`).
         outliers: row numbers (0-based, in records) of the moved landings.
         scatter_m: the injected 2-D landing scatter [m] (RMS).
+        reference_xy: per record, the deterministic world's landing [m] (world frame),
+            shape (len(records), 2): what the floor measures each logged landing from.
     """
 
     records: list[dict[str, Any]]
     floor_m: float
     outliers: tuple[int, ...]
     scatter_m: float
+    reference_xy: np.ndarray | None = None
+
+    def floor_on(self, keep: np.ndarray | None = None) -> float:
+        """The world's floor [m] counted on the logged rows `keep` (a mask over
+        `records`; every row when None): the RMS distance of their logged landings from
+        the deterministic world. An injected outlier (mis-logged, no part of the world's
+        noise) is never counted; NaN where no row is left."""
+        if self.reference_xy is None:
+            raise ValueError("floor_on: the campaign carries no reference landings")
+        landed = np.array([[r["landed_x_m"], r["landed_y_m"]] for r in self.records], float)
+        use = np.ones(len(self.records), bool) if keep is None else np.asarray(keep, bool).copy()
+        use[list(self.outliers)] = False
+        if not use.any():
+            return float("nan")
+        d = landed[use] - self.reference_xy[use]
+        return float(np.sqrt(np.mean(np.sum(d * d, axis=1))))
 
 
 def throw_record(th: Throws, i: int, landed_xy: np.ndarray, t_flight_s: float) -> dict[str, Any]:
@@ -402,4 +421,5 @@ def draw_other_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         floor_m=float(np.sqrt(np.mean(np.sum(d * d, axis=1)))),
         outliers=tuple(rows_out),
         scatter_m=float(np.sqrt(np.mean(np.sum(noise[ok] ** 2, axis=1)))),
+        reference_xy=ref[ok],
     )

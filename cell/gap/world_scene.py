@@ -241,6 +241,8 @@ class SceneCampaign:
             the same throws without them, over the inlier rows (no tracker scatter).
         tracks: the tracker's samples of each logged flight {throw_id: (k, 4) t, x, y, z}
             (`_tracks`), or None where the campaign logs landings only.
+        rows: what the floor is counted from, per record (`FloorRows`), for the floor on
+            a subset of the rows (`floors`).
     """
 
     records: list[dict[str, Any]]
@@ -252,6 +254,42 @@ class SceneCampaign:
     repeat_sd_m: tuple[float, float] = (float("nan"), float("nan"))
     effect_m: float = float("nan")
     tracks: dict[str, np.ndarray] | None = None
+    rows: FloorRows | None = None
+
+    def floors(self, keep: np.ndarray | None = None) -> tuple[float, float]:
+        """(F, F0) [m] counted on the logged rows `keep` (a mask over `records`; every row
+        when None), as `floor_m` and `floor0_m` are on every row: F0 over those rows, the
+        repeats' variances over the configurations with two or more of them left (a
+        row left out takes its repeat out of V). An injected outlier is never counted."""
+        if self.rows is None:
+            raise ValueError("floors: the campaign carries no rows of its floor")
+        use = ~np.isin(np.arange(len(self.records)), self.outliers)
+        if keep is not None:
+            use &= np.asarray(keep, bool)
+        return self.rows.floors(use)
+
+
+@dataclass(frozen=True)
+class FloorRows:
+    """A scene world's floor, per logged record: `miss_sq` [m²] the squared 2-D miss of
+    the same throw made without the effect (logged with the same scatter) from the model
+    as configured; `configs` its configuration (repeats share one); `with_xy`, `without_xy`
+    [m] the true logged points with the effect (scaled by a tracker's scale) and without."""
+
+    miss_sq: np.ndarray
+    configs: tuple[Throw, ...]
+    with_xy: np.ndarray
+    without_xy: np.ndarray
+
+    def floors(self, use: np.ndarray) -> tuple[float, float]:
+        """(F, F0) [m] over the rows `use`: F² = F0² + max(0, V_effect − V_none)."""
+        if not use.any():
+            return float("nan"), float("nan")
+        f0 = float(np.sqrt(np.mean(self.miss_sq[use])))
+        cfg = list(self.configs)
+        v_eff, v_none = repeat_var(cfg, self.with_xy, use), repeat_var(cfg, self.without_xy, use)
+        extra = v_eff - v_none if np.isfinite(v_eff) and np.isfinite(v_none) else 0.0
+        return float(np.sqrt(f0**2 + max(0.0, extra))), f0
 
 
 TRACK_RATE_HZ = 100.0  # [Hz] the tracker's samples of a flight (as `cell.gap.world_tracks`)
@@ -406,15 +444,16 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
     recs = _records(plan, obs, tl + lat, ok)
     free = _records(plan, xy0 + noise, tl0, ok)
     inl = ~out[ok]
-    d = (xy0[ok] + noise[ok] - _model_xy(free, params))[inl]
-    f0 = float(np.sqrt(np.mean(np.sum(d * d, axis=1))))
+    d = xy0[ok] + noise[ok] - _model_xy(free, params)
+    rows = FloorRows(miss_sq=np.sum(d * d, axis=1), configs=tuple(plan[i] for i in np.flatnonzero(ok)),
+                     with_xy=(scale * xy)[ok], without_xy=xy0[ok])  # fmt: skip
+    floor, f0 = rows.floors(inl)
     use = ok & ~out
     v_eff, v_none = repeat_var(plan, scale * xy, use), repeat_var(plan, xy0, use)
-    extra = v_eff - v_none if np.isfinite(v_eff) and np.isfinite(v_none) else 0.0
     moved = (scale * xy - xy0)[use]
     return SceneCampaign(
         records=recs,
-        floor_m=float(np.sqrt(f0**2 + max(0.0, extra))),
+        floor_m=floor,
         noise_m=float(np.sqrt(np.mean(np.sum(noise[ok] ** 2, axis=1)))),
         outliers=tuple(int(k) for k in np.flatnonzero(out[ok])),
         truth=truth,
@@ -426,6 +465,7 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
             if paths is not None and track_noise_m is not None
             else None
         ),
+        rows=rows,
     )
 
 
