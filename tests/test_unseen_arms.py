@@ -195,3 +195,25 @@ def test_an_elevation_just_past_vertical_is_told_apart_from_the_bound(capsys) ->
     assert "1.6: outside the valid range -1.5708 … 1.5708 rad" in capsys.readouterr().err
     arms_md = (Path(__file__).resolve().parents[1] / "docs" / "arms.md").read_text()
     assert "--elevation -1.5708 " not in arms_md
+
+
+def test_cell_job_random_takes_a_mount_files_path(tmp_path: Path, capsys) -> None:
+    """docs/arms.md: `cell job random --robot` takes an arm; a mount file's path was
+    refused as "not an arm under robots/ ... or give cell.mount", a field of a job the
+    command writes itself."""
+    from cell.cli import main
+
+    mount = _mount(tmp_path, BAXTER, "baxter")
+    out = tmp_path / "out" / "random3.yaml"
+    out.parent.mkdir()
+    assert main(["job", "random", "--seed", "3", "--robot", str(mount), "-o", str(out)]) == 0
+    job = load_job(out)  # written in another folder: the mount named by its absolute path
+    assert f"mount: {mount.resolve()}" in out.read_text()
+    assert job.robot == str(mount.resolve())
+    # an arm that does not reach the random layouts' one station: said so
+    z1 = _mount(tmp_path, Z1, "z1")
+    capsys.readouterr()
+    assert main(["job", "random", "--seed", "3", "--robot", str(z1)]) == 2
+    err = capsys.readouterr().err
+    assert "the z1 arm does not reach the pick station" in err
+    assert "every random layout has its pick station at (0.45, -0.4) m" in err
