@@ -217,3 +217,57 @@ def test_cell_job_random_takes_a_mount_files_path(tmp_path: Path, capsys) -> Non
     err = capsys.readouterr().err
     assert "the z1 arm does not reach the pick station" in err
     assert "every random layout has its pick station at (0.45, -0.4) m" in err
+
+
+SO100 = """\
+arm: so100
+arm_joints: [shoulder_pan, shoulder_lift, elbow_flex, wrist_flex, wrist_roll]
+arm_urdf: so_arm_description/urdf/so100.urdf
+flange: gripper
+end_effector: throwing_ee/throwing_ee.urdf
+mount_xyz: [0.0, 0.0, 0.0]
+mount_rpy: [1.5707963267948966, 0.0, 0.0]
+acceleration_limits: [5.0, 5.0, 5.0, 5.0, 5.0]
+jerk_limits: [500.0, 500.0, 500.0, 500.0, 500.0]
+home: [1.863, 1.492, -1.376, 1.113, 0.0]
+"""
+
+SO100_JOB = """\
+cell: {mount: so100/mount.yaml, ee: pybullet}
+pick_station: {position_m: [0.17, -0.05, 0.0]}
+bins:
+  - {id: chute_1, position_m: [0.70, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
+items:
+  - {object: cube30, bin: chute_1}
+policy: throw
+seed: 0
+"""
+
+
+def test_a_five_joint_arm_loads_and_its_missed_throw_names_the_release_box(
+    tmp_path: Path,
+) -> None:
+    """The SO-ARM100: five joints suffice for a pose of position and axis, roll free
+    (accepted, its grip pointing down solved); no release of the cell's box is within its
+    reach, and the failure says so rather than naming one pose as if it were the release."""
+    from cell.orchestrator import Orchestrator
+    from cell.robot import ik
+
+    mount = _mount(tmp_path, SO100, "so100")
+    rb = load_robot(str(mount))
+    assert rb.dof == 5
+    down = np.array([0.15, 0.0, 0.05])
+    q = ik.solve_ik(rb, ik.ReleasePose(down, np.array([0.0, 0.0, -1.0]))).q
+    p, r = rb.tcp_pose(q)  # the forward kinematics: the pose is reached
+    assert np.linalg.norm(p - down) < 1e-3 and r[2, 2] < -0.999
+    job = tmp_path / "job.yaml"
+    job.write_text(SO100_JOB)
+    orch = Orchestrator(load_job(job))
+    try:
+        (res,) = orch.run().results
+    finally:
+        orch.close()
+    assert res.failure == "ik"
+    assert "no release with the grip in the cell's release box, x 0.2 to 0.6, y -0.4 to 0.4" in (
+        res.reason
+    )
