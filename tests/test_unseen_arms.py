@@ -15,6 +15,7 @@ kinematics against Pinocchio's.
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -271,3 +272,78 @@ def test_a_five_joint_arm_loads_and_its_missed_throw_names_the_release_box(
     assert "no release with the grip in the cell's release box, x 0.2 to 0.6, y -0.4 to 0.4" in (
         res.reason
     )
+
+
+TIAGO_HELD = """\
+arm: tiago_held
+arm_joints: [arm_1_joint, arm_2_joint, arm_3_joint, arm_4_joint, arm_5_joint, arm_6_joint,
+             arm_7_joint]
+arm_urdf: tiago_description/robots/tiago.urdf
+flange: arm_tool_link
+end_effector: throwing_ee/throwing_ee.urdf
+mount_xyz: [0.0, 0.0, 0.0]
+mount_rpy: [0.0, 1.5707963267948966, 0.0]
+acceleration_limits: [3.0, 3.0, 5.0, 5.0, 5.0, 5.0, 5.0]
+jerk_limits: [300.0, 300.0, 500.0, 500.0, 500.0, 500.0, 500.0]
+home: [1.0460, 0.1875, -0.0866, 1.6026, -2.0717, 0.1778, 0.0]
+held_joints: {torso_lift_joint: 0.1}
+"""
+
+
+def test_a_torso_lift_held_still_is_where_the_urdf_puts_it(tmp_path: Path) -> None:
+    """TIAGo's arm with `held_joints: {torso_lift_joint: 0.1}`: the planner's flange is
+    where Pinocchio's model of the whole URDF puts it with the lift at 0.1 m (every other
+    joint at zero), and the scene's grip where the planner's is."""
+    import pinocchio as pin
+
+    from cell.sim import EE_TO_TCP_M, CellScene
+
+    mount = str(_mount(tmp_path, TIAGO_HELD, "tiago"))
+    rb = load_robot(mount)
+    assert rb.dof == 7
+    full = pin.buildModelFromUrdf(
+        str(example_robot_data_dir() / "tiago_description/robots/tiago.urdf")
+    )
+    data = full.createData()
+    fid = rb.model.getFrameId("arm_tool_link")
+    for q in rb.random_configuration(np.random.default_rng(3), 5):
+        x = pin.neutral(full)
+        x[full.joints[full.getJointId("torso_lift_joint")].idx_q] = 0.1
+        for k, name in enumerate(rb.spec.arm_joints):
+            x[full.joints[full.getJointId(name)].idx_q] = q[k]
+        pin.framesForwardKinematics(full, data, x)
+        pin.framesForwardKinematics(rb.model, rb.data, q)
+        np.testing.assert_allclose(
+            rb.data.oMf[fid].homogeneous,
+            data.oMf[full.getFrameId("arm_tool_link")].homogeneous,
+            atol=1e-9,
+        )
+    with CellScene(mount) as sc:
+        for q in rb.random_configuration(np.random.default_rng(7), 5):
+            sc.set_arm(q, teleport=True)
+            p, r = sc.ee_pose()
+            assert np.linalg.norm(p + r[:, 2] * EE_TO_TCP_M - rb.tcp_pose(q)[0]) < 1e-4
+
+
+@pytest.mark.parametrize(
+    ("held", "says"),
+    [
+        ("{arm_1_joint: 0.1}", "field 'held_joints': ['arm_1_joint'] are arm joints too"),
+        ("{torso_lift: 0.1}", "field 'held_joints': ['torso_lift'] are not movable joints"),
+        ("{torso_lift_joint: 0.5}", "field 'held_joints': 0.5 for torso_lift_joint is outside"),
+        ("[torso_lift_joint]", "field 'held_joints' must map joint names to positions"),
+        ("{torso_lift_joint: .nan}", "field 'held_joints' must map joint names to positions"),
+    ],
+)
+def test_a_wrong_held_joint_is_refused_by_name(tmp_path: Path, held: str, says: str) -> None:
+    text = TIAGO_HELD.replace("{torso_lift_joint: 0.1}", held)
+    mount = _mount(tmp_path, text, "tiago")
+    with pytest.raises(InvalidParameter, match=re.escape(says)):
+        composite_urdf_text(str(mount))
+
+
+def test_without_held_joints_the_torso_lift_is_named(tmp_path: Path) -> None:
+    text = TIAGO_HELD.replace("held_joints: {torso_lift_joint: 0.1}\n", "")
+    mount = _mount(tmp_path, text, "tiago")
+    with pytest.raises(InvalidParameter, match=r"are \['torso_lift_joint', 'arm_1_joint'"):
+        composite_urdf_text(str(mount))
