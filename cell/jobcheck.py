@@ -11,7 +11,11 @@ calls these; every problem goes into the one report the job is refused with).
 * A bin placed into out of the arm's reach: every bin under `policy: place` (an error),
   those within `limits.place_reach_m` under `auto` (a warning: its items fail), IK of the
   grip pointing down over the bin's point nearest the base (3 cm in from its walls),
-  the tallest item bound there held over the rim.
+  the tallest item bound there at the two heights the place takes it through
+  (`cell.arm.place`): over the spot, its lowest point `ArmTuning.lift_m` or 5 cm over the
+  rim (the higher) above the floor plate and the place clearance, and down on the floor
+  plate. An arm whose grip points down only low (the Unitree Z1) or only high (the PR2)
+  failed every place with the check passed while it tested one pose 5 cm over the rim.
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ __all__ = [
 STATION_HALF_M = 0.12  # [m] half the pick station's square top (cell.sim.scene_build)
 STROKE_RANGE_M = (0.03, 0.11)  # [m] the strokes an item is gripped at (MODEL.md)
 BIN_INSET_M = 0.03  # [m] the place pose checked this far in from the bin's near walls
-OVER_RIM_M = 0.05  # [m] the item's lowest point over the rim, as the place goes over it
+OVER_RIM_M = 0.05  # [m] the item's lowest point over the rim, at least, over the spot
 
 
 def station_problems(
@@ -150,6 +154,15 @@ def _out(reach: float, here_m: float) -> str:
     return f"the arm's grip pointing down reaches about {reach:.2f} m out at that height"
 
 
+def _move(reach: float, here_m: float) -> str:
+    """Where to move a bin whose place pose the arm misses (`_out`'s cases), in words;
+    none where the grip does not point down at that height at all (the Z1 over a bin: the
+    carry lifts the item `ArmTuning.lift_m` over the floor plate at least)."""
+    if reach <= 0.0:  # not at that height anywhere out: no other spot helps
+        return ""
+    return f"move the bin {'farther out' if _inner(reach, here_m) else 'closer'}, or "
+
+
 def _fmt(v: Any) -> str:
     return "(" + ", ".join(f"{x:.2f}" for x in v) + ")"
 
@@ -220,9 +233,12 @@ def place_problems(
         b = bins[i]
         tall = max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
         xy = _nearest_point(b)
-        centre_z = b.rim_height + OVER_RIM_M + tall / 2
-        tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall)])
-        miss = _reaches(robot, tcp)
+        miss, tcp = 0.0, np.zeros(3)
+        for centre_z in _place_centres_z(b.rim_height, tall):
+            tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall)])
+            miss = _reaches(robot, tcp)
+            if miss != 0.0:
+                break
         if miss == 0.0:
             continue
         reach = _reach_m(robot, xy, float(tcp[2]))
@@ -232,10 +248,22 @@ def place_problems(
             f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
             f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
             f"{_out(reach, r_bin)}): "
-            f"move the bin {'farther out' if _inner(reach, r_bin) else 'closer'}, or have its items thrown (policy: auto with limits.place_reach_m below "
+            f"{_move(reach, r_bin)}have its items thrown (policy: auto with limits.place_reach_m below "
             f"{math.hypot(*b.position):.2f} m)"
         )
     return out
+
+
+def _place_centres_z(rim_m: float, tall_m: float) -> tuple[float, float]:
+    """The heights [m, W] of an item's centre (`tall_m` high) a place into a bin with its
+    rim at `rim_m` takes it through (`cell.arm.place`): over the spot, then down on the
+    floor plate, each with the place clearance under it."""
+    from cell.arm.tuning import ArmTuning
+    from cell.jobschema import BIN_WALL_M
+
+    t = ArmTuning()
+    down = BIN_WALL_M + tall_m / 2 + t.place_clearance_m
+    return (down + max(t.lift_m, rim_m + OVER_RIM_M), down)
 
 
 def _nearest_point(b: Any) -> tuple[float, float]:

@@ -46,6 +46,15 @@ def facing_half_range_rad(robot: str) -> float:
     return load_mount(robot).facing_half_range_rad
 
 
+def _arm_field(robot: str) -> dict[str, str]:
+    """The job's `cell` field naming the arm: `robot: <name>`, or for a mount file's path
+    `mount: <its absolute path>` (a job's relative mount path is read from the job's own
+    folder, wherever the job is written)."""
+    from cell.robot.mount import is_mount_path, resolve_mount
+
+    return {"mount": str(resolve_mount(robot))} if is_mount_path(robot) else {"robot": robot}
+
+
 PICK_STATION_XY_M = (0.45, -0.40)  # [m, W] the default pick station (cell.jobs)
 PICK_STATION_CLEAR_M = 0.35  # [m] no bin footprint within this of the station's centre
 BIN_GAP_M = 0.10  # [m] clearance between bin footprints
@@ -190,7 +199,8 @@ def random_job(
 
     Args:
         seed: names the job (0 ≤ seed < 2³²).
-        robot: an arm's name under robots/ (`cell.robot.mount.robot_names`).
+        robot: an arm's name under robots/ (`cell.robot.mount.robot_names`) or a mount
+            file's path (the job names it by its absolute path, `cell.mount`).
         params: the model parameters the feasibility check uses.
         refused: appended to with the kinds drawn again.
     """
@@ -240,7 +250,7 @@ def random_job(
             f"{len(dropped)} kinds drawn that no bin could take (the pads cannot hold them, "
             "or no bin is within their reach) were drawn again"
         ),
-        "cell": {"robot": robot, "ee": "pybullet"},
+        "cell": {**_arm_field(robot), "ee": "pybullet"},
         "bins": bins,
         "items": items,
         "policy": "auto",

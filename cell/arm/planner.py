@@ -126,7 +126,7 @@ class Planner(ArmBase):
                 # where it should cross the rim plane
                 return dc_replace(best, goal=np.asarray(goal, float))
         assert err is not None
-        raise err
+        raise _no_release(err, self.bounds) if isinstance(err, IKFailed) else err
 
     @staticmethod
     def _to_beat(best: ThrowChoice | None) -> float | None:
@@ -435,3 +435,22 @@ class Planner(ArmBase):
                 math.degrees(e_min),
             )
         return plan, bounds, steepened
+
+
+def _no_release(err: IKFailed, bounds: Any) -> IKFailed:
+    """`err` (the first release IK missed), saying that none in the release box of
+    `bounds` and its fallbacks was reached: on an arm that reaches none (the
+    SO-ARM100's), the pose named alone read as if that one were the cell's release. A new
+    exception of the same kind (a failure kept for reuse, `cell.arm.kinematics`, is not
+    changed)."""
+    from cell.robot.ik_pose import IKNoSolution
+
+    lo, hi = bounds.position_min, bounds.position_max
+    box = ", ".join(f"{a} {lo[k]:g} to {hi[k]:g}" for k, a in enumerate("xyz"))
+    msg = (
+        f"{err} (the first release tried; no release with the grip in the cell's release "
+        f"box, {box} m, nor in its lower and smaller fallbacks, was reached by the arm)"
+    )
+    if isinstance(err, IKNoSolution):
+        return IKNoSolution(msg, err.position_error_m, err.axis_error_rad, err.q_best)
+    return IKFailed(msg)

@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.add_argument(
         "--robot",
         default="panda",
-        help="the arm: a name under robots/ (docs/arms.md) (panda)",
+        help="the arm: a name under robots/ or a mount file's path (docs/arms.md) (panda)",
     )
     r.add_argument("-o", "--output", metavar="JOB.yaml", help="write here (default: stdout)")
     r.set_defaults(func=run_random)
@@ -47,11 +47,23 @@ def job_yaml(doc: dict) -> str:  # type: ignore[type-arg]
 
 
 def run_random(args: argparse.Namespace) -> int:
-    from cell.jobgen import random_job
+    from cell.errors import JobError
+    from cell.jobgen import PICK_STATION_XY_M, random_job
     from cell.jobs import parse_job
 
     text = job_yaml(random_job(args.seed, args.robot))
-    parse_job(text, f"<cell job random --seed {args.seed}>")  # what we write always loads
+    try:
+        parse_job(text, f"<cell job random --seed {args.seed}>")  # what we write always loads
+    except JobError as exc:
+        if "pick_station" not in str(exc):
+            raise
+        # a random layout's station is the default one: no layout drawn for this arm loads
+        x, y = PICK_STATION_XY_M
+        raise JobError(
+            f"{exc}\ncell job random: every random layout has its pick station at ({x}, {y}) m "
+            f"(cell.jobgen.PICK_STATION_XY_M), which arm {args.robot} does not reach: write "
+            "its job by hand (docs/jobs.md) with the station within its reach"
+        ) from None
     if args.output:
         out = Path(args.output)
         tmp = out.with_name(out.name + ".tmp")

@@ -149,8 +149,11 @@ def _numbers(args: argparse.Namespace, names: dict[str, str]) -> None:
                     deg = (
                         f" ({math.degrees(lo):g}° … {math.degrees(hi):g}°)" if unit == "rad" else ""
                     )
+                    # as many digits as show the value outside: -1.5708 is below -π/2,
+                    # which 6 digits print as -1.5708 too
                     raise InvalidInput(
-                        f"{flag} {v:g}: outside the valid range {lo:g} … {hi:g} {unit}{deg}".rstrip()
+                        f"{flag} {v:g}: outside the valid range {_bounds(lo, hi, v)} "
+                        f"{unit}{deg}".rstrip()
                     )
             elif dest in INT_RANGES and isinstance(v, int):
                 ilo, ihi = INT_RANGES[dest]
@@ -160,6 +163,16 @@ def _numbers(args: argparse.Namespace, names: dict[str, str]) -> None:
                 raise InvalidInput(
                     f"{flag} {v:g}: an absurd magnitude; give a value within ±{ABSURD:g}"
                 )
+
+
+def _bounds(lo: float, hi: float, v: float) -> str:
+    """A range "lo … hi" in the fewest digits (6 at least) that print each bound apart
+    from the value `v` refused."""
+    for digits in range(6, 17):
+        a, b = f"{lo:.{digits}g}", f"{hi:.{digits}g}"
+        if f"{v:g}" not in (a, b):
+            return f"{a} … {b}"
+    return f"{lo!r} … {hi!r}"
 
 
 def _key(p: Path) -> tuple[int, int] | Path:

@@ -4,8 +4,8 @@ A mount file (`robots/<folder>/mount.yaml` or one a job names: `cell.robot.mount
 its flange link and the end-effector's pose on the flange. The composite is the arm's URDF
 with everything below the flange removed (the Panda's own hand), the end-effector's links
 and joints appended, a fixed joint `ee_mount_joint` from the flange to `ee_base`, and every
-`package://example-robot-data/` mesh URI rewritten to an absolute path, so that Pinocchio
-and PyBullet both load it without a package search path. A continuous joint of the arm
+mesh URI rewritten to an absolute path (a mesh that is not a file refused, naming its link),
+so that Pinocchio and PyBullet both load it without a package search path. A continuous joint of the arm
 becomes a revolute one over ±2π rad (`CONTINUOUS_RANGE_RAD`).
 """
 
@@ -34,8 +34,6 @@ __all__ = [
 
 EE_URDF = Path("throwing_ee", "throwing_ee.urdf")
 """The end-effector's URDF, relative to robots/."""
-
-_PKG = "package://example-robot-data/"
 
 
 def end_effector_urdf() -> Path:
@@ -100,6 +98,44 @@ def _bounded_continuous(arm: ET.Element, spec: MountSpec) -> None:
         lim.set("effort", lim.get("effort", "0"))
 
 
+def _mesh_path(uri: str, urdf_dir: Path) -> Path | None:
+    """The file a mesh URI names: `package://example-robot-data/...` (TALOS' URDFs write
+    `package:///example-robot-data/...`, the path after `package://` led by a slash) under
+    example-robot-data's share folder, `file://` and absolute paths as they are, a relative
+    path from the arm's URDF's folder `urdf_dir`; None for another package, which no loader
+    here can find."""
+    if uri.startswith("package://"):
+        rest = uri[len("package://") :].lstrip("/")
+        pkg, _, inside = rest.partition("/")
+        if pkg != "example-robot-data":
+            return None
+        return example_robot_data_share() / "example-robot-data" / inside
+    return urdf_dir / (uri[len("file://") :] if uri.startswith("file://") else uri)
+
+
+def _absolute_meshes(arm: ET.Element, spec: MountSpec, urdf_dir: Path) -> None:
+    """Rewrite every mesh of the kept arm to its absolute path, so that Pinocchio and
+    PyBullet load the composite without a package search path.
+
+    Raises:
+        InvalidParameter: a mesh that is not a file (PyBullet refuses the whole URDF then,
+            with no word of which), naming the link, the URI and where it was looked for.
+    """
+    for link in arm.findall("link"):
+        for mesh in link.iter("mesh"):
+            uri = mesh.get("filename", "")
+            path = _mesh_path(uri, urdf_dir)
+            if path is None or not path.is_file():
+                raise InvalidParameter(
+                    f"{spec.path}: field 'arm_urdf': link {link.get('name', '')!r} of "
+                    f"{spec.arm_urdf} has the mesh {uri!r}, "
+                    + (f"not a file at {path}" if path is not None else "of another package")
+                    + "; the cell finds package://example-robot-data/ meshes and absolute "
+                    "paths (drop_below_flange removes the links below the flange)"
+                )
+            mesh.set("filename", str(path))
+
+
 def composite_urdf_text(robot: str) -> str:
     """The composite URDF (arm + end-effector) as text.
 
@@ -115,7 +151,7 @@ def composite_urdf_text(robot: str) -> str:
         MissingDependency: example-robot-data or robots/ is missing.
     """
     spec = load_mount(robot)
-    _arm_path, arm = check_against_urdf(spec)
+    arm_path, arm = check_against_urdf(spec)
     ee = ET.parse(robots_dir() / spec.end_effector).getroot()
     if spec.drop_below_flange:
         drop_links, drop_joints = _descendants(arm, spec.flange)
@@ -129,11 +165,7 @@ def composite_urdf_text(robot: str) -> str:
     for el in list(arm):
         if el.tag in ("transmission", "gazebo"):
             arm.remove(el)
-    share = example_robot_data_share()
-    for mesh in arm.iter("mesh"):
-        fn = mesh.get("filename", "")
-        if fn.startswith(_PKG):
-            mesh.set("filename", str(share / "example-robot-data" / fn[len(_PKG) :]))
+    _absolute_meshes(arm, spec, arm_path.parent)
     arm_materials = {m.get("name") for m in arm.findall("material")}
     for el in ee:
         if el.tag == "material" and el.get("name") in arm_materials:

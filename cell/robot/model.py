@@ -64,7 +64,13 @@ class Robot:
         if missing:
             raise InvalidInput(f"{self.urdf}: arm joint(s) {missing} not in the description")
         lock = [full.getJointId(n) for n in names[1:] if n not in spec.arm_joints]
-        q_ref = pin.neutral(full)
+        q_ref = pin.neutral(full)  # every joint not planned at zero, but those held
+        for name, value in spec.held_joints:
+            jm = full.joints[full.getJointId(name)]
+            if jm.nq == 2:  # a continuous joint: (cos θ, sin θ)
+                q_ref[jm.idx_q : jm.idx_q + 2] = (math.cos(value), math.sin(value))
+            else:
+                q_ref[jm.idx_q] = value
         self.model: Any = pin.buildReducedModel(full, lock, q_ref) if lock else full
         self.data: Any = self.model.createData()
         if not self.model.existFrame(TCP_FRAME):

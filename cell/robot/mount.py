@@ -45,7 +45,7 @@ REQUIRED = (
     "acceleration_limits",
     "jerk_limits",
 )
-OPTIONAL = ("drop_below_flange", "facing_half_range_deg")
+OPTIONAL = ("drop_below_flange", "facing_half_range_deg", "held_joints")
 MOUNT_FIELDS = REQUIRED + OPTIONAL
 """Every field a mount file may hold (docs/arms.md describes each)."""
 _NAME = re.compile(r"[a-z][a-z0-9_]{0,31}")
@@ -78,6 +78,9 @@ class MountSpec:
         jerk_limits: joint jerk limits [rad/s³], one per arm joint.
         facing_half_range_rad: half the range of azimuths about the base the arm may
             face a bin at [rad] (random layouts draw bins within it); π: all around.
+        held_joints: (joint, position [rad or m]) of movable joints of the URDF that are
+            not arm joints and are held at a position other than zero (a torso lift); every
+            other joint not in `arm_joints` is held at zero.
     """
 
     name: str
@@ -94,6 +97,7 @@ class MountSpec:
     acceleration_limits: tuple[float, ...]
     jerk_limits: tuple[float, ...]
     facing_half_range_rad: float = math.pi
+    held_joints: tuple[tuple[str, float], ...] = ()
 
 
 def is_mount_path(ref: str) -> bool:
@@ -236,6 +240,32 @@ def _facing(raw: dict[str, Any], path: Path) -> float:
     return math.pi if v == 180.0 else math.radians(float(v))
 
 
+def _held(
+    raw: dict[str, Any], joints: tuple[str, ...], path: Path
+) -> tuple[tuple[str, float], ...]:
+    v = raw.get("held_joints", {})
+    ok = isinstance(v, dict) and all(
+        isinstance(k, str)
+        and k
+        and not isinstance(x, bool)
+        and isinstance(x, (int, float))
+        and math.isfinite(x)
+        for k, x in v.items()
+    )
+    if not ok:
+        raise InvalidParameter(
+            f"{path}: field 'held_joints' must map joint names to positions [rad, or m for "
+            f"a prismatic joint] (torso_lift_joint: 0.2), got {v!r}"
+        )
+    both = sorted(k for k in v if k in joints)
+    if both:
+        raise InvalidParameter(
+            f"{path}: field 'held_joints': {both} are arm joints too; a joint is planned "
+            "(arm_joints) or held (held_joints), not both"
+        )
+    return tuple((str(k), float(x)) for k, x in v.items())
+
+
 def load_mount(ref: str) -> MountSpec:
     """The mount description of a robot, read from its mount file.
 
@@ -279,6 +309,7 @@ def load_mount(ref: str) -> MountSpec:
         acceleration_limits=_per_joint(raw, "acceleration_limits", len(joints), path),
         jerk_limits=_per_joint(raw, "jerk_limits", len(joints), path),
         facing_half_range_rad=_facing(raw, path),
+        held_joints=_held(raw, joints, path),
     )
 
 
@@ -398,14 +429,22 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
             f"{where}: field 'arm_joints': {unknown} are not movable joints of "
             f"{arm_path.name}; its movable joints: {', '.join(movable)}"
         )
+    held = dict(spec.held_joints)
+    unknown = [j for j in held if j not in movable]
+    if unknown:
+        raise InvalidParameter(
+            f"{where}: field 'held_joints': {unknown} are not movable joints of "
+            f"{arm_path.name}; its movable joints: {', '.join(movable)}"
+        )
     chain = [
         j.get("name", "") for j in _chain(root, spec.flange, where) if j.get("type") in _MOVABLE
     ]
-    if chain != list(spec.arm_joints):
+    if [j for j in chain if j not in held] != list(spec.arm_joints):
         raise InvalidParameter(
             f"{where}: fields 'arm_joints' and 'flange': the movable joints from the base to "
             f"flange {spec.flange!r} are {chain}, not {list(spec.arm_joints)}; list those "
-            "joints in order, or name the link the tool is bolted to (below the last joint)"
+            "joints in order (or hold some still, held_joints), or name the link the tool "
+            "is bolted to (below the last joint)"
         )
     _check_limits(root, spec.arm_joints, where)
     _check_home(spec, root)
@@ -413,10 +452,13 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
 
 
 def _check_home(spec: MountSpec, root: ET.Element) -> None:
-    """InvalidParameter naming the mount file when `home` is outside a joint's position
-    limits in the URDF (a continuous joint's are ±2π, as the cell plans it)."""
+    """InvalidParameter naming the mount file when `home` or a held joint's position is
+    outside a joint's position limits in the URDF (a continuous joint's are ±2π, as the
+    cell plans it)."""
     joints = {j.get("name", ""): j for j in root.findall("joint")}
-    for name, q in zip(spec.arm_joints, spec.home, strict=True):
+    pairs = [("home", n, q) for n, q in zip(spec.arm_joints, spec.home, strict=True)]
+    pairs += [("held_joints", n, q) for n, q in spec.held_joints]
+    for field, name, q in pairs:
         lim = joints[name].find("limit")
         if joints[name].get("type") == "continuous":
             lo, hi = -2.0 * math.pi, 2.0 * math.pi  # planned so: cell.robot.composite
@@ -426,6 +468,6 @@ def _check_home(spec: MountSpec, root: ET.Element) -> None:
             lo, hi = float(lim.get("lower", "0")), float(lim.get("upper", "0"))
         if not lo - 1e-9 <= q <= hi + 1e-9:
             raise InvalidParameter(
-                f"{spec.path}: field 'home': {q} rad for {name} is outside its range "
-                f"[{lo}, {hi}] rad in {spec.arm_urdf}"
+                f"{spec.path}: field '{field}': {q} for {name} is outside its range "
+                f"[{lo}, {hi}] (rad, or m if prismatic) in {spec.arm_urdf}"
             )

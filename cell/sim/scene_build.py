@@ -134,6 +134,8 @@ def load_arm(
     links = {cl.getJointInfo(arm, j)[12].decode(): j for j in range(cl.getNumJoints(arm))}
     for j in range(-1, cl.getNumJoints(arm)):
         cl.setCollisionFilterGroupMask(arm, j, 0, 0)  # kinematic, collision-free
+    for name, value in spec.held_joints:  # as the planner's model holds them (the rest at 0)
+        cl.resetJointState(arm, joints[name], float(value))
     for name, j in links.items() if visuals else ():
         if name.startswith("ee_"):  # drawn by the driven end-effector body instead
             cl.changeVisualShape(arm, j, rgbaColor=[0, 0, 0, 0])
