@@ -104,7 +104,9 @@ class ForkStats:
     """What the forked branches did over a run (`PlanFork`): branches forked, answers used,
     branches searched again in the parent by reason, and the children's CPU time [s]
     (user + system, `os.wait4`); the parent's wall time [s] in `os.fork` and waiting for
-    the children's answers once its own branch was done."""
+    the children's answers once its own branch was done; and by how much each child's CPU
+    time passed the parent's between the fork and the join [s], summed (`beyond_cpu_s`:
+    a decision's CPU time on its critical path is the parent's plus that)."""
 
     forked: int = 0
     used: int = 0
@@ -113,6 +115,7 @@ class ForkStats:
     child_cpu_s: float = 0.0
     fork_s: float = 0.0
     wait_s: float = 0.0
+    beyond_cpu_s: float = 0.0
 
 
 @dataclass
@@ -124,6 +127,8 @@ class _Child:
     fd: int
     mine: list[Any]
     kept_log: list[Any] | None
+    cpu0: float = 0.0  # [s] the parent's CPU time when it forked (`time.process_time`)
+    cpu_s: float = 0.0  # [s] the child's CPU time, once reaped (`os.wait4`)
 
 
 def _child_main(fn: Callable[[], Any], w: int) -> None:
@@ -284,7 +289,7 @@ class PlanFork(ArmBase):
         self.fork_stats.fork_s += time.perf_counter() - t0
         self.fork_stats.forked += 1
         kept, self._ik_log = self._ik_log, []
-        return _Child(pid, r, self._ik_log, kept)
+        return _Child(pid, r, self._ik_log, kept, time.process_time())
 
     def _child_branch(self, fn: Callable[[], Any]) -> tuple[str, Any, list[Any], bool]:
         """`fn` run in the child: ("ok", its value) or ("err", its error), the IK record
@@ -303,9 +308,10 @@ class PlanFork(ArmBase):
         record replayed after the parent's; or `serial()`, the branch searched in the
         parent, where the answer cannot be used (module docstring; logged)."""
         self._ik_log = child.kept_log
-        t0 = time.perf_counter()
+        t0, mine = time.perf_counter(), time.process_time() - child.cpu0
         got, why = self._fork_answer(child)
         self.fork_stats.wait_s += time.perf_counter() - t0
+        self.fork_stats.beyond_cpu_s += max(0.0, child.cpu_s - mine)
         if got is not None:
             kind, value, record, moved = got
             why = self._fork_conflict(child.mine, record, moved)
@@ -366,7 +372,8 @@ class PlanFork(ArmBase):
         """Wait for the child to end (it has, or was killed); its CPU time counted."""
         os.close(child.fd)
         _, status, usage = os.wait4(child.pid, 0)
-        self.fork_stats.child_cpu_s += usage.ru_utime + usage.ru_stime
+        child.cpu_s = usage.ru_utime + usage.ru_stime
+        self.fork_stats.child_cpu_s += child.cpu_s
         return status
 
     def _fork_conflict(self, mine: list[Any], record: list[Any], moved: bool) -> str:
