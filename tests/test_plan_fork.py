@@ -178,3 +178,23 @@ def test_plan_workers_are_checked(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv(PLAN_WORKERS_ENV, "many")
     with pytest.raises(InvalidInput, match=r"\$CELL_PLAN_WORKERS='many'"):
         check_plan_workers(None)
+
+
+@pytest.mark.parametrize("tuning", [{"release_budget": 3}, {"release_lower_room_s": 0.5}])
+def test_no_fork_where_a_branch_depends_on_the_other(
+    pair: tuple[Any, Any], tuning: dict[str, Any]
+) -> None:
+    """A work budget counts the candidates of every branch; with `release_lower_room_s`,
+    whether a facing's lower bounds are searched depends on its plan in the cell's bounds
+    as the other facing's estimate pruned it: the serial path then."""
+    import dataclasses
+
+    o = pair[1]
+    kept = o.tuning
+    o.tuning = dataclasses.replace(kept, **tuning)
+    try:
+        assert o._fork_branch(lambda: 1) is None
+    finally:
+        o.tuning = kept
+    child = o._fork_branch(lambda: 1)
+    assert child is not None and o._fork_join(child, lambda: 0) == 1

@@ -233,7 +233,7 @@ class PlanFork(ArmBase):
         plan = partial(self._plan_in, obj, goal, *item)
         at = [dc_replace(b, facing_rad=facing) for b in tier]
         child = None
-        if not first_kept and len(at) > 1:
+        if not first_kept and len(at) > 1 and self.cycle_search:  # else none searched
             child = self._fork_branch(partial(lower_outcomes, plan, at[1:], beat))
         lowers: list[Any] | None = None
         try:
@@ -263,10 +263,13 @@ class PlanFork(ArmBase):
     def _fork_branch(self, fn: Callable[[], Any]) -> _Child | None:
         """Start `fn` (a branch of the decision) in a forked child, or None: with one
         plan worker, a work budget (`ArmTuning.release_budget` counts across branches),
+        `ArmTuning.release_lower_room_s` (whether the lower bounds are searched would
+        depend on the plan in the cell's bounds as the other branch's estimate pruned it),
         inside a child or another fork, or where the fork fails."""
         if (
             self.plan_workers < 2
             or self.tuning.release_budget is not None
+            or self.tuning.release_lower_room_s is not None
             or self._in_child
             or self._ik_log is not None
             or not hasattr(os, "fork")
