@@ -13,6 +13,7 @@ import logging
 import os
 import signal
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -198,3 +199,36 @@ def test_no_fork_where_a_branch_depends_on_the_other(
         o.tuning = kept
     child = o._fork_branch(lambda: 1)
     assert child is not None and o._fork_join(child, lambda: 0) == 1
+
+
+def test_a_child_ends_with_its_parent(pair: tuple[Any, Any]) -> None:
+    """A parent killed mid-decision leaves no child planning on: the child of a process
+    that is killed is killed too (PR_SET_PDEATHSIG)."""
+    o = pair[1]
+    r, w = os.pipe()
+    middle = os.fork()
+    if middle == 0:  # a parent that forks a branch and is killed before the join
+        os.close(r)
+        child = o._fork_branch(lambda: time.sleep(60.0))
+        os.write(w, str(child.pid if child else -1).encode())
+        os.close(w)
+        time.sleep(60.0)
+        os._exit(0)
+    os.close(w)
+    pid = int(os.read(r, 64).decode())
+    os.close(r)
+    assert pid > 0
+    os.kill(middle, signal.SIGKILL)
+    os.waitpid(middle, 0)
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline:
+        try:  # the grandchild is not ours to reap: gone, or a zombie of init's
+            state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]
+        except FileNotFoundError:
+            break
+        if state == "Z":
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(pid, signal.SIGKILL)
+        pytest.fail(f"the child {pid} of a killed parent still runs")

@@ -131,6 +131,20 @@ class _Child:
     cpu_s: float = 0.0  # [s] the child's CPU time, once reaped (`os.wait4`)
 
 
+def _die_with_parent(parent: int) -> None:
+    """In a child: be killed when `parent` ends (Linux's PR_SET_PDEATHSIG), so that a
+    parent killed mid-decision leaves no child planning on; elsewhere nothing."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the parent ended before the call: end now
+        os._exit(1)
+
+
 def _child_main(fn: Callable[[], Any], w: int) -> None:
     """In the child: run `fn` and write its pickled answer to `w`; never returns."""
     code = 0
@@ -286,6 +300,7 @@ class PlanFork(ArmBase):
             return None
         if pid == 0:
             os.close(r)
+            _die_with_parent(os.getppid())
             self._in_child = True
             _child_main(lambda: self._child_branch(fn), w)
         os.close(w)
