@@ -1,5 +1,5 @@
-"""Planning on a second process (`cell.arm.fork`): a decision's turned facing, or its lower
-release bounds, searched in a forked child while the parent searches the rest.
+"""Planning on a second process (`cell.arm.fork`): a decision's turned facing, or its last
+lower release bounds, searched in a forked child while the parent searches the rest.
 
 Independent checks: the serial path's decisions (`plan_workers=1`, the same orchestrator's
 code without a fork) item by item, bit for bit; what the child's process does, seen from
@@ -61,7 +61,7 @@ def _decide(o: Any, k: int, q: np.ndarray) -> Any:
 
 def test_the_forked_decisions_are_the_serial_ones(pair: tuple[Any, Any]) -> None:
     """A cube50 to chute_1 (the turned facing forked and kept), a cube30 to chute_3 (no
-    turned facing: its lower bounds forked) and a cuboid_b to chute_1 (the turned facing
+    turned facing: its last lower bounds forked) and a cuboid_b to chute_1 (the turned facing
     forked and not kept), each planned from the previous one's release as a run would:
     the same plans, releases and estimates, bit for bit."""
     serial, forked = pair

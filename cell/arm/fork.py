@@ -11,10 +11,10 @@ parent searches the first, and the parent combines them with the same rule. The 
 not told the first's estimate (it has not got it): a release that cannot beat it is timed
 there too, but a plan that cannot beat it is not kept either way, and one that can is the
 same plan with or without it (`_release_search`'s bound prunes only what cannot be
-chosen), so the choice is the serial one. A throw with one facing has its lower release
-bounds (RELEASE_FALLBACKS) searched so instead, while the parent plans in the cell's
-bounds (`PlanFork._plan_tier`, the same argument: `soonest_of` keeps a lower bounds' plan
-only where it beats the ones before). tests/test_plan_fork.py checks the decisions
+chosen), so the choice is the serial one. A throw with one facing has its last lower
+release bounds (RELEASE_FALLBACKS) searched so instead, while the parent plans in the
+cell's bounds and the first lower ones (`PlanFork._plan_tier`, the same argument:
+`soonest_of` keeps a lower bounds' plan only where it beats the ones before). tests/test_plan_fork.py checks the decisions
 against the serial path's.
 
 What the serial path's second branch leaves for what follows, the parent gets from the
@@ -239,16 +239,19 @@ class PlanFork(ArmBase):
     ) -> tuple[list[ThrowChoice], CellError | None]:
         """`_plan_facing`'s plans in one tier of release bounds (the first reached kept
         where `first_kept`), and the first error met. With two plan workers and no other
-        branch forked (`cell.arm.fork`), the lower bounds of a tier that keeps the soonest
-        are searched on a second process meanwhile, each told only `beat`, and used as the
-        serial path would (a plan that cannot beat the ones before is not chosen either
-        way: `soonest_of`)."""
+        branch forked (`cell.arm.fork`), the last lower bounds of a tier that keeps the
+        soonest are searched on a second process meanwhile, told only `beat`, and used as
+        the serial path would (a plan that cannot beat the ones before is not chosen
+        either way: `soonest_of`). The last alone: the child's search is not pruned by the
+        bounds before it, the parent's are (the first and second lower bounds in the
+        child cost tune layout 1 4.1 s of CPU beyond the parents' branches, the second
+        alone 0.5 s, at the same critical path; docs/HISTORY.md, branch plan22)."""
         found: list[ThrowChoice] = []
         plan = partial(self._plan_in, obj, goal, *item)
         at = [dc_replace(b, facing_rad=facing) for b in tier]
-        child = None
+        child, cut = None, max(1, len(at) - 1)  # the child's: the last of the bounds
         if not first_kept and len(at) > 1 and self.cycle_search:  # else none searched
-            child = self._fork_branch(partial(lower_outcomes, plan, at[1:], beat))
+            child = self._fork_branch(partial(lower_outcomes, plan, at[cut:], beat))
         lowers: list[Any] | None = None
         try:
             for k, bounds in enumerate(at):
@@ -256,12 +259,12 @@ class PlanFork(ArmBase):
                     break  # the first reached is kept
                 if self._beat(found) is not None and self._budget_spent():
                     break  # a release that holds in hand, the budget spent (`release_budget`)
-                if child is not None and k == 1:  # the lower bounds' plans, searched meanwhile
+                if child is not None and k == cut:  # the last bounds' plans, searched meanwhile
                     forked, child = child, None
                     lowers = self._fork_join(forked, lambda: None)
                 try:
                     if lowers is not None:
-                        r = lowers[k - 1]
+                        r = lowers[k - cut]
                         if isinstance(r, Exception):
                             raise r
                     else:

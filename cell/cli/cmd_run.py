@@ -106,8 +106,9 @@ def _add_arm_args(p: argparse.ArgumentParser) -> None:
         choices=(1, 2),
         default=None,
         help="arm platform: processes a throw's plan uses: 1, one; 2, its turned facing (or "
-        "its lower release bounds) searched on a second core meanwhile, the same decisions "
-        "(default: 2 where the process may use two cores, $CELL_PLAN_WORKERS where set)",
+        "its last lower release bounds) searched on a second core meanwhile, the same "
+        "decisions (default: 2 where the process may use two cores, $CELL_PLAN_WORKERS where "
+        "set)",
     )
     p.add_argument(
         "--order",
