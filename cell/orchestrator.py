@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from cell.arm.flywheel import Flywheel, LandingCorrection
+from cell.arm.fork import PlanFork
 from cell.arm.grip_limits import GripUse
 from cell.arm.grip_side import GripSideChoice, holding_sides, throw_sides
 from cell.arm.kinematics import Kinematics
@@ -107,6 +108,7 @@ class Orchestrator(
     GripUse,
     GripSideChoice,
     Flywheel,
+    PlanFork,
 ):
     """Runs a sort job in the PyBullet cell.
 
@@ -149,6 +151,7 @@ class Orchestrator(
             a tote). A pick's IK is solved from where the arm is, the last release: after
             one at another bin it can come out elsewhere on the arm's redundancy, bin by
             bin the picks stay alike (tests/test_item_order.py).
+        plan_workers: processes a throw is planned on, 1 or 2 (`cell.arm.fork`; None: 2 on 2 cores).
     """
 
     def __init__(
@@ -170,6 +173,7 @@ class Orchestrator(
         cycle_search: bool = True,
         order: str = "job",
         tuning: ArmTuning = TUNING,
+        plan_workers: int | None = None,
     ) -> None:
         from cell.endeffector.factory import make_in_step
         from cell.optimize.bounds import ThrowBounds
@@ -179,6 +183,7 @@ class Orchestrator(
         _check_options(speed_scale, pick, release, order)  # before the scene is built
         _load_planning_libraries()
         self.tuning = tuning
+        self._init_forks(plan_workers)  # `cell.arm.fork`
         self.speed_scale = float(speed_scale)
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())

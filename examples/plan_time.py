@@ -11,7 +11,11 @@ plan_s's p95/median/max/sum [s] (wall), decide_cpu_p95/sum [s] (`time.process_ti
 around `Orchestrator.decide`), the run's CPU time [s], its wall time and the plant's
 stepping wall time [s], the 1-minute load average, and `sig`: a hash of the items'
 results without `plan_s` and the throw ids (equal before and after a pure speedup).
-docs/realtime.md's table was measured with it.
+docs/realtime.md's table was measured with it. With two plan workers (`cell.arm.fork`;
+`plan_workers=1` plans serially) also the children's CPU time per decision and its sum
+(not in the process's CPU time), the parent's wall time waiting for them, each
+decision's CPU time on its critical path (`decide_critical_cpu`: the parent's, plus what
+its child took beyond the parent's own branch; its p95 and max) and what the forks did.
 """
 
 from __future__ import annotations
@@ -42,18 +46,30 @@ def main(what: str, n: int, tuning: dict[str, object] | None = None) -> dict[str
         job = parse_job(yaml.safe_dump(doc, sort_keys=False), f"<random layout {what}>")
     if n:
         job = dataclasses.replace(job, max_items=n)
+    tuning = dict(tuning or {})
+    workers = tuning.pop("plan_workers", None)
     orch = Orchestrator(
-        job, session="plan-time", tuning=dataclasses.replace(TUNING, **(tuning or {}))
+        job,
+        session="plan-time",
+        tuning=dataclasses.replace(TUNING, **tuning),
+        plan_workers=workers,  # type: ignore[arg-type]
     )
     dec_cpu: list[float] = []
+    child_cpu: list[float] = []  # the forked branches' CPU (`cell.arm.fork`)
+    waits: list[float] = []  # the parent's wall time waiting for their answers
+    crit: list[float] = []  # CPU on the critical path: the parent's, the child's beyond it
     decide = orch.decide
 
     def timed(*args: object) -> object:
-        c = time.process_time()
+        c, k, w = time.process_time(), orch.fork_stats.child_cpu_s, orch.fork_stats.wait_s
+        b = orch.fork_stats.beyond_cpu_s
         try:
             return decide(*args)  # type: ignore[arg-type]
         finally:
             dec_cpu.append(time.process_time() - c)
+            child_cpu.append(orch.fork_stats.child_cpu_s - k)
+            waits.append(orch.fork_stats.wait_s - w)
+            crit.append(dec_cpu[-1] + orch.fork_stats.beyond_cpu_s - b)
 
     orch.decide = timed  # type: ignore[method-assign]
     with threadpool_limits(limits=1):  # one BLAS thread, as `cell bench sort` runs
@@ -80,6 +96,15 @@ def main(what: str, n: int, tuning: dict[str, object] | None = None) -> dict[str
         "decide_cpu_p95": round(float(np.percentile(dec_cpu, 95)), 3),
         "decide_cpu_sum": round(sum(dec_cpu), 2),
         "decide_cpu": [round(x, 2) for x in dec_cpu],
+        "decide_child_cpu_sum": round(sum(child_cpu), 2),
+        "decide_critical_cpu_p95": round(float(np.percentile(crit, 95)), 3),
+        "decide_critical_cpu_max": round(max(crit), 3),
+        "decide_critical_cpu": [round(x, 2) for x in crit],
+        "decide_child_cpu": [round(x, 2) for x in child_cpu],
+        "decide_wait": [round(x, 2) for x in waits],
+        "plan_s": [round(float(x), 2) for x in p],
+        "plan_workers": orch.plan_workers,
+        "forks": dataclasses.asdict(orch.fork_stats),
         "cpu_s": round(cpu, 2),
         "wall_s": round(s.wall_time_s, 1),
         "step_wall_s": round(orch.scene.step_wall_s, 1),
@@ -89,6 +114,7 @@ def main(what: str, n: int, tuning: dict[str, object] | None = None) -> dict[str
 
 
 if __name__ == "__main__":
-    # name=value: an ArmTuning constant, its value a Python literal (None, 3, (6, 30.0))
+    # name=value: an ArmTuning constant, its value a Python literal (None, 3, (6, 30.0)),
+    # or plan_workers=N (`Orchestrator`'s; default: 2 where two cores are free)
     over = {k: ast.literal_eval(v) for k, v in (a.split("=", 1) for a in sys.argv[3:])}
     print(json.dumps(main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 0, over)))

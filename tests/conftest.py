@@ -29,6 +29,10 @@ from threadpoolctl import threadpool_limits
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 threadpool_limits(limits=1)
+# One planning process per decision (`cell.arm.fork`): the suite's two workers already use
+# both cores, so a second planning process would add CPU and save no wall time; the tests
+# of the forked planning (tests/test_plan_fork.py) ask for two themselves
+os.environ["CELL_PLAN_WORKERS"] = "1"
 
 # slow first, from `pytest -n 2 --dist loadfile --durations=0 tests` (per-file sums): the
 # sixteen slowest files of the run at cd14b54 (2026-11-30, 805 s of test time), with the

@@ -71,6 +71,9 @@ class ArmBase:
     _approach_plans: dict[tuple[Any, ...], tuple[Any, str]]
     _plan_memo: dict[tuple[Any, ...], Any]
     _timed_n: int = 0  # release candidates timed in this decision (`_new_decision`)
+    # what IK searches asked and kept while a forked branch is searched (`cell.arm.fork`,
+    # `Kinematics._ik_keep`); None: not recorded
+    _ik_log: list[tuple[Any, ...]] | None = None
 
     def _new_decision(self) -> None:
         """Forget what a decision keeps only for itself (`Orchestrator.decide` calls it

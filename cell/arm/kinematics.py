@@ -87,6 +87,8 @@ class Kinematics(ArmBase):
 
         where = (pose.position.tobytes(), pose.axis.tobytes(), repr(pose.roll).encode())
         key = (*where, b"" if seed is None else np.asarray(seed, float).tobytes())
+        if self._ik_log is not None:  # a forked branch's record (`cell.arm.fork`)
+            self._ik_log.append(("ask", key, where, pose if reach else None))
         found = self._ik_memo.get(key)
         kept = reach and self.tuning.ik_reach_kept
         # the verdict's terms: a search with other give-up, polish or reach constants is
@@ -106,14 +108,12 @@ class Kinematics(ArmBase):
             except IKNoSolution as exc:
                 found = exc
                 if reach and exc.position_error_m >= self.tuning.ik_out_of_reach_m:
-                    self._ik_memo[where] = exc
+                    self._ik_keep("memo", where, exc)
                     if kept:
-                        if len(self._out_of_reach) >= OUT_OF_REACH_KEPT_MAX:
-                            self._out_of_reach.clear()  # bounded: a long job's poses
-                        self._out_of_reach[rule] = exc
+                        self._ik_keep("reach", rule, exc)
                         if t.ik_warm:
-                            self._far_poses.add(pose, rule[-1].decode(), exc)
-            self._ik_memo[key] = found
+                            self._ik_keep("far", pose, rule[-1].decode(), exc)
+            self._ik_keep("memo", key, found)
         if isinstance(found, Exception):
             raise found
         return found
@@ -172,14 +172,42 @@ class Kinematics(ArmBase):
                 )
             except IKNoSolution as exc:
                 found = exc.with_traceback(None)  # kept: not the frames it was raised in
-            if len(self._ik_solved) >= IK_SOLVED_KEPT_MAX:
-                self._ik_solved.clear()  # bounded: a long job's poses
-            self._ik_solved[rule] = found
+            self._ik_keep("solved", rule, found)
         if isinstance(found, Exception):
             raise found.with_traceback(None)  # not a chain grown by every raise
         if warm:  # kept or not: the same warm starts for the decision's later searches
-            self._ik_warm.add(pose, found.q)
+            self._ik_keep("warm", pose, found.q)
         return found
+
+    def _ik_keep(self, kind: str, *what: Any) -> None:
+        """Keep what an IK search found, recorded where a forked branch is searched
+        (`_ik_log`, `cell.arm.fork`): "memo" (key, answer) until the next decision,
+        "reach" (rule, error) and "far" (pose, rule, error) out of reach across decisions,
+        "solved" (rule, answer) the search kept across decisions, "warm" (pose, solution)
+        a warm start for the decision's later searches."""
+        if self._ik_log is not None:
+            self._ik_log.append((kind, *what))
+        if kind == "memo":
+            self._ik_memo[what[0]] = what[1]
+        elif kind == "reach":
+            if len(self._out_of_reach) >= OUT_OF_REACH_KEPT_MAX:
+                self._out_of_reach.clear()  # bounded: a long job's poses
+            self._out_of_reach[what[0]] = what[1]
+        elif kind == "far":
+            self._far_poses.add(*what)
+        elif kind == "solved":
+            if len(self._ik_solved) >= IK_SOLVED_KEPT_MAX:
+                self._ik_solved.clear()  # bounded: a long job's poses
+            self._ik_solved[what[0]] = what[1]
+        else:
+            self._ik_warm.add(*what)
+
+    def _ik_replay(self, record: list[tuple[Any, ...]]) -> None:
+        """Keep what a forked branch's IK searches found (its `_ik_log`), in their order,
+        as if they had been made here (`cell.arm.fork`)."""
+        for op in record:
+            if op[0] != "ask":
+                self._ik_keep(*op)
 
     def ik_frame(self, tcp: np.ndarray, seed: np.ndarray | None = None) -> np.ndarray:
         """IK for the grip pointing down at `tcp` [m, W], in the item's frame

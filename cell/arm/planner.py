@@ -7,12 +7,13 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import replace as dc_replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from cell.arm.base import ArmBase
-from cell.arm.choice import ThrowChoice, grip_short, sooner_beat, soonest_of
+from cell.arm.choice import ThrowChoice, grip_short, soonest_of
 from cell.arm.grip_limits import (
     grip_bounds,
     release_elevation_min,
@@ -23,7 +24,7 @@ from cell.arm.launch import (
     plan_clean,
 )
 from cell.arm.spots import throw_spot
-from cell.arm.steep import steep_kept, steep_tiers
+from cell.arm.steep import steep_tiers
 from cell.errors import (
     CellError,
     IKFailed,
@@ -95,33 +96,9 @@ class Planner(ArmBase):
         steep = steep_tiers(self.tuning, target.rim_height, ordinary, shrunk)
         turned = self._facing_toward_station(target)
         for tiers in (steep, ((ordinary, False), (shrunk, True))):
-            best: ThrowChoice | None = None
-            for facing in () if not tiers else (None,) if turned is None else (None, turned):
-                if self._to_beat(best) is not None and self._budget_spent():
-                    break  # a release that holds in hand, the budget spent (`release_budget`)
-                try:
-                    r = self._plan_facing(
-                        obj,
-                        goal,
-                        (index, stroke_max_m),
-                        tiers,
-                        facing,
-                        sooner_beat(self._to_beat(best), beat),
-                    )
-                except (UnreachableTarget, IKFailed) as exc:
-                    err = err or exc
-                    continue
-                if tiers is steep and not steep_kept(r, obj, self.params, self.robot, self.tuning):
-                    continue
-                cost = r.cost
-                log.debug("facing %s: (slips, cycle estimate) %s", facing, cost)
-                if best is not None and (
-                    cost is None or best.cost is None or r.held < best.held or not cost < best.cost
-                ):
-                    continue
-                best = r
-                if cost is None:  # nothing to compare by: the arm faces the bin
-                    break
+            facings = () if not tiers else (None,) if turned is None else (None, turned)
+            plan = partial(self._plan_facing, obj, goal, (index, stroke_max_m), tiers)
+            best, err = self._best_facing(plan, facings, beat, err, tiers is steep, obj)
             if best is not None:
                 # where it should cross the rim plane
                 return dc_replace(best, goal=np.asarray(goal, float))
@@ -207,25 +184,7 @@ class Planner(ArmBase):
         """
         err: CellError | None = None
         for tier, first_kept in tiers:
-            found: list[ThrowChoice] = []
-            for k, bounds in enumerate(tier):
-                if found and (first_kept or not self._lower_bounds_wanted(found[0])):
-                    break  # the first reached is kept
-                if self._beat(found) is not None and self._budget_spent():
-                    break  # a release that holds in hand, the budget spent (`release_budget`)
-                try:
-                    found.append(
-                        self._plan_in(
-                            obj,
-                            goal,
-                            *item,
-                            dc_replace(bounds, facing_rad=facing),
-                            sooner_beat(self._beat(found), beat),
-                            lower=k > 0,
-                        )
-                    )
-                except (UnreachableTarget, IKFailed) as exc:
-                    err = err or exc
+            found, err = self._plan_tier(obj, goal, item, tier, first_kept, facing, beat, err)
             if found:
                 return self._soonest_release(obj, found)
         assert err is not None

@@ -99,6 +99,9 @@ class LayoutUnit:
         cycle_search: each throw's release chosen by its cycle (`cell run --cycle-search`,
             on by default).
         order: the order the items are taken in (`cell run --order`: "job" or "bins").
+        plan_workers: processes a throw's plan uses (`Orchestrator`'s; None: its default).
+            On Ray workers 1 (`cell bench sort --workers 2`): the layouts already keep both
+            cores busy, and a Ray worker runs threads of its own, where a fork is unsafe.
     """
 
     seed: int
@@ -110,6 +113,7 @@ class LayoutUnit:
     floor: bool = False
     cycle_search: bool = True
     order: str = "job"
+    plan_workers: int | None = None
 
 
 def layout_units(
@@ -123,6 +127,7 @@ def layout_units(
     floor: bool = False,
     cycle_search: bool = True,
     order: str = "job",
+    plan_workers: int | None = None,
 ) -> list[LayoutUnit]:
     """The campaign's layouts: seeds seed … seed + n − 1, arms taken in turn."""
     return [
@@ -136,6 +141,7 @@ def layout_units(
             floor,
             cycle_search,
             order,
+            plan_workers,
         )
         for i in range(n)
     ]
@@ -194,6 +200,7 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
             cycle_search=unit.cycle_search,
             floor=unit.floor,
             order=unit.order,
+            plan_workers=unit.plan_workers,
         )
     except JobError as exc:
         out["refused"] = str(exc)

@@ -138,6 +138,7 @@ def run_sort(args: argparse.Namespace) -> int:
         args.floor,
         args.cycle_search,
         args.order,
+        1 if args.workers > 1 or args.ray_address else None,  # on Ray: `LayoutUnit`
     )
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]

@@ -101,6 +101,16 @@ def _add_arm_args(p: argparse.ArgumentParser) -> None:
         "planner's cycle estimate, in the cell's release bounds, for a fraction of the planning)",
     )
     p.add_argument(
+        "--plan-workers",
+        type=int,
+        choices=(1, 2),
+        default=None,
+        help="arm platform: processes a throw's plan uses: 1, one; 2, its turned facing (or "
+        "its last lower release bounds) searched on a second core meanwhile, the same "
+        "decisions (default: 2 where the process may use two cores, $CELL_PLAN_WORKERS where "
+        "set)",
+    )
+    p.add_argument(
         "--order",
         choices=ORDERS,
         default="job",
@@ -181,6 +191,7 @@ def _runner(
             turn_release=args.turn_release,
             cycle_search=args.cycle_search,
             order=args.order,
+            plan_workers=args.plan_workers,
         )
     return orch
 

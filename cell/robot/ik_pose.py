@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,11 @@ class IKNoSolution(IKFailed):
         self.position_error_m = position_error_m
         self.axis_error_rad = axis_error_rad
         self.q_best = q_best
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        """Pickled with its attributes (a planning branch's answer, `cell.arm.fork`)."""
+        args = (str(self), self.position_error_m, self.axis_error_rad, self.q_best)
+        return (type(self), args)
 
 
 @dataclass(frozen=True)
