@@ -494,4 +494,9 @@ class ItemLoop:
             emit(t_end=pl.t)  # report what was scored; an item still in flight is lost
             raise
         emit(t_end=pl.t)
-        return summarise(results, time.perf_counter() - t_wall)
+        return summarise(results, time.perf_counter() - t_wall, self.plan_workers())
+
+    def plan_workers(self) -> int:
+        """The processes a decision of this loop's platform is planned on (its
+        `plan_workers`, `cell.arm.fork`; 1 for a platform that has none: it plans serially)."""
+        return int(getattr(self.platform, "plan_workers", 1))

@@ -116,7 +116,8 @@ class RunSummary:
 
     The planning figures are wall-clock ones (`WALL_CLOCK_KEYS`): `plan_s_median`,
     `plan_s_p95`, `plan_s_max` [s] of the items' `plan_s`, on a machine of `cores`
-    CPU cores (`cores`); `items_per_hour_realtime` counts the items in their bins per
+    CPU cores (`cores`), a decision planned on `plan_workers` processes (1: serially;
+    2: a branch forked, `cell.arm.fork`); `items_per_hour_realtime` counts the items in their bins per
     hour of the run's real-time cycles (`realtime_cycles`: planning not hidden behind
     the arm's previous move added), beside `items_per_hour` of simulated time.
     """
@@ -140,6 +141,7 @@ class RunSummary:
     plan_s_max: float = math.nan
     items_per_hour_realtime: float = math.nan
     cores: int = 0
+    plan_workers: int = 1
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values, item results as a list of dicts."""
@@ -165,6 +167,7 @@ WALL_CLOCK_KEYS = (
     "plan_s_max",
     "items_per_hour_realtime",
     "cores",
+    "plan_workers",
 )
 
 
@@ -222,8 +225,9 @@ def plan_figures(results: Sequence[ItemResult]) -> dict[str, float]:
     }
 
 
-def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
-    """The closing figures of a list of item results."""
+def summarise(results: list[ItemResult], wall_time_s: float, plan_workers: int = 1) -> RunSummary:
+    """The closing figures of a list of item results, planned on `plan_workers` processes
+    per decision (`Orchestrator.plan_workers`; 1 for a platform that plans serially)."""
     n = len(results)
     errs = np.array([r.landing_error_m for r in results if np.isfinite(r.landing_error_m)])
     cyc = np.array([r.cycle_time_s for r in results])
@@ -250,6 +254,7 @@ def summarise(results: list[ItemResult], wall_time_s: float) -> RunSummary:
             sum(realtime_cycles([r.cycle_time_s for r in results], [r.plan_s for r in results])),
         ),
         cores=cores(),
+        plan_workers=plan_workers,
     )
 
 

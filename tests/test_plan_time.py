@@ -71,12 +71,10 @@ def test_plan_s_counts_the_decision_and_not_the_plants_stepping(tmp_path: Path) 
     # DECIDE_S + 2 STEP_SLEEP_S each
     assert stepping >= 4 * 2 * STEP_SLEEP_S
     assert sum(plans) < summary.wall_time_s - 4 * 2 * STEP_SLEEP_S + 1e-9
+    assert summary.plan_workers == 1  # a platform without `plan_workers` plans serially
 
 
-def test_run_json_has_each_items_plan_s_and_its_figures(tmp_path: Path) -> None:
-    job = tmp_path / "job.yaml"
-    job.write_text(
-        """\
+SMALL_JOB = """\
 cell: {robot: panda}
 bins:
   - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
@@ -85,7 +83,11 @@ items:
   - {object: cube50, count: 2, bin: far}
   - {object: cyl70, count: 1, bin: near}
 """
-    )
+
+
+def test_run_json_has_each_items_plan_s_and_its_figures(tmp_path: Path) -> None:
+    job = tmp_path / "job.yaml"
+    job.write_text(SMALL_JOB)
     out = tmp_path / "out.json"
     fast = ["--no-cycle-search", "--no-turn-release"]  # the figures are checked, not these
     assert main(["run", str(job), "--no-log", "--json", str(out)] + fast) == 0
@@ -102,6 +104,24 @@ items:
     # and all the planning (none of it hidden)
     cycles = sum(r["cycle_time_s"] for r in d["results"])
     assert d["items_per_hour_realtime"] >= rate_per_hour(d["in_bin"], cycles + sum(plans))
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_run_says_the_plan_workers_it_planned_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], workers: int
+) -> None:
+    # beside `cores` in the JSON and on the printed "planning per item" line, the
+    # `--plan-workers` given (the suite's $CELL_PLAN_WORKERS is 1: it is not what is read)
+    job = tmp_path / "job.yaml"
+    job.write_text(SMALL_JOB)
+    out = tmp_path / "out.json"
+    fast = ["--no-cycle-search", "--no-turn-release", "--plan-workers", str(workers)]
+    assert main(["run", str(job), "--no-log", "--json", str(out)] + fast) == 0
+    d = json.loads(out.read_text())
+    assert d["plan_workers"] == workers
+    line = next(x for x in capsys.readouterr().out.splitlines() if "planning per item" in x)
+    said = "1 plan worker)" if workers == 1 else "2 plan workers)"
+    assert line.endswith(f"(wall time, {d['cores']} cores, {said}")
 
 
 def test_realtime_cycles_by_hand() -> None:

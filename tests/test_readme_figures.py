@@ -76,14 +76,16 @@ def check_the_demo_table() -> None:
         assert num(rate) == round(run["items_per_hour"])
         (wall,) = quoted(page, r"wall time +([\d.]+) s")
         close(wall, run["wall_time_s"], 1)
-        med, p95, most, cores = quoted(
+        med, p95, most, cores, workers = quoted(
             page,
             r"planning per item +median ([\d.]+) s, p95 ([\d.]+) s, max ([\d.]+) s \(wall "
-            r"time, (\d+) cores\)",
+            r"time, (\d+) cores(?:, (\d+) plan workers?)?\)",
         )
         for q, key in ((med, "plan_s_median"), (p95, "plan_s_p95"), (most, "plan_s_max")):
             close(q, run[key], 2)
         assert int(cores) == run["cores"]
+        if workers is not None:  # quoted from a run that printed them (`plan_workers`)
+            assert int(workers) == run["plan_workers"]
         (realtime,) = quoted(page, r"real-time items/h +([\d,]+) \(planning overlapped")
         assert num(realtime) == round(run["items_per_hour_realtime"])
     check_the_planning_row("the demo", run)

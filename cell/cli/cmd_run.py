@@ -269,7 +269,7 @@ def _run(args: argparse.Namespace) -> int:
                 f"cell run: stopped after {len(done)} of {plural(total, 'item')}{kept}",
                 file=sys.stderr,
             )
-            _partial_json(args, done, total, time.perf_counter() - t_wall)
+            _partial_json(args, done, total, time.perf_counter() - t_wall, orch.loop.plan_workers())
             raise
         if args.snapshot:  # rendered now, written after the results are printed
             image = orch.scene.render()
@@ -297,7 +297,9 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _partial_json(args: argparse.Namespace, done: list[Any], total: int, wall_s: float) -> None:
+def _partial_json(
+    args: argparse.Namespace, done: list[Any], total: int, wall_s: float, plan_workers: int
+) -> None:
     """With --json, the summary of the items finished before an interrupt, marked
     `"interrupted": true` with `items_planned` (the job's items), where --json asks for it;
     said on stderr when written to a file."""
@@ -305,7 +307,8 @@ def _partial_json(args: argparse.Namespace, done: list[Any], total: int, wall_s:
         return
     from cell.results import summarise
 
-    doc = {**summarise(list(done), wall_s).as_dict(), "interrupted": True, "items_planned": total}
+    summary = summarise(list(done), wall_s, plan_workers)
+    doc = {**summary.as_dict(), "interrupted": True, "items_planned": total}
     if json_to_stdout(args):
         print_json(doc)
         return
@@ -429,7 +432,8 @@ def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
         (
             "planning per item",
             f"median {_fmt(s.plan_s_median, ' s', 2)}, p95 {_fmt(s.plan_s_p95, ' s', 2)}, "
-            f"max {_fmt(s.plan_s_max, ' s', 2)} (wall time, {s.cores} cores)",
+            f"max {_fmt(s.plan_s_max, ' s', 2)} (wall time, {s.cores} cores, "
+            f"{plural(s.plan_workers, 'plan worker')})",
         ),
         (
             "real-time items/h",
