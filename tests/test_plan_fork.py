@@ -77,6 +77,7 @@ def test_the_forked_decisions_are_the_serial_ones(pair: tuple[Any, Any]) -> None
         np.testing.assert_array_equal(a.state.q_release, b.state.q_release)
         np.testing.assert_array_equal(ca.goal, cb.goal)
         facings.append((ca.bounds.facing_rad is None, ca.bounds.release_height))
+        _same_planned_moves(serial, forked)
         q = np.asarray(a.state.q_release, float)
     # what the items stand for: the turned facing kept once, the bin faced twice (the
     # cube30 in the cell's bounds, where the forked lower bounds were not kept)
@@ -87,6 +88,27 @@ def test_the_forked_decisions_are_the_serial_ones(pair: tuple[Any, Any]) -> None
     # kept for later decisions are the serial path's
     assert set(forked._out_of_reach) == set(serial._out_of_reach)
     assert len(forked._far_poses) == len(serial._far_poses)
+
+
+def _same_planned_moves(serial: Any, forked: Any) -> None:
+    """The moves the serial path's decision planned and keeps for the item's pick and carry
+    (`Mover._planned`'s memo, toppra's carries and paths) are kept in the forked parent too,
+    those of the child's branch sent back (`PlanFork._memo_merge`), the same trajectories:
+    the pick and carry then plan none again. (A ruckig move cannot be pickled: planned
+    again where needed, the same move.)"""
+    ts = np.linspace(0.0, 5.0, 41)
+    kept = 0
+    for key, a in serial._plan_memo.items():
+        if getattr(a, "kind", "") != "toppra":
+            continue
+        if key not in forked._plan_memo:
+            pytest.fail(f"a {key[0]} move the serial path planned is not kept after the join")
+        b = forked._plan_memo[key]
+        assert a.duration == b.duration
+        for x, y in zip(a.sample_many(ts), b.sample_many(ts), strict=True):
+            np.testing.assert_array_equal(x, y)
+        kept += 1
+    assert kept  # the check checks something
 
 
 def test_a_childs_error_comes_back_as_the_same_error(pair: tuple[Any, Any]) -> None:

@@ -193,3 +193,21 @@ def test_each_scale_keeps_its_own_plans_motion_and_the_dilation_reads_full_speed
         for s in (0.02, 0.4, 1.0):
             assert shared.use(s) == own.use(s)
         assert shared.use(1.0) == scaled.attempt(1.0)[1]
+
+
+def test_a_planned_path_pickles_to_the_same_trajectory() -> None:
+    """A forked planning branch sends its planned carries back pickled (`cell.arm.fork`):
+    `plan_path`'s trajectory, unpickled, has the same parameterisation and states bit for
+    bit (its class is made in `_toppra_class`: it pickles by its state)."""
+    import pickle
+
+    rb = load_robot("panda")
+    rng = np.random.default_rng(5)
+    way = [rb.home + rng.uniform(-0.5, 0.5, 7) for _ in range(3)]
+    traj = plan_path(way, rb)
+    back = pickle.loads(pickle.dumps(traj, protocol=pickle.HIGHEST_PROTOCOL))
+    assert type(back._traj) is type(traj._traj) and back.duration == traj.duration
+    _same(back._traj, traj._traj)
+    ts = np.linspace(0.0, traj.duration, 61)
+    for a, b in zip(back.sample_many(ts), traj.sample_many(ts), strict=True):
+        assert a.tobytes() == b.tobytes()

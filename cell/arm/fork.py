@@ -19,7 +19,10 @@ against the serial path's.
 
 What the serial path's second branch leaves for what follows, the parent gets from the
 child: the IK searches it made (`Kinematics._ik_keep`'s record: answers, poses out of
-reach, warm starts), replayed in the parent after its own branch, in the serial order. A
+reach, warm starts), replayed in the parent after its own branch, in the serial order; and
+the moves it planned (`PlanFork._memo_since`: the carries and paths of `Mover._planned`,
+the pick's approach times), kept where the parent has none under the same key, so that the
+item's pick and carry plan again only what cannot be pickled (a ruckig move). A
 branch's IK depends on the searches made before it (warm starts, poses refused as out of
 reach); the child's began without the first branch's, so the parent checks that none of
 the first branch's IK poses is within `ArmTuning.ik_warm`'s distance and angle (or equal,
@@ -312,17 +315,55 @@ class PlanFork(ArmBase):
         kept, self._ik_log = self._ik_log, []
         return _Child(pid, r, self._ik_log, kept, time.process_time())
 
-    def _child_branch(self, fn: Callable[[], Any]) -> tuple[str, Any, list[Any], bool]:
+    def _child_branch(self, fn: Callable[[], Any]) -> tuple[str, Any, list[Any], bool, bytes]:
         """`fn` run in the child: ("ok", its value) or ("err", its error), the IK record
-        it made, and whether it stepped the plant."""
+        it made, whether it stepped the plant, and the paths it planned (`_memo_since`)."""
         self._ik_log = []
         stepped = float(getattr(self.scene, "step_wall_s", 0.0))
+        before = self._memo_keys()
         try:
             out: tuple[str, Any] = ("ok", fn())
         except Exception as exc:
             out = ("err", exc.with_traceback(None))
         moved = float(getattr(self.scene, "step_wall_s", 0.0)) != stepped
-        return (*out, self._ik_log, moved)
+        return (*out, self._ik_log, moved, self._memo_since(before))
+
+    def _memos(self) -> tuple[dict[Any, Any], ...]:
+        """The decision's memos of planned moves (`_new_decision` clears them): the
+        pick's approach times and plans (`_approach_s`, `_approach_plan`) and the paths
+        and carries (`_planned`)."""
+        return (self._approach_memo, self._approach_plans, self._plan_memo)
+
+    def _memo_keys(self) -> list[set[Any]]:
+        return [set(m) for m in self._memos()]
+
+    def _memo_since(self, before: list[set[Any]]) -> bytes:
+        """The entries the memos gained since `before` (`_memo_keys`), pickled; b"" where
+        they cannot be (the parent then plans them again where it needs them)."""
+        new: list[dict[Any, bytes]] = []
+        for m, b in zip(self._memos(), before, strict=True):
+            kept: dict[Any, bytes] = {}
+            for k, v in m.items():
+                if k in b:
+                    continue
+                try:
+                    kept[k] = pickle.dumps(v, protocol=pickle.HIGHEST_PROTOCOL)
+                except Exception:  # e.g. a ruckig move (a C++ object): planned again
+                    continue
+            new.append(kept)
+        return pickle.dumps(new, protocol=pickle.HIGHEST_PROTOCOL)
+
+    def _memo_merge(self, data: bytes) -> None:
+        """Keep a forked branch's planned moves (`_memo_since`) where the parent has none
+        under the same key: the serial path would have them from that branch, and a key
+        is the whole of what the move's plan depends on (`Mover._planned`), so either
+        process's entry is the same plan."""
+        if not data:
+            return
+        for m, new in zip(self._memos(), pickle.loads(data), strict=True):
+            for k, v in new.items():
+                if k not in m:
+                    m[k] = pickle.loads(v)
 
     def _fork_join(self, child: _Child, serial: Callable[[], Any]) -> Any:
         """The child's answer to its branch (its value returned, its error raised), its IK
@@ -334,11 +375,12 @@ class PlanFork(ArmBase):
         self.fork_stats.wait_s += time.perf_counter() - t0
         self.fork_stats.beyond_cpu_s += max(0.0, child.cpu_s - mine)
         if got is not None:
-            kind, value, record, moved = got
+            kind, value, record, moved, memos = got
             why = self._fork_conflict(child.mine, record, moved)
             if not why:
                 self.fork_stats.used += 1
                 self._ik_replay(record)
+                self._memo_merge(memos)
                 if kind == "err":
                     raise value
                 return value

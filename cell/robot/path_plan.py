@@ -157,6 +157,11 @@ def _toppra_class() -> type:
     toppra_log = logging.getLogger("toppra.algorithm.reachabilitybased.reachability_algorithm")
 
     class ConstAccel(ParametrizeConstAccel):  # type: ignore[misc]
+        def __reduce__(self) -> tuple[Any, ...]:
+            # a class made in this function pickles by its state (`cell.arm.fork` sends a
+            # forked branch's planned carries): the same object, none of it recomputed
+            return (_const_accel, (self.__dict__.copy(),))
+
         def _process_parametrization(self) -> None:
             ss, vs = self._ss, self._velocities
             ds = ss[1:] - ss[:-1]
@@ -225,7 +230,18 @@ def _toppra_class() -> type:
                 )
             )
 
+    Toppra.const_accel = ConstAccel
     return Toppra
+
+
+def _const_accel(state: dict[str, Any]) -> Any:
+    """`_toppra_class`'s constant-acceleration parameterisation with the state `state` (its
+    `__reduce__`: unpickled as it was, nothing recomputed)."""
+    toppra: Any = _toppra_class()
+    cls = toppra.const_accel
+    out = cls.__new__(cls)
+    out.__dict__.update(state)
+    return out
 
 
 def plan_path(
