@@ -150,6 +150,7 @@ def test_an_interrupted_run_keeps_every_throw_already_recorded(tmp_path, signum,
     assert n <= int(said_kept[2]) <= kept
     part = json.loads((tmp_path / "run.json").read_text())
     assert part["interrupted"] is True and part["items_planned"] == 20
+    assert part["plan_workers"] == 1  # the suite's $CELL_PLAN_WORKERS, as the run planned
     assert part["items"] == len(part["results"]) == int(said_kept[1])
     assert part["in_bin"] == sum(r["in_bin"] for r in part["results"])
     with sqlite3.connect(db) as con:
