@@ -242,7 +242,7 @@ def test_a_child_ends_with_its_parent(pair: tuple[Any, Any]) -> None:
     assert pid > 0
     os.kill(middle, signal.SIGKILL)
     os.waitpid(middle, 0)
-    deadline = time.monotonic() + 5.0
+    deadline = time.monotonic() + 20.0  # at once where it works; a loaded machine's slack
     while time.monotonic() < deadline:
         try:  # the grandchild is not ours to reap: gone, or a zombie of init's
             state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]

@@ -298,7 +298,8 @@ class PlanFork(ArmBase):
         r, w = os.pipe()
         t0 = time.perf_counter()
         try:
-            pid = os.fork()
+            parent = os.getpid()  # taken before the fork: a child reading its parent after
+            pid = os.fork()  # it died would read init's and live on (`_die_with_parent`)
         except OSError as exc:
             os.close(r)
             os.close(w)
@@ -306,7 +307,7 @@ class PlanFork(ArmBase):
             return None
         if pid == 0:
             os.close(r)
-            _die_with_parent(os.getppid())
+            _die_with_parent(parent)
             self._in_child = True
             _child_main(lambda: self._child_branch(fn), w)
         os.close(w)
