@@ -9,6 +9,7 @@ those of the items' values, and the real-time formula against a hand computation
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import statistics
@@ -181,3 +182,30 @@ def test_bench_sorts_figures_count_each_layout_as_a_run_of_its_own() -> None:
     assert f["cores"] >= 1
     # a layout written before plan_s was measured: no figures rather than wrong ones
     assert realtime_figures([{"items": [{"cycle_time_s": 2.0, "in_bin": True}]}]) == {}
+
+
+def test_the_benchs_real_time_runs_plan_on_one_blas_thread(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`cell bench --only realtime` ran its jobs with the process's BLAS threads (two here):
+    two in each planning process fought over the 2 cores, the demo's `plan_s` p95 1.0 s
+    against `cell run`'s 0.55 s, which runs on one. The bench now runs each job as
+    `cell run` does; the run itself is the real one (one item of the demo)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from cell.bench import bench_realtime
+    from cell.jobs import load_job
+    from cell.orchestrator import Orchestrator
+
+    seen: list[int] = []
+    real_run = Orchestrator.run
+
+    def run(self: Orchestrator, *args: Any, **kw: Any) -> Any:
+        seen.extend(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+        return real_run(self, *args, **kw)
+
+    monkeypatch.setattr(Orchestrator, "run", run)
+    job = load_job(Path(__file__).resolve().parents[1] / "tasks" / "bins.yaml")
+    with threadpool_limits(limits=2):
+        assert {p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"} == {2}
+        f = bench_realtime._run_job(dataclasses.replace(job, max_items=1), "t")
+    assert seen and set(seen) == {1}
+    assert f["t_items"] == 1.0
