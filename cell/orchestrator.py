@@ -57,6 +57,7 @@ from cell.jobs import ItemSpec, Job, check_order
 from cell.kinds import PICKS, RELEASES
 from cell.loop import ItemLoop
 from cell.model.objects import ObjectParams
+from cell.parallel import one_blas_thread
 from cell.params import ModelParams, load_params, scene_params_path
 from cell.results import FAILURES, ItemResult, RunSummary
 from cell.robot.ik_warm import FarPoses, WarmStarts
@@ -330,10 +331,11 @@ class Orchestrator(
         return self.loop.run_item(index, spec)
 
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
-        """Sort every item of the job (`cell.loop.ItemLoop.run`): the next pick starts
-        as soon as an item is thrown; with `learn`, an item waits for the landing of an
-        earlier throw of the same object (or class) still in flight, to learn from it."""
-        return self.loop.run(on_item)
+        """Sort every item of the job (`cell.loop.ItemLoop.run`, on one BLAS thread as `cell
+        run`): the next pick starts as soon as an item is thrown; with `learn`, an item waits
+        for the landing of an earlier throw of the same object (or class) still in flight."""
+        with one_blas_thread():  # two BLAS threads in each planning process fight for cores
+            return self.loop.run(on_item)
 
     def present(self, index: int, obj: ObjectParams) -> Any:
         """The item on the pick station: at its centre (kinematic pick), or at a seeded

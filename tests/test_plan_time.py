@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from cell.cli import main
-from cell.jobs import parse_job
+from cell.jobs import load_job, parse_job
 from cell.loop import ItemLoop
 from cell.results import ItemResult, rate_per_hour, realtime_cycles, summarise
 from cell.sim.bins import BinSpec
@@ -184,25 +184,24 @@ def test_bench_sorts_figures_count_each_layout_as_a_run_of_its_own() -> None:
     assert realtime_figures([{"items": [{"cycle_time_s": 2.0, "in_bin": True}]}]) == {}
 
 
-def test_the_benchs_real_time_runs_plan_on_one_blas_thread(monkeypatch: pytest.MonkeyPatch) -> None:
-    """`cell bench --only realtime` ran its jobs with the process's BLAS threads (two here):
-    two in each planning process fought over the 2 cores, the demo's `plan_s` p95 1.0 s
-    against `cell run`'s 0.55 s, which runs on one. The bench now runs each job as
-    `cell run` does; the run itself is the real one (one item of the demo)."""
+def test_a_run_plans_on_one_blas_thread_whoever_calls_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`cell bench --only realtime` ran its jobs through `Orchestrator.run` with the process's
+    BLAS threads (two here), where `cell run` set one: two in each planning process fought
+    over the 2 cores, the demo's `plan_s` p95 1.0 s against `cell run`'s 0.55 s.
+    `Orchestrator.run` now runs on one, whoever calls it; the run itself is the real one
+    (one item of the demo, through the bench)."""
     from threadpoolctl import threadpool_info, threadpool_limits
 
     from cell.bench import bench_realtime
-    from cell.jobs import load_job
-    from cell.orchestrator import Orchestrator
 
     seen: list[int] = []
-    real_run = Orchestrator.run
+    real_run = ItemLoop.run
 
-    def run(self: Orchestrator, *args: Any, **kw: Any) -> Any:
+    def run(self: ItemLoop, *args: Any, **kw: Any) -> Any:
         seen.extend(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
         return real_run(self, *args, **kw)
 
-    monkeypatch.setattr(Orchestrator, "run", run)
+    monkeypatch.setattr(ItemLoop, "run", run)
     job = load_job(Path(__file__).resolve().parents[1] / "tasks" / "bins.yaml")
     with threadpool_limits(limits=2):
         assert {p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"} == {2}

@@ -70,18 +70,14 @@ def realtime_figures(layouts: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def _run_job(job: Any, tag: str) -> dict[str, float]:
-    """Run `job` with the default options, as `cell run` runs it (on one BLAS thread: two
-    of them in each planning process fought over the 2 cores, the demo's `plan_s` p95 1.0 s
-    against `cell run`'s 0.55): its planning and rate figures, named `tag`."""
+    """Run `job` with the default options: its planning and rate figures, named `tag`."""
     from cell.orchestrator import Orchestrator
-    from cell.parallel import one_blas_thread
 
     orch = Orchestrator(job)
     try:
-        with one_blas_thread():
-            c0 = time.process_time()
-            s = orch.run()
-            cpu = time.process_time() - c0
+        c0 = time.process_time()
+        s = orch.run()
+        cpu = time.process_time() - c0
     finally:
         orch.close()
     step = float(orch.scene.step_wall_s)
