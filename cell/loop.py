@@ -14,7 +14,7 @@ PyBullet:
 * the end-effector is the platform's; a hardware one rides in step with the simulated
   one (`cell.endeffector.instep.InStep`).
 
-The loop scores what the plant observed (`missed_bin`), records each throw with its
+The loop scores what the plant observed (`cell.results.scored`), records each throw with its
 flight track in the store (`sorted_throw_record`), tells an observer, and accounts
 time honestly: an item's cycle runs from the start of its pick to the start of the
 next item's pick; `items_per_hour` counts only items at rest in their target bin.
@@ -56,8 +56,8 @@ from cell.results import (
     RunSummary,
     failure_of,
     landing,
-    missed_bin,
     rate_per_hour,
+    scored,
     sorted_throw_record,
     summarise,
 )
@@ -82,36 +82,6 @@ log = logging.getLogger(__name__)
 def _settling_in(f: InFlight, bin_id: str) -> bool:
     """Is `f` an item placed in bin `bin_id` that has not come to rest yet?"""
     return f.decision.action == "place" and f.base["target_bin"] == bin_id
-
-
-def _scored(
-    base: dict[str, Any],
-    action: str,
-    d: Decision,
-    out: Any,
-    target: Any,
-    err: float,
-    cycle_time_s: float,
-    throw_id: str = "",
-) -> ItemResult:
-    """The result of a released item from where the plant says it came to rest."""
-    failure, reason = missed_bin(
-        out.bin_id, target.id, err, rest_xyz=getattr(out, "rest_xyz", None), target=target
-    )
-    return ItemResult(
-        **base,
-        action=action,
-        bin_id=out.bin_id or "",
-        in_bin=out.bin_id == target.id,
-        failure=failure,
-        reason=reason,
-        landing_error_m=err,
-        stroke_m=d.stroke_m,
-        delta_stroke_m=d.delta_stroke_m,
-        cycle_time_s=cycle_time_s,
-        throw_id=throw_id,
-        moving=d.moving,
-    )
 
 
 # Outcome (or the NoLanding error) → (ItemResult, landing point [m, W]): how an item
@@ -313,7 +283,7 @@ class ItemLoop:
 
         def score(out: Any) -> tuple[ItemResult, Any]:
             err = math.hypot(out.rest_xyz[0] - bx, out.rest_xyz[1] - by)
-            return _scored(base, "place", d, out, target, err, t_release - t0), out.rest_xyz
+            return scored(base, "place", d, out, target, err, t_release - t0), out.rest_xyz
 
         return score
 
@@ -370,7 +340,7 @@ class ItemLoop:
                     ),
                     track=out.track,
                 )
-            res = _scored(base, "throw", d, out, target, err, t_release - t0, throw_id)
+            res = scored(base, "throw", d, out, target, err, t_release - t0, throw_id)
             return res, (cross[0], cross[1], land_z)
 
         return score
@@ -497,6 +467,5 @@ class ItemLoop:
         return summarise(results, time.perf_counter() - t_wall, self.plan_workers())
 
     def plan_workers(self) -> int:
-        """The processes a decision of this loop's platform is planned on (its
-        `plan_workers`, `cell.arm.fork`; 1 for a platform that has none: it plans serially)."""
+        """The processes a decision is planned on (`cell.arm.fork`; 1: a platform without)."""
         return int(getattr(self.platform, "plan_workers", 1))

@@ -331,9 +331,8 @@ class Orchestrator(
         return self.loop.run_item(index, spec)
 
     def run(self, on_item: Callable[[ItemResult], None] | None = None) -> RunSummary:
-        """Sort every item of the job (`cell.loop.ItemLoop.run`, on one BLAS thread as `cell
-        run`): the next pick starts as soon as an item is thrown; with `learn`, an item waits
-        for the landing of an earlier throw of the same object (or class) still in flight."""
+        """Sort every item of the job (`cell.loop.ItemLoop.run`: the next pick as soon as an
+        item is thrown), on one BLAS thread as `cell run` does (`one_blas_thread`)."""
         with one_blas_thread():  # two BLAS threads in each planning process fight for cores
             return self.loop.run(on_item)
 

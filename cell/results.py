@@ -36,6 +36,7 @@ __all__ = [
     "plan_figures",
     "rate_per_hour",
     "realtime_cycles",
+    "scored",
     "sorted_throw_record",
     "summarise",
 ]
@@ -341,4 +342,35 @@ def missed_bin(
     return (
         "missed_bin",
         f"came to rest {where}, not in {target_id!r} (landing error {landing_error_m:.3f} m)",
+    )
+
+
+def scored(
+    base: dict[str, Any],
+    action: str,
+    d: Any,
+    out: Any,
+    target: Any,
+    err: float,
+    cycle_time_s: float,
+    throw_id: str = "",
+) -> ItemResult:
+    """The result of a released item from where the plant says it came to rest (`out`, the
+    plant's outcome), its decision `d` (`cell.decision.Decision`) and its landing error [m]."""
+    failure, reason = missed_bin(
+        out.bin_id, target.id, err, rest_xyz=getattr(out, "rest_xyz", None), target=target
+    )
+    return ItemResult(
+        **base,
+        action=action,
+        bin_id=out.bin_id or "",
+        in_bin=out.bin_id == target.id,
+        failure=failure,
+        reason=reason,
+        landing_error_m=err,
+        stroke_m=d.stroke_m,
+        delta_stroke_m=d.delta_stroke_m,
+        cycle_time_s=cycle_time_s,
+        throw_id=throw_id,
+        moving=d.moving,
     )

@@ -339,8 +339,8 @@ class PlanFork(ArmBase):
         return [set(m) for m in self._memos()]
 
     def _memo_since(self, before: list[set[Any]]) -> bytes:
-        """The entries the memos gained since `before` (`_memo_keys`), pickled; b"" where
-        they cannot be (the parent then plans them again where it needs them)."""
+        """The entries the memos gained since `before` (`_memo_keys`), pickled; an entry
+        that cannot be is left out (the parent then plans it again where it needs it)."""
         new: list[dict[Any, bytes]] = []
         for m, b in zip(self._memos(), before, strict=True):
             kept: dict[Any, bytes] = {}
@@ -359,8 +359,6 @@ class PlanFork(ArmBase):
         under the same key: the serial path would have them from that branch, and a key
         is the whole of what the move's plan depends on (`Mover._planned`), so either
         process's entry is the same plan."""
-        if not data:
-            return
         for m, new in zip(self._memos(), pickle.loads(data), strict=True):
             for k, v in new.items():
                 if k not in m:
