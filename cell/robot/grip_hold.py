@@ -249,16 +249,26 @@ def _point_motion(
     r_local = np.asarray(offset_tcp_m, float)
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     k = len(qs)
-    a_o, alphas, ws, r = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3))
+    out = np.empty((3, k, 3))  # a_o, α, ω
     rots = np.empty((k, 3, 3))
+    kinematics, place = pin.forwardKinematics, pin.updateFramePlacement
+    classical, spatial, twist = (
+        pin.getFrameClassicalAcceleration,
+        pin.getFrameAcceleration,
+        pin.getFrameVelocity,
+    )
+    a_o, alphas, ws = out
+    # The grip's frame alone placed (`updateFramePlacement`, as `Robot.tcp_positions`),
+    # not the model's 28, and r = R r_local for all instants at once: the same floats as
+    # placing every frame and one product per instant, bit for bit
+    # (tests/test_grip_hold_bits.py), in 0.7 of the time
     for i, (q, dq, ddq) in enumerate(zip(qs, dqs, ddqs, strict=True)):
-        pin.forwardKinematics(m, d, q, dq, ddq)
-        pin.updateFramePlacements(m, d)
-        a_o[i] = pin.getFrameClassicalAcceleration(m, d, fr, lwa).linear
-        alphas[i] = pin.getFrameAcceleration(m, d, fr, lwa).angular
-        ws[i] = pin.getFrameVelocity(m, d, fr, lwa).angular
-        rots[i] = d.oMf[fr].rotation
-        r[i] = rots[i] @ r_local
+        kinematics(m, d, q, dq, ddq)
+        rots[i] = place(m, d, fr).rotation
+        a_o[i] = classical(m, d, fr, lwa).linear
+        alphas[i] = spatial(m, d, fr, lwa).angular
+        ws[i] = twist(m, d, fr, lwa).angular
+    r = rots @ r_local
     # the cross products over all instants at once (one np.cross per row cost 3x the
     # kinematics: np.cross's axis handling dominates for single 3-vectors)
     acc = a_o + np.cross(alphas, r) + np.cross(ws, np.cross(ws, r))

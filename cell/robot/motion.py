@@ -24,7 +24,7 @@ both are re-exported here.
 
 from __future__ import annotations
 
-import math
+import weakref
 from collections.abc import Sequence
 
 import numpy as np
@@ -32,10 +32,10 @@ import numpy as np
 from cell.errors import InvalidInput, TrajectoryError
 from cell.robot.model import Robot
 from cell.robot.path_plan import _check_scales, plan_path
+from cell.robot.ruckig_move import _ruckig, _ruckig_kept
 from cell.robot.spline import monotone_samples, spline_path
 from cell.robot.trajectory import (
     POSITION_TOL_RAD,
-    RuckigTrajectory,
     Trajectory,
     as_robot,
     check_limits,
@@ -118,97 +118,6 @@ def plan_move(
                 f"{vmax[i]:.4f} rad/s"
             )
     return _ruckig(rb, p0, v0, a0, p1, v1, vmax, amax, jmax, velocity_interface=False)
-
-
-def _ruckig(
-    rb: Robot,
-    p0: np.ndarray,
-    v0: np.ndarray,
-    a0: np.ndarray,
-    p1: np.ndarray,
-    v1: np.ndarray,
-    vmax: np.ndarray,
-    amax: np.ndarray,
-    jmax: np.ndarray,
-    *,
-    velocity_interface: bool,
-    phase: bool = False,
-) -> Trajectory:
-    from ruckig import ControlInterface, InputParameter, Result, Ruckig, Synchronization
-    from ruckig import Trajectory as RTrajectory
-
-    n = rb.dof
-    lim = rb.limits
-    inp = InputParameter(n)
-    if velocity_interface:
-        inp.control_interface = ControlInterface.Velocity
-    if phase:  # all joints on one profile: a straight joint-space line where ruckig can
-        inp.synchronization = Synchronization.Phase
-    inp.current_position = p0.tolist()
-    inp.current_velocity = v0.tolist()
-    inp.current_acceleration = a0.tolist()
-    inp.target_position = p1.tolist()
-    inp.target_velocity = v1.tolist()
-    inp.target_acceleration = [0.0] * n
-    inp.max_velocity = vmax.tolist()
-    inp.max_acceleration = amax.tolist()
-    inp.max_jerk = jmax.tolist()
-    raw = RTrajectory(n)
-    try:
-        result = Ruckig(n).calculate(inp, raw)
-    except RuntimeError as exc:
-        raise TrajectoryError(f"ruckig rejected the move: {exc}") from None
-    except ValueError as exc:
-        # a result code ruckig's Python binding cannot name (its enum lacks -101, the
-        # duration beyond ruckig's numerical range: limits far too slow for the move)
-        raise TrajectoryError(
-            f"ruckig found no trajectory ({exc}; a move longer than ruckig can time, "
-            "from limits far too slow for it?)"
-        ) from None
-    if result != Result.Working and result != Result.Finished:
-        raise TrajectoryError(f"ruckig found no trajectory (result {result})")
-    traj = RuckigTrajectory(raw, n)
-    lower, upper = lim.lower - POSITION_TOL_RAD, lim.upper + POSITION_TOL_RAD
-    at_rest = not velocity_interface and not np.any(a0) and np.all(np.abs(v0) <= vmax)
-    if at_rest and _within_by_speed(p0, p1, vmax, traj.duration, lower, upper):
-        bad = np.zeros(0, dtype=int)  # no joint can reach a limit: nothing to sample
-    else:
-        lo, hi = traj.position_bounds(amax, within=(lower, upper))
-        bad = np.flatnonzero((lo < lower) | (hi > upper))
-    if bad.size:
-        i = int(bad[0])
-        raise TrajectoryError(
-            f"the jerk-limited move passes joint {i + 1}'s position limit: it spans "
-            f"[{lo[i]:.4f}, {hi[i]:.4f}] rad, the range is [{lim.lower[i]:.4f}, "
-            f"{lim.upper[i]:.4f}] rad (start velocity {v0[i]:.3f}, target velocity "
-            f"{v1[i]:.3f} rad/s): lower the velocities or move the target inwards"
-        )
-    if not math.isfinite(traj.duration):
-        raise TrajectoryError("ruckig returned a trajectory of infinite duration")
-    return traj
-
-
-def _within_by_speed(
-    p0: np.ndarray,
-    p1: np.ndarray,
-    vmax: np.ndarray,
-    duration_s: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-) -> bool:
-    """Can no joint of a move from p0 to p1 [rad] in duration_s [s], never faster than
-    vmax [rad/s], leave [lower, upper] [rad]? At time t a joint is within vmax·t of p0 and
-    within vmax·(T − t) of p1, so never further up than (p0 + p1 + vmax·T) / 2, nor
-    further down than (p0 + p1 − vmax·T) / 2 (with margins over ruckig's own rounding:
-    1e-6 of vmax, 1e-7 rad). Where both are within the limits, `_ruckig` need not sample
-    the move (`RuckigTrajectory.position_bounds`): it would find it within them. Only for
-    a move that starts without acceleration and within vmax, whose target is a position
-    (ruckig keeps such a move within vmax)."""
-    if not math.isfinite(duration_s):
-        return False
-    reach = np.asarray(vmax, float) * (1.0 + 1e-6) * duration_s + 1e-7
-    mid = p0 + p1
-    return bool(np.all((mid + reach) / 2.0 <= upper) and np.all((mid - reach) / 2.0 >= lower))
 
 
 class ChainTrajectory(Trajectory):
@@ -315,17 +224,18 @@ def plan_approach(
             raise InvalidInput(f"plan_approach: speed fraction {f} outside [0, 1]")
         v = u * s_max * f
         try:
-            first = _ruckig(rb, p0, zero, zero, pm, v, vmax, amax, jmax, velocity_interface=False)
-            down = _ruckig(
+            # the same moves as `_ruckig`'s, remembered: an approach to the same pick from
+            # another start descends the same way (`cell.robot.ruckig_move._KEPT`)
+            first = _ruckig_kept(
+                rb, p0, zero, zero, pm, v, vmax, amax, jmax, velocity_interface=False
+            )
+            down = _ruckig_kept(
                 rb, pm, v, zero, p1, zero, vmax, amax, jmax, velocity_interface=False, phase=True
             )
         except TrajectoryError as exc:
             err = exc
             continue
-        # phase synchronisation may fall back to time synchronisation: then off the line
-        qs = down.sample_many(np.linspace(0.0, down.duration, 41))[0] - pm
-        off = qs - np.outer(qs @ u, u)
-        if float(np.max(np.linalg.norm(off, axis=1))) > POSITION_TOL_RAD:
+        if not _on_segment(down, pm, u):
             err = TrajectoryError(f"the descent at speed fraction {f} leaves the segment")
             continue
         if best is None or first.duration + down.duration < best.duration:
@@ -333,6 +243,24 @@ def plan_approach(
     if best is None:
         raise TrajectoryError(f"no approach through q_over: {err}")
     return best
+
+
+# Whether a descent `_ruckig_kept` remembered keeps to its segment, by the descent: a
+# remembered one is the move of one (start, target) pair, so of one segment.
+_ON_SEGMENT: weakref.WeakKeyDictionary[Trajectory, bool] = weakref.WeakKeyDictionary()
+
+
+def _on_segment(down: Trajectory, pm: np.ndarray, u: np.ndarray) -> bool:
+    """Does the descent `down` from pm [rad] keep to the joint-space line along the unit
+    vector u (within POSITION_TOL_RAD at 41 instants)? Phase synchronisation may fall
+    back to time synchronisation: then it is off the line."""
+    on = _ON_SEGMENT.get(down)
+    if on is None:
+        qs = down.sample_many(np.linspace(0.0, down.duration, 41))[0] - pm
+        off = qs - np.outer(qs @ u, u)
+        on = not float(np.max(np.linalg.norm(off, axis=1))) > POSITION_TOL_RAD
+        _ON_SEGMENT[down] = on
+    return on
 
 
 def plan_stop(

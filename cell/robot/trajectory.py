@@ -126,6 +126,56 @@ class RuckigTrajectory(Trajectory):
         )
         return flat.reshape(ts.size, self.dof)
 
+    def stays_within(
+        self,
+        max_acceleration: np.ndarray,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        n: int = 16,
+        most: int = 160,
+    ) -> bool:
+        """True where the move provably keeps every joint within [lower, upper] [rad]
+        (each shape (dof,)); False where that is not shown (a joint's sample outside, or
+        more than `most` samples needed): `position_bounds` then says.
+
+        Between two samples dt apart a joint whose |q̈| ≤ A has its maximum either at a
+        sample or where q̇ = 0, within A·dt²/8 of the higher sample (and so its minimum);
+        A is the larger of `max_acceleration` [rad/s²] and the move's start acceleration
+        (ruckig keeps within the limits, first bringing down an acceleration beyond them).
+        An interval that this does not clear is halved, down to the joints' limits
+        sampled at the start of a move from rest (where the arm waits at a limit). n
+        samples to begin with, evenly spread, the ends included. Where it is True, every
+        position ruckig gives within the move, and so `position_bounds`'s, lies within
+        [lower, upper] (with 1e-12 rad of the bounds left for ruckig's rounding)."""
+        if self.duration <= 0.0:
+            q0 = np.asarray(self._traj.at_time(0.0)[0], dtype=float)
+            return bool(np.all(q0 >= lower) and np.all(q0 <= upper))
+        acc = np.maximum(max_acceleration, np.abs(self._traj.at_time(0.0)[2]))
+        acc = acc * (1.0 + 1e-9) / 8.0
+        top, bottom = np.asarray(upper) - 1e-12, np.asarray(lower) + 1e-12
+        ts = np.linspace(0.0, self.duration, n)
+        q = self._positions(ts)
+        if np.any(q > upper) or np.any(q < lower):
+            return False
+        ta, tb, qa, qb = ts[:-1], ts[1:], q[:-1], q[1:]
+        taken = n
+        while True:
+            slack = ((tb - ta) ** 2)[:, None] * acc
+            out = (np.maximum(qa, qb) + slack > top) | (np.minimum(qa, qb) - slack < bottom)
+            left = np.flatnonzero(out.any(axis=1))
+            if left.size == 0:
+                return True
+            taken += left.size
+            if taken > most:
+                return False
+            ta, tb, qa, qb = ta[left], tb[left], qa[left], qb[left]
+            tm = 0.5 * (ta + tb)
+            qm = self._positions(tm)
+            if np.any(qm > upper) or np.any(qm < lower):
+                return False
+            ta, tb = np.r_[ta, tm], np.r_[tm, tb]
+            qa, qb = np.r_[qa, qm], np.r_[qm, qb]
+
     def position_bounds(
         self,
         max_acceleration: np.ndarray,
