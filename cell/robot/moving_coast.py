@@ -7,6 +7,7 @@ import logging
 import math
 
 import numpy as np
+from numpy.linalg import _umath_linalg  # type: ignore[attr-defined]
 
 from cell.errors import TrajectoryError
 from cell.frames import axis_frame
@@ -19,6 +20,8 @@ log = logging.getLogger(__name__)
 
 
 _COAST_H = 1e-3  # [s] the coast's integration step (RK4) and sample period
+
+_lstsq = _umath_linalg.lstsq
 
 
 def throw_axis(elevation: float, azimuth: float) -> np.ndarray:
@@ -51,10 +54,14 @@ class CoastTrajectory(Trajectory):
         self.kind = "coast"
         self.duration = float(duration)
         sign = -1.0 if ending else 1.0  # a run-in is integrated backwards from its end
-        twist = np.concatenate([sign * np.asarray(v, float), np.zeros(3)])
+        twist = np.concatenate([sign * np.asarray(v, float), np.zeros(3)])[:, None]
 
         def rate(q: np.ndarray) -> np.ndarray:
-            return np.linalg.lstsq(robot.tcp_jacobian(q), twist, rcond=1e-10)[0]
+            # np.linalg.lstsq(J, twist, rcond=1e-10)[0]: the gufunc it calls (LAPACK's
+            # gelsd), called directly, bit for bit (tests/test_coast_rate.py), without
+            # its checks and copies, which took 40 % of its time (~30,000 calls on tune
+            # layout 2's throws)
+            return _lstsq(robot.tcp_jacobian(q), twist, 1e-10, signature="ddd->ddid")[0][:, 0]
 
         n = max(1, int(math.ceil(self.duration / _COAST_H)))
         h = self.duration / n
