@@ -93,3 +93,35 @@ def test_carries_shaped_by_the_grip_are_the_same_trajectories(name: str) -> None
             slowed += new.duration > plan_path(way, rb).duration + 1e-3
     assert compared >= 4  # most cases are planned, not refused
     assert slowed >= 2  # and the grip binds in some: the constraint shapes them
+
+
+def test_rows_times_the_identity_are_blass_product() -> None:
+    """`_TimesIdentity.dot`, what toppra's seidel set-up multiplies F a, F b, F c by (Fᵀ,
+    the identity): BLAS's product bit for bit, on one BLAS thread and two, for rows with
+    -0.0 and +0.0 among their entries, all-zero rows, rows with a NaN or an infinity (the
+    product itself), and by another matrix (an ordinary product)."""
+    from threadpoolctl import threadpool_limits
+
+    from cell.robot.grip_constraint import _identity, _TimesIdentity
+
+    rng = np.random.default_rng(67)
+    for n, k in ((512, 131), (512, 2), (8, 40)):
+        x = rng.normal(0.0, 3.0, (k, n))
+        x[rng.random((k, n)) < 0.2] = -0.0
+        x[rng.random((k, n)) < 0.1] = 0.0
+        x[0] = -0.0
+        rows = x.view(_TimesIdentity)
+        eye = _identity(n)
+        other = rng.normal(size=(n, n))
+        for threads in (1, 2):
+            with threadpool_limits(threads):
+                got = rows.dot(eye.T)
+                assert type(got) is np.ndarray
+                assert got.tobytes() == x.dot(eye.T).tobytes()
+                assert rows.dot(other).tobytes() == x.dot(other).tobytes()
+        bad = x.copy()
+        bad[1, 3], bad[-1, 0] = np.nan, np.inf
+        with np.errstate(invalid="ignore"):
+            got, want = bad.view(_TimesIdentity).dot(eye.T), bad.dot(eye.T)
+        assert np.array_equal(np.isnan(got), np.isnan(want))
+        assert np.array_equal(got[~np.isnan(got)], want[~np.isnan(want)])
