@@ -32,12 +32,16 @@ bench: install
 	$(BIN)/cell bench
 
 # Every figure and quoted figure in README.md and docs/ (about 2 h 29 min on 2 cores, most of it
-# the random-layout benchmark: 32 min for each of its two sets, 15 min without the release
+# the random-layout benchmark: 32 min for each of its two sets as last timed together (the
+# `test` set alone, one layout at a time: 16 min, 2026-12-01), 15 min without the release
 # search and the turn, 27 min with --order bins; the speed trade-off 19 min; the diagnosis on
 # another implementation's worlds 16 min). The headline (bench_sort.json) is the `test`
 # layouts (seeds from 1000), on which no constant is chosen; the `tune` layouts (seeds 0-19,
 # where the arm's constants were chosen) beside it (bench_sort_tune.json), with the
-# comparisons of options made on them; the speed trade-off is the `test` layouts. The JSON beside
+# comparisons of options made on them; the speed trade-off is the `test` layouts. The `test`
+# layouts run one at a time (--workers 1), each with the machine to itself and its decisions
+# planned on both cores, as a cell's computer would: their planning time and real-time rate
+# are the cell's (on Ray, two layouts at a time, each would have one core). The JSON beside
 # each figure is what tests/test_readme_figures.py checks the README's quotes against.
 # Not here: docs/figures/rerun_run.png needs a screen (docs/recordings.md).
 FIG := docs/figures
@@ -73,7 +77,7 @@ figures: install
 	$(BIN)/python -m cell.gap.scene_repeats s:bounce-slide s:bounce-slide-mu03 s:bounce-hop s:bounce-hop-mu05 s:bounce-roll s:bounce-roll-one --jitters 0.0001,0.01 --json $(FIG)/gap_scene_repeats.json > /dev/null
 	$(BIN)/cell bench --json > $(FIG)/bench.json
 	$(BIN)/python -m cell.bench.bench_scene_reach --n 600 --seed 100 --json $(FIG)/scene_reach_breakdown.json
-	$(BIN)/cell bench sort --set test --layouts 20 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort.json
+	$(BIN)/cell bench sort --set test --layouts 20 --robots panda,ur5 --workers 1 --floor --json > $(FIG)/bench_sort.json
 	$(BIN)/cell bench sort --set tune --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --floor --json > $(FIG)/bench_sort_tune.json
 	$(BIN)/cell bench sort --set tune --layouts 20 --seed 0 --robots panda,ur5 --workers 2 --no-cycle-search --no-turn-release --floor --json > $(FIG)/bench_sort_plain.json
 	$(BIN)/cell run tasks/bins.yaml --no-log --no-cycle-search --no-turn-release --json $(FIG)/run_plain.json
