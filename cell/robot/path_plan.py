@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from cell.errors import InvalidInput, TrajectoryError
+from cell.robot.kept import Kept, array_key
 from cell.robot.model import Robot
 from cell.robot.spline import spline_path
 from cell.robot.toppra_bulk import propose_gridpoints
@@ -74,39 +75,28 @@ def _spline_within(rb: Robot, keep: list[np.ndarray]) -> Any:
 # at several (`cell.robot.carry_plan.plan_carry`: at full speed, shaped by the grip, at
 # the bisection's scale or gently). Nothing reads into them: the gridpoints are read-only.
 # Bounded: cleared when full.
-_PATHS: dict[bytes, tuple[Any, np.ndarray] | str] = {}
-_PATHS_MAX = 64
+_PATHS: Kept[tuple[Any, np.ndarray]] = Kept(64, TrajectoryError)
 
 
 def _path_and_grid(rb: Robot, keep: list[np.ndarray]) -> tuple[Any, np.ndarray]:
     """(`_spline_within`'s path, toppra's gridpoints along it), each made once for the
     same waypoints [rad] and joint limits; TrajectoryError as `_spline_within`."""
     lower, upper = rb.limits.lower, rb.limits.upper
-    key = b"".join(np.ascontiguousarray(v, dtype=float).tobytes() for v in (lower, upper, *keep))
-    found = _PATHS.get(key)
-    if found is None:
-        if len(_PATHS) >= _PATHS_MAX:
-            _PATHS.clear()
-        try:
-            path = _spline_within(rb, keep)
-        except TrajectoryError as exc:
-            found = str(exc)
-        else:
-            # toppra's own gridpoints (its TOPPRA's defaults), for every scale and margin
-            grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
-            grid.setflags(write=False)
-            found = (path, grid)
-        _PATHS[key] = found
-    if isinstance(found, str):
-        raise TrajectoryError(found)
-    return found
+
+    def make() -> tuple[Any, np.ndarray]:
+        path = _spline_within(rb, keep)
+        # toppra's own gridpoints (its TOPPRA's defaults), for every scale and margin
+        grid = propose_gridpoints(path, max_err_threshold=1e-3, min_nb_points=100)
+        grid.setflags(write=False)
+        return path, grid
+
+    return _PATHS.get(array_key(lower, upper, *keep), make)
 
 
 # toppra's joint-limit constraints by their limits' bytes: building one formats its limits
 # into a description string (1.6 ms a pair, more than toppra's own planning of a short
 # path's grid takes); nothing in them changes once built. Bounded: cleared when full.
-_LIMIT_CONSTRAINTS: dict[bytes, tuple[Any, Any]] = {}
-_LIMIT_CONSTRAINTS_MAX = 256
+_LIMIT_CONSTRAINTS: Kept[tuple[Any, Any]] = Kept(256)
 
 
 def _joint_limits(vlim: np.ndarray, alim: np.ndarray) -> tuple[Any, Any]:
@@ -114,19 +104,15 @@ def _joint_limits(vlim: np.ndarray, alim: np.ndarray) -> tuple[Any, Any]:
     vlim and alim, each shape (dof, 2) [rad/s, rad/s²], built once for those limits."""
     import toppra.constraint as constraint
 
-    key = vlim.tobytes() + alim.tobytes()
-    found = _LIMIT_CONSTRAINTS.get(key)
-    if found is None:
-        if len(_LIMIT_CONSTRAINTS) >= _LIMIT_CONSTRAINTS_MAX:
-            _LIMIT_CONSTRAINTS.clear()
-        found = (
+    return _LIMIT_CONSTRAINTS.get(
+        vlim.tobytes() + alim.tobytes(),
+        lambda: (
             constraint.JointVelocityConstraint(vlim),
             constraint.JointAccelerationConstraint(
                 alim, discretization_scheme=constraint.DiscretizationType.Interpolation
             ),
-        )
-        _LIMIT_CONSTRAINTS[key] = found
-    return found
+        ),
+    )
 
 
 @functools.cache

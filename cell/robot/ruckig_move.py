@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from cell.errors import TrajectoryError
+from cell.robot.kept import Kept, array_key
 from cell.robot.model import Robot
 from cell.robot.trajectory import POSITION_TOL_RAD, RuckigTrajectory, Trajectory
 
@@ -116,8 +117,7 @@ def _within_by_speed(
 # first 10 items. ruckig is deterministic, so a move remembered is the move it plans;
 # nothing writes into one (a trajectory is sampled, never changed). Bounded: cleared when
 # full.
-_KEPT: dict[bytes, Trajectory | str] = {}
-_KEPT_MAX = 512
+_KEPT: Kept[Trajectory] = Kept(512, TrajectoryError)
 
 
 def _ruckig_kept(
@@ -137,31 +137,22 @@ def _ruckig_kept(
     """`_ruckig`'s move, planned once for the same arguments and position limits: the
     same trajectory object, or the same TrajectoryError (by its message)."""
     lim = rb.limits
-    arrays = (p0, v0, a0, p1, v1, vmax, amax, jmax, lim.lower, lim.upper)
-    key = bytes((velocity_interface, phase)) + b"".join(
-        np.ascontiguousarray(a, dtype=float).tobytes() for a in arrays
+    key = bytes((velocity_interface, phase)) + array_key(
+        p0, v0, a0, p1, v1, vmax, amax, jmax, lim.lower, lim.upper
     )
-    found = _KEPT.get(key)
-    if found is None:
-        if len(_KEPT) >= _KEPT_MAX:
-            _KEPT.clear()
-        try:
-            found = _ruckig(
-                rb,
-                p0,
-                v0,
-                a0,
-                p1,
-                v1,
-                vmax,
-                amax,
-                jmax,
-                velocity_interface=velocity_interface,
-                phase=phase,
-            )
-        except TrajectoryError as exc:
-            found = str(exc)
-        _KEPT[key] = found
-    if isinstance(found, str):
-        raise TrajectoryError(found)
-    return found
+    return _KEPT.get(
+        key,
+        lambda: _ruckig(
+            rb,
+            p0,
+            v0,
+            a0,
+            p1,
+            v1,
+            vmax,
+            amax,
+            jmax,
+            velocity_interface=velocity_interface,
+            phase=phase,
+        ),
+    )

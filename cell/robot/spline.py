@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.robot.kept import Kept
 from cell.robot.trajectory import (
     POSITION_TOL_RAD,
 )
@@ -36,12 +37,7 @@ def spline_path(
     key = repr(way.shape).encode() + way.tobytes()
     if lower is not None and upper is not None:
         key += np.asarray(lower, float).tobytes() + np.asarray(upper, float).tobytes()
-    found = _SPLINES.get(key)
-    if found is None:
-        if len(_SPLINES) >= _SPLINES_MAX:
-            _SPLINES.clear()
-        found = _SPLINES[key] = _spline_path(way, lower, upper)
-    return found
+    return _SPLINES.get(key, lambda: _spline_path(way, lower, upper))
 
 
 # `spline_path`'s paths by the bytes of the waypoints (their shape too) and of the limits
@@ -50,8 +46,7 @@ def spline_path(
 # on tune layout 0's first 10 items, 0.4 ms each (scipy's CubicSpline and its two
 # derivatives). A spline is the same for the same waypoints; nothing writes into one
 # (`plan_path`'s own `_PATHS` shares them too). Bounded: cleared when full.
-_SPLINES: dict[bytes, Any] = {}
-_SPLINES_MAX = 256
+_SPLINES: Kept[Any] = Kept(256)
 
 
 def _spline_path(way: np.ndarray, lower: np.ndarray | None, upper: np.ndarray | None) -> Any:
