@@ -376,16 +376,36 @@ def check_the_gap_laws() -> None:
     )
     close(tol, 100 * crit["param_tol"], 0)
     assert float(ratio) == crit["floor_ratio"]
-    (miss,) = [c for c in doc["campaigns"] if not c["passes"]]
-    assert miss["truth"] == "drag_scale" and miss["verdict"] == "unknown"
-    tool, best = quoted(page, r"repeated throws, ([\d.]+) m, is below what the\s+best constant "
-                        r"factor leaves, ([\d.]+) m")  # fmt: skip
-    close(tool, miss["tool_floor_m"], 3)
-    close(best, miss["after_m"], 3)
+    (drag,) = [c for c in doc["campaigns"] if c["case"] == "o:drag-throw"]
+    pt = drag["parameter_throw_to_throw"]
+    assert drag["passes"] and drag["verdict"] == "drag_scale" and pt["names"]
+    assert drag["laws"]["drag_scale"] == "factor_i ~ N(mean, sd)"
+    tool, best, world = quoted(
+        page,
+        r"repeated throws, ([\d.]+) m, is below what the best constant factor leaves, ([\d.]+) m "
+        r"\(the world's own floor ([\d.]+) m\)",
+    )
+    sd_w, mean_w = quoted(page, r"\(`o:drag-throw`, sd ([\d.]+)\s+about ([\d.]+)\)")
+    (world_eff,) = OTHER_CASES["o:drag-throw"][0]
+    assert (float(sd_w), float(mean_w)) == (world_eff["sd"], world_eff["value"])
+    close(tool, drag["tool_floor_m"], 3)
+    close(best, drag["after_m"], 3)
+    close(world, drag["world_floor_m"], 3)
+    mean, sd, lo, hi, fs, a_d = quoted(
+        page,
+        r"the mean\s+([\d.]+) and the sd ([\d.]+) \(interval ([\d.]+)–([\d.]+)\), the floor its "
+        r"spread sets ([\d.]+) m, A ([\d.]+)\s+× the world's floor",
+    )
+    close(mean, drag["params"]["drag_scale"]["factor"], 3)
+    close(sd, drag["params"]["drag_scale"]["sd"], 3)
+    close(lo, pt["sd_ci95"][0], 3)
+    close(hi, pt["sd_ci95"][1], 3)
+    close(fs, pt["floor_m"], 4)
+    close(a_d, drag["after_over_floor"], 2)
     varying = [
         c
         for c in doc["campaigns"]
-        if c["case"].endswith("-throw") and c["passes"] and c["case"] != "o:wind-throw"
+        if c["case"].endswith("-throw") and c["case"] not in ("o:wind-throw", "o:drag-throw")
     ]
     lo, hi, n = quoted(page, r"flagged as outliers \((\d+)–(\d+) rows of (\d+)\)")
     assert (int(lo), int(hi)) == (

@@ -167,7 +167,10 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     assert now2 == "32"  # that change's table, as the page tells it
     was3, now3, of3 = quoted(PAGE, r"(\d+) → (\d+) of (\d+) pass; `s:wind-y`, `s:downwash\+wind`")
     assert (was3, of3) == (now2, of)  # the rival's law came after it
-    assert (int(now3), int(of)) == (
+    assert (now3, of) == ("34", "43")  # that change's table, as the page tells it
+    was4, of4, now4, of5 = quoted(PAGE, r"(\d+) of (\d+) → (\d+) of (\d+) pass\.\n")
+    assert (was4, of4) == (now3, of)  # the drawn drag factor came after it
+    assert (int(now4), int(of5)) == (
         load_json("docs/figures/gap_check_scene.json")["passes"],
         len(rows),
     )

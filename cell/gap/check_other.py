@@ -415,6 +415,7 @@ def judge_campaign(case: dict[str, Any], records: list[dict[str, Any]],
         "outliers_false": len(flagged - true_out), "outlier_rows": rows,
         "proposal": rep.get("proposal", {}).get("law"),
         "wind_throw_to_throw": rep.get("wind_throw_to_throw"),
+        "parameter_throw_to_throw": rep.get("parameter_throw_to_throw"),
         "passes": bool(diag and phase_ok and params_ok and floor_ok), "seconds": secs,
     }  # fmt: skip
 

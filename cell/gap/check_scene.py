@@ -207,6 +207,9 @@ SCENE_CASES: dict[
     # no effect, thrown with the flight cases' objects (`matched_objects`): their
     # configurations miss the configured model by more than the tracker's scatter
     "s:none-cubes": ([], "none", {}, {}, {"matched": True}),
+    # the drag factor drawn for each throw (drawn after the others: their rows keep their seeds)
+    "s:drag-throw": ([_e(DS, "throw", value=1.8, sd=0.3)], DS, {DS: "flight"},
+                     {DS: {"factor": 1.8}}, {}),
 }  # fmt: skip
 FAST_SCENE = ("s:wind", "s:none")
 

@@ -312,6 +312,12 @@ def diagnose(
     chosen, cur_sq = sel.join(base_sq) if B > NONE_RATIO * F else ([], base_sq)
     sel.mark_joined(chosen)
     verdict = _verdict(B, float(np.sqrt(cur_sq.mean())), F, chosen)
+    spread = None
+    if verdict == ["unknown"] and chosen:
+        tick("parameter (throw to throw)")
+        spread = _spread_verdict(prob, chosen[-1], float(np.sqrt(cur_sq.mean())), nf)
+        if spread is not None and spread["names"]:
+            verdict = public(chosen[-1].names)
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -340,6 +346,8 @@ def diagnose(
     report["verdict"]["law_mean"] = (
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
     )
+    if spread is not None:
+        _spread_report(report, spread)
     if chosen and verdict[0] not in ("none", "unknown") and "wind" in verdict:
         tick("wind (throw to throw)")
         _wind_throw_report(report, prob, tuple(chosen[-1].full.effects))
@@ -377,6 +385,36 @@ def _wind_throw_report(report: dict[str, Any], prob: GapProblem,
     ci = v["params_ci95"].setdefault("wind", {})
     ci.update({"x_mps": wt["mean_ci95_mps"][0], "y_mps": wt["mean_ci95_mps"][1],
                "sd_mps": wt["sd_ci95_mps"]})  # fmt: skip
+
+
+def _spread_verdict(prob: GapProblem, score: Score, A: float, nf: NoiseFloor
+                    ) -> dict[str, Any] | None:  # fmt: skip
+    """The throw-to-throw form of the joined effects' one-parameter members
+    (`cell.gap.param_throw`), and whether it names them: the form stands and A is within
+    the verdict's ratio of the larger of the floor and the floor its spread sets."""
+    from cell.gap.param_throw import param_spread
+
+    form = param_spread(prob, tuple(score.full.effects), nf)
+    if form is None:
+        return None
+    floor = max(nf.floor_m, form["floor_m"]) if np.isfinite(form["floor_m"]) else nf.floor_m
+    form["verdict_floor_m"] = floor
+    form["names"] = bool(form["chosen"] and A <= VERDICT_RATIO * floor)
+    return form
+
+
+def _spread_report(report: dict[str, Any], form: dict[str, Any]) -> None:
+    """The form under `parameter_throw_to_throw`; where it names the verdict, the effect's
+    parameter is its mean and spread (`sd`, in the parameter's units) with their
+    intervals, and its law `θ_i ~ N(mean, sd)`."""
+    report["parameter_throw_to_throw"] = form
+    if not form["names"]:
+        return
+    v = report["verdict"]
+    name, p = form["effect"], form["param"]
+    v["params"][name] = {**v["params"].get(name, {}), p: form["mean"], "sd": form["sd"]}
+    v["laws"][name] = form["law"]
+    v["params_ci95"].setdefault(name, {}).update({p: form["mean_ci95"], "sd": form["sd_ci95"]})
 
 
 def _law_params(e: Effect, ci: dict[str, list[float]] | None) -> dict[str, Any]:

@@ -173,6 +173,12 @@ def format_table(report: dict[str, Any]) -> str:
             + ", ".join(f"{k}={p[k]:.4g} [{a:.4g}, {b:.4g}]" for k, (a, b) in ci.items())
             + " (95% intervals)"
         )
+    pt = r.get("parameter_throw_to_throw")
+    if pt and pt["names"]:
+        lines.append(
+            f"  {pt['effect']}'s {pt['param']} drawn throw to throw: its spread sets the floor at "
+            f"{pt['floor_m']:.4f} m (F {r['noise_floor_m']:.4f} m from the repeats alone)"
+        )
     if v.get("partial_effects"):
         lines.append(
             f"                 (partly explained by {' + '.join(v['partial_effects'])}; the rest "

@@ -170,6 +170,12 @@ def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
         from cell.gap.wind_throw import whitened_misses
 
         return flag(whitened_misses(full, d.verdict_effects, wind))
+    spread = d.report.get("parameter_throw_to_throw")
+    if spread and spread["names"]:
+        # a parameter drawn throw to throw: a miss its own spread explains is no outlier
+        from cell.gap.param_throw import whitened_spread
+
+        return flag(whitened_spread(full, d.verdict_effects, spread))
     return flag(full.residual(np.arange(len(full)), d.verdict_effects))
 
 

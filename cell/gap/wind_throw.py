@@ -39,7 +39,19 @@ from cell.gap.noise import MIN_REPEAT_DOF, repeat_groups
 from cell.gap.problem import GapProblem
 from cell.model.effects import Effect
 
-__all__ = ["LAW", "LOGLIK_PENALTY", "fit_marginal", "loglik", "whitened_misses", "wind_throw"]
+__all__ = [
+    "LAW",
+    "LOGLIK_PENALTY",
+    "fit_marginal",
+    "heldout",
+    "loglik",
+    "mean_ci95",
+    "repeat_pairs",
+    "repeat_test",
+    "sd_interval",
+    "whitened_misses",
+    "wind_throw",
+]
 
 LAW = "wind_i ~ N(mean, sd)"
 LOGLIK_PENALTY = 2.0 * float(np.log1p(TERM_PENALTY))  # [nats per throw] for the term s
@@ -85,6 +97,13 @@ def _gls(y: np.ndarray, jac: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.
     return cov @ b, cov
 
 
+def mean_ci95(y: np.ndarray, jac: np.ndarray, s: float, sig: float) -> list[list[float]]:
+    """The GLS mean's 95 % intervals [[lo, hi] per parameter] under spread s and noise σ."""
+    mu, cov = _gls(y, jac, _cov(jac, s, sig))
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return [[float(m - 1.96 * e), float(m + 1.96 * e)] for m, e in zip(mu, se, strict=True)]
+
+
 def loglik(y: np.ndarray, jac: np.ndarray, mu: np.ndarray, s: float, sig: float) -> np.ndarray:
     """Each throw's log density [nats] under y_i ~ N(J_i μ, σ² I + s² J_i J_iᵀ)."""
     v = _cov(jac, s, sig)
@@ -120,58 +139,84 @@ def _nll_grid(y: np.ndarray, jac: np.ndarray, s: np.ndarray, sig: np.ndarray
     return 0.5 * np.sum(quad + np.log(det) + 2 * _LN2PI, axis=1), mu
 
 
-def _grid(sig0: float, steady: bool) -> tuple[np.ndarray, np.ndarray]:
+def _nll_grid_one(y: np.ndarray, jac: np.ndarray, s: np.ndarray, sig: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """`_nll_grid` for one parameter, J (n, 2, 1): V = σ² I + s² j jᵀ is of rank one in s,
+    so V⁻¹ = (I − c j jᵀ) / σ², c = s² / (σ² + s² |j|²) (Sherman-Morrison), det V =
+    σ² (σ² + s² |j|²); the 2 × 2 inverse would cancel where s² |j|² ≫ σ²."""
+    j0, j1 = jac[:, 0, 0], jac[:, 1, 0]
+    m = j0**2 + j1**2
+    a = sig[:, None] ** 2
+    den = a + s[:, None] ** 2 * m  # σ² + s² |j|², (g, n)
+    jy = j0 * y[:, 0] + j1 * y[:, 1]
+    mu = (np.sum(jy / den, axis=1) / np.sum(m / den, axis=1))[:, None]
+    e0, e1 = y[None, :, 0] - j0 * mu, y[None, :, 1] - j1 * mu
+    je = j0 * e0 + j1 * e1
+    quad = (e0 * e0 + e1 * e1 - s[:, None] ** 2 * je * je / den) / a
+    return 0.5 * np.sum(quad + np.log(a * den) + 2 * _LN2PI, axis=1), mu
+
+
+def _nll(y: np.ndarray, jac: np.ndarray, s: np.ndarray, sig: np.ndarray
+         ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """(nll (g,), μ (g, K)) for J (n, 2, K): the wind's two level components or one
+    parameter of another effect."""
+    return (_nll_grid_one if jac.shape[2] == 1 else _nll_grid)(y, jac, s, sig)
+
+
+def _grid(sig0: float, steady: bool, unit: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     sig = sig0 * np.geomspace(0.05, 2.0, 41)
     if steady:
         return np.zeros_like(sig), sig
-    sv = np.r_[0.0, np.geomspace(0.01, 5.0, 40)]
+    sv = np.r_[0.0, unit * np.geomspace(0.01, 5.0, 40)]
     gs, gg = np.meshgrid(sv, sig, indexing="ij")
     return gs.ravel(), gg.ravel()
 
 
-def fit_marginal(y: np.ndarray, jac: np.ndarray, *, steady: bool = False
+def fit_marginal(y: np.ndarray, jac: np.ndarray, *, steady: bool = False, unit: float = 1.0
                  ) -> tuple[np.ndarray, float, float, float]:  # fmt: skip
     """(μ [m/s], s [m/s], σ [m], the summed log density) by maximum marginal likelihood;
     `steady` holds s = 0 (μ then is the least-squares fit). A grid over (s, σ) (s = 0
-    among its values), then L-BFGS-B from its best point."""
+    among its values), then L-BFGS-B from its best point. `unit` is the parameter's size
+    (1 m/s for the wind): the spread's grid and bounds are in it."""
     sig0 = max(float(np.sqrt(np.mean(y * y) / 2)), 1e-6)
-    gs, gg = _grid(sig0, steady)
-    grid_nll = _nll_grid(y, jac, gs, gg)[0]
+    gs, gg = _grid(sig0, steady, unit)
+    grid_nll = _nll(y, jac, gs, gg)[0]
     k = int(np.argmin(grid_nll))
 
     def nll(th: np.ndarray) -> float:
         sv = 0.0 if steady else float(np.exp(th[1]))
-        return float(_nll_grid(y, jac, np.array([sv]), np.array([np.exp(th[0])]))[0][0])
+        return float(_nll(y, jac, np.array([sv]), np.array([np.exp(th[0])]))[0][0])
 
-    x0 = [np.log(gg[k])] + ([] if steady else [np.log(max(gs[k], 2 * S_MIN_MPS))])
+    x0 = [np.log(gg[k])] + ([] if steady else [np.log(max(gs[k], 2 * S_MIN_MPS * unit))])
     bounds = [(np.log(1e-6), np.log(10.0))] + (
-        [] if steady else [(np.log(S_MIN_MPS), np.log(10.0))]
+        [] if steady else [(np.log(S_MIN_MPS * unit), np.log(10.0 * unit))]
     )
     best = minimize(nll, np.array(x0), method="L-BFGS-B", bounds=bounds)
     sig = float(np.exp(best.x[0]))
     s = 0.0 if steady else float(np.exp(best.x[1]))
-    if not steady and s < S_ZERO_MPS:
+    if not steady and s < S_ZERO_MPS * unit:
         s = 0.0
     if best.fun > grid_nll[k]:  # the grid's own point is better (s = 0 is on the grid)
         s, sig = float(gs[k]), float(gg[k])
-    val, mu = _nll_grid(y, jac, np.array([s]), np.array([sig]))
+    val, mu = _nll(y, jac, np.array([s]), np.array([sig]))
     return mu[0], s, sig, -float(val[0])
 
 
-def _sd_interval(y: np.ndarray, jac: np.ndarray, s: float, sig: float, ll: float
-                 ) -> list[float]:  # fmt: skip
+def sd_interval(y: np.ndarray, jac: np.ndarray, s: float, sig: float, ll: float,
+                unit: float = 1.0) -> list[float]:  # fmt: skip
     """The spread's 95 % profile-likelihood interval [m/s] (σ and μ refitted at each s, σ
     on a grid of 1.5 % steps; the log-likelihood within χ²₁(0.95)/2 = 1.92 of its
     maximum)."""
-    sv = np.linspace(0.0, max(3.0 * s, 0.5), 61)
+    sv = np.linspace(0.0, max(3.0 * s, 0.5 * unit), 61)
     sg = sig * np.geomspace(1 / 3, 3.0, 151)
     gs, gg = np.meshgrid(sv, sg, indexing="ij")
-    prof = -_nll_grid(y, jac, gs.ravel(), gg.ravel())[0].reshape(gs.shape).min(axis=1)
+    prof = -_nll(y, jac, gs.ravel(), gg.ravel())[0].reshape(gs.shape).min(axis=1)
     inside = sv[prof >= ll - 1.92]
     return [float(inside.min()), float(inside.max())] if inside.size else [s, s]
 
 
-def _heldout(prob: GapProblem, y: np.ndarray, jac: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def heldout(prob: GapProblem, y: np.ndarray, jac: np.ndarray, unit: float = 1.0
+            ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Per throw, the held-out log density [nats] of the steady and the varying form,
     averaged over the problem's fold schemes."""
     n = y.shape[0]
@@ -179,7 +224,7 @@ def _heldout(prob: GapProblem, y: np.ndarray, jac: np.ndarray) -> tuple[np.ndarr
     for folds in prob.folds.values():
         for tr, te in folds:
             mu0, _, sig0, _ = fit_marginal(y[tr], jac[tr], steady=True)
-            mu1, s1, sig1, _ = fit_marginal(y[tr], jac[tr])
+            mu1, s1, sig1, _ = fit_marginal(y[tr], jac[tr], unit=unit)
             steady[te] += loglik(y[te], jac[te], mu0, 0.0, sig0)
             vary[te] += loglik(y[te], jac[te], mu1, s1, sig1)
     k = max(len(prob.folds), 1)
@@ -194,20 +239,23 @@ def repeat_pairs(prob: GapProblem) -> np.ndarray:
     return np.array(pairs, int).reshape(-1, 2)
 
 
-def repeat_test(y: np.ndarray, jac: np.ndarray, pairs: np.ndarray) -> dict[str, Any]:
+def repeat_test(y: np.ndarray, jac: np.ndarray, pairs: np.ndarray, unit: float = 1.0
+                ) -> dict[str, Any]:  # fmt: skip
     """The spread the repeats show: the difference of two throws of one configuration
     keeps a wind drawn per throw (covariance 2σ² I + sd² (J_a J_aᵀ + J_b J_bᵀ)) and
     cancels what the model misses on the configuration itself (a drag or a wind response
     off by a factor per object grows with J just as a spread does). Fitted by maximum
     likelihood (J_a, J_b taken as their mean), with the likelihood ratio of sd > 0."""
     if len(pairs) < MIN_PAIRS:
-        return {"pairs": int(len(pairs)), "sd_mps": None, "lr": None}
+        return {"pairs": int(len(pairs)), "sd_mps": None, "lr": None, "noise_sd_m": None}
     a, b = pairs[:, 0], pairs[:, 1]
     d = y[a] - y[b]
     jm = np.sqrt(2.0) * 0.5 * (jac[a] + jac[b])
-    _, s1, _, ll1 = fit_marginal(d, jm)
+    _, s1, sig1, ll1 = fit_marginal(d, jm, unit=unit)
     ll0 = fit_marginal(d, jm, steady=True)[3]
-    return {"pairs": int(len(pairs)), "sd_mps": s1, "lr": float(2.0 * (ll1 - ll0))}
+    # the difference's scatter is 2σ² per axis: σ is the noise of one throw
+    return {"pairs": int(len(pairs)), "sd_mps": s1, "lr": float(2.0 * (ll1 - ll0)),
+            "noise_sd_m": float(sig1 / np.sqrt(2.0))}  # fmt: skip
 
 
 def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] | None:
@@ -238,7 +286,7 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
         mu, s, sig, ll = fit_marginal(y, jac)
     _, cov = _gls(y, jac, _cov(jac, s, sig))
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    h0, h1 = _heldout(prob, y, jac)
+    h0, h1 = heldout(prob, y, jac)
     d = h1 - h0
     gain = float(np.mean(d))
     lo, hi = np.percentile(d[_indices(d.size, prob.seed + 11, N_BOOT)].mean(axis=1), [2.5, 97.5])
@@ -253,7 +301,7 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
             [float(m - 1.96 * e), float(m + 1.96 * e)] for m, e in zip(mu, se, strict=True)
         ],
         "sd_mps": s,
-        "sd_ci95_mps": _sd_interval(y, jac, s, sig, ll),
+        "sd_ci95_mps": sd_interval(y, jac, s, sig, ll),
         "noise_sd_m": sig,
         "steady_mps": w_steady.tolist(),
         "mean_first_pass_mps": first.tolist(),

@@ -8,7 +8,7 @@ item as forces and contacts, never as a formula on the landing:
 | kind | how it acts in the scene | forms |
 |---|---|---|
 | wind | the item's air drag is taken on its velocity relative to a steady air flow (x_mps, y_mps): a force −c_f·|v − w|·(v − w) each physics step | const, throw (each throw's flow drawn around the mean with sd) |
-| drag_scale | the drag force is c_f = factor · ½ ρ C_d A of the object's own C_d and area | const, object (a factor per object id), stroke (factor = k · stroke) |
+| drag_scale | the drag force is c_f = factor · ½ ρ C_d A of the object's own C_d and area | const, object (a factor per object id), stroke (factor = k · stroke), throw (each throw's factor drawn around the value with sd) |
 | downwash | the air under a drone's rotors moves down: a round jet from the release point whose centre speed w_mps · rpm / 5000 falls as 1 / (1 + depth / core_m) and whose radius grows as radius_m + 0.2 · depth | const |
 | launch | as the item leaves the pads its velocity is turned by yaw_k · stroke about the vertical and scaled by 1 + speed_k · stroke (outside the vocabulary) | stroke |
 | side_force | a constant horizontal force m · (x_mps2, y_mps2) on the item in flight (outside the vocabulary) | const |
@@ -202,6 +202,8 @@ def throw_plan(plan: list[Throw], effects: list[dict[str, Any]], seed: int,
                 sc.drag_factor = float(per.get(th.object_id, dr.get("value", 1.0)))
                 if dr.get("form") == "stroke":
                     sc.drag_factor = float(dr["k"]) * th.stroke
+                if dr.get("form") == "throw":  # drawn for each throw, never below 0.1
+                    sc.drag_factor = max(0.1, sc.drag_factor + rng.normal(0.0, float(dr["sd"])))
             sc.jet = (np.array(th.p0), th.rpm, dw) if dw and th.rpm > 0 else None
             if rows is not None and not rows[i]:
                 continue
