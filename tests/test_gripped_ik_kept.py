@@ -17,14 +17,17 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.jobs import load_job
+from cell.jobs import parse_job
 from cell.orchestrator import Orchestrator
 from cell.robot.ik import IKNoSolution, solve_release_ik
+from tests.test_reach_bound import UR3_CELL
 
 
 @pytest.fixture(scope="module")
 def orchestrator() -> Any:
-    o = Orchestrator(load_job("tasks/bins_ur3.yaml"), session="gripped-ik")
+    # the UR3 demo's cell with one box: the IK is the arm's, and the demo's meshes and
+    # spheres need no grip probe here (`Orchestrator._probe_meshes`)
+    o = Orchestrator(parse_job(UR3_CELL, "ur3_cell.yaml"), session="gripped-ik")
     yield o
     o.close()
 

@@ -84,6 +84,8 @@ items:
   - {object: cube50, count: 2, bin: far}
   - {object: cyl70, count: 1, bin: near}
 """
+# SMALL_JOB's bins and its first item alone
+ONE_ITEM_JOB = SMALL_JOB.split("items:")[0] + "items:\n  - {object: cube50, count: 1, bin: far}\n"
 
 
 def test_run_json_has_each_items_plan_s_and_its_figures(tmp_path: Path) -> None:
@@ -112,9 +114,10 @@ def test_run_says_the_plan_workers_it_planned_on(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], workers: int
 ) -> None:
     # beside `cores` in the JSON and on the printed "planning per item" line, the
-    # `--plan-workers` given (the suite's $CELL_PLAN_WORKERS is 1: it is not what is read)
+    # `--plan-workers` given (the suite's $CELL_PLAN_WORKERS is 1: it is not what is read),
+    # on one item: the count is said once for the run, whatever its items
     job = tmp_path / "job.yaml"
-    job.write_text(SMALL_JOB)
+    job.write_text(ONE_ITEM_JOB)
     out = tmp_path / "out.json"
     fast = ["--no-cycle-search", "--no-turn-release", "--plan-workers", str(workers)]
     assert main(["run", str(job), "--no-log", "--json", str(out)] + fast) == 0
