@@ -86,3 +86,44 @@ def test_a_drag_drawn_throw_to_throw_is_named_with_its_mean_and_spread(drag_draw
     lo, hi = v["params_ci95"]["drag_scale"]["sd"]
     assert lo <= 0.15 <= hi
     assert rep["outliers"]["rows"] == []
+
+
+@pytest.fixture(scope="module")
+def band_mass_drawn_with_outliers():
+    """The other implementation's world with the band mass drawn for every throw,
+    N(0.02, 0.004²) kg (the `o:bm-throw` case's world), and 5 % of the landings moved by
+    0.3–1 m in a random direction, 240 throws: the campaign and the diagnosis."""
+    case = other_cases(("o:bm-throw",), n=240)[0]
+    rng = np.random.default_rng(case["world_seed"])
+    camp = draw_other_campaign(case["effects"], rng, n=240, outliers=0.05)
+    d, _ = diagnose_log(ThrowTable.from_records(camp.records), DEFAULT_EE, seed=case["seed"])
+    return camp, d.report
+
+
+def test_a_band_mass_drawn_per_throw_keeps_its_tails_and_flags_the_outliers(
+    band_mass_drawn_with_outliers,
+):
+    """The verdict names the band mass by its one value; its misses flag the throws whose
+    mass drew far from the mean as well as the moved landings (35 of them besides the 12
+    before the tails were read as the draw's). Read as the mass drawn per throw, the
+    tails are its spread: every moved landing (the world's own list) is still flagged and
+    at most two other throws are; the mean and the sd are the world's (the sd's interval
+    holds 0.004 kg), and the robust held-out RMSE is within 1.3 × the world's floor on
+    the rows kept."""
+    camp, rep = band_mass_drawn_with_outliers
+    assert OTHER_CASES["o:bm-throw"][0][0]["sd"] == 0.004
+    v = rep["verdict"]
+    assert v["effects"] == ["band_mass"]
+    moved = {i + 1 for i in camp.outliers}  # rows: 1 = the first data row
+    flagged = set(rep["outliers"]["rows"])
+    assert len(moved) == 12 and moved <= flagged
+    assert len(flagged - moved) <= 2, sorted(flagged - moved)
+    form = rep["parameter_throw_to_throw"]
+    assert form["chosen"] and form["tried_for"] == "outliers", form
+    assert v["laws"]["band_mass"] == "mass_kg_i ~ N(mean, sd)"
+    assert v["params"]["band_mass"]["mass_kg"] == pytest.approx(0.02, rel=0.05)
+    lo, hi = v["params_ci95"]["band_mass"]["sd"]
+    assert lo <= 0.004 <= hi
+    keep = np.ones(len(camp.records), bool)
+    keep[np.asarray(sorted(flagged)) - 1] = False
+    assert v["heldout_rmse_robust_m"] <= 1.3 * camp.floor_on(keep)

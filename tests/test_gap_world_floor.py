@@ -48,14 +48,16 @@ def test_a_scene_floor_on_kept_rows_drops_a_flagged_rows_repeat_pair():
 
 
 def test_a_row_is_judged_against_the_world_floor_on_the_rows_its_robust_error_counts():
-    """A band mass drawn throw to throw (sd 20 % of 0.02 kg): the throws it moves most are
-    the world's own scatter (in its floor, no injected outlier), and the tool flags them.
-    The judged ratio is the robust RMSE over the world's floor counted by hand on the
-    rows it kept (the logged landings' RMS distance from the deterministic world); the
-    plain RMSE is set against the floor on every row."""
+    """A band mass drawn throw to throw (sd 20 % of 0.02 kg) in a log without repeats: the
+    throws it moves most are the world's own scatter (in its floor, no injected outlier),
+    and the tool flags them (without repeats the spread cannot show, and the verdict reads
+    the mass by its one value, `cell.gap.param_throw`). The judged ratio is the robust
+    RMSE over the world's floor counted by hand on the rows it kept (the logged landings'
+    RMS distance from the deterministic world); the plain RMSE is set against the floor
+    on every row."""
     case = other_cases(("o:bm-throw",), n=160)[0]
     camp = draw_other_campaign(case["effects"], np.random.default_rng(case["world_seed"]),
-                               n=case["n"], **case["options"])  # fmt: skip
+                               n=case["n"], repeats=1, **case["options"])  # fmt: skip
     assert camp.outliers == ()
     row = judge_campaign(case, camp.records, camp.floor_on, camp.outliers)
     flagged = row["outlier_rows"]

@@ -37,6 +37,11 @@ and an `unknown` verdict whose held-out RMSE A is within the verdict's ratio of 
 names the effect, its law `θ_i ~ N(mean, sd)`. In expectation over the draws the repeats'
 floor equals F_s (a repeat holds the spread too); F_s weighs each throw by its J, which the
 repeats' plain mean square does not.
+
+A verdict that names the effect by its one value leaves each throw's draw in its miss, and
+the throws that drew far from the mean look impossible: where its misses flag rows,
+`cell.gap.run` fits the form too and flags on the misses whitened by it
+(`whitened_spread`).
 """
 
 from __future__ import annotations
@@ -103,6 +108,17 @@ def _linearised(prob: GapProblem, effects: tuple[Effect, ...], j: int, th0: floa
     return r0 + jac[:, :, 0] * th0, jac
 
 
+def _sd_ci95(y: np.ndarray, jac: np.ndarray, s: float, sig: float, ll: float, unit: float
+             ) -> list[float]:  # fmt: skip
+    """The sd's 95 % profile interval (`sd_interval`, in θ's unit), then again on a grid
+    from one of its steps below it to one above: a spread small beside its unit (grams of
+    a band mass in a unit of 0.1 kg) is narrower than one step of the first grid, which
+    would give that one grid point as the interval."""
+    lo, hi = sd_interval(y, jac, s, sig, ll, unit)
+    step = max(3.0 * s, 0.5 * unit) / 60.0
+    return sd_interval(y, jac, s, sig, ll, unit, span=(max(lo - step, 0.0), hi + step))
+
+
 def _one(prob: GapProblem, effects: tuple[Effect, ...], j: int, nf: NoiseFloor
          ) -> dict[str, Any]:  # fmt: skip
     from cell.gap.stats import N_BOOT, _indices
@@ -140,7 +156,7 @@ def _one(prob: GapProblem, effects: tuple[Effect, ...], j: int, nf: NoiseFloor
         "mean": float(mu[0]),
         "mean_ci95": mean_ci95(y, jac, s, sig)[0],
         "sd": s,
-        "sd_ci95": sd_interval(y, jac, s, sig, ll, unit),
+        "sd_ci95": _sd_ci95(y, jac, s, sig, ll, unit),
         "one_value": th0,
         "noise_sd_m": sig,
         "sensitivity_rms": float(np.sqrt(sens_sq)),

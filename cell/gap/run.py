@@ -15,6 +15,7 @@ import numpy as np
 from cell.errors import InvalidInput
 from cell.gap.conditions import conditions, worst_conditions
 from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
+from cell.gap.noise import NoiseFloor
 from cell.gap.outliers import flag, threshold_sq
 from cell.gap.problem import GapProblem, build_problem
 from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
@@ -161,7 +162,10 @@ def _one_pass(
 
 def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
     """The throws whose miss under the verdict's effects is impossible (`outliers.flag`);
-    an unknown verdict leaves a structured miss, so its rows are those already out (pre)."""
+    an unknown verdict leaves a structured miss, so its rows are those already out (pre).
+    A spread the verdict reads (a wind, or one parameter, drawn throw to throw) whitens
+    the misses; a verdict that names its effects by their one value tries the one-parameter
+    form where its misses flag rows (`_tail_flags`)."""
     if d.report["verdict"]["effects"] == ["unknown"]:
         return pre.copy()
     wind = d.report.get("wind_throw_to_throw")
@@ -176,7 +180,42 @@ def _flags(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> np.ndarray:
         from cell.gap.param_throw import whitened_spread
 
         return flag(whitened_spread(full, d.verdict_effects, spread))
-    return flag(full.residual(np.arange(len(full)), d.verdict_effects))
+    plain = flag(full.residual(np.arange(len(full)), d.verdict_effects))
+    if not plain.any() or d.noise is None:
+        return plain
+    return _tail_flags(full, pre, d, plain, d.noise)
+
+
+def _tail_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, plain: np.ndarray,
+                nf: NoiseFloor) -> np.ndarray:  # fmt: skip
+    """The flags of a verdict that names its effects by their one value, where the plain
+    misses (`plain`) flag rows: an effect's one parameter drawn throw to throw leaves its
+    draw in each miss, and its tails are no outliers. The form (`cell.gap.param_throw`) is
+    fitted on the throws the diagnosis ran on (`pre` out; on the first pass every throw,
+    an injected outlier too, whose part along J_i widens the spread), then once more
+    without the rows it flags; where it stands both times, the rows flagged on the misses
+    whitened by the second fit, and the report carries it (`parameter_throw_to_throw`,
+    `tried_for` "outliers": the verdict's effects are the same, the drawn one read as its
+    mean and spread). Where it does not stand, the plain flags. `nf`: the diagnosis' floor."""
+    from cell.gap.diagnose import _spread_report
+    from cell.gap.param_throw import param_spread, whitened_spread
+
+    keep, form, out = ~pre, None, plain
+    for _ in range(2):
+        if keep.sum() < MIN_THROWS:
+            break
+        form = param_spread(full.subset(keep) if not keep.all() else full,
+                            d.verdict_effects, nf)  # fmt: skip
+        if form is None or not form["chosen"]:
+            out = plain
+            break
+        out = flag(whitened_spread(full, d.verdict_effects, form))
+        keep = ~out
+    if form is not None:
+        form.update(tried_for="outliers", names=bool(form["chosen"]),
+                    verdict_floor_m=d.report["noise_floor_m"])  # fmt: skip
+        _spread_report(d.report, form)
+    return out
 
 
 def _robust_report(
@@ -287,7 +326,8 @@ def diagnose_log(
         # the rows the verdict's effects call impossible stay out of a second pass
         prob, tp, d = _one_pass(full, post, tracks, identify, progress)
         pre = post if len(prob) < len(full) else np.zeros(len(full), bool)
-    flagged = _flags(full, pre, d)
+    # without a second pass the diagnosis and the rows out are the same, and so the flags
+    flagged = _flags(full, pre, d) if post.any() else post
     proposal: dict[str, Any] | None = None
     if d.report["verdict"]["effects"] == ["unknown"]:
         proposal, miss = _proposal(full, pre, d)

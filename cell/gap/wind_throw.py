@@ -203,11 +203,12 @@ def fit_marginal(y: np.ndarray, jac: np.ndarray, *, steady: bool = False, unit: 
 
 
 def sd_interval(y: np.ndarray, jac: np.ndarray, s: float, sig: float, ll: float,
-                unit: float = 1.0) -> list[float]:  # fmt: skip
+                unit: float = 1.0, span: tuple[float, float] | None = None
+                ) -> list[float]:  # fmt: skip
     """The spread's 95 % profile-likelihood interval [m/s] (σ and μ refitted at each s, σ
     on a grid of 1.5 % steps; the log-likelihood within χ²₁(0.95)/2 = 1.92 of its
-    maximum)."""
-    sv = np.linspace(0.0, max(3.0 * s, 0.5 * unit), 61)
+    maximum), s on a grid of 61 over `span` (by default from 0 to max(3 s, unit / 2))."""
+    sv = np.linspace(*(span or (0.0, max(3.0 * s, 0.5 * unit))), 61)
     sg = sig * np.geomspace(1 / 3, 3.0, 151)
     gs, gg = np.meshgrid(sv, sg, indexing="ij")
     prof = -_nll(y, jac, gs.ravel(), gg.ravel())[0].reshape(gs.shape).min(axis=1)
