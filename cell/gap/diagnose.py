@@ -59,7 +59,14 @@ from cell.gap.select import (
 )
 from cell.model.effects import EFFECTS, FAMILIES, Effect
 
-__all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects"]
+__all__ = [
+    "Diagnosis",
+    "diagnose",
+    "NONE_RATIO",
+    "VERDICT_RATIO",
+    "applicable_effects",
+    "spread_report",
+]
 
 log = logging.getLogger(__name__)
 
@@ -347,7 +354,7 @@ def diagnose(
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
     )
     if spread is not None:
-        _spread_report(report, spread)
+        spread_report(report, spread)
     if chosen and verdict[0] not in ("none", "unknown") and "wind" in verdict:
         tick("wind (throw to throw)")
         _wind_throw_report(report, prob, tuple(chosen[-1].full.effects))
@@ -403,7 +410,7 @@ def _spread_verdict(prob: GapProblem, score: Score, A: float, nf: NoiseFloor
     return form
 
 
-def _spread_report(report: dict[str, Any], form: dict[str, Any]) -> None:
+def spread_report(report: dict[str, Any], form: dict[str, Any]) -> None:
     """The form under `parameter_throw_to_throw`; where it names the verdict, the effect's
     parameter is its mean and spread (`sd`, in the parameter's units) with their
     intervals, and its law `θ_i ~ N(mean, sd)`."""

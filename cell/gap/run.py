@@ -197,7 +197,7 @@ def _tail_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, plain: np.ndarr
     whitened by the second fit, and the report carries it (`parameter_throw_to_throw`,
     `tried_for` "outliers": the verdict's effects are the same, the drawn one read as its
     mean and spread). Where it does not stand, the plain flags. `nf`: the diagnosis' floor."""
-    from cell.gap.diagnose import _spread_report
+    from cell.gap.diagnose import spread_report
     from cell.gap.param_throw import param_spread, whitened_spread
 
     keep, form, out = ~pre, None, plain
@@ -214,7 +214,7 @@ def _tail_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, plain: np.ndarr
     if form is not None:
         form.update(tried_for="outliers", names=bool(form["chosen"]),
                     verdict_floor_m=d.report["noise_floor_m"])  # fmt: skip
-        _spread_report(d.report, form)
+        spread_report(d.report, form)
     return out
 
 
