@@ -318,11 +318,12 @@ def diagnose(
     sel = Selection(prob, prefix, scores, members, tracks, F, tick)
     chosen, cur_sq = sel.join(base_sq) if B > NONE_RATIO * F else ([], base_sq)
     sel.mark_joined(chosen)
-    verdict = _verdict(B, float(np.sqrt(cur_sq.mean())), F, chosen)
+    A = float(np.sqrt(cur_sq.mean()))
+    verdict = _verdict(B, A, F, chosen)
     spread = None
     if verdict == ["unknown"] and chosen:
         tick("parameter (throw to throw)")
-        spread = _spread_verdict(prob, chosen[-1], float(np.sqrt(cur_sq.mean())), nf)
+        spread = _spread_verdict(prob, chosen[-1], A, nf)
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
     if verdict[0] in ("none", "unknown"):

@@ -62,6 +62,7 @@ from cell.gap.wind_throw import (
     repeat_pairs,
     repeat_test,
     sd_interval,
+    whiten,
 )
 from cell.model.effects import Effect
 
@@ -85,6 +86,11 @@ def _drawable(e: Effect) -> bool:
         and getattr(cls, "law_base", None) is None
         and getattr(cls, "object_ids", None) is None
     )
+
+
+def _unit(e: Effect, value: float) -> float:
+    """θ's unit about `value`: its size, or `UNIT_SCALES` of the effect's typical sizes."""
+    return max(abs(value), UNIT_SCALES * float(type(e).scale[0]))
 
 
 def _with(effects: tuple[Effect, ...], j: int, value: float) -> tuple[Effect, ...]:
@@ -126,7 +132,7 @@ def _one(prob: GapProblem, effects: tuple[Effect, ...], j: int, nf: NoiseFloor
     e = effects[j]
     name = e.param_names()[0]
     th0 = float(e.vector()[0])
-    unit = max(abs(th0), UNIT_SCALES * float(type(e).scale[0]))
+    unit = _unit(e, th0)
     y, jac = _linearised(prob, effects, j, th0, unit)
     mu, s, sig, ll = fit_marginal(y, jac, unit=unit)
     y, jac = _linearised(prob, effects, j, float(mu[0]), unit)
@@ -198,11 +204,6 @@ def whitened_spread(prob: GapProblem, effects: tuple[Effect, ...], form: dict[st
     the scatter σ as `cell.gap.wind_throw.whitened_misses` does for the wind: a throw its
     parameter's own spread explains is not called impossible."""
     j = next(i for i, e in enumerate(effects) if e.name == form["effect"])
-    e = effects[j]
-    unit = max(abs(form["mean"]), UNIT_SCALES * float(type(e).scale[0]))
-    y, jac = _linearised(prob, effects, j, float(form["mean"]), unit)
-    sig = float(form["noise_sd_m"])
-    j0 = jac[:, :, 0]
-    cov = sig**2 * np.eye(2) + form["sd"] ** 2 * np.einsum("ni,nj->nij", j0, j0)
-    r = y - j0 * float(form["mean"])
-    return sig * np.linalg.solve(np.linalg.cholesky(cov), r[:, :, None])[:, :, 0]
+    mean = float(form["mean"])
+    y, jac = _linearised(prob, effects, j, mean, _unit(effects[j], mean))
+    return whiten(y, jac, np.array([mean]), float(form["sd"]), float(form["noise_sd_m"]))

@@ -49,6 +49,7 @@ __all__ = [
     "repeat_pairs",
     "repeat_test",
     "sd_interval",
+    "whiten",
     "whitened_misses",
     "wind_throw",
 ]
@@ -97,11 +98,23 @@ def _gls(y: np.ndarray, jac: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.
     return cov @ b, cov
 
 
-def mean_ci95(y: np.ndarray, jac: np.ndarray, s: float, sig: float) -> list[list[float]]:
-    """The GLS mean's 95 % intervals [[lo, hi] per parameter] under spread s and noise σ."""
+def mean_ci95(y: np.ndarray, jac: np.ndarray, s: float, sig: float,
+              centre: np.ndarray | None = None) -> list[list[float]]:  # fmt: skip
+    """The GLS mean's 95 % intervals [[lo, hi] per parameter] under spread s and noise σ,
+    about `centre` (the fitted mean) where given, else about the GLS mean itself."""
     mu, cov = _gls(y, jac, _cov(jac, s, sig))
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    return [[float(m - 1.96 * e), float(m + 1.96 * e)] for m, e in zip(mu, se, strict=True)]
+    at = mu if centre is None else centre
+    return [[float(m - 1.96 * e), float(m + 1.96 * e)] for m, e in zip(at, se, strict=True)]
+
+
+def whiten(y: np.ndarray, jac: np.ndarray, mu: np.ndarray, s: float, sig: float) -> np.ndarray:
+    """Each miss y_i − J_i μ (n, 2) [m] whitened to the scatter σ: σ · L_i⁻¹ (y_i − J_i μ),
+    L_i L_iᵀ = σ² I + s² J_i J_iᵀ. Its squared length is σ² times the Mahalanobis distance,
+    so `cell.gap.outliers.flag` tests it as it tests a plain miss."""
+    low = np.linalg.cholesky(_cov(jac, s, sig))
+    r = y - np.einsum("nij,j->ni", jac, mu)
+    return sig * np.linalg.solve(low, r[:, :, None])[:, :, 0]
 
 
 def loglik(y: np.ndarray, jac: np.ndarray, mu: np.ndarray, s: float, sig: float) -> np.ndarray:
@@ -285,8 +298,6 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
     for _ in range(RELINEARISE):
         y, jac = _linearised(prob, effects, j, mu)
         mu, s, sig, ll = fit_marginal(y, jac)
-    _, cov = _gls(y, jac, _cov(jac, s, sig))
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     h0, h1 = heldout(prob, y, jac)
     d = h1 - h0
     gain = float(np.mean(d))
@@ -298,9 +309,7 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
         "law": LAW,
         "chosen": chosen,
         "mean_mps": mu.tolist(),
-        "mean_ci95_mps": [
-            [float(m - 1.96 * e), float(m + 1.96 * e)] for m, e in zip(mu, se, strict=True)
-        ],
+        "mean_ci95_mps": mean_ci95(y, jac, s, sig, centre=mu),
         "sd_mps": s,
         "sd_ci95_mps": sd_interval(y, jac, s, sig, ll),
         "noise_sd_m": sig,
@@ -326,7 +335,4 @@ def whitened_misses(prob: GapProblem, effects: tuple[Effect, ...], form: dict[st
     j = next(i for i, e in enumerate(effects) if e.name == "wind")
     mu = np.asarray(form["mean_mps"], float)
     y, jac = _linearised(prob, effects, j, mu)
-    sig = float(form["noise_sd_m"])
-    low = np.linalg.cholesky(_cov(jac, float(form["sd_mps"]), sig))
-    r = y - np.einsum("nij,j->ni", jac, mu)
-    return sig * np.linalg.solve(low, r[:, :, None])[:, :, 0]
+    return whiten(y, jac, mu, float(form["sd_mps"]), float(form["noise_sd_m"]))
