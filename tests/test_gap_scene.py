@@ -357,8 +357,11 @@ def _balls_rolling(**options: Any) -> tuple[Any, Any]:
 def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g():
     """Balls rolling on after the landing (`s:bounce-roll`'s world, no tracker scale): on
     the landings alone a tracker scale (1.057 here) fits part of the roll and nothing
-    refuses it; the scene's tracks show g (1.002), and the scale is refused, alone and
-    beside the bounce (`cell.gap.select.refusal`)."""
+    refuses it; the scene's tracks show g (1.002), and the scale is refused alone, and beside
+    the bounce where a pair with it is tried (`cell.gap.select.refusal`). With the bounce's
+    drop law, which follows the balls' fall to the floor, the bounce leaves the scale nothing
+    to take and no pair with it is tried here; the pair's refusal beside the impact law is
+    `test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_across_show_none`'s."""
     from cell.gap.run import diagnose_log
     from cell.log.table import ThrowTable
 
@@ -370,8 +373,9 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show
     (ts,) = [c for c in rep["candidates"] if c["effect"] == "tracking_scale"]
     assert ts["refused"] and "apparent gravity is 1.00" in ts["refused"], ts["refused"]
     pairs = {k: t for k, t in rep["tests"].items() if "tracking_scale" in k}
-    assert pairs and all("tracking_scale: the tracks' apparent" in t["refused"]
-                         for t in pairs.values()), pairs  # fmt: skip
+    assert all("tracking_scale: the tracks' apparent" in t["refused"]
+               for t in pairs.values()), pairs  # fmt: skip
+    assert rep["verdict"]["laws"] == {"bounce": "drop"}
 
 
 def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_across_show_none():

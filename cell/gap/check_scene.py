@@ -39,7 +39,14 @@ FLIGHT_KINDS = ("wind", "drag_scale", "downwash", "side_force")
 _JET: dict[str, Any] = {"w_mps": 9.0, "radius_m": 0.25, "core_m": 0.8}
 # a jet wide and strong enough to move the drone throws' landings by about 2 floors
 _JET_STRONG: dict[str, Any] = {"w_mps": 15.0, "radius_m": 1.5, "core_m": 2.0}
-_SLIDE = {"one_of": [{"tau_s": "measured"}, {"inv_mu": "measured"}, {"inv_mu_imp": "measured"}]}
+_SLIDE = {
+    "one_of": [
+        {"tau_s": "measured"},
+        {"inv_mu": "measured"},
+        {"inv_mu_imp": "measured"},
+        {"inv_mu_drop": "measured", "depth_m": "measured"},
+    ]
+}
 W, B = "wind", "bounce"
 _BLOCKS = ("cube30", "cube40", "cube50", "cube60", "cuboid_a", "cuboid_b", "cuboid_c")
 _BALLS = ("sphere40", "sphere55", "sphere70")

@@ -297,8 +297,8 @@ def choose_law(
     for j in range(len(score.full.effects)):
         eff = best.full.effects[j]
         base = _constant_member(type(eff))
-        if eff.name not in LAW_BASES or base is None:
-            continue
+        if eff.name not in LAW_BASES or base is None or len(base.bounds) != 1:
+            continue  # a member of two parameters (the bounce's drop law) keeps its form
         classes = [type(e) for e in best.full.effects]
         sizes = [len(c.bounds) for c in classes]
         at = int(np.sum(sizes[:j]))

@@ -11,8 +11,11 @@ points and of the crossings of the landing plane, and the RMS of the slide (rest
 crossing) left by each slide law fitted to it by least squares on the crossing's velocity:
 τ · v_h (rolling), 1/μ · v_h|v_h|/2g (friction), both, a hop term v_h|v_z|/g beside the
 friction, the impact law (v_h − μ|v_z|)₊² / 2μg (`impact`, 1/μ `inv_mu_imp`: the
-impact's friction impulse off v_h, then the slide), and 1/μ or τ per object. A law that leaves about the rest points' repeat scatter
-is all a perfect account could do; a law that leaves much more is missing something.
+impact's friction impulse off v_h, then the slide), the drop law (`drop`: the fall from
+the plane to the floor, then the impact law there; 1/μ and the floor's depth fitted,
+`cell.sim.slide_fit.drop_fit`), and 1/μ or τ per object. A law that leaves about the rest
+points' repeat scatter is all a perfect account could do; a law that leaves much more is
+missing something.
 """
 
 from __future__ import annotations
@@ -24,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.gap.world_scene import JITTER_REL, G, draw_plan, impact_fit, repeat_var, throw_plan
+from cell.gap.world_scene import JITTER_REL, draw_plan, impact_fit, repeat_var, throw_plan
+from cell.sim.slide_fit import G, drop_fit
 
 __all__ = ["slide_laws", "main"]
 
@@ -43,6 +47,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     """The case's repeat scatter [m] (rest points, crossings) and each slide law's RMS
     residual [m] (see the module docstring); 1/μ per object [-]; the impact law's 1/μ [-]."""
     from cell.gap.check_scene import SCENE_CASES
+    from cell.sim.items import resolve_object
 
     effects, _, _, _, opts = SCENE_CASES[name]
     if not any(e["kind"] == "bounce" for e in effects):
@@ -62,6 +67,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     per = [objs == o for o in names]
     per_mu = _fit(d, [fric * m[:, None] for m in per])
     inv_mu_imp, imp_rms = impact_fit(d, v)
+    sizes = np.array([resolve_object(o)[0].size for o in objs], float)
     return (
         {
             "repeat_sd_rest_m": float(np.sqrt(repeat_var(plan, rest, ok))),
@@ -72,6 +78,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
             "tau+inv_mu": _fit(d, [tau, fric])[0],
             "inv_mu+hop": _fit(d, [fric, hop])[0],
             "impact": imp_rms,
+            "drop": drop_fit(d, v, sizes)[2],
             "inv_mu per object": per_mu[0],
             "tau per object": _fit(d, [tau * m[:, None] for m in per])[0],
         },

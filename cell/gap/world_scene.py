@@ -49,10 +49,11 @@ from cell.catalogue import catalogue
 from cell.errors import NoLanding
 from cell.sim.effect_scene import EffectScene
 from cell.sim.scene import item_linear_xyz, item_xyz
+from cell.sim.slide_fit import impact_fit, slide_truth
 
-__all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign"]
+__all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign",
+           "impact_fit"]  # fmt: skip
 
-G = 9.81  # [m/s²]
 LAND_Z_M = 0.1  # [m] the campaign's landing plane (the crossing logged without bounce)
 REST_SPEED = 0.01  # [m/s] an item slower than this for REST_STEPS steps is at rest
 REST_STEPS = 30
@@ -362,35 +363,11 @@ def _model_xy(recs: list[dict[str, Any]], params: Any) -> np.ndarray:
     return np.asarray(predict_landing(batch, params.ee).xy, float)
 
 
-def impact_fit(d: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-    """The impact law (`cell.model.effects.BounceImpact`) fitted to slides d (n, 2) [m]
-    from impact velocities v (n, 3) [m/s]: (1/μ [-] minimising the squared 2-D residual of
-    (v_h − μ |v_z|)₊² / (2 μ g) along v_h, a bounded 1-D search; the RMS 2-D residual [m])."""
-    from scipy.optimize import minimize_scalar
+def _sizes(plan: list[Throw]) -> np.ndarray:
+    """The planned throws' objects' true extents (n, 3) [m] (the scene's, the catalogue's)."""
+    from cell.sim.items import resolve_object
 
-    vh, vz = v[:, :2], np.abs(v[:, 2])
-    speed = np.linalg.norm(vh, axis=1)
-    u = vh / np.maximum(speed, 1e-12)[:, None]
-
-    def ss(inv_mu: float) -> float:
-        left = np.maximum(speed - vz / max(inv_mu, 1e-12), 0.0)
-        r = d - u * (left**2 * inv_mu / (2 * G))[:, None]
-        return float(np.sum(r * r))
-
-    res = minimize_scalar(ss, bounds=(1e-3, 20.0), method="bounded", options={"xatol": 1e-4})
-    return float(res.x), float(np.sqrt(ss(float(res.x)) / max(len(d), 1)))
-
-
-def _slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray) -> dict[str, float]:
-    """The bounce's slide measured in the world: least squares of (rest − crossing) on
-    v_h (tau_s [s]), on v_h |v_h| / (2 g) (inv_mu [-]) and on the impact law's slide
-    (inv_mu_imp [-], `impact_fit`)."""
-    ok = np.all(np.isfinite(xy_rest), axis=1) & np.all(np.isfinite(xy_cross), axis=1)
-    d, vh = xy_rest[ok] - xy_cross[ok], v[ok, :2]
-    q = vh * (np.linalg.norm(vh, axis=1) / (2 * G))[:, None]
-    return {"tau_s": float(np.sum(d * vh) / np.sum(vh * vh)),
-            "inv_mu": float(np.sum(d * q) / np.sum(q * q)),
-            "inv_mu_imp": impact_fit(d, v[ok])[0]}  # fmt: skip
+    return np.array([resolve_object(th.object_id)[0].size for th in plan], float)
 
 
 def _untouched(plan: list[Throw], effects: list[dict[str, Any]]) -> np.ndarray:
@@ -430,7 +407,7 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         # without the floor's contact) to where it rests
         air = [e for e in effects if e["kind"] not in ("bounce", "tracker")]
         xyc, _, vcc = throw_plan(plan, air, seed) if air else (xy0, tl0, vc0)
-        truth = _slide_truth(xy, xyc, vcc)
+        truth = slide_truth(xy, xyc, vcc, _sizes(plan))
     tr = _find(effects, "tracker")
     scale = float(tr["scale"]) if tr else 1.0
     lat = float(tr.get("latency_s", 0.0)) if tr else 0.0

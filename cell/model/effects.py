@@ -23,6 +23,7 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 | bounce (friction) | the logged point is the rest point: touchdown + v_h |v_h| / (2 μ g) (∝ impact speed²) |
 | bounce (rolling) | the rest point is touchdown + `tau_s` · v_h (∝ impact speed: rolling) |
 | bounce (impact) | a Coulomb contact that takes its friction impulse at the impact too: v_h loses μ v_z as the object hits (a plastic impact, v_z the vertical impact speed), then slides (v_h − μ v_z)² / (2 μ g) further, nothing where μ v_z ≥ v_h; `inv_mu_imp` = 1/μ |
+| bounce (drop) | the object falls on from the landing plane to a floor `depth_m` below it (its centre to its smallest half-extent r above it: v_h t_d further), hits it at v_z' = √(v_z² + 2 g (depth_m − r)) as the impact law's contact, then slides (v_h − μ v_z')² / (2 μ g); `inv_mu_drop` = 1/μ (`cell.model.effects_bounce`) |
 
 An effect is a family of laws (`FAMILIES`): its members share the name and the phase and
 differ in how the effect grows (the diagnosis picks the member that predicts held-out
@@ -38,16 +39,18 @@ nominal model.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import astuple, dataclass, fields
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
 from cell.errors import InvalidParameter
+from cell.model.effect_base import Effect
+from cell.model.effects_bounce import Bounce, BounceDrop, BounceImpact, BounceRolling
 from cell.model.objects import SHAPES
 
 if TYPE_CHECKING:
-    from cell.model.throw import ThrowBatch
+    pass
 
 __all__ = [
     "Effect",
@@ -64,6 +67,7 @@ __all__ = [
     "Bounce",
     "BounceRolling",
     "BounceImpact",
+    "BounceDrop",
     "DownwashDecay",
     "DownwashJet",
     "DragScale",
@@ -83,68 +87,6 @@ DOWNWASH_REF_RPM = 5000.0  # [rpm] rotor speed at which the downwash speed is k
 # Pope, Turbulent Flows, 2000, Table 5.1, divided by √ln 2); a property of free round
 # jets, not fitted to any case (the landings hang little on it: docs/gap_scene.md)
 JET_SPREAD = 0.11
-
-
-@dataclass(frozen=True)
-class Effect:
-    """Base of all effects: parameters are the dataclass fields (floats, SI)."""
-
-    name: ClassVar[str] = ""
-    phase: ClassVar[str] = ""
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ()
-    scale: ClassVar[tuple[float, ...]] = ()  # typical size of each parameter
-    hangs_on: ClassVar[str | None] = None  # logged quantity for the permutation control
-    law: ClassVar[str] = ""  # the member of the effect's family of laws
-    # plausible range of each parameter (None: the bounds): what a real cell can have
-    plausible: ClassVar[tuple[tuple[float, float], ...] | None] = None
-    # where a fit without a warm start begins (None: one typical size inside the neutral
-    # size); for a law flat about its neutral size (`BounceImpact`)
-    start: ClassVar[tuple[float, ...] | None] = None
-
-    def vector(self) -> np.ndarray:
-        """The parameters as an array, in field order."""
-        return np.asarray(astuple(self), float)
-
-    @classmethod
-    def param_names(cls) -> tuple[str, ...]:
-        """The parameter names, in field order."""
-        return tuple(f.name for f in fields(cls))  # type: ignore[arg-type]
-
-    @classmethod
-    def from_vector(cls, x: Sequence[float] | np.ndarray) -> Effect:
-        """The effect with these parameter values (field order)."""
-        return cls(*[float(v) for v in x])
-
-    @classmethod
-    def neutral(cls) -> Effect:
-        """The effect at the size where it does nothing."""
-        return cls()
-
-    def per_throw(self, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
-        """The effect as evaluated on a batch (a learned law gives one value per throw,
-        `cell.gap.laws`); a plain effect is itself."""
-        return self
-
-    def params(self) -> dict[str, float]:
-        """The parameters as a plain dict."""
-        return {f.name: float(getattr(self, f.name)) for f in fields(self)}
-
-    def implausible(self) -> list[str]:
-        """Parameters outside their plausible range."""
-        rng = self.plausible or self.bounds
-        return [
-            f.name
-            for f, (lo, hi) in zip(fields(self), rng, strict=True)
-            if not lo <= getattr(self, f.name) <= hi
-        ]
-
-    def __post_init__(self) -> None:
-        for f, (lo, hi) in zip(fields(self), self.bounds, strict=True):
-            v = getattr(self, f.name)
-            if not np.isfinite(v) or v < lo - 1e-12 or v > hi + 1e-12:
-                raise InvalidParameter(
-                    f"effect {self.name}: {f.name}={v!r} is outside its range [{lo}, {hi}]"
-                )
 
 
 @dataclass(frozen=True)
@@ -359,54 +301,6 @@ class TrackingScale(Effect):
     scale_factor: float = 1.0  # [-]
 
 
-@dataclass(frozen=True)
-class Bounce(Effect):
-    """The logged point is where the object came to rest after sliding."""
-
-    name: ClassVar[str] = "bounce"
-    phase: ClassVar[str] = "landing"
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2.0),)
-    scale: ClassVar[tuple[float, ...]] = (0.05,)
-    law: ClassVar[str] = "friction"
-    inv_mu: float = 0.0  # [-] 1/μ, the inverse friction coefficient of the slide
-
-
-@dataclass(frozen=True)
-class BounceRolling(Effect):
-    """The logged point is where the object came to rest after rolling on: tau_s · v_h
-    beyond the touchdown (a speed decaying with time constant tau_s)."""
-
-    name: ClassVar[str] = "bounce"
-    phase: ClassVar[str] = "landing"
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 1.0),)
-    scale: ClassVar[tuple[float, ...]] = (0.01,)
-    law: ClassVar[str] = "rolling"
-    tau_s: float = 0.0  # [s] rolled distance per m/s of horizontal impact speed
-
-
-@dataclass(frozen=True)
-class BounceImpact(Effect):
-    """The logged point is where the object came to rest on a Coulomb contact of friction
-    μ that acts through the impact as well: the floor's normal impulse m v_z (a plastic
-    impact, v_z the vertical impact speed) brings a friction impulse of at most μ m v_z,
-    so the object leaves the impact at v_h − μ v_z (or stops), then slides under μ g
-    to rest: (v_h − μ v_z)² / (2 μ g) beyond the touchdown. A rolling ball's resistance
-    takes the same form (its torque, too, is bounded by the normal force, at the impact as
-    after it). Steep impacts slide less than flat ones of the same v_h, which the friction
-    law (v_h² / (2 μ g)) cannot tell apart.
-
-    The slide is nil wherever μ v_z ≥ v_h, so about its neutral size (μ → ∞) the law is
-    flat: a fit without a warm start begins at μ 0.5 (`start`), a middling floor's."""
-
-    name: ClassVar[str] = "bounce"
-    phase: ClassVar[str] = "landing"
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 5.0),)
-    scale: ClassVar[tuple[float, ...]] = (0.05,)
-    law: ClassVar[str] = "impact"
-    start: ClassVar[tuple[float, ...] | None] = (2.0,)
-    inv_mu_imp: float = 0.0  # [-] 1/μ of the contact (impact impulse and slide)
-
-
 EFFECTS: dict[str, type[Effect]] = {
     c.name: c
     for c in (
@@ -431,7 +325,7 @@ FAMILIES: dict[str, tuple[type[Effect], ...]] = {
     for extra in [
         {
             "downwash": (DownwashDecay, DownwashJet),
-            "bounce": (BounceRolling, BounceImpact),
+            "bounce": (BounceRolling, BounceImpact, BounceDrop),
             "wind": (WindLevel,),
         }.get(name, ())
     ]

@@ -19,6 +19,7 @@ from cell.model.effects import (
     BandDamping,
     BandMass,
     Bounce,
+    BounceDrop,
     BounceImpact,
     BounceRolling,
     Downwash,
@@ -219,9 +220,12 @@ def _area(batch: ThrowBatch) -> np.ndarray:
     return np.asarray(drag_area(batch.shape, batch.size))
 
 
-def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) -> np.ndarray:
+def _after_landing(
+    xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect], size: np.ndarray | None = None
+) -> np.ndarray:
     """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
-    from the impact velocities v_imp [m/s] (n, 3)."""
+    from the impact velocities v_imp [m/s] (n, 3) at the landing plane; `size` (n, 3) [m]
+    the objects' extents (the drop law's fall ends at the smallest half-extent)."""
     # a parameter is one value, or one per throw (a law in a covariate, `cell.gap.laws`)
     bo = _find(effs, Bounce)
     if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
@@ -241,7 +245,29 @@ def _after_landing(xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect]) ->
         left = np.maximum(speed - mu * np.abs(v_imp[:, 2]), 0.0)
         slide = left**2 * inv_mu / (2 * G)
         xy = xy + vh * (slide / np.maximum(speed, 1e-12))[:, None]
+    bd = _find(effs, BounceDrop)
+    if bd is not None and (
+        np.any(np.asarray(bd.inv_mu_drop) > 0) or np.any(np.asarray(bd.depth_m) > 0)
+    ):
+        xy = xy + drop_slide(v_imp, bd.inv_mu_drop, bd.depth_m, size)
     return xy
+
+
+def drop_slide(v_imp: np.ndarray, inv_mu: Any, depth_m: Any, size: np.ndarray | None) -> np.ndarray:
+    """The drop law's move (n, 2) [m] (`cell.model.effects_bounce.BounceDrop`) from the
+    landing plane's crossing at v_imp [m/s] (n, 3): the free fall over depth_m − r (r the
+    smallest half-extent of `size` (n, 3) [m]; 0 without sizes) at v_h, the impact at
+    v_z' = √(v_z² + 2 g (depth_m − r)) taking μ v_z' off v_h, the slide (v_h')² / (2 μ g)."""
+    vh = v_imp[:, :2]
+    speed = np.linalg.norm(vh, axis=1)
+    vz = np.abs(v_imp[:, 2])
+    r = 0.0 if size is None else np.min(np.asarray(size, float), axis=1) / 2
+    fall = np.maximum(np.asarray(depth_m, float) - r, 0.0)
+    vz_floor = np.sqrt(vz**2 + 2 * G * fall)
+    inv_mu = np.asarray(inv_mu, float)
+    left = np.maximum(speed - vz_floor / np.maximum(inv_mu, 1e-12), 0.0)
+    along = speed * (vz_floor - vz) / G + left**2 * inv_mu / (2 * G)
+    return vh * (along / np.maximum(speed, 1e-12))[:, None]
 
 
 def _given_launch(
@@ -347,7 +373,7 @@ def predict_with_effects(
         k = drag_constant(batch.shape, batch.mass, batch.size)
         res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
         xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
-    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs) * s
+    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size) * s
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)
     return Landing(

@@ -1,0 +1,87 @@
+"""The bounce's family of laws (`cell.model.effects.FAMILIES`): where an object that
+crossed the landing plane comes to rest on the floor, each member one law of the slide
+(`cell.model.effects_apply._after_landing` moves the landing points by it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from cell.model.effect_base import Effect
+
+__all__ = ["Bounce", "BounceRolling", "BounceImpact", "BounceDrop"]
+
+
+@dataclass(frozen=True)
+class Bounce(Effect):
+    """The logged point is where the object came to rest after sliding."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.05,)
+    law: ClassVar[str] = "friction"
+    inv_mu: float = 0.0  # [-] 1/μ, the inverse friction coefficient of the slide
+
+
+@dataclass(frozen=True)
+class BounceRolling(Effect):
+    """The logged point is where the object came to rest after rolling on: tau_s · v_h
+    beyond the touchdown (a speed decaying with time constant tau_s)."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 1.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.01,)
+    law: ClassVar[str] = "rolling"
+    tau_s: float = 0.0  # [s] rolled distance per m/s of horizontal impact speed
+
+
+@dataclass(frozen=True)
+class BounceImpact(Effect):
+    """The logged point is where the object came to rest on a Coulomb contact of friction
+    μ that acts through the impact as well: the floor's normal impulse m v_z (a plastic
+    impact, v_z the vertical impact speed) brings a friction impulse of at most μ m v_z,
+    so the object leaves the impact at v_h − μ v_z (or stops), then slides under μ g
+    to rest: (v_h − μ v_z)² / (2 μ g) beyond the touchdown. A rolling ball's resistance
+    takes the same form (its torque, too, is bounded by the normal force, at the impact as
+    after it). Steep impacts slide less than flat ones of the same v_h, which the friction
+    law (v_h² / (2 μ g)) cannot tell apart.
+
+    The slide is nil wherever μ v_z ≥ v_h, so about its neutral size (μ → ∞) the law is
+    flat: a fit without a warm start begins at μ 0.5 (`start`), a middling floor's."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 5.0),)
+    scale: ClassVar[tuple[float, ...]] = (0.05,)
+    law: ClassVar[str] = "impact"
+    start: ClassVar[tuple[float, ...] | None] = (2.0,)
+    inv_mu_imp: float = 0.0  # [-] 1/μ of the contact (impact impulse and slide)
+
+
+@dataclass(frozen=True)
+class BounceDrop(Effect):
+    """The logged point is where the object came to rest on a floor `depth_m` below the
+    landing plane (the world frame's floor, z = 0, under a plane at `land_z`): from the
+    crossing the object falls on until it touches the floor, its centre r (its smallest
+    half-extent) above it, moving v_h · t_d further (t_d the free fall's time over
+    depth_m − r from the crossing's v_z), hits the floor at v_z' = √(v_z² + 2 g (depth_m − r))
+    as the impact law's plastic Coulomb contact (v_h loses μ v_z', or stops), then slides
+    (v_h − μ v_z')² / (2 μ g) to rest. A ball whose rolling resistance holds its spin at
+    nil (Bullet's rolling friction, a torque up to μ_r N, outlasts the friction's μ N r
+    where μ_r ≥ μ r) slides so; the impact law taken at the plane misses the fall by a
+    length that hangs on v_h / v_z and on the object's size.
+
+    At its neutral size (depth_m 0, 1/μ 0) it does nothing; the fall is nil where
+    depth_m ≤ r, so a fit without a warm start begins below the objects' half-sizes'
+    range (`start`: a floor 0.25 m down, μ 0.5, a middling floor's)."""
+
+    name: ClassVar[str] = "bounce"
+    phase: ClassVar[str] = "landing"
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 5.0), (0.0, 1.0))
+    scale: ClassVar[tuple[float, ...]] = (0.05, 0.01)
+    law: ClassVar[str] = "drop"
+    start: ClassVar[tuple[float, ...] | None] = (2.0, 0.25)
+    inv_mu_drop: float = 0.0  # [-] 1/μ of the floor's contact (impact impulse and slide)
+    depth_m: float = 0.0  # [m] the floor's depth below the landing plane
