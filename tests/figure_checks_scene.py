@@ -16,7 +16,7 @@ from tests.figure_checks_pages import _case
 from tests.figure_quotes import COVERED, close, load_json, note, page_text, quoted
 
 PAGE = "docs/gap_scene.md"
-_LAWS = ("tau", "inv_mu", "tau+inv_mu", "inv_mu+hop", "impact")
+_LAWS = ("tau", "inv_mu", "tau+inv_mu", "inv_mu+hop", "impact", "drop")
 _COLS = ("repeat_sd_rest_m", "repeat_sd_crossing_m", "slide_rms_m", *_LAWS,
          "inv_mu per object", "tau per object")  # fmt: skip
 
@@ -154,8 +154,9 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
         PAGE, r"`unknown` at ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+) × the repeats' floor"
     )
     assert over == ("1.32", "1.32", "1.31", "1.43")  # the table before, as the page tells it
-    assert rows["s:bounce-roll"]["verdict"] == "bounce+stroke_offset"
-    assert not rows["s:bounce-roll"]["passes"]
+    # "`s:bounce-roll` names the spurious scale beside its bounce": that step's table; the
+    # drop law names the bounce alone since ("What changed the table")
+    assert rows["s:bounce-roll"]["verdict"] == "bounce" and rows["s:bounce-roll"]["passes"]
     was, now, of = quoted(
         PAGE, r"`s:drag\+hop`'s drag is its constant\. (\d+) → (\d+) of (\d+) pass"
     )
@@ -170,10 +171,18 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     assert (now3, of) == ("34", "43")  # that change's table, as the page tells it
     was4, of4, now4, of5 = quoted(PAGE, r"(\d+) of (\d+) → (\d+) of (\d+) pass\.\n")
     assert (was4, of4) == (now3, of)  # the drawn drag factor came after it
-    assert (int(now4), int(of5)) == (
+    assert (now4, of5) == ("35", "44")  # that change's table, as the page tells it
+    was6, now6, of6 = quoted(
+        PAGE, r"(\d+) → (\d+) of (\d+) pass; no row without\s+a bounce moved\."
+    )
+    assert was6 == now4  # the drop law came after the drawn drag factor
+    assert (int(now6), int(of6)) == (
         load_json("docs/figures/gap_check_scene.json")["passes"],
         len(rows),
     )
+    for c in ("s:bounce-roll", "s:bounce-roll-one", "s:bounce-hop+outliers"):
+        assert rows[c]["verdict"] == "bounce" and rows[c]["passes"], c
+        assert rows[c]["laws"] == {"bounce": "drop"}, c
     for c in ("s:wind-y", "s:downwash+wind", "s:wind-all-objects"):
         assert rows[c]["laws"] == {"wind": "level"}, c
     assert "drag_scale" not in rows["s:drag+hop"]["laws"] and rows["s:drag+hop"]["passes"]
@@ -225,9 +234,12 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     assert m2 == m_before == "5.37"  # the jitter's table, before the bounce had laws
     assert law == mu3["laws"]["bounce"] and mu3["verdict"] == "unknown"
     assert m_after == "4.41"  # that step's table (the impact law's is in the table now)
-    # "The impact law's 1/μ is itself given a law in the stroke in the three pairs"
-    for c in ("s:wind+bounce", "s:wind+hop", "s:drag+hop"):
-        assert rows[c]["laws"]["bounce"] == "inv_mu_imp = a + k · stroke_m", c
+    # "In `s:drag+hop` the impact law's 1/μ is itself given a law in the stroke"; "the two
+    # pairs with a wind take the drop law"
+    quoted(PAGE, r"In `s:drag\+hop` the impact law's 1/μ is itself given a law in the stroke")
+    assert rows["s:drag+hop"]["laws"]["bounce"] == "inv_mu_imp = a + k · stroke_m"
+    for c in ("s:wind+bounce", "s:wind+hop"):
+        assert rows[c]["laws"]["bounce"] == "drop", c
     assert ratio == doc["criteria"]["floor_ratio"]
     COVERED[PAGE].sort()
 
@@ -339,20 +351,11 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     w = _case("s:downwash+wind")[1]
     assert (float(tx), float(ty)) == (w["x_mps"], w["y_mps"])
     _check_the_jet(page, rows)
-    b1, m1, sc, b3, m3, mu3, t4, m4 = quoted(
+    mu3, t4, m4 = quoted(
         page,
-        r"\(1/μ by the impact law within (\d+) % of the world's ([\d.]+) over the log for the "
-        r"balls of\s+`s:bounce-roll`, where a stroke offset of (−[\d.]+) mm joins beside it; "
-        r"([\d.]+) against ([\d.]+) with "
-        r"outliers; for blocks at μ ([\d.]+) `[^`]+`, its mean over the log within (\d+) % of "
+        r"\(for blocks at μ ([\d.]+) `[^`]+`, its mean over the log within\s+(\d+) % of "
         r"the world's τ ([\d.]+)\)",
     )
-    roll = rows["s:bounce-roll"]
-    close(b1, 100 * roll["param_errors"]["bounce.inv_mu_imp"], 0)
-    _written(m1, roll["world_truth"]["inv_mu_imp"])
-    close(sc.replace("−", "-"), 1000 * roll["params"]["stroke_offset"]["delta_m"], 1)
-    _written(b3, rows["s:bounce-hop+outliers"]["params"]["bounce"]["inv_mu"])
-    _written(m3, rows["s:bounce-hop+outliers"]["world_truth"]["inv_mu"])
     # a law in the mass, judged on its mean over the log (`verdict.law_mean`)
     close(t4, 100 * rows["s:bounce-slide-mu03"]["param_errors"]["bounce.tau_s"], 0)
     _written(m4, rows["s:bounce-slide-mu03"]["world_truth"]["tau_s"])
@@ -363,21 +366,21 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     from tests.figure_checks_scene import check_the_edge_and_the_changes
 
     check_the_edge_and_the_changes(rows, float(above))
-    mu5, a5, ratio2, a_roll, one = quoted(
+    mu5, a5, ratio2, dep, before5 = quoted(
         page,
-        r"the bouncy floor at μ ([\d.]+)\s+\(`s:bounce-hop-mu05`\) to A ([\d.]+) F \(still "
-        r"`unknown`: over ([\d.]+) × the tool's floor\) and the\s+balls to ([\d.]+) F \(named "
-        r"`bounce\+stroke_offset`, the offset spurious\); one ball size\s+\(`s:bounce-roll-one`\) "
-        r"stays at ([\d.]+) F",
+        r"bouncy floor at μ ([\d.]+) \(`s:bounce-hop-mu05`\) the drop law stands for the "
+        r"bounce, A ([\d.]+) F\s+\(still `unknown`: over ([\d.]+) × the tool's floor\), its "
+        r"floor's depth (\d+) % off the world's:.*?which stood for it before, left ([\d.]+) F",
     )
+    hop5 = rows["s:bounce-hop-mu05"]
     assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
-    close(a5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
-    close(a_roll, roll["after_over_floor"], 2)
+    close(a5, hop5["after_over_floor"], 2)
     assert (
         float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
     )
-    close(one, rows["s:bounce-roll-one"]["after_over_floor"], 2)
-    assert not rows["s:bounce-hop-mu05"]["passes"] and not roll["passes"]
+    close(dep, 100 * hop5["param_errors"]["bounce.depth_m"], 0)
+    assert hop5["laws"] == {"bounce": "drop"} and not hop5["passes"]
+    assert before5 == "1.41"  # the table before the drop law, as the page tells it
     (cubes,) = quoted(page, r"\(`s:none-cubes`, A ([\d.]+) F\)")
     close(cubes, rows["s:none-cubes"]["after_over_floor"], 2)
     assert rows["s:none-cubes"]["passes"] and rows["s:wind+bounce"]["passes"]
@@ -396,7 +399,7 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         r"stay `unknown`",
     )
     assert (was5, was_roll) == ("1.65", "1.22")  # the table before the impact law
-    close(now5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
+    assert now5 == "1.41"  # that step's table (the drop law's is in the table now)
     assert now_roll == "1.15"  # the table after the impact law, as the page tells it
     was_roll2, now_roll2 = quoted(
         page,
@@ -404,7 +407,7 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         r"`bounce\+tracking_scale` at ([\d.]+) F\)",
     )[::-1]
     assert was_roll2 == now_roll  # the table before the rule across the impact velocity
-    close(now_roll2, roll["after_over_floor"], 2)
+    assert now_roll2 == "1.16"  # that step's table (the drop law's is in the table now)
     (sh,) = quoted(page, r"the bounce alone, its 1/μ\s+([\d.]+) absorbing the scale")
     _written(sh, rows["s:scale+hop"]["params"]["bounce"]["inv_mu"])
 
