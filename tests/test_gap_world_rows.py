@@ -44,7 +44,7 @@ def test_a_throw_lands_where_it_lands_alone(effects: list[dict]) -> None:
     t = every[1]
     # flights of different lengths: the rows drop out of the integration at different steps
     assert np.isfinite(t).all() and np.ptp(t) > 0.3
-    for rows in (np.arange(0, 40, 7), np.array([int(np.argmax(t))]), np.arange(39, -1, -3)):
+    for rows in (np.array([int(np.argmax(t))]), np.arange(39, -1, -3)):
         alone = landings(_take(th, rows), effects)
         for got, want in zip(alone, every, strict=True):
             assert got.tobytes() == want[rows].tobytes()
@@ -57,10 +57,10 @@ def test_the_other_world_lands_where_it_landed_before() -> None:
     part, gives the landings, flight times and impact velocities of the integrator before
     it dropped landed throws and took each throw's drag and push once
     (tests/world_other_before.py), to the bit."""
-    from cell.gap.check_other import OTHER_CASES
     from tests import world_other_before as before
 
-    cd = OTHER_CASES["o:drag-object"][0][0]["per_object"]
+    cd = {"cube50": 1.4, "cube30": 2.0, "cuboid_c": 1.2, "cyl50": 1.6, "cyl70": 1.3,
+          "sphere40": 2.2, "sphere70": 1.5, "block40": 1.8}  # C_d by object  # fmt: skip
     sets = [
         [_e("band_mass", "throw", value=0.02, sd=0.004),
          _e("drag_scale", "object", value=1.6, per_object=cd),
@@ -75,11 +75,11 @@ def test_the_other_world_lands_where_it_landed_before() -> None:
          _e("slide", tau_s=0.05), _e("tracking_scale", value=1.03)],
     ]  # fmt: skip
     th = draw_throws(60, np.random.default_rng(4), drone_share=0.4)
-    for effects in sets:
-        for seed in (None, 5):
-            got = landings(th, effects, None if seed is None else np.random.default_rng(seed))
-            rng = None if seed is None else np.random.default_rng(seed)
-            want = before.landings(th, effects, rng)
-            assert np.isfinite(got[1]).sum() > 50
-            for g, w in zip(got, want, strict=True):
-                assert g.tobytes() == w.tobytes()
+    # the first set drawn (each throw's own mass, drag and wind), the second at its
+    # deterministic part
+    for effects, seed in zip(sets, (5, None), strict=True):
+        got = landings(th, effects, None if seed is None else np.random.default_rng(seed))
+        want = before.landings(th, effects, None if seed is None else np.random.default_rng(seed))
+        assert np.isfinite(got[1]).sum() > 50
+        for g, w in zip(got, want, strict=True):
+            assert g.tobytes() == w.tobytes()
