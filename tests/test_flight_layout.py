@@ -7,6 +7,7 @@ effect: a parabola), and for a stale value when the rows or the states change.""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from cell.model import flight3d
 from cell.model.effects import DownwashJet, DragScale, Spin, Wind
@@ -44,7 +45,7 @@ def _row_major_step(p, v, neg_k, accel, h):  # type: ignore[no-untyped-def]
 
     def rates(ps, vs):  # type: ignore[no-untyped-def]
         w, extra = accel(np.ascontiguousarray(ps[0]), np.ascontiguousarray(vs[0]), idx)
-        rel = vs[0] - w
+        rel = vs[0] - (np.zeros(3) if w is None else w)  # still air: v − 0, as before
         sq = (rel[:, 0] * rel[:, 0] + rel[:, 2] * rel[:, 2]) + rel[:, 1] * rel[:, 1]
         a = np.empty_like(rel)
         for j in range(3):
@@ -79,6 +80,35 @@ def test_column_major_steps_are_bitwise_the_row_major_ones() -> None:
         pf, vf = flight3d._rk4(pf, vf, neg_k, idx, acc, 0.01)
         assert pf.flags.f_contiguous  # the elementwise results keep the layout
         assert np.array_equal(pf, pc) and np.array_equal(vf, vc)
+
+
+@pytest.mark.parametrize(
+    "effs",
+    [
+        [DragScale(factor=1.6)],
+        [Spin(spin_rad_s=150.0, lift_max=0.4), DragScale(factor=0.7)],
+        [Wind(x_mps=0.8, y_mps=-0.4, z_mps=0.1), DragScale(factor=1.6)],
+    ],  # fmt: skip
+    ids=["drag", "spin+drag", "wind+drag"],
+)
+def test_steps_in_still_air_or_off_the_position_are_bitwise_the_row_major_ones(effs) -> None:  # type: ignore[no-untyped-def]
+    """Effects that read no position (no downwash: `reads_position` false, the stages'
+    positions not formed) and, without a wind, no air velocity (still air: v itself, not
+    v − 0): ten steps equal, bit for bit, the row-major steps that form every stage's
+    position and subtract the zero air."""
+    b = _batch(13, 41)
+    p, v = launch_state(b, EE)
+    neg_k = -drag_constant(b.shape, b.mass, b.size)
+    acc = flight_accel(b, effs)
+    assert acc.reads_position is False
+    pc, vc = np.ascontiguousarray(p), np.ascontiguousarray(v)
+    pf, vf = flight3d._column_major(p), flight3d._column_major(v)
+    idx = np.arange(41)
+    for _ in range(10):
+        pc, vc = _row_major_step(pc, vc, neg_k, acc, 0.01)
+        pf, vf = flight3d._rk4(pf, vf, neg_k, idx, acc, 0.01)
+        assert pf.tobytes() == np.asfortranarray(pc).tobytes()
+        assert vf.tobytes() == np.asfortranarray(vc).tobytes()
 
 
 def test_a_flight_without_drag_lands_on_its_parabola() -> None:
@@ -151,3 +181,14 @@ def test_the_downwash_air_follows_the_position_at_every_stage() -> None:
     assert np.all(w_near[:, 2] < w_far[:, 2])  # stronger (more negative) near the rotor
     fresh = flight_accel(b, [DownwashJet(speed_mps=10.0, radius_m=0.4, exponent=1.0)], rpm)
     assert np.array_equal(fresh(further, np.zeros((n, 3)), idx)[0], w_far)
+
+
+def test_the_speeds_are_the_sums_written_out_column_by_column() -> None:
+    """|rel|² of the rates ((x² + z²) + y²) and |x| of the callback ((x² + y²) + z²), their
+    squares taken in one call: the sums of the columns' squares in that order, to the bit."""
+    from cell.model.effects_apply import _norm
+
+    rel = flight3d._column_major(np.random.default_rng(14).normal(0.0, 3.0, (300, 3)))
+    x, y, z = rel[:, 0], rel[:, 1], rel[:, 2]
+    assert flight3d._speed_sq(rel).tobytes() == ((x * x + z * z) + y * y).tobytes()
+    assert _norm(rel).tobytes() == np.sqrt((x * x + y * y) + z * z).tobytes()

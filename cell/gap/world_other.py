@@ -255,36 +255,58 @@ def landings(th: Throws, effs: list[dict[str, Any]], rng: np.random.Generator | 
     if sf:
         a_side[:2] = float(sf["x_mps2"]), float(sf["y_mps2"])
     air = _air(th, effs, rng)
-    idx = np.arange(n)
+    reads_p = _find(effs, "downwash") is not None  # the air depends on where the object is
+    # the air without a downwash: the same all along each flight
+    steady = np.zeros((n, 3)) if reads_p else air(th.p0, np.arange(n))
+    # per row: −(drag per unit |v|) in the push (the push drives m + m_b) and after it, the
+    # push's acceleration; taken once, the same operations as at every stage
+    neg_drag = {True: -(kd * th.mass / m_push)[:, None], False: -(kd * th.mass / th.mass)[:, None]}
+    a_push = (f_o / m_push)[:, None] * u
+    # the rows integrated, and their arrays (each row's arithmetic is its own: the rows
+    # that have landed are dropped once they are over half of those integrated)
+    at: dict[str, Any] = {}
 
-    def rate(t: float, p: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rel = v - air(p, idx)
-        drag = (kd * th.mass / np.where(t < PUSH_S, m_push, th.mass))[:, None]
-        a = -drag * np.linalg.norm(rel, axis=1)[:, None] * rel
+    def rows(idx: np.ndarray) -> None:
+        at.update(idx=idx, lz=th.land_z[idx], steady=steady[idx], push=a_push[idx],
+                  drag={k: d[idx] for k, d in neg_drag.items()})  # fmt: skip
+
+    def rate(t: float, p: np.ndarray, v: np.ndarray) -> np.ndarray:
+        rel = v - (air(p, at["idx"]) if reads_p else at["steady"])
+        pushed = t < PUSH_S
+        a = at["drag"][pushed] * np.sqrt(np.add.reduce(rel * rel, axis=1))[:, None] * rel
         a[:, 2] -= G
         a += a_side
-        if t < PUSH_S:
-            a += (f_o / m_push)[:, None] * u
-        return v, a
+        if pushed:
+            a += at["push"]
+        return a
 
+    rows(np.arange(n))
     p, v = th.p0.copy(), th.vb.copy()
     t = 0.0
     done = np.zeros(n, bool)
     steps: list[tuple[np.ndarray, ...]] = []  # each crossing: its rows, states and step
     while t < 6.0 and not done.all():
         h = H_PUSH if t < PUSH_S - 1e-12 else H_FLIGHT
-        k1p, k1v = rate(t, p, v)
-        k2p, k2v = rate(t + h / 2, p + h / 2 * k1p, v + h / 2 * k1v)
-        k3p, k3v = rate(t + h / 2, p + h / 2 * k2p, v + h / 2 * k2v)
-        k4p, k4v = rate(t + h - 1e-12, p + h * k3p, v + h * k3v)
-        p1 = p + h / 6 * (k1p + 2 * k2p + 2 * k3p + k4p)
+        k1v = rate(t, p, v)
+        k2p = v + h / 2 * k1v
+        k2v = rate(t + h / 2, p + h / 2 * v if reads_p else p, k2p)
+        k3p = v + h / 2 * k2v
+        k3v = rate(t + h / 2, p + h / 2 * k2p if reads_p else p, k3p)
+        k4p = v + h * k3v
+        k4v = rate(t + h - 1e-12, p + h * k3p if reads_p else p, k4p)
+        p1 = p + h / 6 * (v + 2 * k2p + 2 * k3p + k4p)
         v1 = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        cross = ~done & (v1[:, 2] < 0) & (p1[:, 2] <= th.land_z) & (t + h > PUSH_S)
+        cross = ~done & (v1[:, 2] < 0) & (p1[:, 2] <= at["lz"]) & (t + h > PUSH_S)
         if cross.any():
             k = np.flatnonzero(cross)
-            steps.append((k, p[k], p1[k], v[k], v1[k], np.full(k.size, t), np.full(k.size, h)))
+            steps.append((at["idx"][k], p[k], p1[k], v[k], v1[k], np.full(k.size, t),
+                          np.full(k.size, h)))  # fmt: skip
             done |= cross
         p, v, t = p1, v1, t + h
+        if np.count_nonzero(done) > done.size / 2:
+            going = ~done
+            rows(at["idx"][going])
+            p, v, done = p[going], v[going], done[going]
     xy, tl, vimp = _crossings(th, n, steps)
     xy = _slide(th, xy, vimp, _find(effs, "slide"))
     ts = _find(effs, "tracking_scale")

@@ -132,13 +132,16 @@ def _flight_accel(
     # while its rows stay the same): the parameters at those rows, and, without a
     # downwash (which varies along the path), the air velocity, the same at every stage
     held: dict[str, Any] = {"idx": None}
+    # no wind and no downwash: the air is still (the nominal drag's and the spin's and drag
+    # factor's relative velocity is v itself)
+    still = wind is None and dw is None
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
         if idx is not held["idx"]:
             held["idx"], held["r"], held["w"] = idx, {**par, **rows(idx)}, None
         r = held["r"]
-        w = held["w"]
-        if w is None:
+        w = held["w"]  # None while the air is still
+        if w is None and not still:
             w = np.empty_like(p)
             w[:] = r["w"]
             if dw is None:  # never written below: handed out again at the next stage
@@ -158,7 +161,7 @@ def _flight_accel(
             w[:, 2] -= r["w_dw"] * inside
         if sp is None and ds is None:
             return w, None
-        rel = v - w
+        rel = v if still else v - w  # v − 0 is v to the bit
         speed = _norm(rel)
         extra = None
         if sp is not None:
@@ -176,6 +179,8 @@ def _flight_accel(
             extra = drag if extra is None else extra + drag
         return w, extra
 
+    # only a downwash's column reads where the object is (`flight3d._rk4`)
+    accel.reads_position = dw is not None  # type: ignore[attr-defined]
     return accel
 
 
@@ -196,8 +201,9 @@ def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
 def _norm(x: np.ndarray) -> np.ndarray:
     """|x| of each row of x (m, 3): `np.linalg.norm(x, axis=1)`'s arithmetic ((x² + y²) + z²),
     without its per-call checks, from x's columns (contiguous in the integrator's
-    column-major states)."""
-    return np.sqrt((x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1]) + x[:, 2] * x[:, 2])
+    column-major states): the squares in one call, summed column by column."""
+    sq = x * x
+    return np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])
 
 
 def flight_accel(

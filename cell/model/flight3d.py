@@ -36,7 +36,8 @@ __all__ = [
 ]
 
 # acc(p, v, idx) -> (air velocity (m, 3) or None, extra acceleration (m, 3) or None);
-# idx are the indices (into the batch) of the rows in p and v.
+# idx are the indices (into the batch) of the rows in p and v. An accel whose attribute
+# `reads_position` is False is handed the step's starting positions at every stage.
 Accel = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray | None, np.ndarray | None]]
 
 
@@ -96,9 +97,10 @@ class FlightResult:
 def _speed_sq(rel: np.ndarray) -> np.ndarray:
     """|rel|² of each row of rel (m, 3), from its columns: the sum `np.einsum("ij,ij->i")`
     made before the states were kept column-major, in its order ((x² + z²) + y², its two-lane
-    accumulator), so the rates are bitwise the ones it gave (tests/test_flight_layout.py)."""
-    x, y, z = rel[:, 0], rel[:, 1], rel[:, 2]
-    return (x * x + z * z) + y * y
+    accumulator), so the rates are bitwise the ones it gave (tests/test_flight_layout.py).
+    The squares in one call (rel²'s columns are x², y², z²), their sums column by column."""
+    sq = rel * rel
+    return (sq[:, 0] + sq[:, 2]) + sq[:, 1]
 
 
 def _rates(
@@ -130,15 +132,19 @@ def _rk4(
     p: np.ndarray, v: np.ndarray, neg_k: np.ndarray, idx: np.ndarray, accel: Accel | None, h: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """One RK4 step of rows idx: `cell.model.integrate.rk4_step` written out for whole
-    (m, 3) vectors, the same arithmetic operation for operation (tests/test_flight3d.py)."""
+    (m, 3) vectors, the same arithmetic operation for operation (tests/test_flight_layout.py).
+    The stages' positions are formed only for an accel that reads them (`reads_position`,
+    true unless the accel says otherwise): gravity and drag alone, a wind, a spin or a drag
+    factor do not (`rk4_step`'s `reads_position`)."""
     half = 0.5 * h
+    reads = accel is not None and getattr(accel, "reads_position", True)
     a1 = _rates(p, v, neg_k, idx, accel)
     v2 = v + half * a1
-    a2 = _rates(p + half * v, v2, neg_k, idx, accel)
+    a2 = _rates(p + half * v if reads else p, v2, neg_k, idx, accel)
     v3 = v + half * a2
-    a3 = _rates(p + half * v2, v3, neg_k, idx, accel)
+    a3 = _rates(p + half * v2 if reads else p, v3, neg_k, idx, accel)
     v4 = v + h * a3
-    a4 = _rates(p + h * v3, v4, neg_k, idx, accel)
+    a4 = _rates(p + h * v3 if reads else p, v4, neg_k, idx, accel)
     sixth = h / 6
     p_new = p + sixth * (v + 2 * v2 + 2 * v3 + v4)
     v_new = v + sixth * (a1 + 2 * a2 + 2 * a3 + a4)

@@ -84,6 +84,46 @@ def flight_planar_one(
     return nan, nan, False, nan, nan
 
 
+def _rk4_arrays(
+    h: np.ndarray,
+    z: np.ndarray,
+    vh: np.ndarray,
+    vz: np.ndarray,
+    neg_k: np.ndarray,
+    step: float,
+    speed: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """`rk4_planar` for arrays with −k (neg_k) and the starting |v| (speed) given, as
+    `flight_planar` holds them: the same arithmetic, operation for operation, without
+    negating k at every stage nor taking the speed the step size was taken from again
+    (tests/test_flight_same.py: equal to the bit)."""
+    half = 0.5 * step
+    a1h = neg_k * speed * vh
+    a1z = neg_k * speed * vz - G
+    vh2 = vh + half * a1h
+    vz2 = vz + half * a1z
+    s2 = np.sqrt(vh2 * vh2 + vz2 * vz2)
+    a2h = neg_k * s2 * vh2
+    a2z = neg_k * s2 * vz2 - G
+    vh3 = vh + half * a2h
+    vz3 = vz + half * a2z
+    s3 = np.sqrt(vh3 * vh3 + vz3 * vz3)
+    a3h = neg_k * s3 * vh3
+    a3z = neg_k * s3 * vz3 - G
+    vh4 = vh + step * a3h
+    vz4 = vz + step * a3z
+    s4 = np.sqrt(vh4 * vh4 + vz4 * vz4)
+    a4h = neg_k * s4 * vh4
+    a4z = neg_k * s4 * vz4 - G
+    sixth = step / 6
+    return (
+        h + sixth * (vh + 2 * vh2 + 2 * vh3 + vh4),
+        z + sixth * (vz + 2 * vz2 + 2 * vz3 + vz4),
+        vh + sixth * (a1h + 2 * a2h + 2 * a3h + a4h),
+        vz + sixth * (a1z + 2 * a2z + 2 * a3z + a4z),
+    )
+
+
 def flight_planar(
     z: np.ndarray,
     vh: np.ndarray,
@@ -106,22 +146,23 @@ def flight_planar(
     vz = vz.copy()
     k = k.copy()
     lz = land_z.copy()
+    neg_k = -k
     crossed: list[tuple[np.ndarray, ...]] = []  # the crossing steps, located at the end
     while idx.size and t < t_max:
-        step = min(
-            max_step, float(_DRAG_STEP_SCALE / max(np.max(k * np.sqrt(vh * vh + vz * vz)), 1e-9))
-        )
-        h1, z1, vh1, vz1 = rk4_planar(h_pos, z, vh, vz, k, step, np.sqrt)
-        cross = (z > lz) & (z1 <= lz)
+        speed = np.sqrt(vh * vh + vz * vz)
+        step = min(max_step, float(_DRAG_STEP_SCALE / max((k * speed).max(), 1e-9)))
+        h1, z1, vh1, vz1 = _rk4_arrays(h_pos, z, vh, vz, neg_k, step, speed)
+        below = z1 <= lz
+        cross = (z > lz) & below
         if cross.any():
             c = cross
             ends = (h_pos[c], h1[c], z[c], z1[c], vh[c], vh1[c], vz[c], vz1[c], lz[c])
             crossed.append((idx[c], *ends, np.full(ends[0].size, t), np.full(ends[0].size, step)))
         # drop crossed throws, and those below their plane still falling (never land)
-        keep = ~cross & ~((z1 <= lz) & (vz1 < 0))
+        keep = ~cross & ~(below & (vz1 < 0))
         t += step
-        if not np.all(keep):
-            idx = idx[keep]
+        if not keep.all():
+            idx, neg_k = idx[keep], neg_k[keep]
             h_pos, z, vh, vz, k, lz = h1[keep], z1[keep], vh1[keep], vz1[keep], k[keep], lz[keep]
         else:
             h_pos, z, vh, vz = h1, z1, vh1, vz1
