@@ -6,10 +6,15 @@ d beyond c σ has probability exp(−c²/2); c is set so that a log of n throws 
 in-noise throw with probability OUTLIER_P in all (c² = 2 ln(n / OUTLIER_P)). σ is robust:
 the median of d² over the log divided by that of χ²₂ (2 ln 2).
 
-Two passes: the diagnosis runs on every throw; the misses of every throw under the
-verdict's effects (or under the law proposed for an `unknown` verdict, `cell.gap.propose`)
-are tested against the threshold, and when that flags rows, the diagnosis runs again
-without them (so that they do not drive the verdict), and they are reported by row. (A
+Passes: the diagnosis runs on every throw; the misses of every throw under the verdict's
+effects (or under the law proposed for an `unknown` verdict, `cell.gap.propose`) are
+tested against the threshold, and when that flags rows, the diagnosis runs again without
+them (so that they do not drive the verdict), and again without the rows that pass's
+verdict flags, until a pass is fitted without the very rows its verdict flags (at most
+`cell.gap.run.MAX_PASSES`): the verdict is judged on the rows it reports. A first pass
+that the outliers' misses pull to `none` (they widen the repeats' floor) flags on the
+baseline's misses, the throws a large real gap moves most among them; the next pass's
+verdict explains those and puts them back. The rows are reported by row. (A
 screen before any fit, on the misses of trajectory neighbours, was tried and dropped: it
 screens out the throws a large real gap moves most.)
 

@@ -1,9 +1,10 @@
 """The whole diagnosis of a throw log: problem, tracks, verdict, where and conditions.
 
 Outliers (`cell.gap.outliers`) are the throws whose miss under the verdict's effects (or an
-`unknown` verdict's proposed law) is impossible: the diagnosis runs again without them,
-they are reported by row, and the held-out errors are reported plain and robust. An `unknown` verdict carries the law
-proposed for what is left (`cell.gap.propose`)."""
+`unknown` verdict's proposed law) is impossible: the diagnosis runs again without them
+(until the rows a pass leaves out are the rows its verdict flags), they are reported by
+row, and the held-out errors are reported plain and robust. An `unknown` verdict carries
+the law proposed for what is left (`cell.gap.propose`)."""
 
 from __future__ import annotations
 
@@ -267,6 +268,23 @@ def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> tuple[dict[str
 
 
 MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need this many
+MAX_PASSES = 4  # diagnoses of one log: every throw, then without the rows flagged
+
+
+def _pass_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, from_law: bool
+                ) -> tuple[np.ndarray, dict[str, Any] | None, bool]:  # fmt: skip
+    """The rows a pass's verdict flags (the pass ran without `pre`), the law proposed for
+    an `unknown` verdict (`_proposal`, else None), and whether the rows are that law's.
+
+    A named verdict flags by `_flags`. An unknown one flags the misses its proposed law
+    leaves (the scatter alone), once: a pass already run without a proposed law's rows
+    (`from_law`) keeps them."""
+    if d.report["verdict"]["effects"] != ["unknown"]:
+        return _flags(full, pre, d), None, False
+    proposal, miss = _proposal(full, pre, d)
+    if proposal["law"] and not from_law:
+        return flag(miss), proposal, True
+    return pre.copy(), proposal, from_law
 
 
 def diagnose_log(
@@ -321,26 +339,25 @@ def diagnose_log(
         raise
     pre = np.zeros(len(full), bool)
     prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
-    post = _flags(full, pre, d)
-    if not np.array_equal(post, pre):
-        # the rows the verdict's effects call impossible stay out of a second pass
-        prob, tp, d = _one_pass(full, post, tracks, identify, progress)
-        pre = post if len(prob) < len(full) else np.zeros(len(full), bool)
-    # without a second pass the diagnosis and the rows out are the same, and so the flags
-    flagged = _flags(full, pre, d) if post.any() else post
-    proposal: dict[str, Any] | None = None
-    if d.report["verdict"]["effects"] == ["unknown"]:
-        proposal, miss = _proposal(full, pre, d)
-        if proposal["law"]:
-            # the misses the proposed law leaves carry the scatter alone: test them
-            flagged = flag(miss)
-        if not np.array_equal(flagged, pre) and (~flagged).sum() >= MIN_THROWS:
-            prob, tp, d = _one_pass(full, flagged, tracks, identify, progress)
-            pre = flagged if len(prob) < len(full) else np.zeros(len(full), bool)
-            if d.report["verdict"]["effects"] == ["unknown"]:
-                proposal, _ = _proposal(full, pre, d)
-            else:
-                proposal, flagged = None, _flags(full, pre, d)
+    flagged, proposal, by_law = _pass_flags(full, pre, d, False)
+    tried = [pre]
+    # the rows flagged stay out of the next pass, until the rows a pass is fitted without
+    # are the rows its verdict flags: the verdict is judged on the rows it reports (a first
+    # pass that an outlier's miss pulls to `none` flags on the baseline's misses, and so the
+    # throws the world's effect moves most, which the next pass's verdict takes back)
+    while (
+        not np.array_equal(flagged, pre)
+        and (~flagged).sum() >= MIN_THROWS
+        and len(tried) < MAX_PASSES
+        and not any(np.array_equal(flagged, t) for t in tried)
+    ):
+        prob, tp, d = _one_pass(full, flagged, tracks, identify, progress)
+        pre, from_law = flagged, by_law
+        tried.append(pre)
+        flagged, proposal, by_law = _pass_flags(full, pre, d, from_law)
+    # passes that do not settle (a cycle: rows a proposed law flagged, which the verdict
+    # of the pass without them puts back; or MAX_PASSES run) report the last verdict's
+    # flags: no row its own effects explain is called an outlier
     rep = d.report
     if proposal is not None:
         rep["proposal"] = proposal
