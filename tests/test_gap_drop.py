@@ -1,5 +1,6 @@
 """Issue 57: the bounce's drop law (`cell.model.effects_bounce.BounceDrop`) against balls
-landing in the PyBullet scene on `s:bounce-roll`'s floor, and its closed forms."""
+landing in the PyBullet scene on `s:bounce-roll`'s floor, its closed forms, and its 1/μ's
+law of the throw (`cell.gap.laws`)."""
 
 from __future__ import annotations
 
@@ -84,3 +85,73 @@ def test_the_drop_law_at_the_plane_is_the_impact_law_and_neutral_does_nothing():
     got = _after_landing(xy, v, [BounceDrop(1e-6, 0.1)], size)
     assert np.allclose(got, xy + fall, atol=1e-9)
     assert BounceDrop in FAMILIES["bounce"]
+
+
+@pytest.mark.parametrize(("a", "k"), [(1.6, 15.0), (2.4, 0.0)])
+def test_the_drop_laws_friction_is_given_a_law_in_the_mass_where_the_world_has_one(a, k):
+    """A floor 0.12 m below the plane whose contact's 1/μ is a + k · mass_kg (2.0–2.4 over
+    the drawn objects' 27–53 g; k 0: one 1/μ), 80 throws planned as the scene plans them
+    and landed by the model (the drop law's own arithmetic,
+    `tests.test_gap_laws._scene_like`) with 10 mm of scatter: a two-parameter member's law
+    is in its 1/μ, the depth one value common to all (`law_params`). Where the world has
+    the law it is chosen with a, k and the depth near the world's, within their 95 %
+    intervals; where it has none the constant stays."""
+    from cell.gap.diagnose import _law_means, _verdict_ci
+    from cell.gap.fit import score_set
+    from cell.gap.laws import choose_law, law_class
+    from cell.gap.problem import build_problem
+    from tests.test_gap_laws import _scene_like
+
+    world = law_class(BounceDrop, "mass_kg", True)(a, k, 0.12)
+    table, mp = _scene_like(80, 4, None, (world,), 0.01)
+    prob = build_problem(table, mp.ee, objects=mp.objects, seed=0)
+    best, tried = choose_law(prob, score_set(prob, [BounceDrop]))
+    eff, rows = best.full.effects[-1], tried.get("bounce", {})
+    assert "inv_mu_drop = a + k · mass_kg" in rows, tried  # the forms were tried
+    if k == 0.0:
+        assert type(eff) is BounceDrop, rows
+        assert eff.inv_mu_drop == pytest.approx(a, rel=0.05)
+        return
+    assert eff.law == "inv_mu_drop = a + k · mass_kg", rows
+    assert "depth_m = a" not in str(rows)  # the depth takes no law
+    got = eff.params()
+    ci = _verdict_ci(best)["bounce"]
+    for name, want, rel in (("a", a, 0.1), ("k", k, 0.2), ("depth_m", 0.12, 0.1)):
+        assert got[name] == pytest.approx(want, rel=rel), got
+        assert ci[name][0] < want < ci[name][1], (name, ci)
+    mean = float(np.mean(a + k * prob.batch.mass))  # the law's mean over the log's throws
+    assert _law_means([eff], prob)["bounce"]["inv_mu_drop"] == pytest.approx(mean, rel=0.05)
+    assert best.heldout_rmse_m < 0.8 * rows["constant"]
+
+
+def test_a_per_object_drop_law_is_reported_by_object_beside_its_common_depth():
+    """The drop law's per-object form (one 1/μ per object, the depth common to all): each
+    throw takes its object's 1/μ (by the log's object ids) and the one depth; the report's
+    params carry the objects' values beside the depth, and the text table names each
+    object's value and 95 % interval by its id (`o0`, `o1`, … are the form's fields)."""
+    from cell.gap.diagnose import _law_params
+    from cell.gap.laws import per_object_class
+    from cell.gap.problem import build_problem
+    from cell.gap.report import format_table
+    from tests.test_gap_laws import _scene_like
+
+    table, mp = _scene_like(12, 0, ("cube30", "sphere40"), (), 0.01)  # 8 and 4 throws
+    prob = build_problem(table, mp.ee, objects=mp.objects, seed=0)
+    cls = per_object_class(BounceDrop, prob)
+    ids = cls.object_ids
+    e = cls(1.5, 2.5, 0.12)
+    on = e.per_throw(prob.batch)
+    oid = np.array(table.text("object_id"))
+    assert np.array_equal(on.inv_mu_drop, np.where(oid == ids[0], 1.5, 2.5))
+    assert np.all(on.depth_m == 0.12)
+    ci = {"o0": [1.4, 1.6], "o1": [2.4, 2.6], "depth_m": [0.11, 0.13]}
+    p = _law_params(e, ci)
+    assert p["depth_m"] == 0.12 and list(p["per_object"]) == list(ids)
+    v = {"effects": ["bounce"], "heldout_rmse_m": 0.05, "shrink_pct": 50.0,
+         "shrink_ci_pct": [40.0, 60.0], "params": {"bounce": p}, "params_ci95": {"bounce": ci},
+         "laws": {"bounce": e.law}}  # fmt: skip
+    text = format_table({"throws": 12, "noise_floor_m": 0.03, "candidates": [], "where": {},
+                         "baseline": {"heldout_rmse_m": 0.1, "fit_rmse_m": 0.1}, "verdict": v})  # fmt: skip
+    for o, (lo, hi) in zip(ids, (ci["o0"], ci["o1"]), strict=True):
+        assert f"{o}={p['per_object'][o]:.4g} [{lo:.4g}, {hi:.4g}]" in text, text
+    assert "depth_m=0.12 [0.11, 0.13]" in text, text

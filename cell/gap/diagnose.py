@@ -17,8 +17,9 @@ Verdict rules:
 * an effect is a family of laws (`cell.model.effects.FAMILIES`): every member is
   fitted and scored, and the one that predicts held-out throws best, with a penalty
   per term more than the family's fewest, stands for the effect;
-* an effect's one parameter may follow a law of the throw (`cell.gap.laws`: constant,
-  proportional or linear in the stroke, mass or grip width, or one value per object),
+* an effect's parameter may follow a law of the throw (`cell.gap.laws`: constant,
+  proportional or linear in the stroke, mass or grip width, or one value per object;
+  a member of two parameters in those it names, the drop law's 1/μ, its depth common),
   chosen by held-out RMSE with a penalty per extra term when the effect joins; the
   other effects whose constant alone would have joined first get their law too, and
   one whose law cuts MIN_CUT of what the first leaves replaces it (`Selection.rival_law`);
@@ -433,12 +434,14 @@ def _law_params(e: Effect, ci: dict[str, list[float]] | None) -> dict[str, Any]:
         return e.params()
     from cell.gap.laws import shrunk
 
-    arr = np.array([ci[k] for k in e.params()]) if ci else None
-    vals, common, tau = shrunk(e.vector(), arr)
+    own = [f"o{j}" for j in range(len(ids))]
+    arr = np.array([ci[k] for k in own]) if ci else None
+    vals, common, tau = shrunk(np.array([getattr(e, k) for k in own], float), arr)
     return {
         "common": common,
         "spread": tau,
         "per_object": {o: float(v) for o, v in zip(ids, vals, strict=True)},
+        **{k: v for k, v in e.params().items() if k not in own},  # a member's common values
     }
 
 
@@ -447,9 +450,8 @@ def _law_means(effects: Sequence[Effect], prob: GapProblem) -> dict[str, dict[st
     gives its parameter averaged over the log's throws {effect: {param: mean}}."""
     out: dict[str, dict[str, float]] = {}
     for e in effects:
-        base = getattr(type(e), "law_base", None)
-        if base is not None:
-            p = base.param_names()[0]
+        if getattr(type(e), "law_base", None) is not None:
+            p = type(e).law_param  # type: ignore[attr-defined]
             out[e.name] = {p: float(np.mean(getattr(e.per_throw(prob.batch), p)))}
     return out
 

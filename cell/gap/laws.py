@@ -1,8 +1,8 @@
 """The law of an effect learned from the data: its parameter as a function of the throw.
 
-An effect of one parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
-drag_scale's `factor`, the bounce's `inv_mu` or `tau_s` in whichever of its laws stands
-for it, ...) may follow one of these forms, c a logged covariate of the
+An effect's parameter p (band_mass's `mass_kg`, release_pitch's `delta_rad`,
+drag_scale's `factor`, the bounce's `inv_mu`, `tau_s` or `inv_mu_imp` in whichever of its
+laws stands for it, ...) may follow one of these forms, c a logged covariate of the
 throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
 
 | form | law | terms |
@@ -13,7 +13,12 @@ throw (`stroke_m`, `mass_kg`, `size_x_m` the grip width):
 
 `law_class(base, covariate, intercept)` makes the form as an `Effect` class whose fields
 are the form's coefficients; `Effect.per_throw` turns it into the base effect with one
-value per throw (an array), which the model's effect code evaluates unchanged. The
+value per throw (an array), which the model's effect code evaluates unchanged. A member of
+two parameters takes a law in those its `law_params` name (the bounce's drop law: its 1/μ,
+`inv_mu_drop = a + k · mass_kg`), its other parameters kept as fields of the form, one
+value common to every throw (the drop law's depth, the cell's geometry); a one-parameter
+effect takes it in its one parameter. The extra terms are counted over the member's own
+parameters. The
 diagnosis picks the form by held-out evidence with a penalty for each extra term
 (`choose_law`): a form replaces the constant only when its held-out RMSE, raised by
 TERM_PENALTY per extra term, is lower, and its cut over the constant has a bootstrap
@@ -41,8 +46,8 @@ from cell.gap.problem import GapProblem
 from cell.model.effects import Effect
 from cell.model.throw import ThrowBatch
 
-__all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_text", "levels", "TERM_PENALTY",
-           "choose_law", "law_range", "law_stretched"]  # fmt: skip
+__all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_params", "law_text", "levels",
+           "TERM_PENALTY", "choose_law", "law_range", "law_stretched"]  # fmt: skip
 
 TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
@@ -55,12 +60,42 @@ COVARIATES: dict[str, tuple[Any, float]] = {
     "size_x_m": (lambda b: b.size[:, 0], 0.07),
 }
 LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping", "bounce")
-_CACHE: dict[tuple[type[Effect], str, bool], type[Effect]] = {}
+_CACHE: dict[tuple[type[Effect], str, bool, str], type[Effect]] = {}
 
 
-def law_text(base: type[Effect], covariate: str | None, intercept: bool) -> str:
+def law_params(base: type[Effect]) -> tuple[str, ...]:
+    """The parameters of a member a law of the throw may be given: those its `law_params`
+    name, else the one parameter of a one-parameter member (none of a member of more)."""
+    if base.law_params is not None:
+        return tuple(base.law_params)
+    names = base.param_names()
+    return names if len(names) == 1 else ()
+
+
+def _param(base: type[Effect], param: str | None) -> str:
+    """The parameter a form's law is in: `param`, else the member's first law parameter."""
+    if param is None:
+        ps = law_params(base)
+        if not ps:
+            raise ValueError(f"effect {base.name} ({base.law}) takes no law of the throw")
+        return ps[0]
+    if param not in law_params(base):
+        raise ValueError(f"effect {base.name}: {param!r} takes no law; valid: {law_params(base)}")
+    return param
+
+
+def _held(self: Any, base: type[Effect], out: Effect, vals: np.ndarray) -> Effect:
+    """The base effect `out` with the law's values in its law parameter and the form's
+    common values in the others."""
+    for nm in base.param_names():
+        object.__setattr__(out, nm, vals if nm == self.law_param else getattr(self, nm))
+    return out
+
+
+def law_text(base: type[Effect], covariate: str | None, intercept: bool,
+             param: str | None = None) -> str:  # fmt: skip
     """The law as text: `mass_kg = k · stroke_m`, `delta_rad = a + k · mass_kg`."""
-    p = base.param_names()[0]
+    p = _param(base, param)
     if covariate is None:
         return f"{p} = a"
     return f"{p} = a + k · {covariate}" if intercept else f"{p} = k · {covariate}"
@@ -72,27 +107,39 @@ def _per_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = No
     c = np.asarray(read(batch), float)
     if permutation is not None:
         c = c[permutation]
-    lo, hi = base.bounds[0]
+    lo, hi = base.bounds[base.param_names().index(self.law_param)]
     a = self.a if self.intercept else 0.0
     vals = np.clip(a + self.k * c, lo, hi)
-    out = object.__new__(base)
-    object.__setattr__(out, base.param_names()[0], vals)
-    return out
+    return _held(self, base, object.__new__(base), vals)
 
 
-def law_class(base: type[Effect], covariate: str, intercept: bool) -> type[Effect]:
-    """The effect class of `base` (one parameter) whose parameter follows
-    a + k · covariate (intercept) or k · covariate.
+def _held_fields(base: type[Effect], param: str) -> tuple[list[tuple[str, type, Any]],
+                                                           list[tuple[float, float]], list[float]]:  # fmt: skip
+    """The fields, bounds and scales of a member's parameters other than `param` (kept
+    common to every throw by a law in `param`), as the member has them."""
+    names, neutral = base.param_names(), base.neutral().vector()
+    i = [j for j, nm in enumerate(names) if nm != param]
+    return ([(names[j], float, float(neutral[j])) for j in i], [base.bounds[j] for j in i],
+            [base.scale[j] for j in i])  # fmt: skip
 
-    Its fields: `a` (in the base's units, with intercept) and `k` (base units per
-    covariate unit); its law text is `law_text`. Its phase and name are the base's, and
-    it hangs on the covariate (the permutation control shuffles the covariate)."""
-    key = (base, covariate, intercept)
+
+def law_class(base: type[Effect], covariate: str, intercept: bool,
+              param: str | None = None) -> type[Effect]:  # fmt: skip
+    """The effect class of `base` whose parameter `param` (by default its first of
+    `law_params`) follows a + k · covariate (intercept) or k · covariate.
+
+    Its fields: `a` (in the parameter's units, with intercept) and `k` (its units per
+    covariate unit), then the base's other parameters, common to every throw; its law
+    text is `law_text`. Its phase and name are the base's, and it hangs on the covariate
+    (the permutation control shuffles the covariate)."""
+    param = _param(base, param)
+    key = (base, covariate, intercept, param)
     if key in _CACHE:
         return _CACHE[key]
-    (lo, hi), sc = base.bounds[0], base.scale[0]
+    i = base.param_names().index(param)
+    (lo, hi), sc = base.bounds[i], base.scale[i]
     cmax = COVARIATES[covariate][1]
-    neutral = float(base.neutral().vector()[0])
+    neutral = float(base.neutral().vector()[i])
     span = (hi - lo) / cmax
     k_bounds = (lo / cmax, hi / cmax) if not intercept else (-span, span)
     if not intercept and lo >= 0 and neutral > 0:
@@ -108,20 +155,24 @@ def law_class(base: type[Effect], covariate: str, intercept: bool) -> type[Effec
     flds.append(("k", float, k0))
     bounds.append(k_bounds)
     scale.append(sc / cmax)
+    hf, hb, hs = _held_fields(base, param)
+    flds, bounds, scale = flds + hf, bounds + hb, scale + hs
     ns = {
         "name": base.name,
         "phase": base.phase,
         "bounds": tuple(bounds),
         "scale": tuple(scale),
         "hangs_on": covariate,
-        "law": law_text(base, covariate, intercept),
+        "law": law_text(base, covariate, intercept, param),
         "plausible": None,
         "law_base": base,
+        "law_param": param,
         "covariate": covariate,
         "intercept": intercept,
         "per_throw": _per_throw,
     }
     cls_name = f"{base.__name__}_{'lin' if intercept else 'prop'}_{covariate}"
+    cls_name += f"_{param}" if len(base.bounds) > 1 else ""
     cls = make_dataclass(cls_name, flds, bases=(Effect,), frozen=True, namespace=ns)
     for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
         cls.__annotations__[nm] = ClassVar
@@ -140,19 +191,21 @@ def _object_keys(batch: ThrowBatch) -> list[tuple[float, ...]]:
 def _per_object_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None
                       ) -> Effect:  # fmt: skip
     base: type[Effect] = self.law_base
-    vals = self.vector()
+    vals = np.array([getattr(self, f"o{i}") for i in range(len(self.object_ids))], float)
     j = np.array([self.object_index.get(k, -1) for k in _object_keys(batch)])
     if permutation is not None:
         j = j[permutation]
     v = np.where(j >= 0, vals[np.clip(j, 0, None)], vals.mean())
-    out = object.__new__(base)
-    object.__setattr__(out, base.param_names()[0], v)
-    return out
+    return _held(self, base, object.__new__(base), v)
 
 
-def per_object_class(base: type[Effect], prob: GapProblem) -> type[Effect]:
-    """The form of `base` with one value per object of the log (fields `o0`, `o1`, ...
-    in the order of `object_ids`); its law text is `p = a_object`."""
+def per_object_class(base: type[Effect], prob: GapProblem, param: str | None = None
+                     ) -> type[Effect]:  # fmt: skip
+    """The form of `base` with one value of `param` (by default its first of
+    `law_params`) per object of the log (fields `o0`, `o1`, ... in the order of
+    `object_ids`, then the base's other parameters, common); its law text is
+    `p = a_object`."""
+    param = _param(base, param)
     keys = _object_keys(prob.batch)
     oid = prob.table.text("object_id")
     index: dict[tuple[float, ...], int] = {}
@@ -161,13 +214,15 @@ def per_object_class(base: type[Effect], prob: GapProblem) -> type[Effect]:
         if k not in index:
             index[k] = len(ids)
             ids.append(str(o))
-    neutral = float(base.neutral().vector()[0])
-    flds = [(f"o{j}", float, neutral) for j in range(len(ids))]
-    p = base.param_names()[0]
+    i = base.param_names().index(param)
+    neutral = float(base.neutral().vector()[i])
+    hf, hb, hs = _held_fields(base, param)
+    flds = [(f"o{j}", float, neutral) for j in range(len(ids))] + hf
     ns = {
-        "name": base.name, "phase": base.phase, "bounds": base.bounds * len(ids),
-        "scale": base.scale * len(ids), "hangs_on": "object_id",
-        "law": f"{p} = a_object", "plausible": None, "law_base": base,
+        "name": base.name, "phase": base.phase,
+        "bounds": (base.bounds[i],) * len(ids) + tuple(hb),
+        "scale": (base.scale[i],) * len(ids) + tuple(hs), "hangs_on": "object_id",
+        "law": f"{param} = a_object", "plausible": None, "law_base": base, "law_param": param,
         "covariate": "object_id", "intercept": False, "object_index": index,
         "object_ids": tuple(ids), "per_throw": _per_object_throw,
     }  # fmt: skip
@@ -193,11 +248,13 @@ def shrunk(values: np.ndarray, ci: np.ndarray | None) -> tuple[np.ndarray, float
     return mean + b * (v - mean), mean, float(np.sqrt(tau2))
 
 
-def law_forms(base: type[Effect], batch: ThrowBatch | None = None) -> list[type[Effect]]:
-    """Every covariate form of a one-parameter effect (proportional and linear); with a
-    batch, only those of covariates that take at least MIN_LEVELS values in it."""
+def law_forms(base: type[Effect], batch: ThrowBatch | None = None,
+              param: str | None = None) -> list[type[Effect]]:  # fmt: skip
+    """Every covariate form of an effect's law parameter `param` (proportional and
+    linear); with a batch, only those of covariates that take at least MIN_LEVELS values
+    in it."""
     covs = [c for c in COVARIATES if batch is None or levels(batch, c) >= MIN_LEVELS]
-    return [law_class(base, c, i) for c in covs for i in (False, True)]
+    return [law_class(base, c, i, param) for c in covs for i in (False, True)]
 
 
 def levels(batch: ThrowBatch, covariate: str) -> int:
@@ -206,20 +263,20 @@ def levels(batch: ThrowBatch, covariate: str) -> int:
     return int(np.unique(np.round(np.asarray(read(batch), float), 9)).size)
 
 
-def _warm(cls: type[Effect], p: float, cov_mean: float) -> np.ndarray:
-    """A form's scaled start from the constant's fitted value p."""
+def _warm(cls: type[Effect], p: float, cov_mean: float, held: dict[str, float]) -> np.ndarray:
+    """A form's scaled start from the constant's fitted value p of its law parameter and
+    the member's other parameters' values (held)."""
     sc = np.asarray(cls.scale, float)
-    if getattr(cls, "intercept", False):
-        return np.array([p, 0.0]) / sc
-    return np.array([p / max(cov_mean, 1e-9)]) / sc
+    own = [p, 0.0] if getattr(cls, "intercept", False) else [p / max(cov_mean, 1e-9)]
+    return np.array(own + list(held.values())) / sc
 
 
 def law_range(eff: Effect, batch: ThrowBatch) -> tuple[float, float]:
     """The smallest and largest value a law's parameter takes over a batch's throws, as
     the law gives it (before the base effect's bounds clip it)."""
     if getattr(type(eff), "covariate", None) == "object_id":
-        base: type[Effect] = eff.law_base  # type: ignore[attr-defined]
-        v = np.asarray(getattr(eff.per_throw(batch), base.param_names()[0]), dtype=float)
+        p: str = eff.law_param  # type: ignore[attr-defined]
+        v = np.asarray(getattr(eff.per_throw(batch), p), dtype=float)
     else:
         read, _ = COVARIATES[eff.covariate]  # type: ignore[attr-defined]
         a = eff.a if eff.intercept else 0.0  # type: ignore[attr-defined]
@@ -235,8 +292,9 @@ def law_stretched(eff: Effect, batch: ThrowBatch) -> bool:
     from cell.gap.select import BOUND_TOL
 
     base: type[Effect] = eff.law_base  # type: ignore[attr-defined]
-    (blo, bhi), tol = base.bounds[0], BOUND_TOL * (base.bounds[0][1] - base.bounds[0][0])
-    plo, phi = (base.plausible or base.bounds)[0]
+    i = base.param_names().index(eff.law_param)  # type: ignore[attr-defined]
+    (blo, bhi), tol = base.bounds[i], BOUND_TOL * (base.bounds[i][1] - base.bounds[i][0])
+    plo, phi = (base.plausible or base.bounds)[i]
     lo, hi = law_range(eff, batch)
     return bool(lo < max(plo, blo + tol) or hi > min(phi, bhi - tol))
 
@@ -272,10 +330,12 @@ def choose_law(
 ) -> tuple[Score, dict[str, dict[str, float]]]:
     """The law of each effect of a scored set chosen among its forms.
 
-    Every one-parameter effect of LAW_BASES in the set (at its constant form) is refitted
-    with each covariate form (the others kept at their form, warm-started from the set's
-    solution) and scored held-out; a form replaces the constant when its held-out RMSE,
-    raised by TERM_PENALTY per extra term, is the lowest, its cut over the constant
+    Every effect of LAW_BASES in the set (at its constant form) is refitted with each
+    covariate form of each of its `law_params` (a one-parameter member's one parameter;
+    the drop law's 1/μ, its depth kept common; the others kept at their form,
+    warm-started from the set's solution) and scored held-out; a form replaces the
+    constant when its held-out RMSE, raised by TERM_PENALTY per term beyond the member's
+    own, is the lowest, its cut over the constant
     has a bootstrap interval above zero, and it keeps every logged throw's value within
     the effect's plausible range and off its bounds (`law_stretched`); a covariate form
     (not the per-object one) is refused where, on a log of two or more objects, it
@@ -297,40 +357,47 @@ def choose_law(
     for j in range(len(score.full.effects)):
         eff = best.full.effects[j]
         base = _constant_member(type(eff))
-        if eff.name not in LAW_BASES or base is None or len(base.bounds) != 1:
-            continue  # a member of two parameters (the bounce's drop law) keeps its form
+        if eff.name not in LAW_BASES or base is None or not law_params(base):
+            continue  # a member no law may be given keeps its form
         classes = [type(e) for e in best.full.effects]
         sizes = [len(c.bounds) for c in classes]
         at = int(np.sum(sizes[:j]))
         if type(eff) is not base:
             # a form chosen before a partner joined: start again from the constant
-            p = float(np.mean(getattr(eff.per_throw(prob.batch), base.param_names()[0])))
-            own = np.array([p]) / np.asarray(base.scale, float)
+            on = eff.per_throw(prob.batch)
+            own = np.array([float(np.mean(getattr(on, nm))) for nm in base.param_names()])
+            own = own / np.asarray(base.scale, float)
             warm = np.r_[best.full.x[:at], own, best.full.x[at + sizes[j] :]]
             tick(f"{eff.name} (constant)")
             best = score_set(prob, classes[:j] + [base] + classes[j + 1 :], warm=warm)
             eff = best.full.effects[j]
             classes = [type(e) for e in best.full.effects]
-        p = float(eff.vector()[0])
+        const, nb = eff.params(), len(base.bounds)
         rows = {"constant": best.heldout_rmse_m}
         const_held: Score | None = None
         pick, pick_val = best, best.heldout_rmse_m
-        forms = law_forms(base, prob.batch)
         n_obj = len(set(_object_keys(prob.batch)))
-        if 2 <= n_obj <= MAX_OBJECTS:
-            forms.append(per_object_class(base, prob))
+        forms: list[type[Effect]] = []
+        for param in law_params(base):
+            forms += law_forms(base, prob.batch, param)
+            if 2 <= n_obj <= MAX_OBJECTS:
+                forms.append(per_object_class(base, prob, param))
         for form in forms:
+            p = const[form.law_param]  # type: ignore[attr-defined]
+            common = {k: v for k, v in const.items() if k != form.law_param}  # type: ignore[attr-defined]
             if form.covariate == "object_id":  # type: ignore[attr-defined]
-                own = np.full(len(form.bounds), p) / np.asarray(form.scale, float)
+                own = np.r_[np.full(len(form.object_ids), p), list(common.values())]  # type: ignore[attr-defined]
+                own = own / np.asarray(form.scale, float)
             else:
                 read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
-                own = _warm(form, p, float(np.mean(read(prob.batch))))
-            warm = np.r_[best.full.x[:at], own, best.full.x[at + 1 :]]
+                own = _warm(form, p, float(np.mean(read(prob.batch))), common)
+            warm = np.r_[best.full.x[:at], own, best.full.x[at + nb :]]
             tick(f"{eff.name} ({form.law})")
             cls_j = classes[:j] + [form] + classes[j + 1 :]
             sc = score_set(prob, cls_j, warm=warm)
             rows[form.law] = sc.heldout_rmse_m
-            val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - 1))
+            # the extra terms over the member's own parameters
+            val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - nb))
             if val >= pick_val or law_stretched(sc.full.effects[j], prob.batch):
                 continue
             _, lo, _ = bootstrap_cut(best.heldout, sc.heldout, seed=prob.seed + 3)

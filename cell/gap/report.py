@@ -48,6 +48,20 @@ def _fmt_params(p: dict[str, float]) -> str:
     return " ".join(f"{k}={v:.4g}" for k, v in p.items())
 
 
+def _ci_items(
+    p: dict[str, Any], ci: dict[str, list[float]]
+) -> list[tuple[str, float, list[float]]]:
+    """Each interval's (name, value, [lo, hi]); a per-object law's fields `o0`, `o1`, …
+    named by their objects (`per_object`, in field order) with their shrunk values."""
+    per = list((p.get("per_object") or {}).items())
+    out = []
+    for k, iv in ci.items():
+        j = int(k[1:]) if k not in p and k[:1] == "o" and k[1:].isdigit() else -1
+        name, val = per[j] if 0 <= j < len(per) else (k, p[k])
+        out.append((name, float(val), iv))
+    return out
+
+
 def _tracks_set_aside(tracks: dict[str, Any]) -> list[str]:
     """The table's line on the tracks given that the diagnosis could not use or mended
     (none: no line), each reason with how many tracks it covers, the commonest first; a
@@ -170,7 +184,7 @@ def format_table(report: dict[str, Any]) -> str:
         law = (v.get("laws") or {}).get(eff)
         lines.append(
             f"  {eff}{f' ({law})' if law else ''}: "
-            + ", ".join(f"{k}={p[k]:.4g} [{a:.4g}, {b:.4g}]" for k, (a, b) in ci.items())
+            + ", ".join(f"{k}={x:.4g} [{a:.4g}, {b:.4g}]" for k, x, (a, b) in _ci_items(p, ci))
             + " (95% intervals)"
         )
     pt = r.get("parameter_throw_to_throw")

@@ -33,6 +33,9 @@ class Effect:
     # where a fit without a warm start begins (None: one typical size inside the neutral
     # size); for a law flat about its neutral size (`BounceImpact`)
     start: ClassVar[tuple[float, ...] | None] = None
+    # the parameters a learned law of the throw may give a value per throw
+    # (`cell.gap.laws`; None: the one parameter of a one-parameter effect, none of others)
+    law_params: ClassVar[tuple[str, ...] | None] = None
 
     def vector(self) -> np.ndarray:
         """The parameters as an array, in field order."""

@@ -75,7 +75,12 @@ class BounceDrop(Effect):
 
     At its neutral size (depth_m 0, 1/μ 0) it does nothing; the fall is nil where
     depth_m ≤ r, so a fit without a warm start begins below the objects' half-sizes'
-    range (`start`: a floor 0.25 m down, μ 0.5, a middling floor's)."""
+    range (`start`: a floor 0.25 m down, μ 0.5, a middling floor's).
+
+    A law of the throw (`cell.gap.laws`) may be given to 1/μ alone (`law_params`): the
+    contact's friction is the object's and the floor's (an object of another mass or
+    shape may meet the floor otherwise), while the depth is the cell's geometry, the same
+    under every throw, and stays one value common to all."""
 
     name: ClassVar[str] = "bounce"
     phase: ClassVar[str] = "landing"
@@ -83,5 +88,6 @@ class BounceDrop(Effect):
     scale: ClassVar[tuple[float, ...]] = (0.05, 0.01)
     law: ClassVar[str] = "drop"
     start: ClassVar[tuple[float, ...] | None] = (2.0, 0.25)
+    law_params: ClassVar[tuple[str, ...] | None] = ("inv_mu_drop",)
     inv_mu_drop: float = 0.0  # [-] 1/μ of the floor's contact (impact impulse and slide)
     depth_m: float = 0.0  # [m] the floor's depth below the landing plane
