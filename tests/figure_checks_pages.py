@@ -269,10 +269,12 @@ def check_the_gap_scene_worlds() -> None:
         _JET_STRONG[k] for k in ("w_mps", "core_m", "radius_m")
     )
     assert f"+ {grow2} * depth" in src
-    mu3, mu5 = quoted(page, r"blocks on a floor of μ ([\d.]+); one ball size \(sphere55\) "
-                      r"rolling; the bouncy floor at μ ([\d.]+) \|")  # fmt: skip
+    mu3, mu5, hard = quoted(page, r"blocks on a floor of μ ([\d.]+); one ball size \(sphere55\) "
+                            r"rolling; the bouncy floor at μ ([\d.]+); the balls on a hard floor, "
+                            r"rolling friction ([\d.]+) m, where they roll")  # fmt: skip
     assert float(mu3) == _case("s:bounce-slide-mu03")[0]["friction"]
     assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
+    assert float(hard) == _case("s:bounce-roll-hard")[0]["rolling_m"]
     (rel,) = quoted(page, r"v\(t\) = w − w / \(1 \+ \(c/m\) w t\), within ([\d.]+) %\)")
     rels = re.findall(r"rel=([\d.e-]+)\)", (ROOT / "tests/test_gap_scene.py").read_text())
     assert float(rel) / 100 == pytest.approx(float(rels[0]))

@@ -13,9 +13,11 @@ crossing) left by each slide law fitted to it by least squares on the crossing's
 friction, the impact law (v_h − μ|v_z|)₊² / 2μg (`impact`, 1/μ `inv_mu_imp`: the
 impact's friction impulse off v_h, then the slide), the drop law (`drop`: the fall from
 the plane to the floor, then the impact law there; 1/μ and the floor's depth fitted,
-`cell.sim.slide_fit.drop_fit`), and 1/μ or τ per object. A law that leaves about the rest
-points' repeat scatter is all a perfect account could do; a law that leaves much more is
-missing something.
+`cell.sim.slide_fit.drop_fit`), the roll law (`roll`: the fall, then a ball brought to
+rolling by the impact and braked by its rolling resistance, other shapes left at the
+crossing; 1/μ_r and the depth fitted, `cell.sim.slide_fit.roll_fit`), and 1/μ or τ per
+object. A law that leaves about the rest points' repeat scatter is all a perfect account
+could do; a law that leaves much more is missing something.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.gap.world_scene import JITTER_REL, draw_plan, impact_fit, repeat_var, throw_plan
-from cell.sim.slide_fit import G, drop_fit
+from cell.sim.slide_fit import G, drop_fit, roll_fit
 
 __all__ = ["slide_laws", "main"]
 
@@ -68,6 +70,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     per_mu = _fit(d, [fric * m[:, None] for m in per])
     inv_mu_imp, imp_rms = impact_fit(d, v)
     sizes = np.array([resolve_object(o)[0].size for o in objs], float)
+    balls = np.array([resolve_object(o)[0].shape == "sphere" for o in objs], bool)
     return (
         {
             "repeat_sd_rest_m": float(np.sqrt(repeat_var(plan, rest, ok))),
@@ -79,6 +82,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
             "inv_mu+hop": _fit(d, [fric, hop])[0],
             "impact": imp_rms,
             "drop": drop_fit(d, v, sizes)[2],
+            "roll": roll_fit(d, v, sizes, balls)[2],
             "inv_mu per object": per_mu[0],
             "tau per object": _fit(d, [tau * m[:, None] for m in per])[0],
         },

@@ -21,6 +21,7 @@ from cell.model.effects import (
     Bounce,
     BounceDrop,
     BounceImpact,
+    BounceRoll,
     BounceRolling,
     Downwash,
     DownwashDecay,
@@ -227,11 +228,17 @@ def _area(batch: ThrowBatch) -> np.ndarray:
 
 
 def _after_landing(
-    xy: np.ndarray, v_imp: np.ndarray, effs: Sequence[Effect], size: np.ndarray | None = None
+    xy: np.ndarray,
+    v_imp: np.ndarray,
+    effs: Sequence[Effect],
+    size: np.ndarray | None = None,
+    shape: np.ndarray | None = None,
 ) -> np.ndarray:
     """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
     from the impact velocities v_imp [m/s] (n, 3) at the landing plane; `size` (n, 3) [m]
-    the objects' extents (the drop law's fall ends at the smallest half-extent)."""
+    the objects' extents (the drop law's fall ends at the smallest half-extent), `shape`
+    (n,) their shape codes (`cell.model.objects.SHAPES`: the roll law moves balls alone;
+    None: every object a ball)."""
     # a parameter is one value, or one per throw (a law in a covariate, `cell.gap.laws`)
     bo = _find(effs, Bounce)
     if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
@@ -256,7 +263,39 @@ def _after_landing(
         np.any(np.asarray(bd.inv_mu_drop) > 0) or np.any(np.asarray(bd.depth_m) > 0)
     ):
         xy = xy + drop_slide(v_imp, bd.inv_mu_drop, bd.depth_m, size)
+    bl = _find(effs, BounceRoll)
+    if bl is not None and (
+        np.any(np.asarray(bl.inv_mu_r_per_m) > 0) or np.any(np.asarray(bl.roll_depth_m) > 0)
+    ):
+        move = roll_move(v_imp, bl.inv_mu_r_per_m, bl.roll_depth_m, size)
+        if shape is not None:  # a block does not roll: the law leaves it where it landed
+            from cell.model.objects import SHAPES
+
+            move = move * (np.asarray(shape) == SHAPES.index("sphere"))[:, None]
+        xy = xy + move
     return xy
+
+
+def roll_move(
+    v_imp: np.ndarray, inv_mu_r: Any, depth_m: Any, size: np.ndarray | None
+) -> np.ndarray:
+    """The roll law's move (n, 2) [m] (`cell.model.effects_bounce.BounceRoll`) from the
+    landing plane's crossing at v_imp [m/s] (n, 3): the free fall over depth_m − r (r the
+    smallest half-extent of `size` (n, 3) [m]; 0 without sizes) at v_h, the impact at
+    v_z' = √(v_z² + 2 g (depth_m − r)) bringing the ball to rolling at
+    5/7 v_h − 5 μ_r v_z' / (7 r), the roll v'² · 7 r / (10 μ_r g); inv_mu_r = 1/μ_r [1/m]."""
+    vh = v_imp[:, :2]
+    speed = np.linalg.norm(vh, axis=1)
+    vz = np.abs(v_imp[:, 2])
+    r = 0.0 if size is None else np.min(np.asarray(size, float), axis=1) / 2
+    fall = np.maximum(np.asarray(depth_m, float) - r, 0.0)
+    vz_floor = np.sqrt(vz**2 + 2 * G * fall)
+    inv = np.asarray(inv_mu_r, float)
+    rr = np.maximum(r, 1e-6)  # a ball of no size (no sizes given) brakes at once
+    brake = 5.0 * vz_floor / (7.0 * rr * np.maximum(inv, 1e-12))
+    rolling = np.maximum(5.0 / 7.0 * speed - brake, 0.0)
+    along = speed * (vz_floor - vz) / G + 7.0 * rr * rolling**2 * inv / (10.0 * G)
+    return vh * (along / np.maximum(speed, 1e-12))[:, None]
 
 
 def drop_slide(v_imp: np.ndarray, inv_mu: Any, depth_m: Any, size: np.ndarray | None) -> np.ndarray:
@@ -379,7 +418,7 @@ def predict_with_effects(
         k = drag_constant(batch.shape, batch.mass, batch.size)
         res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
         xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
-    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size) * s
+    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size, batch.shape) * s
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)
     return Landing(

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["G", "impact_fit", "drop_along", "drop_fit", "slide_truth"]
+__all__ = ["G", "impact_fit", "drop_along", "drop_fit", "roll_along", "roll_fit", "slide_truth"]
 
 G = 9.81  # [m/s²]
 
@@ -62,16 +62,66 @@ def drop_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray) -> tuple[float, flo
     return float(fit.x[0]), float(fit.x[1]), rms
 
 
-def slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray, size: np.ndarray
-                ) -> dict[str, float]:  # fmt: skip
+def roll_along(v: np.ndarray, mu_r_m: float, depth_m: float, size: np.ndarray) -> np.ndarray:
+    """The roll law's move along v_h (n,) [m] from the crossing's velocities v (n, 3)
+    [m/s] of balls of extents size (n, 3) [m] (radius r the smallest half-extent) on a
+    floor depth_m below the plane, of rolling resistance length mu_r_m [m]: the fall at
+    v_h, then the impact's angular impulse about the contact point (the friction's acts
+    through it, the rolling resistance's μ_r m v_z' against the roll) leaving
+    L = m r v_h − μ_r m v_z' = (7/5) m r v' (rolling, I = 2/5 m r² about the centre),
+    and the roll to rest under the torque μ_r m g, (7/5) m r v' / (μ_r m g) long, at
+    v' / 2 on average."""
+    r = np.min(size, axis=1) / 2
+    speed, vz = np.linalg.norm(v[:, :2], axis=1), np.abs(v[:, 2])
+    t_fall = (np.sqrt(vz * vz + 2 * G * np.maximum(depth_m - r, 0.0)) - vz) / G
+    vz_floor = vz + G * t_fall
+    v_roll = np.maximum(r * speed - mu_r_m * vz_floor, 0.0) / (1.4 * r)
+    t_roll = 1.4 * r * v_roll / (mu_r_m * G)
+    return speed * t_fall + 0.5 * v_roll * t_roll
+
+
+def roll_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray, ball: np.ndarray | None = None
+             ) -> tuple[float, float, float]:  # fmt: skip
+    """The roll law (`cell.model.effects_bounce.BounceRoll`) fitted to moves d (n, 2) [m]
+    from the crossing's velocities v (n, 3) [m/s] of balls of extents size (n, 3) [m]:
+    (1/μ_r [1/m], the floor's depth below the plane [m]) minimising the squared 2-D
+    residual (bounded least squares in log μ_r from μ_r 0.01 m, a depth of 0.25 m: the
+    law's own start), and the RMS 2-D residual [m]. `ball` (n,) marks the balls: the law
+    rolls those alone and leaves the others at the crossing (None: all balls)."""
+    from scipy.optimize import least_squares
+
+    u = v[:, :2] / np.maximum(np.linalg.norm(v[:, :2], axis=1), 1e-12)[:, None]
+    if ball is not None:
+        u = u * np.asarray(ball, bool)[:, None]
+
+    def res(x: np.ndarray) -> np.ndarray:
+        return (d - u * roll_along(v, float(np.exp(x[0])), x[1], size)[:, None]).reshape(-1)
+
+    lo, hi = np.log(5e-4), np.log(1.0)
+    fit = least_squares(
+        res, [np.log(0.01), 0.25], bounds=([lo, 0.0], [hi, 1.0]), x_scale=[0.1, 0.01]
+    )
+    rms = float(np.sqrt(np.mean(np.sum(res(fit.x).reshape(-1, 2) ** 2, axis=1))))
+    return float(np.exp(-fit.x[0])), float(fit.x[1]), rms
+
+
+def slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray, size: np.ndarray,
+                ball: np.ndarray | None = None) -> dict[str, float]:  # fmt: skip
     """The bounce's slide measured in the world: least squares of (rest − crossing) on
     v_h (tau_s [s]), on v_h |v_h| / (2 g) (inv_mu [-]), on the impact law's slide
     (inv_mu_imp [-], `impact_fit`) and on the drop law's (inv_mu_drop [-] and depth_m [m],
-    `drop_fit`, size (n, 3) [m] the objects' extents)."""
+    `drop_fit`, size (n, 3) [m] the objects' extents) and on the roll law's
+    (inv_mu_r_per_m [1/m] and roll_depth_m [m], `roll_fit`; `ball` (n,) the balls: with
+    none, no roll is measured and the two are left out)."""
     ok = np.all(np.isfinite(xy_rest), axis=1) & np.all(np.isfinite(xy_cross), axis=1)
     d, vh = xy_rest[ok] - xy_cross[ok], v[ok, :2]
     q = vh * (np.linalg.norm(vh, axis=1) / (2 * G))[:, None]
-    return {"tau_s": float(np.sum(d * vh) / np.sum(vh * vh)),
-            "inv_mu": float(np.sum(d * q) / np.sum(q * q)),
-            "inv_mu_imp": impact_fit(d, v[ok])[0],
-            **dict(zip(("inv_mu_drop", "depth_m"), drop_fit(d, v[ok], size[ok])[:2], strict=True))}  # fmt: skip
+    out = {"tau_s": float(np.sum(d * vh) / np.sum(vh * vh)),
+           "inv_mu": float(np.sum(d * q) / np.sum(q * q)),
+           "inv_mu_imp": impact_fit(d, v[ok])[0],
+           **dict(zip(("inv_mu_drop", "depth_m"), drop_fit(d, v[ok], size[ok])[:2], strict=True))}  # fmt: skip
+    balls = None if ball is None else np.asarray(ball, bool)[ok]
+    if balls is None or balls.any():  # no ball, no roll to measure
+        fit = roll_fit(d, v[ok], size[ok], balls)
+        out.update(inv_mu_r_per_m=fit[0], roll_depth_m=fit[1])
+    return out
