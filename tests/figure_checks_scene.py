@@ -176,13 +176,29 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
         PAGE, r"(\d+) → (\d+) of (\d+) pass; no row without\s+a bounce moved\."
     )
     assert was6 == now4  # the drop law came after the drawn drag factor
-    assert (int(now6), int(of6)) == (
-        load_json("docs/figures/gap_check_scene.json")["passes"],
-        len(rows),
+    assert (now6, of6) == ("38", "44")  # that change's table, as the page tells it
+    was7, of7, now7, of8, d7, d8 = quoted(
+        PAGE,
+        r"(\d+) of (\d+) → (\d+) of (\d+) pass, diagonal (\d+) → (\d+); no row\s+without a ball",
     )
-    for c in ("s:bounce-roll", "s:bounce-roll-one", "s:bounce-hop+outliers"):
+    assert (was7, of7) == (now6, of6)  # the roll law came after the drop law
+    table = load_json("docs/figures/gap_check_scene.json")
+    assert (int(now7), int(of8), int(d8)) == (table["passes"], len(rows), table["diagonal"])
+    assert d7 == "38"  # the drop law's table's diagonal, as the page tells it
+    for c in ("s:bounce-roll", "s:bounce-hop+outliers"):
         assert rows[c]["verdict"] == "bounce" and rows[c]["passes"], c
         assert rows[c]["laws"] == {"bounce": "drop"}, c
+    one, hard = rows["s:bounce-roll-one"], rows["s:bounce-roll-hard"]
+    for r in (one, hard):  # named by the roll law, failing on the floor's depth alone
+        assert r["verdict"] == "bounce" and r["laws"] == {"bounce": "roll"} and not r["passes"]
+        assert r["floor_ok"] and not r["params_ok"]
+    d_hard, d_one = quoted(
+        PAGE,
+        r"fails on the floor's depth\s+\((\d+) % off.*?its\s+depth, judged against the "
+        r"world's roll fit, is (\d+) % off",
+    )
+    close(d_one, 100 * one["param_errors"]["bounce.roll_depth_m"], 0)
+    close(d_hard, 100 * hard["param_errors"]["bounce.roll_depth_m"], 0)
     for c in ("s:wind-y", "s:downwash+wind", "s:wind-all-objects"):
         assert rows[c]["laws"] == {"wind": "level"}, c
     assert "drag_scale" not in rows["s:drag+hop"]["laws"] and rows["s:drag+hop"]["passes"]
@@ -379,8 +395,17 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
     )
     close(dep, 100 * hop5["param_errors"]["bounce.depth_m"], 0)
-    assert hop5["laws"] == {"bounce": "drop"} and not hop5["passes"]
+    assert hop5["laws"] == {"bounce": "inv_mu_drop = a + k · mass_kg"} and not hop5["passes"]
     assert before5 == "1.41"  # the table before the drop law, as the page tells it
+    was5, now5, dep0, dep1 = quoted(
+        page,
+        r"`s:bounce-hop-mu05` ([\d.]+) → ([\d.]+) F, its parameters within the tolerance "
+        r"\(the depth (\d+) → (\d+) %",
+    )
+    assert (was5, dep0) == ("1.73", "37")  # the drop law's constant, as the page tells it
+    close(now5, hop5["after_over_floor"], 2)
+    close(dep1, 100 * hop5["param_errors"]["bounce.depth_m"], 0)
+    assert hop5["params_ok"]
     (cubes,) = quoted(page, r"\(`s:none-cubes`, A ([\d.]+) F\)")
     close(cubes, rows["s:none-cubes"]["after_over_floor"], 2)
     assert rows["s:none-cubes"]["passes"] and rows["s:wind+bounce"]["passes"]
