@@ -276,6 +276,21 @@ def _after_landing(
     return xy
 
 
+def _fall(
+    v_imp: np.ndarray, depth_m: Any, size: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any, np.ndarray]:
+    """The fall from the landing plane's crossing at v_imp [m/s] (n, 3) to a floor depth_m
+    [m] below it, the centre stopping r (the smallest half-extent of `size` (n, 3) [m]; 0
+    without sizes) above the floor: (v_h (n, 2), |v_h|, |v_z| at the plane, r, |v_z| at the
+    floor √(v_z² + 2 g (depth_m − r)₊)), shared by the drop and roll laws."""
+    vh = v_imp[:, :2]
+    speed = np.linalg.norm(vh, axis=1)
+    vz = np.abs(v_imp[:, 2])
+    r = 0.0 if size is None else np.min(np.asarray(size, float), axis=1) / 2
+    fall = np.maximum(np.asarray(depth_m, float) - r, 0.0)
+    return vh, speed, vz, r, np.sqrt(vz**2 + 2 * G * fall)
+
+
 def roll_move(
     v_imp: np.ndarray, inv_mu_r: Any, depth_m: Any, size: np.ndarray | None
 ) -> np.ndarray:
@@ -284,12 +299,7 @@ def roll_move(
     smallest half-extent of `size` (n, 3) [m]; 0 without sizes) at v_h, the impact at
     v_z' = √(v_z² + 2 g (depth_m − r)) bringing the ball to rolling at
     5/7 v_h − 5 μ_r v_z' / (7 r), the roll v'² · 7 r / (10 μ_r g); inv_mu_r = 1/μ_r [1/m]."""
-    vh = v_imp[:, :2]
-    speed = np.linalg.norm(vh, axis=1)
-    vz = np.abs(v_imp[:, 2])
-    r = 0.0 if size is None else np.min(np.asarray(size, float), axis=1) / 2
-    fall = np.maximum(np.asarray(depth_m, float) - r, 0.0)
-    vz_floor = np.sqrt(vz**2 + 2 * G * fall)
+    vh, speed, vz, r, vz_floor = _fall(v_imp, depth_m, size)
     inv = np.asarray(inv_mu_r, float)
     rr = np.maximum(r, 1e-6)  # a ball of no size (no sizes given) brakes at once
     brake = 5.0 * vz_floor / (7.0 * rr * np.maximum(inv, 1e-12))
@@ -303,12 +313,7 @@ def drop_slide(v_imp: np.ndarray, inv_mu: Any, depth_m: Any, size: np.ndarray | 
     landing plane's crossing at v_imp [m/s] (n, 3): the free fall over depth_m − r (r the
     smallest half-extent of `size` (n, 3) [m]; 0 without sizes) at v_h, the impact at
     v_z' = √(v_z² + 2 g (depth_m − r)) taking μ v_z' off v_h, the slide (v_h')² / (2 μ g)."""
-    vh = v_imp[:, :2]
-    speed = np.linalg.norm(vh, axis=1)
-    vz = np.abs(v_imp[:, 2])
-    r = 0.0 if size is None else np.min(np.asarray(size, float), axis=1) / 2
-    fall = np.maximum(np.asarray(depth_m, float) - r, 0.0)
-    vz_floor = np.sqrt(vz**2 + 2 * G * fall)
+    vh, speed, vz, _, vz_floor = _fall(v_imp, depth_m, size)
     inv_mu = np.asarray(inv_mu, float)
     left = np.maximum(speed - vz_floor / np.maximum(inv_mu, 1e-12), 0.0)
     along = speed * (vz_floor - vz) / G + left**2 * inv_mu / (2 * G)
