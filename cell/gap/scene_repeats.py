@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.gap.world_scene import JITTER_REL, draw_plan, impact_fit, repeat_var, throw_plan
-from cell.sim.slide_fit import G, drop_fit, roll_fit
+from cell.sim.slide_fit import G, drop_fit, extents_and_balls, roll_fit
 
 __all__ = ["slide_laws", "main"]
 
@@ -49,7 +49,6 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     """The case's repeat scatter [m] (rest points, crossings) and each slide law's RMS
     residual [m] (see the module docstring); 1/μ per object [-]; the impact law's 1/μ [-]."""
     from cell.gap.check_scene import SCENE_CASES
-    from cell.sim.items import resolve_object
 
     effects, _, _, _, opts = SCENE_CASES[name]
     if not any(e["kind"] == "bounce" for e in effects):
@@ -69,8 +68,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
     per = [objs == o for o in names]
     per_mu = _fit(d, [fric * m[:, None] for m in per])
     inv_mu_imp, imp_rms = impact_fit(d, v)
-    sizes = np.array([resolve_object(o)[0].size for o in objs], float)
-    balls = np.array([resolve_object(o)[0].shape == "sphere" for o in objs], bool)
+    sizes, balls = extents_and_balls(objs)
     return (
         {
             "repeat_sd_rest_m": float(np.sqrt(repeat_var(plan, rest, ok))),

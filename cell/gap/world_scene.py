@@ -49,7 +49,7 @@ from cell.catalogue import catalogue
 from cell.errors import NoLanding
 from cell.sim.effect_scene import EffectScene
 from cell.sim.scene import item_linear_xyz, item_xyz
-from cell.sim.slide_fit import impact_fit, slide_truth
+from cell.sim.slide_fit import extents_and_balls, impact_fit, slide_truth
 
 __all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign",
            "impact_fit"]  # fmt: skip
@@ -363,20 +363,6 @@ def _model_xy(recs: list[dict[str, Any]], params: Any) -> np.ndarray:
     return np.asarray(predict_landing(batch, params.ee).xy, float)
 
 
-def _sizes(plan: list[Throw]) -> np.ndarray:
-    """The planned throws' objects' true extents (n, 3) [m] (the scene's, the catalogue's)."""
-    from cell.sim.items import resolve_object
-
-    return np.array([resolve_object(th.object_id)[0].size for th in plan], float)
-
-
-def _balls(plan: list[Throw]) -> np.ndarray:
-    """Which planned throws' objects are balls (the roll law rolls those alone)."""
-    from cell.sim.items import resolve_object
-
-    return np.array([resolve_object(th.object_id)[0].shape == "sphere" for th in plan], bool)
-
-
 def _untouched(plan: list[Throw], effects: list[dict[str, Any]]) -> np.ndarray:
     """The throws (mask) that no effect acts on in the scene: with a downwash and a
     tracker alone, the arm's throws (no rotor); with a tracker alone, every throw."""
@@ -414,7 +400,7 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         # without the floor's contact) to where it rests
         air = [e for e in effects if e["kind"] not in ("bounce", "tracker")]
         xyc, _, vcc = throw_plan(plan, air, seed) if air else (xy0, tl0, vc0)
-        truth = slide_truth(xy, xyc, vcc, _sizes(plan), _balls(plan))
+        truth = slide_truth(xy, xyc, vcc, *extents_and_balls([th.object_id for th in plan]))
     tr = _find(effects, "tracker")
     scale = float(tr["scale"]) if tr else 1.0
     lat = float(tr.get("latency_s", 0.0)) if tr else 0.0

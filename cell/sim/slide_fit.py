@@ -6,11 +6,32 @@ the model's (`cell.model.effects_apply`): the world shares no code with the fit.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
-__all__ = ["G", "impact_fit", "drop_along", "drop_fit", "roll_along", "roll_fit", "slide_truth"]
+__all__ = [
+    "G",
+    "extents_and_balls",
+    "impact_fit",
+    "drop_along",
+    "drop_fit",
+    "roll_along",
+    "roll_fit",
+    "slide_truth",
+]
 
 G = 9.81  # [m/s²]
+
+
+def extents_and_balls(object_ids: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """The scene's objects of these ids (the catalogue's): their true extents (n, 3) [m]
+    and which are balls (n,) (the roll law rolls those alone)."""
+    from cell.sim.items import resolve_object
+
+    objs = [resolve_object(o)[0] for o in object_ids]
+    return (np.array([o.size for o in objs], float),
+            np.array([o.shape == "sphere" for o in objs], bool))  # fmt: skip
 
 
 def impact_fit(d: np.ndarray, v: np.ndarray) -> tuple[float, float]:
