@@ -9,6 +9,7 @@ import pytest
 
 from cell.model.effects import FAMILIES, BounceDrop, BounceImpact
 from cell.model.effects_apply import _after_landing, drop_slide
+from tests.ball_drop import drop_ball
 
 G = 9.81  # [m/s²]
 
@@ -18,24 +19,8 @@ def _landed(obj: str, vh: float, vz: float, floor: tuple[float, float, float]
     """A ball set with its centre on the landing plane (z = 0.1 m) moving at (v_h, 0, −v_z)
     [m/s] onto the scene's floor (restitution, friction, rolling friction [m]): (rest − start
     along x [m], across [m], the largest ω r / v_h after its first touch)."""
-    from cell.sim.effect_scene import EffectScene
-
-    sc = EffectScene()
-    try:
-        sc.set_floor(*floor)
-        item = sc.spawn_item(obj, position=(0.0, 0.0, 0.1))
-        r = item.obj.size[0] / 2
-        sc.client.resetBaseVelocity(item.body, [vh, 0.0, -vz], [0.0, 0.0, 0.0])
-        spin, slow = 0.0, 0
-        while sc.t < 3.0 and slow < 30:
-            sc.step()
-            v, w = sc.item_velocity(item)
-            spin = max(spin, abs(w[1]) * r / vh)
-            slow = slow + 1 if np.linalg.norm(v) < 0.01 else 0
-        p = sc.item_position(item)
-        return float(p[0]), float(p[1]), spin
-    finally:
-        sc.close()
+    x, y, _, _, wr = drop_ball(obj, vh, vz, floor)
+    return x, y, float(np.max(np.abs(wr))) / vh
 
 
 def test_a_ball_on_the_roll_floor_slides_to_rest_as_the_drop_law_says():

@@ -9,9 +9,9 @@ import pytest
 from cell.model.effects import FAMILIES, BounceDrop, BounceRoll
 from cell.model.effects_apply import _after_landing, roll_move
 from cell.model.objects import SHAPES
+from tests.ball_drop import PLANE_Z, drop_ball
 
 G = 9.81  # [m/s²]
-PLANE_Z = 0.1  # [m] the landing plane above the scene's floor (world frame, z up)
 _SIZE = {"sphere40": 0.04, "sphere55": 0.055, "sphere70": 0.07}  # [m] the balls' diameters
 
 
@@ -20,25 +20,12 @@ def _rolled(obj: str, vh: float, vz: float, floor: tuple[float, float, float]
     """A ball set with its centre on the landing plane moving at (v_h, 0, −v_z) [m/s],
     no spin, onto the scene's floor (restitution, friction, rolling friction [m]): (rest −
     start along x [m], across [m], ω r / v [-] 0.1 s after the start, on the floor)."""
-    from cell.sim.effect_scene import EffectScene
-
-    sc = EffectScene()
-    try:
-        sc.set_floor(*floor)
-        item = sc.spawn_item(obj, position=(0.0, 0.0, PLANE_Z))
-        r = item.obj.size[0] / 2
-        sc.client.resetBaseVelocity(item.body, [vh, 0.0, -vz], [0.0, 0.0, 0.0])
-        ratio, slow = float("nan"), 0
-        while sc.t < 3.0 and slow < 30:
-            sc.step()
-            v, w = sc.item_velocity(item)
-            if np.isnan(ratio) and sc.t >= 0.1:
-                ratio = float(w[1] * r / max(v[0], 1e-9))
-            slow = slow + 1 if np.linalg.norm(v) < 0.01 else 0
-        p = sc.item_position(item)
-        return float(p[0]), float(p[1]), ratio
-    finally:
-        sc.close()
+    x, y, t, vx, wr = drop_ball(obj, vh, vz, floor)
+    late = np.flatnonzero(t >= 0.1)
+    if not late.size:
+        return x, y, float("nan")
+    i = late[0]
+    return x, y, float(wr[i] / max(vx[i], 1e-9))
 
 
 def test_a_ball_on_a_hard_floor_rolls_to_rest_as_the_roll_law_says():
