@@ -52,6 +52,47 @@ def test_a_ball_on_the_roll_floor_slides_to_rest_as_the_drop_law_says():
     assert rms < 3e-3
 
 
+def test_balls_that_hop_on_the_bouncy_floor_rest_where_the_drop_law_says():
+    """On `s:bounce-hop-mu05`'s floor (restitution 0.6, friction 0.5, rolling friction
+    0.05 m) a ball hops: its impact rebounds (Bullet's restitution, about 0.6 × the item's
+    0.2) and it flies about a tenth of a second before it lands again and slides. Its
+    rest point is still the drop law's with μ 0.5 × 0.7 and the floor 0.1 m below the
+    plane, neither fitted: under a Coulomb contact the hop changes nothing wherever the
+    first impact leaves the ball sliding (the impact of normal impulse (1 + e) m v_z'
+    leaves v1 = v_h − μ (1 + e) v_z', the flight 2 e v_z' / g carries it v1 · 2 e v_z' / g,
+    the landing at e v_z' takes μ e v_z' more, and the slide (v1 − μ e v_z')² / (2 μ g):
+    the sum is the plastic impact's (v_h − μ v_z')² / (2 μ g)). Where the first impact
+    stops a ball the plastic one would not (μ v_z' < v_h < μ (1 + e) v_z'), the hop is a
+    few mm shorter: the drop law holds within 6 mm."""
+    from cell.sim.items import ITEM_FRICTION
+
+    throws = [("sphere40", 3.0, 4.0), ("sphere55", 1.5, 3.5), ("sphere70", 2.5, 3.0),
+              ("sphere55", 2.0, 5.0), ("sphere70", 3.0, 3.5)]  # fmt: skip
+    radius = {"sphere40": 0.02, "sphere55": 0.0275, "sphere70": 0.035}
+    mu = 0.5 * ITEM_FRICTION
+    v = np.array([[vh, 0.0, -vz] for _, vh, vz in throws])
+    size = np.array([[2 * radius[o]] * 3 for o, _, _ in throws])
+    want = drop_slide(v, 1.0 / mu, 0.1, size)[:, 0]
+    for (obj, vh, vz), w in zip(throws, want, strict=True):
+        z: list[float] = []
+        x, y, _, _, wr = drop_ball(obj, vh, vz, (0.6, 0.5, 0.05), z)
+        touch = int(np.argmin(z))  # the first impact's deepest step
+        assert max(z[touch:]) - radius[obj] > 0.005, (obj, vh, vz)  # it hops
+        assert np.abs(wr).max() < 0.01 * vh and abs(y) < 1e-3  # no spin: it slides
+        assert abs(x - w) < 6e-3, (obj, vh, vz, x, w)
+    # the hop's closed form against the law's, where the first impact leaves it sliding
+    rng = np.random.default_rng(5)
+    n, e, r = 40, 0.15, rng.uniform(0.02, 0.035, 40)
+    vz, vh = rng.uniform(2.5, 5.0, n), rng.uniform(0.0, 5.0, n)
+    vzf = np.sqrt(vz**2 + 2 * G * (0.1 - r))
+    v1 = vh - mu * (1 + e) * vzf
+    hop = vh * (vzf - vz) / G + v1 * 2 * e * vzf / G + (v1 - mu * e * vzf) ** 2 / (2 * mu * G)
+    law = drop_slide(np.c_[vh, np.zeros(n), -vz], 1.0 / mu, 0.1, np.c_[2 * r, 2 * r, 2 * r])
+    sliding = v1 - mu * e * vzf > 0
+    assert 5 < sliding.sum() < n
+    assert np.allclose(law[sliding, 0], hop[sliding], atol=1e-12)
+
+
 def test_the_drop_law_at_the_plane_is_the_impact_law_and_neutral_does_nothing():
     """A floor at the plane (no fall) leaves the impact law's slide; the neutral size does
     nothing; a fall of h at v_h, v_z moves the landing v_h (√(v_z² + 2 g h) − v_z) / g more
