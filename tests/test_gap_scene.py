@@ -384,7 +384,8 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_acro
     effects alone refuses it; across the impact velocity, where a roll moves no landing, the
     misses show no scale, and the pair is refused (`cell.gap.select.across_refusal`). The same
     landings scaled by 1.03 about the origin (a tracker at 1.03, made here, not fitted): the
-    misses across show 1.03 within 3 standard errors and the pair may join."""
+    misses across show 1.03 within 3 standard errors and the pair may join. The join's test
+    records that scale beside the cut (`Selection.passes`), the pair refused or not."""
     from cell.gap.fit import Score, fit_set
     from cell.gap.problem import build_problem
     from cell.gap.select import Selection, across_refusal, across_scale, refusal
@@ -404,12 +405,21 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_acro
         pair = Score(names=("bounce", "tracking_scale"), full=fit,
                      heldout=np.zeros(len(prob)), heldout_rmse_m=0.0)  # fmt: skip
         sel = Selection(prob, [], {}, {}, None, 0.0, lambda _: None)
+        # the join's test records the scale the misses across show, joined or not: the
+        # tracker's own scale within 3 standard errors
+        sel.passes(np.full(len(prob), 1.0), pair)
+        rec = sel.tests["bounce+tracking_scale"]
+        assert abs(rec["across_scale"][0] - s_true) < 3 * rec["across_scale"][1], rec
         if s_true == 1.0:
             # the pair's scale is off 1 by more than the misses across allow
             assert abs(fit.effects[1].params()["scale_factor"] - s) > se, (fit.effects, s, se)
             assert abs(s - 1.0) < 1.96 * se, (s, se)
             why = sel.refuse(pair)
             assert why and "across the impact velocity" in why, why
+            assert rec["refused"] == why and not rec["passes"], rec
+            # no scale across: within the refusal's 1.96 standard errors of 1 (the pair's
+            # own scale, the roll taken along the flight, is not)
+            assert abs(rec["across_scale"][0] - 1.0) < 1.96 * rec["across_scale"][1], rec
         else:
             assert abs(s - s_true) < 3 * se and abs(s - 1.0) > 1.96 * se, (s, se)
             assert across_refusal(prob, fit.effects) is None and sel.refuse(pair) is None

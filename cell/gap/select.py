@@ -32,6 +32,7 @@ __all__ = [
     "refusal",
     "across_scale",
     "across_refusal",
+    "scale_beside_landing",
     "at_bound",
     "public",
     "effect_class",
@@ -136,13 +137,19 @@ def across_scale(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect]
     return 1.0 + k, se, int(ok.sum())
 
 
+def scale_beside_landing(effects: tuple[Effect, ...] | list[Effect]) -> bool:
+    """Whether a set holds a tracking scale beside a landing effect (the sets whose scale
+    the misses across the impact velocity judge, `across_refusal`)."""
+    return any(isinstance(e, TrackingScale) for e in effects) and any(
+        e.phase == "landing" for e in effects
+    )
+
+
 def across_refusal(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect]) -> str | None:
     """Why a tracking scale in a set beside a landing effect may not join (None: it may, or
     the set has no such pair): the landing misses across the impact velocity
     (`across_scale`) show no scale, within ACROSS_Z standard errors of 1."""
-    if not any(isinstance(e, TrackingScale) for e in effects) or not any(
-        e.phase == "landing" for e in effects
-    ):
+    if not scale_beside_landing(effects):
         return None
     s, se, _ = across_scale(prob, effects)
     if not np.isfinite(s) or not np.isfinite(se) or abs(s - 1.0) >= ACROSS_Z * se:
@@ -372,7 +379,10 @@ class Selection:
         """Whether a candidate set joins over the misses before it (prev_sq [m²] per
         throw): it cuts MIN_CUT of the held-out RMSE left with a bootstrap interval above
         zero, is not refused and survives the permutation control. Records the tests
-        (under `key`, or the set's names joined by "+")."""
+        (under `key`, or the set's names joined by "+"), and for a tracking scale beside a
+        landing effect the scale the misses across the impact velocity show with its
+        standard error (`across_scale`: the landings' evidence for the scale that no slide
+        mimics, whether or not the set joins)."""
         t = self._test(prev_sq, cand)
         cut = t["cut_m"]
         ok = bool(t.pop("passes"))
@@ -380,6 +390,10 @@ class Selection:
         if why:
             t["refused"] = why
             ok = False
+        if scale_beside_landing(cand.full.effects):
+            # what the landings show of the scale where no slide moves them, joined or not
+            s, se, _ = across_scale(self.prob, cand.full.effects)
+            t["across_scale"] = [s, se]
         newest = type(cand.full.effects[-1])
         if ok and newest.hangs_on is not None:
             ok = ok and self._survives_permutation(cand, cut, t)
