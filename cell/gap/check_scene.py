@@ -45,7 +45,7 @@ _SLIDE = {
         {"inv_mu": "measured"},
         {"inv_mu_imp": "measured"},
         {"inv_mu_drop": "measured", "depth_m": "measured"},
-        {"inv_mu_r_per_m": "measured", "roll_depth_m": "measured"},
+        {"inv_mu_r_per_m": "measured"},
     ]
 }
 W, B = "wind", "bounce"

@@ -400,7 +400,8 @@ def draw_scene_campaign(effects: list[dict[str, Any]], rng: np.random.Generator,
         # without the floor's contact) to where it rests
         air = [e for e in effects if e["kind"] not in ("bounce", "tracker")]
         xyc, _, vcc = throw_plan(plan, air, seed) if air else (xy0, tl0, vc0)
-        truth = slide_truth(xy, xyc, vcc, *extents_and_balls([th.object_id for th in plan]))
+        sizes, balls = extents_and_balls([th.object_id for th in plan])
+        truth = slide_truth(xy, xyc, vcc, sizes, balls, LAND_Z_M)
     tr = _find(effects, "tracker")
     scale = float(tr["scale"]) if tr else 1.0
     lat = float(tr.get("latency_s", 0.0)) if tr else 0.0

@@ -24,7 +24,7 @@ control of the sim-to-real diagnosis). Every form is physically shaped:
 | bounce (rolling) | the rest point is touchdown + `tau_s` · v_h (∝ impact speed: rolling) |
 | bounce (impact) | a Coulomb contact that takes its friction impulse at the impact too: v_h loses μ v_z as the object hits (a plastic impact, v_z the vertical impact speed), then slides (v_h − μ v_z)² / (2 μ g) further, nothing where μ v_z ≥ v_h; `inv_mu_imp` = 1/μ |
 | bounce (drop) | the object falls on from the landing plane to a floor `depth_m` below it (its centre to its smallest half-extent r above it: v_h t_d further), hits it at v_z' = √(v_z² + 2 g (depth_m − r)) as the impact law's contact, then slides (v_h − μ v_z')² / (2 μ g); `inv_mu_drop` = 1/μ (`cell.model.effects_bounce`) |
-| bounce (roll) | a ball falls on to a floor `roll_depth_m` below the plane as in the drop law, the impact brings it to rolling at 5/7 v_h less the rolling resistance's impulse 5 μ_r v_z' / (7 r), then it rolls v'² · 7 r / (10 μ_r g) to rest (a deceleration 5 μ_r g / (7 r)); `inv_mu_r_per_m` = 1/μ_r [1/m], μ_r the rolling resistance length |
+| bounce (roll) | a ball falls on to the floor (z = 0) from the log's plane (`land_z_m` above it) as in the drop law, the impact brings it to rolling at 5/7 v_h less the rolling resistance's impulse 5 μ_r v_z' / (7 r), then it rolls v'² · 7 r / (10 μ_r g) to rest (a deceleration 5 μ_r g / (7 r)); `inv_mu_r_per_m` = 1/μ_r [1/m], μ_r the rolling resistance length |
 
 An effect is a family of laws (`FAMILIES`): its members share the name and the phase and
 differ in how the effect grows (the diagnosis picks the member that predicts held-out

@@ -233,12 +233,14 @@ def _after_landing(
     effs: Sequence[Effect],
     size: np.ndarray | None = None,
     shape: np.ndarray | None = None,
+    land_z: np.ndarray | None = None,
 ) -> np.ndarray:
     """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
     from the impact velocities v_imp [m/s] (n, 3) at the landing plane; `size` (n, 3) [m]
     the objects' extents (the drop law's fall ends at the smallest half-extent), `shape`
     (n,) their shape codes (`cell.model.objects.SHAPES`: the roll law moves balls alone;
-    None: every object a ball)."""
+    None: every object a ball), `land_z` (n,) [m] the landing planes' heights above the
+    floor (the roll law's fall; None: 0, no fall)."""
     # a parameter is one value, or one per throw (a law in a covariate, `cell.gap.laws`)
     bo = _find(effs, Bounce)
     if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
@@ -264,10 +266,8 @@ def _after_landing(
     ):
         xy = xy + drop_slide(v_imp, bd.inv_mu_drop, bd.depth_m, size)
     bl = _find(effs, BounceRoll)
-    if bl is not None and (
-        np.any(np.asarray(bl.inv_mu_r_per_m) > 0) or np.any(np.asarray(bl.roll_depth_m) > 0)
-    ):
-        move = roll_move(v_imp, bl.inv_mu_r_per_m, bl.roll_depth_m, size)
+    if bl is not None and np.any(np.asarray(bl.inv_mu_r_per_m) > 0):
+        move = roll_move(v_imp, bl.inv_mu_r_per_m, 0.0 if land_z is None else land_z, size)
         if shape is not None:  # a block does not roll: the law leaves it where it landed
             from cell.model.objects import SHAPES
 
@@ -423,7 +423,7 @@ def predict_with_effects(
         k = drag_constant(batch.shape, batch.mass, batch.size)
         res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
         xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
-    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size, batch.shape) * s
+    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size, batch.shape, batch.land_z) * s
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)
     return Landing(

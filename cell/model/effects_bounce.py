@@ -95,28 +95,30 @@ class BounceDrop(Effect):
 
 @dataclass(frozen=True)
 class BounceRoll(Effect):
-    """The logged point is where a ball came to rest after rolling on a floor
-    `roll_depth_m` below the landing plane: the drop law's fall (v_h · t_d further, the
-    floor hit at v_z' = √(v_z² + 2 g (roll_depth_m − r)), r the object's smallest
-    half-extent), then an impact whose friction brings the ball to rolling (ω r = v) at
-    5/7 v_h (a ball of zero spin: its moment of inertia 2/5 m r²; the friction impulse is
-    taken as large enough, μ v_z' ≥ 2/7 v_h) less the rolling resistance's impulse
-    5 μ_r v_z' / (7 r) (a torque up to μ_r N over the normal impulse m v_z'), or stopped,
-    then a roll at the deceleration 5 μ_r g / (7 r) to rest: 7 r v'² / (10 μ_r g) further.
-    μ_r [m] is the rolling resistance length (Bullet's rolling friction: a torque up to
-    μ_r N); a ball rolls so where μ_r < μ r, and slides as the drop law has it elsewhere.
-    Only a ball rolls: an object of another shape is left where it crossed the plane.
+    """The logged point is where a ball came to rest after rolling on the floor, the
+    world frame's z = 0 under a landing plane at the log's `land_z_m` (`docs/throw_log.md`:
+    the height of the plane, 0 the floor): the drop law's fall (v_h · t_d further, the
+    floor hit at v_z' = √(v_z² + 2 g (land_z − r)), r the object's smallest half-extent),
+    then an impact whose friction brings the ball to rolling (ω r = v) at 5/7 v_h (a ball
+    of zero spin: its moment of inertia 2/5 m r²; the friction impulse is taken as large
+    enough, μ v_z' ≥ 2/7 v_h) less the rolling resistance's impulse 5 μ_r v_z' / (7 r) (a
+    torque up to μ_r N over the normal impulse m v_z'), or stopped, then a roll at the
+    deceleration 5 μ_r g / (7 r) to rest: 7 r v'² / (10 μ_r g) further. μ_r [m] is the
+    rolling resistance length (Bullet's rolling friction: a torque up to μ_r N); a ball
+    rolls so where μ_r < μ r, and slides as the drop law has it elsewhere. Only a ball
+    rolls: an object of another shape is left where it crossed the plane.
 
-    Its parameter is 1/μ_r [1/m], so that the neutral size (1/μ_r 0, depth 0) does
-    nothing (an infinite resistance: no roll). The roll is nil wherever 5 μ_r v_z' ≥
-    5 v_h r, so about the neutral size the law is flat: a fit without a warm start begins
-    at μ_r 0.01 m (a hard floor's few mm) and a floor 0.25 m down (the drop law's)."""
+    Its one parameter is 1/μ_r [1/m], so that the neutral size (0) does nothing (an
+    infinite resistance: no roll beyond the fall); the depth is the log's, not fitted: a
+    fitted depth takes up the configured model's flight misses along v_h on long rolls
+    (`s:bounce-roll-hard`: 0.217 m for the plane's 0.1, docs/HISTORY.md). The roll is nil
+    wherever 5 μ_r v_z' ≥ 5 v_h r, so about the neutral size the law is flat: a fit
+    without a warm start begins at μ_r 0.01 m (a hard floor's few mm)."""
 
     name: ClassVar[str] = "bounce"
     phase: ClassVar[str] = "landing"
-    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2000.0), (0.0, 1.0))
-    scale: ClassVar[tuple[float, ...]] = (10.0, 0.01)
+    bounds: ClassVar[tuple[tuple[float, float], ...]] = ((0.0, 2000.0),)
+    scale: ClassVar[tuple[float, ...]] = (10.0,)
     law: ClassVar[str] = "roll"
-    start: ClassVar[tuple[float, ...] | None] = (100.0, 0.25)
+    start: ClassVar[tuple[float, ...] | None] = (100.0,)
     inv_mu_r_per_m: float = 0.0  # [1/m] 1/μ_r, the inverse rolling resistance length
-    roll_depth_m: float = 0.0  # [m] the floor's depth below the landing plane

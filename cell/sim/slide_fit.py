@@ -101,14 +101,16 @@ def roll_along(v: np.ndarray, mu_r_m: float, depth_m: float, size: np.ndarray) -
     return speed * t_fall + 0.5 * v_roll * t_roll
 
 
-def roll_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray, ball: np.ndarray | None = None
-             ) -> tuple[float, float, float]:  # fmt: skip
+def roll_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray, ball: np.ndarray | None = None,
+             depth_m: float | None = None) -> tuple[float, float, float]:  # fmt: skip
     """The roll law (`cell.model.effects_bounce.BounceRoll`) fitted to moves d (n, 2) [m]
     from the crossing's velocities v (n, 3) [m/s] of balls of extents size (n, 3) [m]:
     (1/μ_r [1/m], the floor's depth below the plane [m]) minimising the squared 2-D
     residual (bounded least squares in log μ_r from μ_r 0.01 m, a depth of 0.25 m: the
     law's own start), and the RMS 2-D residual [m]. `ball` (n,) marks the balls: the law
-    rolls those alone and leaves the others at the crossing (None: all balls)."""
+    rolls those alone and leaves the others at the crossing (None: all balls). With
+    `depth_m` [m] the depth is that (the plane's height above the floor) and 1/μ_r alone
+    is fitted."""
     from scipy.optimize import least_squares
 
     u = v[:, :2] / np.maximum(np.linalg.norm(v[:, :2], axis=1), 1e-12)[:, None]
@@ -116,24 +118,31 @@ def roll_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray, ball: np.ndarray | 
         u = u * np.asarray(ball, bool)[:, None]
 
     def res(x: np.ndarray) -> np.ndarray:
-        return (d - u * roll_along(v, float(np.exp(x[0])), x[1], size)[:, None]).reshape(-1)
+        depth = x[1] if depth_m is None else depth_m
+        return (d - u * roll_along(v, float(np.exp(x[0])), depth, size)[:, None]).reshape(-1)
 
     lo, hi = np.log(5e-4), np.log(1.0)
-    fit = least_squares(
-        res, [np.log(0.01), 0.25], bounds=([lo, 0.0], [hi, 1.0]), x_scale=[0.1, 0.01]
-    )
+    if depth_m is None:
+        fit = least_squares(
+            res, [np.log(0.01), 0.25], bounds=([lo, 0.0], [hi, 1.0]), x_scale=[0.1, 0.01]
+        )
+    else:
+        fit = least_squares(res, [np.log(0.01)], bounds=([lo], [hi]), x_scale=[0.1])
+        fit.x = np.r_[fit.x, depth_m]
     rms = float(np.sqrt(np.mean(np.sum(res(fit.x).reshape(-1, 2) ** 2, axis=1))))
     return float(np.exp(-fit.x[0])), float(fit.x[1]), rms
 
 
 def slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray, size: np.ndarray,
-                ball: np.ndarray | None = None) -> dict[str, float]:  # fmt: skip
+                ball: np.ndarray | None = None, plane_z_m: float = 0.0
+                ) -> dict[str, float]:  # fmt: skip
     """The bounce's slide measured in the world: least squares of (rest − crossing) on
     v_h (tau_s [s]), on v_h |v_h| / (2 g) (inv_mu [-]), on the impact law's slide
     (inv_mu_imp [-], `impact_fit`) and on the drop law's (inv_mu_drop [-] and depth_m [m],
     `drop_fit`, size (n, 3) [m] the objects' extents) and on the roll law's
-    (inv_mu_r_per_m [1/m] and roll_depth_m [m], `roll_fit`; `ball` (n,) the balls: with
-    none, no roll is measured and the two are left out)."""
+    (inv_mu_r_per_m [1/m], `roll_fit`, the fall from the plane at plane_z_m [m] to the
+    floor at z = 0, as the model's roll law takes it from the log; `ball` (n,) the balls:
+    with none, no roll is measured and it is left out)."""
     ok = np.all(np.isfinite(xy_rest), axis=1) & np.all(np.isfinite(xy_cross), axis=1)
     d, vh = xy_rest[ok] - xy_cross[ok], v[ok, :2]
     q = vh * (np.linalg.norm(vh, axis=1) / (2 * G))[:, None]
@@ -143,6 +152,5 @@ def slide_truth(xy_rest: np.ndarray, xy_cross: np.ndarray, v: np.ndarray, size: 
            **dict(zip(("inv_mu_drop", "depth_m"), drop_fit(d, v[ok], size[ok])[:2], strict=True))}  # fmt: skip
     balls = None if ball is None else np.asarray(ball, bool)[ok]
     if balls is None or balls.any():  # no ball, no roll to measure
-        fit = roll_fit(d, v[ok], size[ok], balls)
-        out.update(inv_mu_r_per_m=fit[0], roll_depth_m=fit[1])
+        out["inv_mu_r_per_m"] = roll_fit(d, v[ok], size[ok], balls, plane_z_m)[0]
     return out
