@@ -183,22 +183,33 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     )
     assert (was7, of7) == (now6, of6)  # the roll law came after the drop law
     table = load_json("docs/figures/gap_check_scene.json")
-    assert (int(now7), int(of8), int(d8)) == (table["passes"], len(rows), table["diagonal"])
+    assert (now7, of8, d8) == ("37", "45", "39")  # the roll law's table, as the page tells it
     assert d7 == "38"  # the drop law's table's diagonal, as the page tells it
     for c in ("s:bounce-roll", "s:bounce-hop+outliers"):
         assert rows[c]["verdict"] == "bounce" and rows[c]["passes"], c
         assert rows[c]["laws"] == {"bounce": "drop"}, c
     one, hard = rows["s:bounce-roll-one"], rows["s:bounce-roll-hard"]
-    for r in (one, hard):  # named by the roll law, failing on the floor's depth alone
-        assert r["verdict"] == "bounce" and r["laws"] == {"bounce": "roll"} and not r["passes"]
-        assert r["floor_ok"] and not r["params_ok"]
+    # the roll law's depth from the log: the hard floor's balls named by it, passing; the
+    # sliding floor's one ball size by the drop law again, passing
+    law = "inv_mu_r_per_m = a + k · stroke_m"  # the roll law's 1/μ_r, a law in the stroke
+    assert hard["laws"] == {"bounce": law} and hard["passes"] and hard["params_ok"]
+    assert one["laws"] == {"bounce": "drop"} and one["passes"] and one["params_ok"]
+    assert set(hard["params"]["bounce"]) == {"a", "k"}  # the depth is the log's, not fitted
+    (a_hard,) = quoted(PAGE, r"named `bounce` by\s+the roll law with the log's depth, A ([\d.]+) F")
+    close(a_hard, hard["after_over_floor"], 2)
+    (a_log,) = quoted(
+        PAGE, r"`s:bounce-roll-hard` is named by it within the world's floor \(A ([\d.]+) F\)"
+    )
+    close(a_log, hard["after_over_floor"], 2)
+    was9, now9, of9, d9 = quoted(PAGE, r"(\d+) → (\d+) of (\d+) pass,\s+diagonal (\d+) as before")
+    assert (int(now9), int(of9), int(d9)) == (table["passes"], len(rows), table["diagonal"])
+    assert was9 == now7 == "37" and d9 == d8
     d_hard, d_one = quoted(
         PAGE,
-        r"fails on the floor's depth\s+\((\d+) % off.*?its\s+depth, judged against the "
-        r"world's roll fit, is (\d+) % off",
+        r"fails on the floor's depth\s+\((\d+) % off, the depth then fitted.*?its\s+depth, "
+        r"judged against the world's roll fit, is (\d+) % off",
     )
-    close(d_one, 100 * one["param_errors"]["bounce.roll_depth_m"], 0)
-    close(d_hard, 100 * hard["param_errors"]["bounce.roll_depth_m"], 0)
+    assert (d_hard, d_one) == ("88", "31")  # the table with the roll law's depth fitted
     for c in ("s:wind-y", "s:downwash+wind", "s:wind-all-objects"):
         assert rows[c]["laws"] == {"wind": "level"}, c
     assert "drag_scale" not in rows["s:drag+hop"]["laws"] and rows["s:drag+hop"]["passes"]
