@@ -16,7 +16,7 @@ from tests.figure_checks_pages import _case
 from tests.figure_quotes import COVERED, close, load_json, note, page_text, quoted
 
 PAGE = "docs/gap_scene.md"
-_LAWS = ("tau", "inv_mu", "tau+inv_mu", "inv_mu+hop", "impact", "drop")
+_LAWS = ("tau", "inv_mu", "tau+inv_mu", "inv_mu+hop", "impact", "drop", "roll")
 _COLS = ("repeat_sd_rest_m", "repeat_sd_crossing_m", "slide_rms_m", *_LAWS,
          "inv_mu per object", "tau per object")  # fmt: skip
 

@@ -15,7 +15,8 @@ impact's friction impulse off v_h, then the slide), the drop law (`drop`: the fa
 the plane to the floor, then the impact law there; 1/μ and the floor's depth fitted,
 `cell.sim.slide_fit.drop_fit`), the roll law (`roll`: the fall, then a ball brought to
 rolling by the impact and braked by its rolling resistance, other shapes left at the
-crossing; 1/μ_r and the depth fitted, `cell.sim.slide_fit.roll_fit`), and 1/μ or τ per
+crossing; 1/μ_r fitted, the fall from the campaign's plane to the floor as the model's
+roll law takes it from the log, `cell.sim.slide_fit.roll_fit`), and 1/μ or τ per
 object. A law that leaves about the rest points' repeat scatter is all a perfect account
 could do; a law that leaves much more is missing something.
 """
@@ -29,7 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.gap.world_scene import JITTER_REL, draw_plan, impact_fit, repeat_var, throw_plan
+from cell.gap.world_scene import (
+    JITTER_REL,
+    LAND_Z_M,
+    draw_plan,
+    impact_fit,
+    repeat_var,
+    throw_plan,
+)
 from cell.sim.slide_fit import G, drop_fit, extents_and_balls, roll_fit
 
 __all__ = ["slide_laws", "main"]
@@ -80,7 +88,7 @@ def slide_laws(name: str, n: int = 80, seed: int = 7, jitter_rel: float = JITTER
             "inv_mu+hop": _fit(d, [fric, hop])[0],
             "impact": imp_rms,
             "drop": drop_fit(d, v, sizes)[2],
-            "roll": roll_fit(d, v, sizes, balls)[2],
+            "roll": roll_fit(d, v, sizes, balls, LAND_Z_M)[2],
             "inv_mu per object": per_mu[0],
             "tau per object": _fit(d, [tau * m[:, None] for m in per])[0],
         },
