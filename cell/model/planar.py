@@ -84,6 +84,17 @@ def flight_planar_one(
     return nan, nan, False, nan, nan
 
 
+def _stage(
+    vh: np.ndarray, vz: np.ndarray, dt: float, ah: np.ndarray, az: np.ndarray, neg_k: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One of RK4's later stages: the velocity dt [s] on at the previous stage's
+    acceleration (ah, az) [m/s²] and the drag and gravity there."""
+    vh_s = vh + dt * ah
+    vz_s = vz + dt * az
+    s = np.sqrt(vh_s * vh_s + vz_s * vz_s)
+    return vh_s, vz_s, neg_k * s * vh_s, neg_k * s * vz_s - G
+
+
 def _rk4_arrays(
     h: np.ndarray,
     z: np.ndarray,
@@ -100,21 +111,9 @@ def _rk4_arrays(
     half = 0.5 * step
     a1h = neg_k * speed * vh
     a1z = neg_k * speed * vz - G
-    vh2 = vh + half * a1h
-    vz2 = vz + half * a1z
-    s2 = np.sqrt(vh2 * vh2 + vz2 * vz2)
-    a2h = neg_k * s2 * vh2
-    a2z = neg_k * s2 * vz2 - G
-    vh3 = vh + half * a2h
-    vz3 = vz + half * a2z
-    s3 = np.sqrt(vh3 * vh3 + vz3 * vz3)
-    a3h = neg_k * s3 * vh3
-    a3z = neg_k * s3 * vz3 - G
-    vh4 = vh + step * a3h
-    vz4 = vz + step * a3z
-    s4 = np.sqrt(vh4 * vh4 + vz4 * vz4)
-    a4h = neg_k * s4 * vh4
-    a4z = neg_k * s4 * vz4 - G
+    vh2, vz2, a2h, a2z = _stage(vh, vz, half, a1h, a1z, neg_k)
+    vh3, vz3, a3h, a3z = _stage(vh, vz, half, a2h, a2z, neg_k)
+    vh4, vz4, a4h, a4z = _stage(vh, vz, step, a3h, a3z, neg_k)
     sixth = step / 6
     return (
         h + sixth * (vh + 2 * vh2 + 2 * vh3 + vh4),

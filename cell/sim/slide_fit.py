@@ -106,8 +106,8 @@ def roll_fit(d: np.ndarray, v: np.ndarray, size: np.ndarray, ball: np.ndarray | 
     """The roll law (`cell.model.effects_bounce.BounceRoll`) fitted to moves d (n, 2) [m]
     from the crossing's velocities v (n, 3) [m/s] of balls of extents size (n, 3) [m]:
     (1/μ_r [1/m], the floor's depth below the plane [m]) minimising the squared 2-D
-    residual (bounded least squares in log μ_r from μ_r 0.01 m, a depth of 0.25 m: the
-    law's own start), and the RMS 2-D residual [m]. `ball` (n,) marks the balls: the law
+    residual (bounded least squares in log μ_r from μ_r 0.01 m, the law's own start, and
+    a depth of 0.25 m), and the RMS 2-D residual [m]. `ball` (n,) marks the balls: the law
     rolls those alone and leaves the others at the crossing (None: all balls). With
     `depth_m` [m] the depth is that (the plane's height above the floor) and 1/μ_r alone
     is fitted."""
