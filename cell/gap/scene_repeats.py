@@ -30,15 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cell.gap.world_scene import (
-    JITTER_REL,
-    LAND_Z_M,
-    draw_plan,
-    impact_fit,
-    repeat_var,
-    throw_plan,
-)
-from cell.sim.slide_fit import G, drop_fit, extents_and_balls, roll_fit
+from cell.gap.world_scene import JITTER_REL, LAND_Z_M, draw_plan, repeat_var, throw_plan
+from cell.sim.slide_fit import G, drop_fit, extents_and_balls, impact_fit, roll_fit
 
 __all__ = ["slide_laws", "main"]
 

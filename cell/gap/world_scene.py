@@ -49,10 +49,9 @@ from cell.catalogue import catalogue
 from cell.errors import NoLanding
 from cell.sim.effect_scene import EffectScene
 from cell.sim.scene import item_linear_xyz, item_xyz
-from cell.sim.slide_fit import extents_and_balls, impact_fit, slide_truth
+from cell.sim.slide_fit import extents_and_balls, slide_truth
 
-__all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign",
-           "impact_fit"]  # fmt: skip
+__all__ = ["EffectScene", "SceneCampaign", "draw_plan", "throw_plan", "draw_scene_campaign"]
 
 LAND_Z_M = 0.1  # [m] the campaign's landing plane (the crossing logged without bounce)
 REST_SPEED = 0.01  # [m/s] an item slower than this for REST_STEPS steps is at rest
