@@ -213,6 +213,10 @@ def check_the_real_launcher_flights() -> None:
     close(held, gap["baseline"]["heldout_rmse_m"], 3)
     close(floor, gap["noise_floor_m"], 3)
     close(spin, gap["verdict"]["heldout_rmse_m"], 3)
+    r1, r2 = quoted(
+        page, r"the landings of two flights \(rows (\d+) and (\d+)\) it\s+flags as outliers"
+    )
+    assert gap["outliers"]["rows"] == [int(r1), int(r2)]
 
 
 # -- docs/identify_evidence.md ---------------------------------------------------------------
