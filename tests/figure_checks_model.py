@@ -182,10 +182,11 @@ def check_the_scene_gap() -> None:
     )
     cands = {c["effect"]: c for c in nominal["candidates"]}
     page = "docs/diagnosis.md"
-    rmse, floor, worst, partial, refused = quoted(
+    rmse, floor, worst, partial, pair, refused = quoted(
         page,
         r"held-out landing RMSE is ([\d.]+) m over a noise floor of ([\d.]+) m.*?cube30 ([\d.]+) m"
-        r".*?best partial cause \(−([\d.]+) %\); `drag_scale` cut more \(−([\d.]+) %\)",
+        r".*?best partial cause \(−([\d.]+) %; with `shape_stretch` beside it −([\d.]+) %\); "
+        r"`drag_scale` cut more \(−([\d.]+) %\)",
     )
     close(rmse, nominal["baseline"]["heldout_rmse_m"], 2)
     close(floor, nominal["noise_floor_m"], 3)
@@ -193,23 +194,29 @@ def check_the_scene_gap() -> None:
     assert nominal["where"]["worst"][0]["level"] == "cube30"
     assert nominal["verdict"]["effects"] == ["unknown"]
     close(partial, cands["band_mass"]["shrink_pct"], 1)
+    assert nominal["verdict"]["partial_effects"] == ["band_mass", "shape_stretch"]
+    close(pair, nominal["verdict"]["shrink_pct"], 1)
     close(refused, cands["drag_scale"]["shrink_pct"], 1)
     assert cands["drag_scale"]["refused"]
-    before, after, pct, lo, hi, mass, mlo, mhi = quoted(
+    before, after, pct, lo, hi, a_g, alo, ahi, k_g, klo, khi = quoted(
         page,
-        r"([\d.]+) → ([\d.]+) m \(−([\d.]+) %, interval ([\d.]+)–([\d.]+) %\), a band mass of "
-        r"(\d+) g \((\d+)–(\d+) g\)",
+        r"([\d.]+) → ([\d.]+) m \(−([\d.]+) %, interval\s+([\d.]+)–([\d.]+) %\), a band mass that "
+        r"falls with the stroke, `mass_kg = a \+ k · stroke_m` with a\s+(\d+) g \((\d+)–(\d+) g\) "
+        r"and k (−\d+) g/m \((−\d+) to (−\d+) g/m\)",
     )
     v = ident["verdict"]
-    assert v["effects"] == ["band_mass"]
+    assert v["effects"] == ["band_mass"] and v["laws"] == {
+        "band_mass": "mass_kg = a + k · stroke_m"
+    }
     close(before, ident["baseline"]["heldout_rmse_m"], 3)
     close(after, v["heldout_rmse_m"], 3)
     close(pct, v["shrink_pct"], 1)
     close(lo, v["shrink_ci_pct"][0], 1)
     close(hi, v["shrink_ci_pct"][1], 1)
-    close(mass, 1000 * v["params"]["band_mass"]["mass_kg"], 0)
-    close(mlo, 1000 * v["params_ci95"]["band_mass"]["mass_kg"][0], 0)
-    close(mhi, 1000 * v["params_ci95"]["band_mass"]["mass_kg"][1], 0)
+    p, ci = v["params"]["band_mass"], v["params_ci95"]["band_mass"]
+    for q, val in ((a_g, p["a"]), (alo, ci["a"][0]), (ahi, ci["a"][1]), (k_g, p["k"]),
+                   (klo, ci["k"][0]), (khi, ci["k"][1])):  # fmt: skip
+        close(q.replace("−", "-"), 1000 * val, 0)
     rmse, before, after = quoted(
         "README.md",
         r"held-out landing RMSE ([\d.]+) m, verdict `unknown`; re-identified first, "
