@@ -13,6 +13,7 @@ from typing import Any
 from cell.jobschema import BIN_WALL_M
 
 __all__ = [
+    "BIN_HINTS",
     "ROBOT_BASE_CLEARANCE_M",
     "capacity_warnings",
     "footprints_overlap",
@@ -21,6 +22,12 @@ __all__ = [
 ]
 
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+# What a bin's two vectors hold, said where one has another length (a height given to it).
+BIN_HINTS = {
+    "position_m": "x y of its centre: a bin stands on the floor, and the height of its "
+    "opening, up to 1 m, is rim_height_m",
+    "size_m": "its inner x y: its height is rim_height_m",
+}
 
 
 def footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:

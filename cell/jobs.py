@@ -18,6 +18,7 @@ import yaml
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
 from cell.jobbins import (
+    BIN_HINTS,
     ROBOT_BASE_CLEARANCE_M,
     capacity_warnings,
     light_item_warnings,
@@ -225,8 +226,8 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
     bid = c.text(b["id"], f"{fp}.id")
     if any(same_text(bid, other) for other in ids):
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
-    pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
-    size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
+    pos = c.vector(b["position_m"], f"{fp}.position_m", 2, hint=BIN_HINTS["position_m"])
+    size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True, hint=BIN_HINTS["size_m"])
     rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", hi=1.0)
     if rim <= BIN_WALL_M:  # 0 and below too: the valid range is the plate's thickness up
         raise c.fail(

@@ -189,9 +189,14 @@ class Checker:
             )
         return v
 
-    def vector(self, node: Node, fp: str, n: int, *, positive: bool = False) -> tuple[float, ...]:
+    def vector(
+        self, node: Node, fp: str, n: int, *, positive: bool = False, hint: str = ""
+    ) -> tuple[float, ...]:
+        """A list of `n` finite numbers (`positive`: each > 0); `hint` says what they are
+        where the list has another length."""
         if not isinstance(node.value, list) or len(node.value) != n:
-            raise self.fail(node, fp, f"must be a list of {n} numbers")
+            said = f" ({hint})" if hint and isinstance(node.value, list) else ""
+            raise self.fail(node, fp, f"must be a list of {n} numbers{said}")
         return tuple(
             self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
             for i, x in enumerate(node.value)

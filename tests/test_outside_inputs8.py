@@ -1,0 +1,217 @@
+"""Inputs written by hand as a new user would, a seventh round: files a job or an arm's mount
+file names are inputs too (never overwritten by an output), a bin given a height, a job
+saved in another encoding, ids wider than one column in the results table."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import pytest
+
+import cell
+from tests.cli_exit import cell_exit
+
+ROOT = Path(cell.__file__).resolve().parents[1]
+BIN = "  - {id: far, position_m: [1.50, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}\n"
+ITEM = "  - {object: cube50, bin: far}\n"
+
+
+def _digest(p: Path) -> str:
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def _refused(argv: list[str], capsys: pytest.CaptureFixture[str], *named: str) -> str:
+    code = cell_exit(argv)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "cell: error: " in err and "Traceback" not in err, err
+    for word in named:
+        assert word in err, err
+    return err
+
+
+def _mount_json(folder: Path) -> Path:
+    """The UR5's mount file written as JSON (YAML reads it), in a folder of the user's."""
+    import yaml
+
+    raw = yaml.safe_load((ROOT / "robots" / "ur5_throwing" / "mount.yaml").read_text())
+    p = folder / "mount.json"
+    p.write_text(json.dumps(raw))
+    return p
+
+
+def test_the_jobs_parameter_file_is_never_an_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell.params: params.json` and `--json params.json`: the run reads the file, so the
+    summary may not be written over it (it was: the run went on and replaced the model's
+    parameters with the run's summary)."""
+    import yaml
+
+    params = tmp_path / "params.json"
+    raw = yaml.safe_load((ROOT / "robots" / "cell_scene" / "ee_params.yaml").read_text())
+    params.write_text(json.dumps(raw))
+    job = tmp_path / "job.yaml"
+    job.write_text(f"cell: {{robot: panda, params: params.json}}\nbins:\n{BIN}items:\n{ITEM}")
+    before = _digest(params)
+    _refused(
+        ["run", str(job), "--no-log", "-q", "--json", str(params)],
+        capsys,
+        "cell.params",
+        "never overwritten",
+    )
+    assert _digest(params) == before
+
+
+def test_the_jobs_mount_file_is_never_an_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell.mount: mount.json` and `--json mount.json`, or the same file by a symbolic link."""
+    mount = _mount_json(tmp_path)
+    (tmp_path / "link.json").symlink_to(mount)
+    job = tmp_path / "job.yaml"
+    job.write_text(f"cell: {{mount: mount.json}}\nbins:\n{BIN}items:\n{ITEM}")
+    before = _digest(mount)
+    for out in (mount, tmp_path / "link.json"):
+        _refused(
+            ["run", str(job), "--no-log", "-q", "--json", str(out)],
+            capsys,
+            "cell.mount",
+            "never overwritten",
+        )
+    assert _digest(mount) == before
+
+
+def test_a_mount_file_given_to_reach_or_job_random_is_never_an_output(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell reach --robot M --json M` wrote the IK result over the mount file; `cell job
+    random --robot M -o M` would write the job over it."""
+    mount = _mount_json(tmp_path)
+    before = _digest(mount)
+    pose = ["--at", "0.45", "0", "0.3", "--elevation", "-1.5707", "--azimuth", "0"]
+    _refused(["reach", "--robot", str(mount), *pose, "--json", str(mount)], capsys, "--robot")
+    _refused(["job", "random", "--robot", str(mount), "-o", str(mount)], capsys, "--robot")
+    assert _digest(mount) == before
+    # an arm's name is no file: an output of that name in the current folder is written
+    assert cell_exit(["job", "random", "--robot", "ur5", "-o", str(tmp_path / "ur5")]) == 0
+    assert (tmp_path / "ur5").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    "argv,flag",
+    [
+        (["throw", "--object", "cube50", "--land-z", "-1"], "--land-z"),
+        (["plan", "--target", "1.5", "0", "-0.3", "--object", "cube50"], "--target"),
+    ],
+)
+def test_a_landing_plane_under_the_floor_is_refused(
+    argv: list[str], flag: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The world's floor is z = 0: `cell throw --land-z -1` said the cube landed 1.90 m out
+    "on z = -1.000 m", through the floor; `cell plan` aimed at a target 0.3 m under it."""
+    _refused(argv, capsys, flag, "under the floor")
+    # the floor itself is a landing plane (the throw's default)
+    assert cell_exit(["throw", "--object", "cube50", "--land-z", "0"]) == 0
+
+
+def test_an_item_the_pads_cannot_hold_is_said_so_by_throw_and_plan(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`cell throw` of a 2 kg cube printed its landing as if the cell could throw it
+    (`cell run` refuses it: the pads hold under 0.5 kg at 0.1 m across); both commands now
+    say so on standard error, with why, and a catalogue cube is told nothing."""
+    from cell.arm.grip_limits import grip_refusal
+    from cell.model import ObjectParams
+    from cell.params import load_params
+
+    heavy = ["--shape", "cube", "--mass", "2", "--size", "0.1", "0.1", "0.1"]
+    why = grip_refusal(load_params(None), ObjectParams(shape="cube", mass=2.0, size=(0.1,) * 3))
+    assert why  # the independent judge: the same rule the job check refuses it by
+    assert cell_exit(["throw", *heavy]) == 0
+    err = capsys.readouterr().err
+    assert "cell: warning: " in err and "cannot be held" in err and why in err, err
+    assert cell_exit(["plan", "--target", "0.5", "0", "0.15", *heavy]) in (0, 2)
+    err = capsys.readouterr().err
+    assert "cannot be held" in err and why in err, err
+    assert cell_exit(["throw", "--object", "cube50"]) == 0
+    assert "cannot be held" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "encoding,said",
+    [
+        ("latin-1", "not UTF-8 (byte 0xe9 on line 1, column 10: Latin-1 or Windows-1252?)"),
+        ("cp1252", "not UTF-8 (byte 0xe9 on line 1, column 10: Latin-1 or Windows-1252?)"),
+        ("utf-16", "UTF-16"),
+        ("utf-32", "UTF-32"),
+    ],
+)
+def test_a_job_saved_in_another_encoding_is_named(
+    encoding: str, said: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A job whose `name: café` was saved in Latin-1 (or as Notepad's "Unicode") was
+    refused as "not a text file"; the encoding is said, and how to save it."""
+    job = tmp_path / "job.yaml"
+    job.write_bytes(f"name: café\nbins:\n{BIN}items:\n{ITEM}".encode(encoding))
+    err = _refused(["run", str(job), "--no-log"], capsys, str(job), said, "save it as UTF-8")
+    assert "not a text file" not in err
+    (tmp_path / "bin.yaml").write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\xff\xfe")
+    _refused(["run", str(tmp_path / "bin.yaml"), "--no-log"], capsys, "not a text file")
+
+
+def test_a_bin_given_a_height_is_told_that_bins_stand_on_the_floor(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`position_m: [1.5, 0.0, 0.8]`, a bin on a shelf as a user would write it, was told
+    only "must be a list of 2 numbers"."""
+    job = tmp_path / "job.yaml"
+    shelf = BIN.replace("[1.50, 0.00]", "[1.50, 0.00, 0.80]")
+    job.write_text(f"bins:\n{shelf}items:\n{ITEM}")
+    _refused(
+        ["run", str(job), "--no-log"],
+        capsys,
+        "line 2, bins[0].position_m: must be a list of 2 numbers",
+        "on the floor",
+        "rim_height_m",
+    )
+
+
+def test_the_results_table_keeps_its_columns_with_wide_or_long_names(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Bins named `箱📦` (four columns on a terminal in two characters) and
+    `outbound_chute_north` (20 characters, over the column's 9) shifted every column after
+    them in `cell run`'s table. Each row's `error` figure now ends in the header's column,
+    as wcwidth (a separate implementation of the terminal's widths) counts them."""
+    from wcwidth import wcswidth
+
+    job = tmp_path / "job.yaml"
+    job.write_text(
+        "bins:\n"
+        '  - {id: "箱📦", position_m: [0.55, 0.35], size_m: [0.30, 0.30], rim_height_m: 0.12}\n'
+        "  - {id: outbound_chute_north, position_m: [1.50, 0.00], size_m: [0.30, 0.30],"
+        " rim_height_m: 0.15}\n"
+        "items:\n"
+        '  - {object: cube50, bin: "箱📦"}\n'
+        "  - {object: cube50, bin: outbound_chute_north}\n",
+        encoding="utf-8",
+    )
+    assert cell_exit(["run", str(job), "--no-log", "-q"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    head = next(i for i, line in enumerate(out) if line.startswith("item "))
+    rows = out[head + 1 : head + 3]
+    assert "箱📦" in rows[0] and "outbound_chute_north" in rows[1], out
+
+    def end_of(line: str, word: str) -> int:
+        """The terminal column just after the first `word` of `line`."""
+        k = line.index(word) + len(word)
+        return wcswidth(line[:k])
+
+    error_end = end_of(out[head], "error")
+    for row in rows:
+        figures = [w for w in row.split() if w.replace(".", "").isdigit()]
+        error = f"{figures[1]} m"  # the item's index, then its landing error
+        assert end_of(row, error) == error_end, out
