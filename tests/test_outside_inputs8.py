@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import cell
@@ -215,3 +217,55 @@ def test_the_results_table_keeps_its_columns_with_wide_or_long_names(
         figures = [w for w in row.split() if w.replace(".", "").isdigit()]
         error = f"{figures[1]} m"  # the item's index, then its landing error
         assert end_of(row, error) == error_end, out
+
+
+def _vacuum_range_m(speed_mps: float, drop_m: float) -> float:
+    """The farthest a point thrown at `speed_mps` lands `drop_m` below its release, without
+    drag (closed form, the best elevation searched on a 0.1° grid): drag only shortens it."""
+    g = 9.81
+    best = 0.0
+    for k in range(-900, 901):
+        th = math.radians(k / 10)
+        vx, vz = speed_mps * math.cos(th), speed_mps * math.sin(th)
+        best = max(best, vx * (vz + math.sqrt(vz * vz + 2 * g * drop_m)) / g)
+    return best
+
+
+@pytest.mark.parametrize(
+    "platform,release_z_m",
+    [("platform: drone, drone: {hover_height_m: 2.0}", 1.75), ("platform: mobile", 0.9)],
+)
+def test_a_bin_beyond_the_drones_or_the_bases_throws_is_refused_with_the_job(
+    platform: str, release_z_m: float, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A bin 6 m out for the drone or the moving base ran, and its items failed
+    `unreachable` one by one in the run; the arm's jobs are refused for that before
+    anything moves, now the drone's and the moving base's too, by the plan the run makes
+    (the line, the bin, the reach said). Independently: the cube's fastest launch (the
+    longest stroke, the model's launch speed) thrown without drag from the highest release
+    lands short of 5 m. A job of the reachable bin alone runs."""
+    from cell.catalogue import get_object
+    from cell.model import ThrowBatch, predict_landing
+    from cell.params import load_params, scene_params_path
+
+    away = "  - {id: away, position_m: [6.00, 0.00], size_m: [0.40, 0.40], rim_height_m: 0.15}\n"
+    head = f"cell: {{robot: panda, {platform}}}\nbins:\n"
+    job = tmp_path / "job.yaml"
+    job.write_text(head + BIN + away + "items:\n  - {object: cube50, bin: away}\n" + ITEM)
+    ee = load_params(scene_params_path()).ee
+    batch = ThrowBatch.single(
+        get_object("cube50"),
+        stroke=ee.stroke_max,
+        position=(0.0, 0.0, release_z_m),
+        elevation=0.0,
+        azimuth=0.0,
+        base_velocity=(0.0, 0.0, 0.0),
+        land_z=0.15,
+    )
+    speed = float(np.linalg.norm(predict_landing(batch, ee).launch_velocity[0]))
+    base = 1.5 if "mobile" in platform else 0.0  # the base's speed bound (docs/jobs.md)
+    assert _vacuum_range_m(speed + base, release_z_m - 0.15) < 5.0
+    err = _refused(["run", str(job), "--no-log", "-q"], capsys, "line 6", "bin 'away'")
+    assert "out of reach" in err and "line 7" not in err, err
+    job.write_text(head + BIN + "items:\n" + ITEM)
+    assert cell_exit(["run", str(job), "--no-log", "-q"]) == 0

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput
+from cell.errors import InvalidInput, JobError
 from cell.jobs import Job
 from cell.loop import Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
@@ -119,6 +119,34 @@ class PlatformRunner:
         self.name = job.platform
         self.rotor_rpm = job.rotor_rpm if job.platform == "drone" else 0.0
         self.loop = ItemLoop(job, self, self.scene, store=store, session=self.session)
+        try:
+            self._check_reach()
+        except JobError:
+            self.scene.close()  # a refused job leaves nothing open
+            raise
+
+    def _check_reach(self) -> None:
+        """Refuse the job before any item moves if an item's bin is beyond every throw
+        the platform can make with it (the plan `decide` makes in the run, here once an
+        item line): every such line in one report, as the arm's jobs are
+        (`Orchestrator._check_job`)."""
+        from cell.errors import UnreachableTarget
+        from cell.yamltree import Errors
+
+        errors = Errors(self.job.path)
+        for spec in self.job.items:
+            try:
+                self.decide(0, spec.obj, self.job.bin(spec.bin))
+            except UnreachableTarget as exc:
+                errors.add(
+                    JobError(
+                        f"{self.job.path}, line {spec.line}: item "
+                        f"{spec.obj.name or spec.obj.shape} to bin {spec.bin!r}: "
+                        f"{str(exc).rstrip('.')}; move bin {spec.bin!r} within the reach "
+                        "above, or send the item to another bin"
+                    )
+                )
+        errors.raise_all()
 
     # -- planning ----------------------------------------------------------------
     def plan_drone(self, obj: ObjectParams, goal: np.ndarray) -> tuple[Any, np.ndarray]:
