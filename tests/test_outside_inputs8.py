@@ -269,3 +269,56 @@ def test_a_bin_beyond_the_drones_or_the_bases_throws_is_refused_with_the_job(
     assert "out of reach" in err and "line 7" not in err, err
     job.write_text(head + BIN + "items:\n" + ITEM)
     assert cell_exit(["run", str(job), "--no-log", "-q"]) == 0
+
+
+XARM7_MOUNT = """\
+arm: xarm7
+arm_joints: [joint1, joint2, joint3, joint4, joint5, joint6, joint7]
+arm_urdf: xarm_description/urdf/xarm7.urdf
+flange: link7
+end_effector: throwing_ee/throwing_ee.urdf
+mount_xyz: [0.0, 0.0, 0.0]
+mount_rpy: [0.0, 0.0, 0.0]
+acceleration_limits: [8.0, 8.0, 8.0, 10.0, 10.0, 12.0, 12.0]
+jerk_limits: [800.0, 800.0, 800.0, 1000.0, 1000.0, 1200.0, 1200.0]
+home: {home}
+"""
+
+
+def test_a_home_with_the_grip_under_the_floor_is_refused_by_field(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An xArm7 (example-robot-data; no shipped mount) whose home, within every joint's
+    limits, folds the arm under the floor: the job ran from there (the arm is kinematic).
+    Independently of cell's kinematics, Pinocchio's model of the unmodified URDF puts the
+    flange 0.14 m under the floor with the tool axis (the flange's +z, along which the
+    end-effector's TCP lies) pointing down, so the TCP is lower still. The home the
+    docs' `cell reach` solves (grip down 0.3 m high in front) runs."""
+    import pinocchio as pin
+
+    from cell.robot.paths import example_robot_data_dir
+
+    bad = [0.0, 1.2, 0.0, 1.2, 0.0, 0.8, 0.0]
+    model = pin.buildModelFromUrdf(
+        str(example_robot_data_dir() / "xarm_description/urdf/xarm7.urdf")
+    )
+    data = model.createData()
+    pin.forwardKinematics(model, data, np.array(bad))
+    pin.updateFramePlacements(model, data)
+    flange = data.oMf[model.getFrameId("link7")]
+    assert flange.translation[2] < -0.1 and flange.rotation[2, 2] < -0.5
+
+    mount = tmp_path / "arm" / "mount.yaml"
+    mount.parent.mkdir()
+    mount.write_text(XARM7_MOUNT.format(home=bad))
+    job = tmp_path / "job.yaml"
+    job.write_text(f"cell: {{mount: arm/mount.yaml}}\nbins:\n{BIN}items:\n{ITEM}")
+    _refused(
+        ["run", str(job), "--no-log", "-q"],
+        capsys,
+        "line 1, cell.mount",
+        "field 'home'",
+        "under the floor",
+    )
+    mount.write_text(XARM7_MOUNT.format(home=[0.0, -0.0983, 0.0, 1.188, 0.0, 1.2862, 0.0]))
+    assert cell_exit(["run", str(job), "--no-log", "-q"]) == 0
