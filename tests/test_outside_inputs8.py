@@ -322,3 +322,40 @@ def test_a_home_with_the_grip_under_the_floor_is_refused_by_field(
     )
     mount.write_text(XARM7_MOUNT.format(home=[0.0, -0.0983, 0.0, 1.188, 0.0, 1.2862, 0.0]))
     assert cell_exit(["run", str(job), "--no-log", "-q"]) == 0
+
+
+@pytest.mark.parametrize(
+    "command,obj,flag,said",
+    [
+        (["throw"], ["cube", "0.0001", "0.05", "0.05", "0.05"], "--mass", "lighter than the air"),
+        (["throw"], ["cube", "50", "0.01", "0.01", "0.01"], "--mass", "denser than any solid"),
+        (["throw"], ["sphere", "0.05", "0.05", "0.06", "0.07"], "--size", "a sphere's three"),
+        (
+            ["plan", "--target", "1", "0", "0.1"],
+            ["cylinder", "0.05", "0.03", "0.05", "0.1"],
+            "--size",
+            "a cylinder's x and y",
+        ),
+    ],
+)
+def test_an_ad_hoc_object_no_job_would_take_is_refused_by_throw_and_plan(
+    command: list[str],
+    obj: list[str],
+    flag: str,
+    said: str,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`cell throw --shape cube --mass 0.0001 --size 0.05 0.05 0.05` (0.8 kg/m³, lighter than
+    air) printed a launch at 79.7 m/s landing 1.02 m out; a sphere 50 by 60 by 70 mm was
+    thrown as one. A job (and a throw log) refuses each: the two commands now do too.
+    Independently: the density by hand, against air's 1.2 kg/m³ and osmium's 22,590."""
+    shape, mass, *size = obj
+    density = float(mass) / math.prod(float(s) for s in size)
+    if "air" in said:
+        assert density < 1.2
+    if "solid" in said:
+        assert density > 22_590
+    argv = [*command, "--shape", shape, "--mass", mass, "--size", *size]
+    _refused(argv, capsys, flag, said)
+    # a 30 g sphere of 40 mm (the catalogue's sphere40 is 40 mm) is thrown as before
+    assert cell_exit(["throw", "--shape", "sphere", "--mass", "0.03", "--size", *["0.04"] * 3]) == 0
