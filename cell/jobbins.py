@@ -18,6 +18,7 @@ __all__ = [
     "capacity_warnings",
     "footprints_overlap",
     "light_item_warnings",
+    "look_alike_warnings",
     "placement_problem",
 ]
 
@@ -117,4 +118,23 @@ def light_item_warnings(job: Any) -> tuple[str, ...]:
                 "thrown 1.5 m missed by 0.24 m at 2 g, 0.13 m at 5 g); under policy auto, a "
                 "bin within limits.place_reach_m has it placed"
             )
+    return tuple(out)
+
+
+def look_alike_warnings(job: Any) -> tuple[str, ...]:
+    """A warning for each two bins whose ids are one text to the eye but not the same id
+    (`cell.yamltree.look_alike`: `near` and the full-width `ｎear`): both are bins, and an
+    item sent to one is not sent to the other."""
+    from cell.yamltree import look_alike
+
+    out = []
+    ids = [b.id for b in job.bins]
+    for i, a in enumerate(ids):
+        for b in ids[i + 1 :]:
+            how = look_alike(b, a)
+            if how:
+                out.append(
+                    f"{job.path}: bins {a!r} and {b!r} look alike but are two bins ({b!r} "
+                    f"holds {how}); an item sent to one is not sent to the other"
+                )
     return tuple(out)

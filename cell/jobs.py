@@ -22,6 +22,7 @@ from cell.jobbins import (
     ROBOT_BASE_CLEARANCE_M,
     capacity_warnings,
     light_item_warnings,
+    look_alike_warnings,
     placement_problem,
 )
 from cell.jobcell import cell_section
@@ -480,7 +481,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         errors.messages += problems
     errors.raise_all()
     warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
-    warnings += tuple(reach_warnings)
+    warnings += tuple(reach_warnings) + look_alike_warnings(job)
     return replace(job, warnings=warnings)
 
 

@@ -359,3 +359,28 @@ def test_an_ad_hoc_object_no_job_would_take_is_refused_by_throw_and_plan(
     _refused(argv, capsys, flag, said)
     # a 30 g sphere of 40 mm (the catalogue's sphere40 is 40 mm) is thrown as before
     assert cell_exit(["throw", "--shape", "sphere", "--mass", "0.03", "--size", *["0.04"] * 3]) == 0
+
+
+def test_bins_whose_ids_look_alike_are_warned_of_and_an_items_bin_told_apart(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`near` and `ｎear` (a full-width n, as an input method types it) were two bins without
+    a word; an item sent to `ｎear` in a job whose one bin is `near` was told "choose one of
+    near", the same text to the eye. Independently: NFC (the id check's) keeps them apart,
+    NFKC makes them one."""
+    import unicodedata
+
+    fw = "\uff4eear"
+    assert unicodedata.normalize("NFC", fw) != "near" == unicodedata.normalize("NFKC", fw)
+    job = tmp_path / "job.yaml"
+    near = "  - {id: near, position_m: [0.55, 0.35], size_m: [0.30, 0.30], rim_height_m: 0.12}\n"
+    job.write_text(
+        f"bins:\n{near}{BIN.replace('far', fw)}items:\n  - {{object: cube50, bin: {fw}}}\n",
+        encoding="utf-8",
+    )
+    from cell.jobs import load_job
+
+    (warning,) = [w for w in load_job(job).warnings if "look alike" in w]
+    assert "'near'" in warning and f"'{fw}'" in warning and "U+FF4E" in warning
+    job.write_text(f"bins:\n{near}items:\n  - {{object: cube50, bin: {fw}}}\n", encoding="utf-8")
+    _refused(["run", str(job), "--no-log"], capsys, "line 4, items[0].bin", "U+FF4E")
