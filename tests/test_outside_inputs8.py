@@ -384,3 +384,27 @@ def test_bins_whose_ids_look_alike_are_warned_of_and_an_items_bin_told_apart(
     assert "'near'" in warning and f"'{fw}'" in warning and "U+FF4E" in warning
     job.write_text(f"bins:\n{near}items:\n  - {{object: cube50, bin: {fw}}}\n", encoding="utf-8")
     _refused(["run", str(job), "--no-log"], capsys, "line 4, items[0].bin", "U+FF4E")
+
+
+@pytest.mark.parametrize("platform", ["drone", "mobile"])
+def test_the_drone_or_the_base_refuses_a_place_policy_and_an_item_the_pads_cannot_hold(
+    platform: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """On the drone, `policy: place` was ignored (every item thrown, the summary "placed 0")
+    and a 2 kg 100 mm cube, which the arm's job refuses (the pads hold under 0.5 kg at that
+    width), was thrown into its bin. Both refused now, the cube by its line with why (the
+    same rule as the arm's, `grip_refusal`, the judge here)."""
+    from cell.arm.grip_limits import grip_refusal
+    from cell.model import ObjectParams
+    from cell.params import load_params, scene_params_path
+
+    heavy = "  - {shape: cube, mass_kg: 2.0, size_m: [0.1, 0.1, 0.1], bin: far}\n"
+    why = grip_refusal(load_params(scene_params_path()), ObjectParams("cube", 2.0, (0.1,) * 3))
+    assert why
+    job = tmp_path / "job.yaml"
+    head = f"cell: {{robot: panda, platform: {platform}}}\nbins:\n{BIN}items:\n{ITEM}"
+    job.write_text(head + "policy: place\n")
+    _refused(["run", str(job), "--no-log", "-q"], capsys, "policy", "place")
+    job.write_text(head + heavy)
+    err = _refused(["run", str(job), "--no-log", "-q"], capsys, "line 6", why)
+    assert "line 5" not in err, err  # the catalogue cube50 is held
