@@ -15,20 +15,26 @@ def job_files(job: Any) -> list[tuple[str, str]]:
     from cell.robot.mount import is_mount_path, load_mount
     from cell.robot.paths import example_robot_data_dir, robots_dir
 
+    what = {
+        "params": "parameter file",
+        "residual": "learned model",
+        "ee_config": "Dynamixel configuration",
+    }
     out = [
-        (f"cell.{key} of {job.path}", getattr(job, key))
+        (f"the {what[key]} this run reads (cell.{key} of {job.path})", getattr(job, key))
         for key in ("params", "residual", "ee_config")
         if getattr(job, key)
     ]
     spec = load_mount(job.robot)
-    what = (
+    named = (
         f"cell.mount of {job.path}"
         if is_mount_path(job.robot)
-        else f"the mount file of cell.robot {job.robot!r}"
+        else f"cell.robot {job.robot!r} of {job.path}"
     )
-    out.append((what, spec.path))
+    out.append((f"the mount file this run reads ({named})", spec.path))
+    erd = example_robot_data_dir()
+    out.append((f"the arm's URDF this run reads (its arm_urdf, {named})", str(erd / spec.arm_urdf)))
     out.append(
-        (f"the arm's URDF ({what}, arm_urdf)", str(example_robot_data_dir() / spec.arm_urdf))
+        (f"the end-effector's URDF this run reads ({named})", str(robots_dir() / spec.end_effector))
     )
-    out.append((f"the end-effector's URDF ({what})", str(robots_dir() / spec.end_effector)))
     return out

@@ -254,7 +254,7 @@ def _files(args: argparse.Namespace, names: dict[str, str]) -> None:
 
 def refuse_outputs_among(args: argparse.Namespace, inputs: list[tuple[str, str]]) -> None:
     """Refuse an output (or `--db`, which a run writes) that is one of `inputs`, (what it
-    is, path): the files a command learns it reads only once it has read its input, as the
+    is: "the parameter file this run reads (...)", path): the files a command learns it reads only once it has read its input, as the
     parameter file, learned model or mount file a job names (same device and inode, or the
     same resolved path).
 
@@ -270,8 +270,8 @@ def refuse_outputs_among(args: argparse.Namespace, inputs: list[tuple[str, str]]
         key = _key(Path(value))
         if key in seen:
             raise InvalidInput(
-                f"{flag} {value}: that is also {seen[key]}, which this command reads; give "
-                "another file (an input is never overwritten)"
+                f"{flag} {value}: that is {seen[key]}; give another file (an input is "
+                "never overwritten)"
             )
 
 
