@@ -13,14 +13,22 @@ from typing import Any
 from cell.jobschema import BIN_WALL_M
 
 __all__ = [
+    "BIN_HINTS",
     "ROBOT_BASE_CLEARANCE_M",
     "capacity_warnings",
     "footprints_overlap",
     "light_item_warnings",
+    "look_alike_warnings",
     "placement_problem",
 ]
 
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+# What a bin's two vectors hold, said where one has another length (a height given to it).
+BIN_HINTS = {
+    "position_m": "x y of its centre: a bin stands on the floor, and the height of its "
+    "opening, up to 1 m, is rim_height_m",
+    "size_m": "its inner x y: its height is rim_height_m",
+}
 
 
 def footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
@@ -110,4 +118,23 @@ def light_item_warnings(job: Any) -> tuple[str, ...]:
                 "thrown 1.5 m missed by 0.24 m at 2 g, 0.13 m at 5 g); under policy auto, a "
                 "bin within limits.place_reach_m has it placed"
             )
+    return tuple(out)
+
+
+def look_alike_warnings(job: Any) -> tuple[str, ...]:
+    """A warning for each two bins whose ids are one text to the eye but not the same id
+    (`cell.yamltree.look_alike`: `near` and the full-width `ｎear`): both are bins, and an
+    item sent to one is not sent to the other."""
+    from cell.yamltree import look_alike
+
+    out = []
+    ids = [b.id for b in job.bins]
+    for i, a in enumerate(ids):
+        for b in ids[i + 1 :]:
+            how = look_alike(b, a)
+            if how:
+                out.append(
+                    f"{job.path}: bins {a!r} and {b!r} look alike but are two bins ({b!r} "
+                    f"holds {how}); an item sent to one is not sent to the other"
+                )
     return tuple(out)

@@ -136,6 +136,11 @@ def _robot(c: Checker, cell: dict[str, Node], base: Path) -> str:
         check_against_urdf(load_mount(ref))
     except ValueError as exc:  # InvalidParameter: a wrong mount file, named
         raise c.fail(node, fp, f"the arm's mount file is not valid: {exc}") from None
+    from cell.robot.home import home_problem
+
+    why = home_problem(ref)
+    if why:
+        raise c.fail(node, fp, f"the arm's mount file is not valid: {why}")
     return ref
 
 

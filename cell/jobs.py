@@ -18,9 +18,11 @@ import yaml
 from cell.catalogue import CatalogueEntry, catalogue
 from cell.errors import InvalidInput, JobError
 from cell.jobbins import (
+    BIN_HINTS,
     ROBOT_BASE_CLEARANCE_M,
     capacity_warnings,
     light_item_warnings,
+    look_alike_warnings,
     placement_problem,
 )
 from cell.jobcell import cell_section
@@ -225,8 +227,8 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
     bid = c.text(b["id"], f"{fp}.id")
     if any(same_text(bid, other) for other in ids):
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
-    pos = c.vector(b["position_m"], f"{fp}.position_m", 2)
-    size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True)
+    pos = c.vector(b["position_m"], f"{fp}.position_m", 2, hint=BIN_HINTS["position_m"])
+    size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True, hint=BIN_HINTS["size_m"])
     rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", hi=1.0)
     if rim <= BIN_WALL_M:  # 0 and below too: the valid range is the plate's thickness up
         raise c.fail(
@@ -479,7 +481,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         errors.messages += problems
     errors.raise_all()
     warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
-    warnings += tuple(reach_warnings)
+    warnings += tuple(reach_warnings) + look_alike_warnings(job)
     return replace(job, warnings=warnings)
 
 

@@ -313,7 +313,7 @@ class Orchestrator(
                 errors.add(
                     JobError(
                         f"{job.path}, line {spec.line}: item {spec.obj.name or spec.obj.shape} "
-                        f"to bin {spec.bin!r}: {exc}{instead}"
+                        f"to bin {spec.bin!r}: {str(exc).rstrip('.')}{instead}"
                     )
                 )
         errors.raise_all()

@@ -167,8 +167,31 @@ def read_yaml_text(path: str | Path, what: str) -> str:
         raise InvalidInput(f"{p}: more than {MAX_BYTES} bytes; a {what} is at most {MAX_BYTES}")
     try:
         return raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise InvalidInput(f"{p}: not a text file; a {what} is YAML text") from None
+    except UnicodeDecodeError as exc:
+        why = _not_utf8(raw, exc.start)
+        save = "" if why.startswith("not a text") else " in UTF-8: save it as UTF-8"
+        raise InvalidInput(f"{p}: {why}; a {what} is YAML text{save}") from None
+
+
+def _not_utf8(raw: bytes, at: int) -> str:
+    """Why `raw` is not UTF-8 text, its first bad byte at `at`: UTF-32 or UTF-16 by its
+    byte-order mark; binary data by a control byte no text holds (NUL, ...) or by more
+    bytes outside ASCII than ASCII ones; else text in another encoding (the byte and
+    where it is: a Latin-1 or Windows-1252 editor's `é`)."""
+    if raw[:4] in (b"\xff\xfe\x00\x00", b"\x00\x00\xfe\xff"):
+        return "saved as UTF-32"
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return "saved as UTF-16 (a Windows editor's 'Unicode')"
+    controls = bytes(range(9)) + bytes(range(14, 32))
+    ascii_only = raw.translate(None, bytes(range(128, 256)))
+    if len(raw.translate(None, controls)) < len(raw) or 2 * len(ascii_only) < len(raw):
+        return "not a text file"
+    line = raw.count(b"\n", 0, at) + 1
+    column = at - (raw.rfind(b"\n", 0, at) + 1) + 1  # in bytes, 1-based
+    return (
+        f"not UTF-8 (byte 0x{raw[at]:02x} on line {line}, column {column}: Latin-1 or "
+        "Windows-1252?)"
+    )
 
 
 def safe_load(text: str, path: str) -> Any:

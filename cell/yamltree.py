@@ -88,6 +88,16 @@ def unseen_problem(text: str) -> str:
     return ""
 
 
+def look_alike(a: str, b: str) -> str:
+    """How `a` differs from `b` where the two are one text to the eye but not the same
+    (not `same_text`): written with compatibility characters (full-width letters, a
+    ligature, a superscript: equal under NFKC), each named by code point; "" otherwise."""
+    if same_text(a, b) or unicodedata.normalize("NFKC", a) != unicodedata.normalize("NFKC", b):
+        return ""
+    odd = [ch for ch in dict.fromkeys(a + b) if unicodedata.normalize("NFKC", ch) != ch]
+    return ", ".join(f"U+{ord(ch):04X} {unicodedata.name(ch, '?')}" for ch in odd)
+
+
 def on_screen(text: str) -> str:
     """`text` with every character that shows nothing written as its code point."""
     return "".join(
@@ -184,14 +194,23 @@ class Checker:
             same = [ch for ch in choices if same_text(ch, v)]
             if same:
                 return same[0]
+            alike = [(ch, look_alike(v, ch)) for ch in choices if look_alike(v, ch)]
+            hint = f" ({v!r} is not {alike[0][0]!r}: it holds {alike[0][1]})" if alike else ""
             raise self.fail(
-                node, fp, f"{v!r} is not valid; choose one of {', '.join(map(on_screen, choices))}"
+                node,
+                fp,
+                f"{v!r} is not valid; choose one of {', '.join(map(on_screen, choices))}{hint}",
             )
         return v
 
-    def vector(self, node: Node, fp: str, n: int, *, positive: bool = False) -> tuple[float, ...]:
+    def vector(
+        self, node: Node, fp: str, n: int, *, positive: bool = False, hint: str = ""
+    ) -> tuple[float, ...]:
+        """A list of `n` finite numbers (`positive`: each > 0); `hint` says what they are
+        where the list has another length."""
         if not isinstance(node.value, list) or len(node.value) != n:
-            raise self.fail(node, fp, f"must be a list of {n} numbers")
+            said = f" ({hint})" if hint and isinstance(node.value, list) else ""
+            raise self.fail(node, fp, f"must be a list of {n} numbers{said}")
         return tuple(
             self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
             for i, x in enumerate(node.value)

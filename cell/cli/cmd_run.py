@@ -10,6 +10,8 @@ from pathlib import Path
 from typing import Any
 
 from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
+from cell.cli.guard import refuse_outputs_among
+from cell.jobfiles import job_files
 from cell.jobs import ORDERS, load_job
 from cell.kinds import EE_BACKENDS, PICKS, RELEASES
 
@@ -210,6 +212,7 @@ def _run(args: argparse.Namespace) -> int:
     from cell.errors import HardwareError, InvalidInput
 
     job = load_job(args.job)
+    refuse_outputs_among(args, job_files(job))  # the files the job names are inputs too
     for warning in job.warnings:  # items left unsorted, a bin auto would place into out of reach
         print(f"cell: warning: {warning}", file=sys.stderr)
     if not 0.0 < args.speed_scale <= 1.0:
@@ -401,15 +404,20 @@ def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
 
 
 def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
+    from cell.cli.columns import column_width, pad
+
     print(f"\nsort job {path}")
+    wo = column_width(14, (r.object_id for r in s.results))  # names as wide as they show
+    wb = column_width(9, (b for r in s.results for b in (r.target_bin, r.bin_id)))
     print(
-        f"{'item':>4} {'object':14} {'action':7} {'target':9} {'landed in':9} {'error':>8} "
-        f"{'stroke':>8}  failure"
+        f"{'item':>4} {pad('object', wo)} {'action':7} {pad('target', wb)} "
+        f"{pad('landed in', wb)} {'error':>8} {'stroke':>8}  failure"
     )
     for r in s.results:
         print(
-            f"{r.index:4d} {r.object_id:14} {r.action:7} {r.target_bin:9} {r.bin_id or '-':9} "
-            f"{_fmt(r.landing_error_m, ' m'):>8} {_fmt(r.stroke_m, ' m'):>8}  {r.failure}"
+            f"{r.index:4d} {pad(r.object_id, wo)} {r.action:7} {pad(r.target_bin, wb)} "
+            f"{pad(r.bin_id or '-', wb)} {_fmt(r.landing_error_m, ' m'):>8} "
+            f"{_fmt(r.stroke_m, ' m'):>8}  {r.failure}"
         )
     failed = [r for r in s.results if r.reason]
     if failed:

@@ -17,6 +17,7 @@ from cell.cli.common import (
     object_from_args,
     report,
 )
+from cell.cli.model_checks import refuse_under_floor, warn_if_not_held
 from cell.model import ObjectParams, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
@@ -57,7 +58,9 @@ def run(args: argparse.Namespace) -> int:
             )
         return 0
     obj = object_from_args(args)
+    refuse_under_floor("--land-z", args.land_z)
     mp = load_params(args.params)
+    warn_if_not_held(mp, obj)
     batch = ThrowBatch.single(
         obj,
         stroke=args.stroke,

@@ -101,9 +101,26 @@ def object_from_args(args: argparse.Namespace) -> ObjectParams:
             "an ad-hoc object needs all of --shape, --mass [kg] and --size X Y Z [m]"
         )
     try:
-        return ObjectParams(shape=args.shape, mass=args.mass, size=tuple(args.size))
+        obj = ObjectParams(shape=args.shape, mass=args.mass, size=tuple(args.size))
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
+    _refuse_impossible(obj)
+    return obj
+
+
+def _refuse_impossible(obj: ObjectParams) -> None:
+    """Refuse an ad-hoc object no job, throw log or scene takes: denser than any solid,
+    lighter than the air its box displaces, or a sphere's or cylinder's extents that say
+    no one item (`cell.jobcheck.extents_mismatch`), naming the flag."""
+    from cell.jobcheck import extents_mismatch
+    from cell.model.objects import denser_than_any_solid, lighter_than_air
+
+    why = denser_than_any_solid(obj.mass, obj.size) or lighter_than_air(obj.mass, obj.size)
+    if why:
+        raise InvalidInput(f"--mass {obj.mass:g} with --size: {why}")
+    why = extents_mismatch(obj.shape, obj.size)
+    if why:
+        raise InvalidInput(f"--size {' '.join(f'{s:g}' for s in obj.size)}: {why}")
 
 
 def to_jsonable(v: Any) -> Any:

@@ -24,6 +24,7 @@ __all__ = [
     "add_replace_args",
     "check_args",
     "flag_names",
+    "refuse_outputs_among",
     "shipped_dirs",
 ]
 
@@ -208,6 +209,12 @@ def _inputs(args: argparse.Namespace, outputs: list[tuple[str, str, str]]) -> li
         value = getattr(args, dest, None)
         if isinstance(value, str) and value and dest not in written:
             ins.append((flag, value))
+    robot = getattr(args, "robot", None)  # `reach`, `job random`: an arm's name or mount file
+    if isinstance(robot, str) and robot:
+        from cell.robot.mount import is_mount_path
+
+        if is_mount_path(robot):
+            ins.append(("--robot", robot))
     return ins
 
 
@@ -243,6 +250,29 @@ def _files(args: argparse.Namespace, names: dict[str, str]) -> None:
                     f"{flag} {value}: a file shipped with cell under {folder}; write to "
                     "another file, or add --replace to overwrite it"
                 )
+
+
+def refuse_outputs_among(args: argparse.Namespace, inputs: list[tuple[str, str]]) -> None:
+    """Refuse an output (or `--db`, which a run writes) that is one of `inputs`, (what it
+    is: "the parameter file this run reads (...)", path): the files a command learns it reads only once it has read its input, as the
+    parameter file, learned model or mount file a job names (same device and inode, or the
+    same resolved path).
+
+    Raises:
+        InvalidInput: naming the option, its value and the input it is.
+    """
+    seen = {_key(Path(path)): what for what, path in inputs if path}
+    written = [(flag, value) for _, flag, value in _outputs(args, {})]
+    db = getattr(args, "db", None)
+    if isinstance(db, str) and db and not getattr(args, "no_log", False):
+        written.append(("--db", db))
+    for flag, value in written:
+        key = _key(Path(value))
+        if key in seen:
+            raise InvalidInput(
+                f"{flag} {value}: that is {seen[key]}; give another file (an input is "
+                "never overwritten)"
+            )
 
 
 def _display(args: argparse.Namespace) -> None:

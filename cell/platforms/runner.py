@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.errors import InvalidInput
+from cell.errors import InvalidInput, JobError
 from cell.jobs import Job
 from cell.loop import Decision, ItemLoop, ItemResult, RunSummary
 from cell.model.objects import ObjectParams
@@ -92,6 +92,11 @@ class PlatformRunner:
             raise InvalidInput(
                 f"{job.path}: a hardware end-effector rides the arm only, not the {job.platform}"
             )
+        if job.policy == "place":
+            raise JobError(
+                f"{job.path}: policy 'place': the {job.platform} throws every item, it places "
+                "none; give policy throw (or auto), or cell.platform arm to place"
+            )
         self.job = job
         self.params = params or load_params(job.params or scene_params_path())
         self.store = store
@@ -119,6 +124,45 @@ class PlatformRunner:
         self.name = job.platform
         self.rotor_rpm = job.rotor_rpm if job.platform == "drone" else 0.0
         self.loop = ItemLoop(job, self, self.scene, store=store, session=self.session)
+        try:
+            self._check_reach()
+        except JobError:
+            self.scene.close()  # a refused job leaves nothing open
+            raise
+
+    def _check_reach(self) -> None:
+        """Refuse the job before any item moves if the pads cannot hold an item (across
+        its x, as the loader puts it in the grip; `grip_refusal`) or its bin is beyond
+        every throw the platform can make with it (the plan `decide` makes in the run, here
+        once an item line): every such line in one report, as the arm's jobs are
+        (`Orchestrator._check_job`)."""
+        from cell.arm.grip_limits import grip_refusal
+        from cell.errors import UnreachableTarget
+        from cell.yamltree import Errors
+
+        errors = Errors(self.job.path)
+        for spec in self.job.items:
+            name = spec.obj.name or spec.obj.shape
+            why = grip_refusal(self.params, spec.obj)  # gripped across x, as the loader does
+            if why:
+                errors.add(
+                    JobError(
+                        f"{self.job.path}, line {spec.line}: item {name} "
+                        f"({spec.obj.mass * 1000:.0f} g) cannot be held: {why}; sort it by hand"
+                    )
+                )
+                continue
+            try:
+                self.decide(0, spec.obj, self.job.bin(spec.bin))
+            except UnreachableTarget as exc:
+                errors.add(
+                    JobError(
+                        f"{self.job.path}, line {spec.line}: item {name} to bin {spec.bin!r}: "
+                        f"{str(exc).rstrip('.')}; move bin {spec.bin!r} within the reach "
+                        "above, or send the item to another bin"
+                    )
+                )
+        errors.raise_all()
 
     # -- planning ----------------------------------------------------------------
     def plan_drone(self, obj: ObjectParams, goal: np.ndarray) -> tuple[Any, np.ndarray]:
