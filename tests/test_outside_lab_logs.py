@@ -139,3 +139,21 @@ def test_landings_all_at_one_point_are_refused_not_given_a_floor_of_zero(
         err = capsys.readouterr().err
         assert "needs landings that vary with the throw" in err, err
     assert not out.exists() and not (tmp_path / "g.json").exists()
+
+
+def test_the_store_gives_a_track_back_in_the_order_it_came(log_csv: Path, tmp_path: Path) -> None:
+    """`cell log export --tracks` sorted every track by time (`ORDER BY t_s`): a track whose
+    clock stepped back came out of the store looking like one flight, and `cell gap` on the
+    export used it. It comes back as imported, and the diagnosis sets it aside again."""
+    tid = read_throws_csv(log_csv).text("throw_id")[0]
+    stepped = _parabola()
+    stepped[len(stepped) // 2 :, 0] -= 0.015
+    tracks = _write_tracks(tmp_path / "tracks.csv", {tid: stepped})
+    db, out, out_tracks = tmp_path / "s.sqlite", tmp_path / "o.csv", tmp_path / "o_tracks.csv"
+    assert cell_exit(["log", "--db", str(db), "import", str(log_csv), "--tracks", str(tracks)]) == 0
+    argv = ["log", "export", "--db", str(db), "-o", str(out), "--tracks", str(out_tracks)]
+    assert cell_exit(argv) == 0
+    back = read_tracks_csv(out_tracks, keep_lost=True)
+    np.testing.assert_allclose(back[tid], read_tracks_csv(tracks)[tid], atol=1e-9)
+    _, bad, _ = check_tracks([tid], back)
+    assert bad and bad[0]["why"].startswith("time goes back: "), bad
