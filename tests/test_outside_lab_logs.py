@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from cell.errors import InvalidInput, LogFormatError
+from cell.gap.problem import build_problem
 from cell.gap.track_check import check_tracks
 from cell.log import read_throws_csv, read_tracks_csv, write_throws_csv
+from cell.model.params import DEFAULT_EE
 from cell.synth import Campaign, default_world, draw_campaign
 from tests.cli_exit import cell_exit
 
@@ -157,3 +159,25 @@ def test_the_store_gives_a_track_back_in_the_order_it_came(log_csv: Path, tmp_pa
     np.testing.assert_allclose(back[tid], read_tracks_csv(tracks)[tid], atol=1e-9)
     _, bad, _ = check_tracks([tid], back)
     assert bad and bad[0]["why"].startswith("time goes back: "), bad
+
+
+def test_throws_dropped_are_counted_by_why(log_csv: Path, tmp_path: Path, caplog) -> None:
+    """Throws the diagnosis drops were "N dropped: no landing logged, or no stroke and no
+    track", also where a track was given and set aside; each reason is counted now."""
+    with log_csv.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows[:5]:
+        r["stroke_m"] = ""
+    for r in rows[5:8]:
+        r["landed_x_m"] = r["landed_y_m"] = ""
+    path = tmp_path / "partly.csv"
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    with caplog.at_level("WARNING", logger="cell.gap.problem"):
+        build_problem(read_throws_csv(path), DEFAULT_EE, seed=1000)
+    assert (
+        "8 throws dropped: 3 with no landing logged; 5 with no stroke (another launcher's) "
+        "and no track given (--tracks)"
+    ) in caplog.text, caplog.text
