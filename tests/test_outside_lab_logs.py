@@ -46,17 +46,20 @@ def test_a_track_whose_clock_steps_back_is_set_aside_and_a_shuffled_one_sorted(
     throws of a ball with no effect, 14 of them so: verdict `unknown`, noise floor
     0.069 m against the lab's 0.014 m); it is set aside naming the step. A track written
     in shuffled order is still sorted, and now says so (the reader had sorted it before the
-    check could)."""
+    check could); samples written again whole (a logger replaying its buffer) are repeats,
+    dropped and said."""
     good = _parabola()
     stepped = good.copy()
     half = len(good) // 2
     stepped[half:, 0] -= 0.015
     shuffled = good[np.random.default_rng(1000).permutation(len(good))]
+    replayed = np.vstack([good[:60], good[40:60], good[60:]])  # 20 samples written again
     path = _write_tracks(
-        tmp_path / "tracks.csv", {"clean": good, "clock": stepped, "shuffled": shuffled}
+        tmp_path / "tracks.csv",
+        {"clean": good, "clock": stepped, "shuffled": shuffled, "replayed": replayed},
     )
     tracks = read_tracks_csv(path, keep_lost=True)
-    usable, bad, mended = check_tracks(["clean", "clock", "shuffled"], tracks)
+    usable, bad, mended = check_tracks(["clean", "clock", "shuffled", "replayed"], tracks)
     why = {b["throw_id"]: b["why"] for b in bad}
     assert set(why) == {"clock"}, why
     t_before, t_after = good[half - 1, 0], good[half, 0] - 0.015
@@ -65,8 +68,13 @@ def test_a_track_whose_clock_steps_back_is_set_aside_and_a_shuffled_one_sorted(
         f"of {len(good)}"
     ), why["clock"]
     assert {"throw_id": "shuffled", "note": "samples not in time order (sorted)"} in mended
-    # sorted back, the shuffled track is the clean one, sample for sample
+    assert {
+        "throw_id": "replayed",
+        "note": "20 repeated time stamps (later ones dropped)",
+    } in mended
+    # sorted back, the shuffled and the replayed tracks are the clean one, sample for sample
     assert np.allclose(usable["shuffled"], usable["clean"], atol=1e-6)
+    assert np.allclose(usable["replayed"], usable["clean"], atol=1e-6)
 
 
 def test_two_flights_under_one_id_are_not_merged_into_one(tmp_path: Path) -> None:

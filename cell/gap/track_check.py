@@ -75,7 +75,10 @@ def check_track(raw: object) -> CheckedTrack:
         notes.append(f"{int((~fin).sum())} of {arr.shape[0]} samples not finite (dropped)")
         arr = arr[fin]
     if arr.shape[0] and np.any(np.diff(arr[:, 0]) < 0):
-        step = clock_step(arr[:, 0])
+        # a sample written again whole (a logger replaying its buffer) is a repeat, which
+        # the sort and the repeats' drop mend; only the others can show a clock's step
+        _, first = np.unique(arr, axis=0, return_index=True)
+        step = clock_step(arr[np.sort(first), 0])
         if step:
             return CheckedTrack(None, step, tuple(notes))
         notes.append("samples not in time order (sorted)")
