@@ -243,9 +243,19 @@ def build_problem(
         usable &= has_stroke
     dropped = int(n - usable.sum())
     if dropped:
-        log.warning(
-            "%s dropped: no landing logged, or no stroke and no track", plural(dropped, "throw")
-        )
+        no_land = int((~landed).sum())
+        no_launch = int((landed & ~usable).sum())  # no stroke, and no launch from a track
+        why = [f"{no_land} with no landing logged"] if no_land else []
+        if no_launch:
+            why.append(
+                f"{no_launch} with no stroke (another launcher's) and "
+                + (
+                    "no usable track (the report's tracks.unusable says why)"
+                    if launch is not None
+                    else "no track given (--tracks)"
+                )
+            )
+        log.warning("%s dropped: %s", plural(dropped, "throw"), "; ".join(why))
     if usable.sum() < 10:
         raise InvalidInput(
             f"{table.path or 'throw log'}: only {plural(int(usable.sum()), 'throw')} can be diagnosed "

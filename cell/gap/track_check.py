@@ -16,7 +16,14 @@ import numpy as np
 
 from cell.yamltree import on_screen, unseen_problem
 
-__all__ = ["MIN_SAMPLES", "MIN_SPAN_S", "CheckedTrack", "check_track", "check_tracks"]
+__all__ = [
+    "MIN_SAMPLES",
+    "MIN_SPAN_S",
+    "CheckedTrack",
+    "check_track",
+    "check_tracks",
+    "clock_step",
+]
 
 MIN_SAMPLES = 8  # a whole-track fit frees up to 9 parameters from 3 coordinates per sample
 MIN_SPAN_S = 0.1  # [s] a shorter track does not show gravity
@@ -68,6 +75,12 @@ def check_track(raw: object) -> CheckedTrack:
         notes.append(f"{int((~fin).sum())} of {arr.shape[0]} samples not finite (dropped)")
         arr = arr[fin]
     if arr.shape[0] and np.any(np.diff(arr[:, 0]) < 0):
+        # a sample written again whole (a logger replaying its buffer) is a repeat, which
+        # the sort and the repeats' drop mend; only the others can show a clock's step
+        _, first = np.unique(arr, axis=0, return_index=True)
+        step = clock_step(arr[np.sort(first), 0])
+        if step:
+            return CheckedTrack(None, step, tuple(notes))
         notes.append("samples not in time order (sorted)")
         arr = arr[np.argsort(arr[:, 0], kind="stable")]
     n_rep = 0
@@ -86,6 +99,35 @@ def check_track(raw: object) -> CheckedTrack:
             "for every sample, to the millisecond?"
         )
     return CheckedTrack(None if why else arr, why, tuple(notes))
+
+
+def clock_step(t: np.ndarray) -> str | None:
+    """Why a track whose time goes back cannot be mended by sorting (None: it can).
+
+    Samples written out of order (shuffled, reversed, chunks swapped) sort into one
+    flight. A track whose time, in the order written, runs forward, steps back and runs
+    forward again over the same times (a tracker's clock stepped back, two flights under
+    one id) does not: sorting would interleave two runs of samples that each hold a
+    flight's stretch, or shift one against the other. Two runs in time order of at least
+    `MIN_SAMPLES` samples each, over overlapping times, are that.
+
+    Args:
+        t: the finite samples' times [s] in the order written.
+    """
+    starts = np.r_[0, np.flatnonzero(np.diff(t) < 0) + 1]
+    ends = np.r_[starts[1:], t.size]
+    runs = [(int(a), int(b)) for a, b in zip(starts, ends, strict=True) if b - a >= MIN_SAMPLES]
+    for i, (a, b) in enumerate(runs):
+        for c, d in runs[i + 1 :]:
+            if max(t[a], t[c]) < min(t[b - 1], t[d - 1]):
+                return (
+                    f"time goes back: from {t[c - 1]:.4g} s to {t[c]:.4g} s at sample {c + 1} "
+                    f"of {t.size}, and the {d - c} samples from there overlap in time the "
+                    f"{b - a} before (a tracker's clock stepped back, or two flights under one "
+                    "throw_id?); sorting would mix them: give each flight its own throw_id, "
+                    "its t_s from its release"
+                )
+    return None
 
 
 def _unusable(arr: np.ndarray) -> str | None:

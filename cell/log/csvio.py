@@ -21,6 +21,7 @@ from cell.log.table import (
     RANGES,
     REQUIRED_COLUMNS,
     ThrowTable,
+    comment_line,
     log_number,
     millimetres_hint,
     number_text_hint,
@@ -191,11 +192,23 @@ def _track_time_problem(t: float) -> str:
     )
 
 
+def _number(cell: str | None) -> bool:
+    """Whether a cell reads as a number."""
+    try:
+        log_number((cell or "").strip())
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
 _LOST = ("", "nan", "NaN", "NAN", "inf", "-inf")  # a position cell a tracker left lost
 
 
 def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, np.ndarray]:
-    """Read a tracks.csv into {throw_id: array (k, 4) of t_s, x_m, y_m, z_m}, sorted by time.
+    """Read a tracks.csv into {throw_id: array (k, 4) of t_s, x_m, y_m, z_m}.
+
+    The samples stay in the order written: a track out of time order is the diagnosis's to
+    mend or set aside, and to say which (`cell.gap.track_check`).
 
     Args:
         path: the file.
@@ -240,6 +253,10 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                 first = (row.get(header[0]) or "").strip()
                 if first in names and repeats_header((row.get(c) for c in header), names):
                     raise LogFormatError(p, r, None, HEADER_AGAIN)
+                line = [row[h] for h in header if row[h] is not None] + list(extra)
+                comment = comment_line(",".join(line))
+                if comment and (extra or None in row.values() or not _number(row["t_s"])):
+                    raise LogFormatError(p, r, None, comment)
                 if extra or short:
                     cells = len(header) + len(extra) - list(row.values()).count(None)
                     raise LogFormatError(
@@ -275,4 +292,4 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
         raise LogFormatError(p, None, None, _not_utf8(p)) from None
     except csv.Error as exc:
         raise _csv_error(p, exc, blank=lambda row: row == []) from None
-    return {k: np.asarray(sorted(v)) for k, v in out.items()}
+    return {k: np.asarray(v) for k, v in out.items()}

@@ -373,9 +373,11 @@ class ThrowStore:
         return ThrowTable(columns=columns, data=data, path=str(self.path))
 
     def tracks(self, throw_ids: list[str] | None = None) -> dict[str, np.ndarray]:
-        """Observed flight samples {throw_id: (k, 4) array of t_s, x_m, y_m, z_m}, by time."""
+        """Observed flight samples {throw_id: (k, 4) array of t_s, x_m, y_m, z_m}, in the
+        order they were added: a track out of time order is exported as it came, for the
+        diagnosis to mend or set aside and say so (`cell.gap.track_check`)."""
         rows = self._conn.execute(
-            "SELECT throw_id, t_s, x_m, y_m, z_m FROM tracks ORDER BY throw_id, t_s"
+            "SELECT throw_id, t_s, x_m, y_m, z_m FROM tracks ORDER BY throw_id, rowid"
         ).fetchall()
         keep = set(throw_ids) if throw_ids is not None else None
         out: dict[str, list[tuple[float, ...]]] = {}

@@ -40,6 +40,7 @@ __all__ = [
     "RANGES",
     "REQUIRED_COLUMNS",
     "ThrowTable",
+    "comment_line",
     "log_number",
     "millimetres_hint",
     "other_separator",
@@ -147,6 +148,25 @@ class ThrowTable:
                 f"{self.path}: {purpose} needs at least {n_min} distinct throws; this log has "
                 f"{len(self)} rows of which {distinct} distinct (identical throws count once)"
             )
+        self._require_varied_landings(n_min, purpose)
+
+    def _require_varied_landings(self, n_min: int, purpose: str) -> None:
+        """Refuse observed landings that do not vary with the throw: at least `n_min` of
+        them logged, fewer than `n_min` distinct points among them (a column filled with
+        one value, a logger stuck). Their scatter would read as a noise floor of zero."""
+        seen = self.landed[np.all(np.isfinite(self.landed), axis=1)]
+        points = {tuple(np.round(r, 9)) for r in seen}
+        if len(seen) < n_min or len(points) >= n_min:
+            return
+        shown = ", ".join(f"({x:g}, {y:g}) m" for x, y in sorted(points)[:3])
+        more = ", ..." if len(points) > 3 else ""
+        raise InvalidInput(
+            f"{self.path}: {purpose} needs landings that vary with the throw; the "
+            f"{len(seen)} landings logged are {len(points)} point"
+            f"{'s' if len(points) != 1 else ''} ({shown}{more}) in columns 'landed_x_m', "
+            "'landed_y_m': is a fixed value written there? Leave a landing not observed "
+            "empty (docs/throw_log.md)"
+        )
 
     def take(self, idx: np.ndarray | list[int]) -> ThrowTable:
         """The rows at these indices (or boolean mask), as a new table."""
@@ -300,6 +320,20 @@ HEADER_AGAIN = (
 )
 
 
+def comment_line(line: str | None) -> str | None:
+    """The refusal of a row of the wrong width whose text (its cells joined by commas)
+    begins with `#`: a comment line, which neither a throw log nor a tracks file has
+    (None: not one)."""
+    text = (line or "").strip()
+    if not text.startswith("#"):
+        return None
+    shown = text if len(text) <= 40 else text[:37] + "..."
+    return (
+        f"is a comment line ({shown!r}): a log has none (docs/throw_log.md); delete the "
+        "line, or keep the note in a column of its own (any other column is kept as text)"
+    )
+
+
 def repeats_header(cells: Iterable[str | None], names: list[str]) -> bool:
     """Whether a data row's `cells` are the header's names again, in any order (`names`:
     the header, sorted; a missing cell is empty): two files appended one after the other."""
@@ -317,6 +351,8 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
             f"the header is one column separated by {sep}, not commas: a throw log is "
             "comma-separated, with '.' for the decimal point (docs/throw_log.md)",
         )
+    if missing and header and comment_line(header[0]):
+        raise LogFormatError(path, None, None, "the first line " + str(comment_line(header[0])))
     if missing:
         raise LogFormatError(
             path, None, missing[0], f"required column missing (all missing: {', '.join(missing)})"
@@ -332,9 +368,10 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
         if row[0].strip() in pos and repeats_header(row, names):
             raise LogFormatError(path, r, None, HEADER_AGAIN)
         if len(row) != len(header):
-            raise LogFormatError(
-                path, r, None, f"has {len(row)} cells; the header has {len(header)}"
+            why = (
+                comment_line(",".join(row)) or f"has {len(row)} cells; the header has {len(header)}"
             )
+            raise LogFormatError(path, r, None, why)
     for c in header:
         cells = [row[pos[c]].strip() for row in rows]
         if c in NUMERIC_COLUMNS:
