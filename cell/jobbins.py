@@ -7,7 +7,7 @@ world frame W; its walls, `BIN_WALL_M` thick, stand outside that size (`cell.sim
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import Any
 
 from cell.jobschema import BIN_WALL_M
@@ -20,6 +20,7 @@ __all__ = [
     "light_item_warnings",
     "look_alike_warnings",
     "placement_problem",
+    "places",
 ]
 
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
@@ -29,6 +30,15 @@ BIN_HINTS = {
     "opening, up to 1 m, is rim_height_m",
     "size_m": "its inner x y: its height is rim_height_m",
 }
+
+
+def places(policy: str, reach_m: float, b: Any, thrown: Collection[str] = ()) -> bool:
+    """Does the cell place into bin `b` (else it throws): every bin under `policy: place`;
+    under `auto`, a bin within `reach_m` (`limits.place_reach_m`) of the base [m] but one
+    whose place pose the job's check finds out of the arm's reach (`thrown`, those bins'
+    ids: `Job.thrown_bins`, `cell.jobcheck.job_problems`)."""
+    near = math.hypot(*b.position) <= reach_m
+    return policy == "place" or (policy == "auto" and near and b.id not in thrown)
 
 
 def footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
@@ -107,16 +117,13 @@ def light_item_warnings(job: Any) -> tuple[str, ...]:
     out = []
     for it in job.items:
         b = job.bin(it.bin)
-        placed = job.policy == "place" or (
-            job.policy == "auto" and math.hypot(*b.position) <= job.place_reach_m
-        )
-        if not placed and it.obj.mass < m_min:
+        if not places(job.policy, job.place_reach_m, b, job.thrown_bins) and it.obj.mass < m_min:
             out.append(
                 f"{job.path}, line {it.line}, mass_kg: {it.obj.mass:g} kg is lighter than the "
                 f"lightest object the throw model is calibrated on ({lightest[0]}, {m_min:g} "
                 f"kg): thrown to bin {it.bin!r}, it will miss where it is aimed (25 mm cubes "
                 "thrown 1.5 m missed by 0.24 m at 2 g, 0.13 m at 5 g); under policy auto, a "
-                "bin within limits.place_reach_m has it placed"
+                "bin within limits.place_reach_m that the arm reaches has it placed"
             )
     return tuple(out)
 

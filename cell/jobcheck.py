@@ -9,7 +9,8 @@ calls these; every problem goes into the one report the job is refused with).
   pick solves it (`reach_problems`; the lift over the pick is lowered where the arm
   does not reach it, `cell.arm.kinematics`).
 * A bin placed into out of the arm's reach: every bin under `policy: place` (an error),
-  those within `limits.place_reach_m` under `auto` (a warning: its items fail), IK of the
+  those within `limits.place_reach_m` under `auto` (a warning: its items are thrown
+  instead, `Job.thrown_bins`), IK of the
   grip pointing down over the bin's point nearest the base (3 cm in from its walls),
   the tallest item bound there at the two heights the place takes it through
   (`cell.arm.place`): over the spot, its lowest point `ArmTuning.lift_m` or 5 cm over the
@@ -34,9 +35,11 @@ __all__ = [
     "extents_mismatch",
     "items_fit",
     "job_problems",
+    "place_miss",
     "place_problems",
     "reach_problems",
     "station_problems",
+    "tallest_m",
     "unsorted_warning",
 ]
 
@@ -228,28 +231,68 @@ def place_problems(
 ) -> list[str]:
     """The bins placed into (indices `placed`) that the arm (`cell.robot.model.Robot`) does
     not reach with the grip pointing down over their nearest point, one message a bin."""
-    out: list[str] = []
+    return [m for _, m in _place_misses(robot, bins, items, placed, where, thrown=False)]
+
+
+def place_miss(robot: Any, b: Any, tall_m: float) -> tuple[float, np.ndarray]:
+    """How far the nearest IK solution misses placing an item `tall_m` high into bin `b`
+    (0 when the arm reaches both heights the place takes it through over the bin's point
+    nearest the base, `_place_centres_z`), and the TCP position missed [m, W]."""
+    xy = _nearest_point(b)
+    miss, tcp = 0.0, np.zeros(3)
+    for centre_z in _place_centres_z(b.rim_height, tall_m):
+        tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall_m)])
+        miss = _reaches(robot, tcp)
+        if miss != 0.0:
+            break
+    return miss, tcp
+
+
+def tallest_m(b: Any, items: Sequence[Any]) -> float:
+    """The height [m] of the tallest item the job sends to bin `b` (5 cm when none)."""
+    return max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
+
+
+def _place_misses(
+    robot: Any,
+    bins: Sequence[Any],
+    items: Sequence[Any],
+    placed: Sequence[int],
+    where: dict[str, str],
+    *,
+    thrown: bool,
+) -> list[tuple[int, str]]:
+    """(index, message) for each bin of `placed` the arm cannot place into; the message
+    ends with what would do (`thrown`: that `auto` throws its items instead)."""
+    out: list[tuple[int, str]] = []
     for i in placed:
         b = bins[i]
-        tall = max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
-        xy = _nearest_point(b)
-        miss, tcp = 0.0, np.zeros(3)
-        for centre_z in _place_centres_z(b.rim_height, tall):
-            tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall)])
-            miss = _reaches(robot, tcp)
-            if miss != 0.0:
-                break
+        miss, tcp = place_miss(robot, b, tallest_m(b, items))
         if miss == 0.0:
             continue
+        xy = _nearest_point(b)
         reach = _reach_m(robot, xy, float(tcp[2]))
         r_bin = math.hypot(xy[0], xy[1])
+        if thrown:
+            move = _move(reach, r_bin).removesuffix(", or ")
+            tail = (
+                "under policy auto its items are thrown into it instead (a throw is planned "
+                "for each, as into a bin beyond limits.place_reach_m)"
+                + (f"; to have them placed, {move}" if move else "")
+            )
+        else:
+            tail = (
+                f"{_move(reach, r_bin)}have its items thrown (policy: auto with "
+                f"limits.place_reach_m below {math.hypot(*b.position):.2f} m)"
+            )
         out.append(
-            f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
-            f"cannot place into bin {b.id!r}: the grip pointing down over its nearest point "
-            f"{_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
-            f"{_out(reach, r_bin)}): "
-            f"{_move(reach, r_bin)}have its items thrown (policy: auto with limits.place_reach_m below "
-            f"{math.hypot(*b.position):.2f} m)"
+            (
+                i,
+                f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
+                f"cannot place into bin {b.id!r}: the grip pointing down over its nearest "
+                f"point {_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
+                f"{_out(reach, r_bin)}): {tail}",
+            )
         )
     return out
 
@@ -276,15 +319,16 @@ def _nearest_point(b: Any) -> tuple[float, float]:
 
 
 def job_problems(
-    job: Any, where: dict[str, str], *, reach: bool = True
-) -> tuple[list[str], list[str]]:
+    job: Any, where: dict[str, str], reach: bool = True
+) -> tuple[list[str], list[str], frozenset[str]]:
     """What the job asks of its arm that it cannot do: a bin under the station, and (with
     `reach`, once nothing else is wrong) the station and the bins placed into out of the
     arm's reach.
 
     A bin out of place reach is an error under `policy: place`; under `auto` (the cell
-    places into a bin within `limits.place_reach_m`) it is a warning, since a job may
-    hold such a bin on purpose and its items then fail one by one (`ik`), each recorded.
+    places into a bin within `limits.place_reach_m`) its items are thrown instead, with a
+    warning: the job's `Job.thrown_bins` (`cell.jobbins.places`), which the run's
+    decisions and its check that every item can be sorted (`cell.arm.launch`) read.
 
     Args:
         job: the job (`cell.jobs.Job`, on the arm platform).
@@ -292,10 +336,11 @@ def job_problems(
         reach: check the arm's reach (IK) too.
 
     Returns:
-        (errors, warnings), each one message a problem.
+        (errors, warnings, the ids of the bins within place reach `auto` throws into).
     """
     out = station_problems(job.pick_position, job.bins, where)
     warnings: list[str] = []
+    thrown: set[str] = set()
     if reach and not out:
         chosen = [
             i
@@ -308,8 +353,10 @@ def job_problems(
             from cell.robot.model import load_robot
 
             robot = load_robot(job.robot)
-            warnings += place_problems(robot, job.bins, job.items, chosen, where)
-    return out, warnings
+            for i, m in _place_misses(robot, job.bins, job.items, chosen, where, thrown=True):
+                warnings.append(m)
+                thrown.add(job.bins[i].id)
+    return out, warnings, frozenset(thrown)
 
 
 def extents_mismatch(shape: str, size: Sequence[float]) -> str:

@@ -21,7 +21,7 @@ seed names a job.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -58,6 +58,7 @@ def _arm_field(robot: str) -> dict[str, str]:
 PICK_STATION_XY_M = (0.45, -0.40)  # [m, W] the default pick station (cell.jobs)
 PICK_STATION_CLEAR_M = 0.35  # [m] no bin footprint within this of the station's centre
 BIN_GAP_M = 0.10  # [m] clearance between bin footprints
+PLACE_REACH_M = 0.75  # [m] the job's limits.place_reach_m (its default, `cell.jobs`)
 
 
 class LayoutRanges:
@@ -161,8 +162,14 @@ def _object_of(entry: dict[str, Any]) -> Any:
     )
 
 
-def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any) -> list[str]:
-    """The ids of the bins the cell can sort this item into (cell.orchestrator.check_sortable)."""
+def sortable_bins(
+    entry: dict[str, Any],
+    bins: list[dict[str, Any]],
+    params: Any,
+    thrown: frozenset[str] = frozenset(),
+) -> list[str]:
+    """The ids of the bins the cell can sort this item into (`cell.arm.launch.check_sortable`;
+    `thrown`: the bins within place reach the job would throw into, `Job.thrown_bins`)."""
     from cell.arm.grip_side import holding_sides
     from cell.arm.launch import check_sortable
     from cell.errors import CannotGrip, UnreachableTarget
@@ -177,11 +184,64 @@ def sortable_bins(entry: dict[str, Any], bins: list[dict[str, Any]], params: Any
     for b in bins:
         spec = BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
         try:
-            check_sortable(params, obj, spec, sides=sides)
+            check_sortable(params, obj, spec, sides=sides, thrown_bins=thrown)
         except (CannotGrip, UnreachableTarget):
             continue
         ok.append(b["id"])
     return ok
+
+
+class NearBins:
+    """A random layout's bins within the job's place reach, and which of them its load
+    will find the arm cannot place into with the tallest item sent there (`Job.thrown_bins`,
+    `cell.jobcheck.job_problems`, by the same IK: `place_miss`): the job throws into those,
+    so an item goes there only if it can be thrown there, and so can those sent before."""
+
+    def __init__(self, robot: str, bins: list[dict[str, Any]]) -> None:
+        from cell.jobs import BinSpec
+
+        self.robot, self._robot = robot, cast(Any, None)
+        self.near = {
+            b["id"]: BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
+            for b in bins
+            if math.hypot(*b["position_m"]) <= PLACE_REACH_M
+        }
+        self.sent: dict[str, list[tuple[dict[str, Any], float]]] = {i: [] for i in self.near}
+        self._missed: dict[tuple[str, float], bool] = {}
+
+    def _misses(self, bin_id: str, tall_m: float) -> bool:
+        """Does the arm miss placing an item `tall_m` high into the bin (cached)?"""
+        key = (bin_id, tall_m)
+        if key not in self._missed:
+            from cell.jobcheck import place_miss
+            from cell.robot.model import load_robot
+
+            self._robot = self._robot or load_robot(self.robot)
+            self._missed[key] = place_miss(self._robot, self.near[bin_id], tall_m)[0] != 0.0
+        return self._missed[key]
+
+    def _tallest(self, bin_id: str, h: float | None = None) -> float:
+        hs = [t for _, t in self.sent[bin_id]] + ([] if h is None else [h])
+        return max(hs, default=0.05)  # as `cell.jobcheck.tallest_m`
+
+    def thrown_with(self, h: float) -> frozenset[str]:
+        """The near bins the job would throw into were an item `h` [m] high sent to each."""
+        return frozenset(i for i in self.near if self._misses(i, self._tallest(i, h)))
+
+    def keeps_sorted(self, bin_id: str, thrown: frozenset[str], params: Any) -> bool:
+        """Can the items sent to `bin_id` before still be sorted there (thrown, where this
+        item would have the job throw into a bin it placed into)?"""
+        if bin_id not in thrown or self._misses(bin_id, self._tallest(bin_id)):
+            return True
+        spec = self.near[bin_id]
+        one = [{"id": spec.id, "position_m": spec.position, "size_m": spec.size,
+                "rim_height_m": spec.rim_height}]  # fmt: skip
+        return all(sortable_bins(e, one, params, thrown) for e, _ in self.sent[bin_id])
+
+    def send(self, entry: dict[str, Any], h: float) -> None:
+        """The item `entry`, `h` [m] high, is sent to its bin."""
+        if entry["bin"] in self.sent:
+            self.sent[entry["bin"]].append((entry, h))
 
 
 def random_job(
@@ -212,6 +272,7 @@ def random_job(
     r = LayoutRanges
     rng = np.random.default_rng([seed, 0x10B])
     bins = _bins(rng, robot)
+    near = NearBins(robot, bins)
     cat = catalogue()
     seen = [k for k, e in cat.items() if e.set == CALIBRATION_SET]
     unseen = [k for k, e in cat.items() if e.set != CALIBRATION_SET]
@@ -231,12 +292,19 @@ def random_job(
             entry, is_unseen = {"object": str(rng.choice(unseen))}, True
         else:
             entry, is_unseen = {"object": str(rng.choice(seen))}, False
-        choices = sortable_bins(entry, bins, params)
+        h = float(_object_of(entry).size[2])
+        thrown = near.thrown_with(h)
+        choices = [
+            c
+            for c in sortable_bins(entry, bins, params, thrown)
+            if near.keeps_sorted(c, thrown, params)
+        ]
         if not choices:
             dropped.append(entry.get("object") or f"adhoc {entry['shape']}")
             continue
         entry["count"] = count
         entry["bin"] = choices[int(rng.integers(len(choices)))]
+        near.send(entry, h)
         items.append(entry)
         n_unseen += count if is_unseen else 0
         total += count

@@ -26,7 +26,7 @@ from cell.jobbins import (
     placement_problem,
 )
 from cell.jobcell import cell_section
-from cell.jobcheck import extents_mismatch, items_fit, unsorted_warning
+from cell.jobcheck import extents_mismatch, items_fit, job_problems, unsorted_warning
 from cell.jobschema import (
     BIN_KEYS,
     BIN_WALL_M,
@@ -121,6 +121,7 @@ class Job:
     base_speed_mps: float = 0.0
     extras: dict[str, Any] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
+    thrown_bins: frozenset[str] = frozenset()  # `auto`'s near bins it cannot place into
 
     def bin(self, bin_id: str) -> BinSpec:
         """The bin with this id."""
@@ -474,11 +475,10 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
     )
     errors.messages += items_fit(path, items, bins)
     reach_warnings: list[str] = []
-    if cell.platform == "arm":
-        from cell.jobcheck import job_problems
-
-        problems, reach_warnings = job_problems(job, _where(job, tree, top), reach=check_reach)
+    if cell.platform == "arm":  # and which of auto's near bins the arm cannot place into
+        problems, reach_warnings, thrown = job_problems(job, _where(job, tree, top), check_reach)
         errors.messages += problems
+        job = replace(job, thrown_bins=thrown)
     errors.raise_all()
     warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
     warnings += tuple(reach_warnings) + look_alike_warnings(job)

@@ -24,7 +24,6 @@ of all cycles: a run whose items all fail sorts 0 items per hour.
 from __future__ import annotations
 
 import logging
-import math
 import uuid
 from collections.abc import Callable
 from typing import Any
@@ -53,6 +52,7 @@ from cell.errors import (
     InvalidInput,
     UnreachableTarget,
 )
+from cell.jobbins import places
 from cell.jobs import ItemSpec, Job, check_order
 from cell.kinds import PICKS, RELEASES
 from cell.loop import ItemLoop
@@ -302,6 +302,7 @@ class Orchestrator(
                     policy=job.policy,
                     place_reach_m=job.place_reach_m,
                     bounds=self.bounds,
+                    thrown_bins=job.thrown_bins,
                 )
             except (CannotGrip, UnreachableTarget) as exc:
                 instead = (
@@ -355,14 +356,13 @@ class Orchestrator(
         return item
 
     def decide(self, index: int, obj: ObjectParams, target: Any) -> Decision:
-        """Place (a bin within the job's place reach, or the job's policy) or throw, and
+        """Place (`cell.jobbins.places`: a bin within the job's place reach the arm can place
+        into, or the job's policy) or throw, and
         the throw's plan, made before the pick: the end-effector grasps at the stroke it
         will throw with, so the item sits on the band carriage as the plan assumes."""
         self._new_decision()
-        dist = math.hypot(*target.position)
-        place = self.job.policy == "place" or (
-            self.job.policy == "auto" and dist <= self.job.place_reach_m
-        )
+        job = self.job  # its policy, place reach and the near bins it throws into
+        place = places(job.policy, job.place_reach_m, target, job.thrown_bins)
         sides = holding_sides(self.params, obj)  # CannotGrip: none holds
         if place:
             stroke = min(self.tuning.pick_stroke_m, sides[0].stroke_max_m)

@@ -222,14 +222,17 @@ def test_a_bin_under_the_station_and_a_place_out_of_reach_are_refused() -> None:
             for ln in lines
         )
     # the UR3 under auto with the default place reach (0.75 m) would place into a bin it
-    # cannot reach: a warning (its items fail, each recorded), the place reach to lower named;
-    # under policy: place the same bin is refused
+    # cannot reach: it throws into it instead, with a warning saying why (how far the place
+    # is missed); under policy: place the same bin is refused
     ur3 = (ROOT / "tasks" / "bins_ur3.yaml").read_text()
     far_tote = ur3.replace("[0.00, -0.42]", "[0.00, -0.70]").replace(
         "place_reach_m: 0.5", "place_reach_m: 0.75"
     )
-    (warning,) = parse_job(far_tote, "j.yaml").warnings
-    assert re.search(r"cannot place into bin 'tote_b'.*place_reach_m below 0.70", warning)
+    job = parse_job(far_tote, "j.yaml")
+    (warning,) = job.warnings
+    assert re.search(r"cannot place into bin 'tote_b'.*out of reach \(missed by \d+ mm", warning)
+    assert warning.endswith("to have them placed, move the bin closer")
+    assert job.thrown_bins == frozenset({"tote_b"})
     with pytest.raises(JobError, match=r"cannot place into bin 'tote_b'"):
         parse_job(far_tote.replace("policy: auto", "policy: place"), "j.yaml")
 

@@ -24,7 +24,7 @@ import pytest
 
 from cell.errors import InvalidParameter, JobError
 from cell.jobcheck import OVER_RIM_M, STROKE_RANGE_M, _reaches, _tcp_z
-from cell.jobs import load_job
+from cell.jobs import load_job, parse_job
 from cell.robot import paths
 from cell.robot.composite import composite_urdf, composite_urdf_text
 from cell.robot.model import load_robot
@@ -144,20 +144,25 @@ def test_a_place_the_z1_cannot_make_is_found_before_the_run(tmp_path: Path) -> N
     job.write_text(Z1_JOB.replace("POLICY", "auto"))
     (warning,) = load_job(job).warnings
     assert "cannot place into bin 'tote_a'" in warning
-    assert "does not get there at that height): have its items thrown" in warning
+    assert "does not get there at that height): under policy auto its items are thrown" in warning
+    assert load_job(job).thrown_bins == frozenset({"tote_a"})
     job.write_text(Z1_JOB.replace("POLICY", "place"))
     with pytest.raises(JobError, match="cannot place into bin 'tote_a'"):
         load_job(job)
 
 
 def test_the_place_the_check_warns_of_fails_in_the_scene(tmp_path: Path) -> None:
-    """The run's own outcome, the check's independent witness: the item fails (`ik`)."""
+    """The run's own outcome, the check's independent witness: placed (the job loaded
+    without the check, which has `auto` throw into the bin), the item fails (`ik`), and
+    the failure is recorded."""
     from cell.orchestrator import Orchestrator
 
     _mount(tmp_path, Z1, "z1")
     job = tmp_path / "job.yaml"
     job.write_text(Z1_JOB.replace("POLICY", "auto"))
-    orch = Orchestrator(load_job(job))
+    unchecked = parse_job(job.read_text(), str(job), check_reach=False)
+    assert unchecked.thrown_bins == frozenset()
+    orch = Orchestrator(unchecked)
     try:
         s = orch.run()
     finally:

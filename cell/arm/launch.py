@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Collection
 from typing import Any
 
 import numpy as np
@@ -119,19 +120,22 @@ def check_sortable(
     place_reach_m: float = 0.75,
     bounds: Any = None,
     sides: list[Any] | None = None,
+    thrown_bins: Collection[str] = (),
 ) -> None:
     """Raise CannotGrip or UnreachableTarget when the cell cannot sort `obj` into the
     bin: the pads hold it across none of its sides (`cell.arm.grip_side`), or (for a
     throw) none briskly (`throw_sides`), or no release within the bounds lands it there, across any side that holds, by
     the planner's model of the scene. `sides`: what `holding_sides(params, obj)` gave,
-    where the caller has it (`cell.jobgen.sortable_bins`: once an item, not once a bin)."""
+    where the caller has it (`cell.jobgen.sortable_bins`: once an item, not once a bin).
+    A bin placed into (`cell.jobbins.places`: `thrown_bins`, the job's `Job.thrown_bins`,
+    are thrown into under `auto` though near) is not checked here but by the job's load."""
     from cell.arm.grip_side import holding_sides, throw_sides
+    from cell.jobbins import places
     from cell.optimize.bounds import ThrowBounds
 
     if sides is None:
         sides = holding_sides(params, obj)
-    dist = math.hypot(*bin_spec.position)
-    if policy == "place" or (policy == "auto" and dist <= place_reach_m):
+    if places(policy, place_reach_m, bin_spec, thrown_bins):
         return
     sides = throw_sides(sides, obj)
     goal = (*bin_spec.position, bin_spec.rim_height)
@@ -146,4 +150,9 @@ def check_sortable(
         except (CannotGrip, UnreachableTarget) as exc:
             err = err or exc
     assert err is not None
+    if bin_spec.id in thrown_bins:  # the reason it is thrown, not placed, said too
+        raise type(err)(
+            f"{str(err).rstrip('.')}; the bin is within limits.place_reach_m, but the arm "
+            "cannot place into it either (its place pose is out of reach: the job's warning)"
+        ) from None
     raise err

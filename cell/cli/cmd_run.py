@@ -213,7 +213,7 @@ def _run(args: argparse.Namespace) -> int:
 
     job = load_job(args.job)
     refuse_outputs_among(args, job_files(job))  # the files the job names are inputs too
-    for warning in job.warnings:  # items left unsorted, a bin auto would place into out of reach
+    for warning in job.warnings:  # items left unsorted, a near bin auto throws into
         print(f"cell: warning: {warning}", file=sys.stderr)
     if not 0.0 < args.speed_scale <= 1.0:
         raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
