@@ -58,6 +58,7 @@ from cell.gap.select import (
     public,
     refusal,
 )
+from cell.gap.track_gust import unsteady_wind
 from cell.model.effects import EFFECTS, FAMILIES, Effect
 
 __all__ = [
@@ -327,6 +328,8 @@ def diagnose(
         spread = _spread_verdict(prob, chosen[-1], A, nf)
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
+    unsteady = unsteady_wind(verdict, tracks)  # a pull growing along the flight: no steady wind
+    verdict = ["unknown"] if unsteady else verdict
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -351,6 +354,7 @@ def diagnose(
             else {}
         ),
         "rules": _rules(),
+        **({"wind_not_steady": unsteady} if unsteady else {}),
     }
     report["verdict"]["law_mean"] = (
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}

@@ -194,9 +194,11 @@ def format_table(report: dict[str, Any]) -> str:
             f"{pt['floor_m']:.4f} m (F {r['noise_floor_m']:.4f} m from the repeats alone)"
         )
     if v.get("partial_effects"):
+        rest = "the rest is above 1.3 × F"
+        if r.get("wind_not_steady"):
+            rest = r["wind_not_steady"]["why"]
         lines.append(
-            f"                 (partly explained by {' + '.join(v['partial_effects'])}; the rest "
-            f"is above 1.3 × F)"
+            f"                 (partly explained by {' + '.join(v['partial_effects'])}; {rest})"
         )
     return "\n".join(lines)
 
