@@ -336,7 +336,12 @@ def test_the_report_keys_are_the_reports() -> None:
     page = _read("docs/diagnosis.md")
     where = page[page.index("keys appear only where they apply") :].split("\n\n")[0]
     sometimes = set(re.findall(r"`([a-z_]+)` where", where))
-    assert sometimes == {"proposal", "wind_throw_to_throw", "parameter_throw_to_throw"}
+    assert sometimes == {
+        "proposal",
+        "wind_throw_to_throw",
+        "parameter_throw_to_throw",
+        "one_configuration",
+    }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())
         # the table's keys are in every report; any other key is one of those that appear

@@ -30,7 +30,9 @@ Verdict rules:
   measurement effect without an apparent gravity off g, or a tracking scale off the
   tracks' apparent gravity ratio by more than SCALE_AGREE; a tracking scale beside a
   landing effect is refused where the landing misses across the impact velocity show no
-  scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`).
+  scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`);
+* on a log of one configuration, a verdict naming effects the log cannot tell apart is
+  `unknown`, those effects its partials (`cell.gap.one_config`).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ import numpy as np
 
 from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
+from cell.gap.one_config import one_configuration
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
     ACROSS_Z,
@@ -352,6 +355,10 @@ def diagnose(
         ),
         "rules": _rules(),
     }
+    if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
+        verdict = v1  # one configuration: the effects it cannot tell apart as partials
+        report["verdict"] = _verdict_report(verdict, chosen, B, base_sq, v_sq, prob.seed)
+        report["verdict"]["partial_effects"] = report["one_configuration"]["explained_alike"]
     report["verdict"]["law_mean"] = (
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
     )
