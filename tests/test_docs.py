@@ -340,6 +340,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "proposal",
         "wind_throw_to_throw",
         "parameter_throw_to_throw",
+        "one_configuration",
         "wind_not_steady",
     }
     for name in ("nominal", "identified"):

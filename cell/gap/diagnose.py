@@ -30,7 +30,11 @@ Verdict rules:
   measurement effect without an apparent gravity off g, or a tracking scale off the
   tracks' apparent gravity ratio by more than SCALE_AGREE; a tracking scale beside a
   landing effect is refused where the landing misses across the impact velocity show no
-  scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`).
+  scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`);
+* on a log of one configuration, a verdict naming effects the log cannot tell apart is
+  `unknown`, those effects its partials (`cell.gap.one_config`);
+* a verdict naming `wind` is `unknown`, the wind partial, where the tracks show its
+  sideways pull growing along the flight (a late gust, `cell.gap.track_gust`).
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ import numpy as np
 
 from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
+from cell.gap.one_config import one_configuration
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
     ACROSS_Z,
@@ -61,14 +66,8 @@ from cell.gap.select import (
 from cell.gap.track_gust import unsteady_wind
 from cell.model.effects import EFFECTS, FAMILIES, Effect
 
-__all__ = [
-    "Diagnosis",
-    "diagnose",
-    "NONE_RATIO",
-    "VERDICT_RATIO",
-    "applicable_effects",
-    "spread_report",
-]
+__all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects",
+           "spread_report"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -328,8 +327,8 @@ def diagnose(
         spread = _spread_verdict(prob, chosen[-1], A, nf)
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
-    unsteady = unsteady_wind(verdict, tracks)  # a pull growing along the flight: no steady wind
-    verdict = ["unknown"] if unsteady else verdict
+    # a wind whose pull the tracks show growing along the flight is no steady wind
+    verdict = ["unknown"] if (unsteady := unsteady_wind(verdict, tracks)) else verdict
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -356,6 +355,10 @@ def diagnose(
         "rules": _rules(),
         **({"wind_not_steady": unsteady} if unsteady else {}),
     }
+    if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
+        verdict = v1  # one configuration: the effects it cannot tell apart as partials
+        report["verdict"] = _verdict_report(verdict, chosen, B, base_sq, v_sq, prob.seed)
+        report["verdict"]["partial_effects"] = report["one_configuration"]["explained_alike"]
     report["verdict"]["law_mean"] = (
         _law_means(chosen[-1].full.effects, prob) if chosen and verdict[0] != "none" else {}
     )

@@ -193,7 +193,9 @@ def format_table(report: dict[str, Any]) -> str:
             f"  {pt['effect']}'s {pt['param']} drawn throw to throw: its spread sets the floor at "
             f"{pt['floor_m']:.4f} m (F {r['noise_floor_m']:.4f} m from the repeats alone)"
         )
-    if v.get("partial_effects"):
+    if r.get("one_configuration"):
+        lines.append(f"                 ({r['one_configuration']['why']})")
+    elif v.get("partial_effects"):
         rest = "the rest is above 1.3 × F"
         if r.get("wind_not_steady"):
             rest = r["wind_not_steady"]["why"]
@@ -213,7 +215,10 @@ def _png(fig: Any) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _after_title(v: dict[str, Any]) -> str:
+def _after_title(r: dict[str, Any]) -> str:
+    v = r["verdict"]
+    if r.get("one_configuration") and v["params"]:  # the plot is the joined effects'
+        return "with " + " + ".join(v["params"]) + " (one of those alike; verdict unknown)"
     if v.get("partial_effects"):
         return "with " + " + ".join(v["partial_effects"]) + " (partial; verdict unknown)"
     if v["effects"] == ["none"]:
@@ -234,7 +239,7 @@ def _plots(d: Diagnosis, prob: GapProblem) -> list[tuple[str, str]]:
     fig, axes = plt.subplots(1, 2, figsize=(9, 4.2), sharex=True, sharey=True)
     for ax, res, title in (
         (axes[0], d.baseline_residual, "configured model"),
-        (axes[1], d.verdict_residual, _after_title(r["verdict"])),
+        (axes[1], d.verdict_residual, _after_title(r)),
     ):
         ax.scatter(res[:, 0], res[:, 1], s=5, alpha=0.5)
         ax.add_patch(plt.Circle((0, 0), F, fill=False, color="k", ls="--", label="noise floor"))

@@ -51,6 +51,11 @@ def _phase_from_verdict(d: Diagnosis) -> dict[str, Any]:
     if v == ["unknown"]:
         plausible = [c for c in rep["candidates"] if not c.get("refused")]
         best = (plausible or rep["candidates"] or [None])[0]
+        if best is not None and "one_configuration" in rep:  # explained, alike
+            return {
+                "phase": best["phase"],
+                "evidence": "no tracks; " + rep["one_configuration"]["why"],
+            }
         prop = rep.get("proposal") or {}
         if prop.get("law") and (
             best is None or prop["heldout_rmse_after_m"] < best["heldout_rmse_m"]
