@@ -341,6 +341,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "wind_throw_to_throw",
         "parameter_throw_to_throw",
         "one_configuration",
+        "wind_not_steady",
     }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())

@@ -32,7 +32,9 @@ Verdict rules:
   landing effect is refused where the landing misses across the impact velocity show no
   scale (within ACROSS_Z standard errors of 1, `cell.gap.select.across_refusal`);
 * on a log of one configuration, a verdict naming effects the log cannot tell apart is
-  `unknown`, those effects its partials (`cell.gap.one_config`).
+  `unknown`, those effects its partials (`cell.gap.one_config`);
+* a verdict naming `wind` is `unknown`, the wind partial, where the tracks show its
+  sideways pull growing along the flight (a late gust, `cell.gap.track_gust`).
 """
 
 from __future__ import annotations
@@ -61,16 +63,11 @@ from cell.gap.select import (
     public,
     refusal,
 )
+from cell.gap.track_gust import unsteady_wind
 from cell.model.effects import EFFECTS, FAMILIES, Effect
 
-__all__ = [
-    "Diagnosis",
-    "diagnose",
-    "NONE_RATIO",
-    "VERDICT_RATIO",
-    "applicable_effects",
-    "spread_report",
-]
+__all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects",
+           "spread_report"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -330,6 +327,8 @@ def diagnose(
         spread = _spread_verdict(prob, chosen[-1], A, nf)
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
+    # a wind whose pull the tracks show growing along the flight is no steady wind
+    verdict = ["unknown"] if (unsteady := unsteady_wind(verdict, tracks)) else verdict
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -354,6 +353,7 @@ def diagnose(
             else {}
         ),
         "rules": _rules(),
+        **({"wind_not_steady": unsteady} if unsteady else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials

@@ -196,9 +196,11 @@ def format_table(report: dict[str, Any]) -> str:
     if r.get("one_configuration"):
         lines.append(f"                 ({r['one_configuration']['why']})")
     elif v.get("partial_effects"):
+        rest = "the rest is above 1.3 × F"
+        if r.get("wind_not_steady"):
+            rest = r["wind_not_steady"]["why"]
         lines.append(
-            f"                 (partly explained by {' + '.join(v['partial_effects'])}; the rest "
-            f"is above 1.3 × F)"
+            f"                 (partly explained by {' + '.join(v['partial_effects'])}; {rest})"
         )
     return "\n".join(lines)
 

@@ -138,13 +138,18 @@ def predict_ode(theta: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray
 
 
 def _residuals(
-    th: np.ndarray, k: np.ndarray, tau: np.ndarray, pos: np.ndarray, free: tuple[int, ...]
+    th: np.ndarray,
+    k: np.ndarray,
+    tau: np.ndarray,
+    pos: np.ndarray,
+    free: tuple[int, ...],
+    priors: bool = True,
 ) -> np.ndarray:
     """Weighted residual vectors (n, P, 3 m + priors) of parameters th (n, P, 12)."""
     pred = _simulate(th, k, tau)
     r = np.nan_to_num(pred - pos[:, None])
     r = r.reshape(r.shape[0], r.shape[1], -1)
-    pri = [th[..., j] * (PRIOR_M[j] if j != 9 else PRIOR_M[9]) for j in free if j in PRIOR_M]
+    pri = [th[..., j] * PRIOR_M[j] for j in free if j in PRIOR_M and priors]
     if pri:
         r = np.concatenate([r, np.stack(pri, axis=-1)], axis=-1)
     return r
@@ -157,6 +162,7 @@ def _jacobian(
     pos: np.ndarray,
     free: tuple[int, ...],
     eps: np.ndarray,
+    priors: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Residuals (a, R) at th (a, 12) and their Jacobian (a, f, R) in the free
     parameters. The start position only shifts the flight (no force depends on it): its
@@ -165,7 +171,7 @@ def _jacobian(
     stack = np.repeat(th[:, None], 1 + len(dyn), axis=1)
     for q, c in enumerate(dyn):
         stack[:, 1 + q, free[c]] += eps[c]
-    r_all = _residuals(stack, k, tau, pos, free)
+    r_all = _residuals(stack, k, tau, pos, free, priors)
     r0 = r_all[:, 0]
     jac = np.zeros((th.shape[0], len(free), r0.shape[1]))
     jac[:, dyn] = (r_all[:, 1:] - r0[:, None]) / eps[dyn][None, :, None]
@@ -184,6 +190,7 @@ def fit_ode(
     k: np.ndarray,
     model: str,
     theta0: np.ndarray,
+    priors: bool = True,
 ) -> OdeFit:
     """Fit `model` to n tracks by Levenberg-Marquardt (forward-difference Jacobians, every
     track at once).
@@ -194,6 +201,8 @@ def fit_ode(
         k: nominal drag constants [1/m], shape (n,).
         model: a key of MODELS.
         theta0: start parameters, shape (n, 12) (the parameters not freed stay).
+        priors: with the weak priors on λ and w (`PRIOR_M`); without, a short track's
+            wind is its data's alone (unbiased, however uncertain).
 
     Returns:
         The fit.
@@ -204,14 +213,14 @@ def fit_ode(
     th = theta0.astype(float).copy()
     lam = np.full(n, 1e-3)
     done = np.zeros(n, bool)
-    cost = np.sum(_residuals(th[:, None], k, tau, pos, free)[:, 0] ** 2, axis=1)
+    cost = np.sum(_residuals(th[:, None], k, tau, pos, free, priors)[:, 0] ** 2, axis=1)
     eps = np.array([1e-6 if j < 3 else 1e-6 if j < 6 else 1e-5 for j in free])
     for _ in range(MAX_ITER):
         act = np.flatnonzero(~done)
         if act.size == 0:
             break
         ta = th[act]
-        r0, jac = _jacobian(ta, k[act], tau[act], pos[act], free, eps)
+        r0, jac = _jacobian(ta, k[act], tau[act], pos[act], free, eps, priors)
         jtj = np.einsum("afr,agr->afg", jac, jac)
         jtr = np.einsum("afr,ar->af", jac, r0)
         diag = np.einsum("aff->af", jtj)
@@ -225,7 +234,8 @@ def fit_ode(
             trial = ta.copy()
             trial[:, list(free)] += step
             c_new = np.sum(
-                _residuals(trial[:, None], k[act], tau[act], pos[act], free)[:, 0] ** 2, 1
+                _residuals(trial[:, None], k[act], tau[act], pos[act], free, priors)[:, 0] ** 2,
+                1,
             )
             better = np.isfinite(c_new) & (c_new <= cost[act])
             rel = (cost[act] - np.where(better, c_new, cost[act])) / np.maximum(cost[act], 1e-30)

@@ -32,6 +32,7 @@ import numpy as np
 from cell.gap.problem import GapProblem
 from cell.gap.track_check import check_tracks
 from cell.gap.track_evidence import evidence, flight_time
+from cell.gap.track_gust import pull_along
 from cell.gap.track_halves import _state, end_state, halves
 from cell.gap.track_launch import whole_track_launch
 from cell.gap.track_sideways import scale_or_wind
@@ -419,7 +420,8 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     Returns:
         {"phase", "evidence", "launch_m", "flight_m", "landing_m", "g_ratio", "tracked",
         "unusable": [{"throw_id", "why"}], "mended": [{"throw_id", "note"}], "sideways":
-        `cell.gap.track_sideways.scale_or_wind` on the throws of another launcher or None}.
+        `cell.gap.track_sideways.scale_or_wind` on the throws of another launcher or None,
+        "pull_along": `cell.gap.track_gust.pull_along` on every tracked throw or None}.
         "phase" is None when the tracks cannot place the gap (too few usable tracks, no
         share computable).
     """
@@ -487,6 +489,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "track_fit_rms_m": float(np.median(fit.rms_m[idx])),
         "drag_ratio": float(np.median(fit.drag_ratio[idx])),
         "sideways": side,
+        "pull_along": pull_along([fit.samples[i] for i in idx], fit.dropped[idx], kk),
     }
     ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
     return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}
