@@ -27,6 +27,7 @@ import numpy as np
 
 from cell.catalogue import catalogue
 from cell.jobbins import ROBOT_BASE_CLEARANCE_M
+from cell.jobschema import PLACE_REACH_M
 
 __all__ = ["LayoutRanges", "random_job", "CALIBRATION_SET", "facing_half_range_rad"]
 
@@ -58,7 +59,6 @@ def _arm_field(robot: str) -> dict[str, str]:
 PICK_STATION_XY_M = (0.45, -0.40)  # [m, W] the default pick station (cell.jobs)
 PICK_STATION_CLEAR_M = 0.35  # [m] no bin footprint within this of the station's centre
 BIN_GAP_M = 0.10  # [m] clearance between bin footprints
-PLACE_REACH_M = 0.75  # [m] the job's limits.place_reach_m (its default, `cell.jobs`)
 
 
 class LayoutRanges:
@@ -162,6 +162,13 @@ def _object_of(entry: dict[str, Any]) -> Any:
     )
 
 
+def _spec(b: dict[str, Any]) -> Any:
+    """A drawn bin as the job's `cell.jobs.BinSpec`."""
+    from cell.jobs import BinSpec
+
+    return BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
+
+
 def sortable_bins(
     entry: dict[str, Any],
     bins: list[dict[str, Any]],
@@ -173,7 +180,6 @@ def sortable_bins(
     from cell.arm.grip_side import holding_sides
     from cell.arm.launch import check_sortable
     from cell.errors import CannotGrip, UnreachableTarget
-    from cell.jobs import BinSpec
 
     obj = _object_of(entry)
     try:  # the sides the pads hold it across: the item's, whatever the bin
@@ -182,9 +188,8 @@ def sortable_bins(
         return []
     ok = []
     for b in bins:
-        spec = BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
         try:
-            check_sortable(params, obj, spec, sides=sides, thrown_bins=thrown)
+            check_sortable(params, obj, _spec(b), sides=sides, thrown_bins=thrown)
         except (CannotGrip, UnreachableTarget):
             continue
         ok.append(b["id"])
@@ -198,14 +203,9 @@ class NearBins:
     so an item goes there only if it can be thrown there, and so can those sent before."""
 
     def __init__(self, robot: str, bins: list[dict[str, Any]]) -> None:
-        from cell.jobs import BinSpec
-
         self.robot, self._robot = robot, cast(Any, None)
-        self.near = {
-            b["id"]: BinSpec(b["id"], tuple(b["position_m"]), tuple(b["size_m"]), b["rim_height_m"])  # type: ignore[arg-type]
-            for b in bins
-            if math.hypot(*b["position_m"]) <= PLACE_REACH_M
-        }
+        self._drawn = {b["id"]: b for b in bins if math.hypot(*b["position_m"]) <= PLACE_REACH_M}
+        self.near = {i: _spec(b) for i, b in self._drawn.items()}
         self.sent: dict[str, list[tuple[dict[str, Any], float]]] = {i: [] for i in self.near}
         self._missed: dict[tuple[str, float], bool] = {}
 
@@ -233,9 +233,7 @@ class NearBins:
         item would have the job throw into a bin it placed into)?"""
         if bin_id not in thrown or self._misses(bin_id, self._tallest(bin_id)):
             return True
-        spec = self.near[bin_id]
-        one = [{"id": spec.id, "position_m": spec.position, "size_m": spec.size,
-                "rim_height_m": spec.rim_height}]  # fmt: skip
+        one = [self._drawn[bin_id]]
         return all(sortable_bins(e, one, params, thrown) for e, _ in self.sent[bin_id])
 
     def send(self, entry: dict[str, Any], h: float) -> None:

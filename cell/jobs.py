@@ -33,6 +33,7 @@ from cell.jobschema import (
     ITEM_KEYS,
     LIMIT_KEYS,
     PICK_KEYS,
+    PLACE_REACH_M,
     TOP_KEYS,
     job_keys,
 )
@@ -387,7 +388,7 @@ def _limits(c: Checker, top: dict[str, Node]) -> tuple[float, int, float]:
     reach = (
         c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2)
         if "place_reach_m" in lim
-        else 0.75
+        else PLACE_REACH_M
     )
     max_items = (
         c.integer(lim["max_items"], "limits.max_items", 1, MAX_ITEMS)

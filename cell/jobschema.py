@@ -18,11 +18,14 @@ __all__ = [
     "job_keys",
     "BIN_WALL_M",
     "BASE_SPEED_MAX_MPS",
+    "PLACE_REACH_M",
 ]
 
 # [m] a bin's wall and floor plate (the scene builds it so, `cell.sim.bins.BinSpec.wall`):
 # a rim must stand above it
 BIN_WALL_M = 0.01
+# [m] limits.place_reach_m where a job gives none: `auto` places into a bin this near the base
+PLACE_REACH_M = 0.75
 # [m/s] the moving base's velocity limit (`cell.platforms.mobile.BaseLimits.velocity_mps`)
 BASE_SPEED_MAX_MPS = 1.5
 

@@ -19,6 +19,7 @@ from cell.errors import (
     CannotGrip,
     UnreachableTarget,
 )
+from cell.jobschema import PLACE_REACH_M
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
@@ -117,7 +118,7 @@ def check_sortable(
     bin_spec: Any,
     *,
     policy: str = "auto",
-    place_reach_m: float = 0.75,
+    place_reach_m: float = PLACE_REACH_M,
     bounds: Any = None,
     sides: list[Any] | None = None,
     thrown_bins: Collection[str] = (),
