@@ -47,7 +47,7 @@ from cell.model.effects import Effect
 from cell.model.throw import ThrowBatch
 
 __all__ = ["COVARIATES", "LAW_BASES", "MIN_LEVELS", "law_class", "law_params", "law_text", "levels",
-           "TERM_PENALTY", "choose_law", "law_range", "law_stretched"]  # fmt: skip
+           "TERM_PENALTY", "choose_law", "distinct", "law_range", "law_stretched"]  # fmt: skip
 
 TERM_PENALTY = 0.03  # a form's held-out RMSE is raised by this share per extra term
 MAX_OBJECTS = 12  # a per-object form is tried on logs of at most this many objects
@@ -257,10 +257,15 @@ def law_forms(base: type[Effect], batch: ThrowBatch | None = None,
     return [law_class(base, c, i, param) for c in covs for i in (False, True)]
 
 
+def distinct(x: Any) -> int:
+    """How many distinct values (to 1e-9 of their unit) `x` holds."""
+    return int(np.unique(np.round(np.asarray(x, float), 9)).size)
+
+
 def levels(batch: ThrowBatch, covariate: str) -> int:
     """How many distinct values (to 1e-9 of its unit) a covariate takes in a batch."""
     read, _ = COVARIATES[covariate]
-    return int(np.unique(np.round(np.asarray(read(batch), float), 9)).size)
+    return distinct(read(batch))
 
 
 def _warm(cls: type[Effect], p: float, cov_mean: float, held: dict[str, float]) -> np.ndarray:

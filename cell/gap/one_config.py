@@ -18,7 +18,7 @@ alike, and the landings cannot say which effect it was. Two scopes are checked:
   one value too, the throws are one throw repeated: every effect is one shift of the
   landing, and a verdict naming any effect is `unknown`.
 
-Values are one where they agree to 1e-9 of their unit (as `cell.gap.laws.levels`). A
+Values are one where they agree to 1e-9 of their unit (`cell.gap.laws.distinct`). A
 `none` verdict stands (there is no shift to explain), and so does an `unknown` one. The report's `one_configuration`
 says why in a sentence, with the mean shift of the landings (along and across the throw)
 and the effects that explain it alike (held-out RMSE within `VERDICT_RATIO` of the floor,
@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.gap.laws import distinct
 from cell.gap.problem import GapProblem
 from cell.gap.select import VERDICT_RATIO
 from cell.model.effects import EFFECTS
@@ -69,10 +70,6 @@ def _columns(prob: GapProblem) -> dict[str, np.ndarray]:
     }
 
 
-def _one(x: np.ndarray) -> bool:
-    return int(np.unique(np.round(np.asarray(x, float), 9)).size) <= 1
-
-
 def one_scope(prob: GapProblem) -> str | None:
     """ "all" where every covariate the model reads is one value across the throws,
     "launch" where only the launch's are, None otherwise (or where a throw was made by
@@ -80,9 +77,9 @@ def one_scope(prob: GapProblem) -> str | None:
     if not bool(np.all(prob.has_stroke)) or len(prob) < 2:
         return None
     cols = _columns(prob)
-    if not all(_one(cols[c]) for c in LAUNCH_COVARIATES):
+    if not all(distinct(cols[c]) <= 1 for c in LAUNCH_COVARIATES):
         return None
-    return "all" if all(_one(cols[c]) for c in FLIGHT_COVARIATES) else "launch"
+    return "all" if all(distinct(cols[c]) <= 1 for c in FLIGHT_COVARIATES) else "launch"
 
 
 def _alike(report: dict[str, Any], named: list[str]) -> list[str]:

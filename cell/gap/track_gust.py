@@ -3,12 +3,11 @@
 A steady wind pushes a flight across its plane from the release on; a gust that rises late
 in the flight (an effect outside the vocabulary) pushes only its end. Landings alone can
 take the late push for a smaller steady wind. The tracks tell them apart: each track's
-first and last third is fitted on its own with a constant acceleration besides gravity and
-the configured drag (`cell.gap.track_halves._free_fit`), and the part of it across the
-track's vertical plane, over the drag constant times the part's mean speed, is the air's
-speed across the flight that this part shows (a wind w across the flight pulls k·|v|·w
-sideways: read as air speed, a steady wind's pull is the same on a slow rise as on a fast
-descent). Along the flight and vertically a drag or gravity off the configured one pulls
+first and last third is fitted on its own with a steady horizontal wind besides gravity and
+the configured drag (`cell.gap.track_ode`'s "wind" model, without its prior), and the part
+of that wind across the track's vertical plane is the air's speed across the flight that
+this part shows (a wind w across the flight pulls k·|v|·w sideways: read as air speed, a
+steady wind's pull is the same on a slow rise as on a fast descent). Along the flight and vertically a drag or gravity off the configured one pulls
 too, and more where the flight is faster, so only the sideways part is compared.
 
 Pooled over the tracks, each track's sideways air speeds are read as one horizontal air
@@ -26,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from cell.gap.track_launch import _start_guess, pad_tracks
+from cell.gap.track_launch import pad_tracks, start_guess
 from cell.gap.track_ode import fit_ode
 
 __all__ = ["GROW_Z", "pull_along", "unsteady_wind"]
@@ -54,7 +53,7 @@ def _winds(parts: list[np.ndarray], k: np.ndarray) -> np.ndarray:
     """The steady horizontal wind [m/s] fitted to each part with gravity and the configured
     drag (`cell.gap.track_ode`, model "wind", without its prior), shape (m, 2)."""
     tau, pos = pad_tracks(parts, np.zeros(len(parts), int))
-    fit = fit_ode(tau, pos, k, "wind", _start_guess(tau, pos), priors=False)
+    fit = fit_ode(tau, pos, k, "wind", start_guess(tau, pos), priors=False)
     return fit.theta[:, 10:12]
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from cell.gap.track_ode import fit_ode, predict_ode
 from cell.model.params import G
 
-__all__ = ["DISTURBED_S", "DROP_SIGMA", "pad_tracks", "whole_track_launch"]
+__all__ = ["DISTURBED_S", "DROP_SIGMA", "pad_tracks", "start_guess", "whole_track_launch"]
 
 DISTURBED_S = 0.08  # [s] the first samples a release may still disturb (fit to the rest)
 DROP_SIGMA = 3.0  # a leading sample this many σ (per axis) off the rest's fit is dropped
@@ -39,7 +39,7 @@ def pad_tracks(tracks: list[np.ndarray], start: np.ndarray) -> tuple[np.ndarray,
     return tau, pos
 
 
-def _start_guess(tau: np.ndarray, pos: np.ndarray) -> np.ndarray:
+def start_guess(tau: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """Start parameters (n, 12): position and velocity of a parabola through each track."""
     th = np.zeros((tau.shape[0], 12))
     for i in range(tau.shape[0]):
@@ -62,7 +62,7 @@ def _drops(tracks: list[np.ndarray], k: np.ndarray) -> tuple[np.ndarray, np.ndar
     core[short] = np.isfinite(tau_all[short])
     tau_c = np.where(core, tau_all, np.nan)
     pos_c = np.where(core[..., None], pos_all, np.nan)
-    fit = fit_ode(tau_c, pos_c, k, "accel", _start_guess(tau_c, pos_c))
+    fit = fit_ode(tau_c, pos_c, k, "accel", start_guess(tau_c, pos_c))
     sigma = np.sqrt(fit.ssr / np.maximum(fit.m, 1))
     pred = predict_ode(fit.theta, k, tau_all)
     drops = np.zeros(n, int)
@@ -102,7 +102,7 @@ def whole_track_launch(tracks: list[np.ndarray], k: np.ndarray) -> dict[str, np.
                 "theta": np.zeros((0, 12)), "rms_m": z}  # fmt: skip
     drops, sigma = _drops(tracks, k)
     tau, pos = pad_tracks(tracks, drops)
-    fit = fit_ode(tau, pos, k, "accel_drag", _start_guess(tau, pos))
+    fit = fit_ode(tau, pos, k, "accel_drag", start_guess(tau, pos))
     t0 = np.array([tr[d, 0] for tr, d in zip(tracks, drops, strict=True)])
     span = np.array([tr[-1, 0] - tr[d, 0] for tr, d in zip(tracks, drops, strict=True)])
     g_ratio = np.where(span >= MIN_G_SPAN_S, 1.0 - fit.theta[:, 8] / G, np.nan)
