@@ -94,12 +94,18 @@ def capacity_warnings(job: Any) -> tuple[str, ...]:
     for b in job.bins:
         inside = b.size[0] * b.size[1] * (b.rim_height - BIN_WALL_M)
         if b.id in filled and filled[b.id] > inside:
+            n = count[b.id]
+            sent = f"{n} items whose boxes take" if n > 1 else "1 item whose box takes"
+            rests = (
+                "the later ones will come to rest on the others, above the rim"
+                if n > 1
+                else "it will stand above the rim"
+            )
             out.append(
-                f"{job.path}: bin {b.id!r} is sent {count[b.id]} items whose boxes take "
-                f"{filled[b.id]:.3g} m³, {filled[b.id] / inside:.3g} times the {inside:.3g} m³ "
-                "inside it up to its rim: the later ones will come to rest on the others, "
-                "above the rim (`missed_bin`); widen or deepen the bin, or split the items "
-                "between bins"
+                f"{job.path}: bin {b.id!r} is sent {sent} {filled[b.id]:.3g} m³, "
+                f"{filled[b.id] / inside:.3g} times the {inside:.3g} m³ inside it up to its "
+                f"rim: {rests} (`missed_bin`); widen or deepen the bin"
+                + (", or split the items between bins" if n > 1 else "")
             )
     return tuple(out)
 

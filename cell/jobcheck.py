@@ -323,7 +323,8 @@ def job_problems(
 ) -> tuple[list[str], list[str], frozenset[str]]:
     """What the job asks of its arm that it cannot do: a bin under the station, and (with
     `reach`, once nothing else is wrong) the station and the bins placed into out of the
-    arm's reach.
+    arm's reach, and an arm that cannot turn its throw axis up to level where the job
+    throws (`cell.jobtilt`).
 
     A bin out of place reach is an error under `policy: place`; under `auto` (the cell
     places into a bin within `limits.place_reach_m`) its items are thrown instead, with a
@@ -349,13 +350,21 @@ def job_problems(
         ]
         forced = list(range(len(job.bins))) if job.policy == "place" else []
         out += reach_problems(job.robot, job.pick_position, job.bins, job.items, forced, where)
-        if chosen:
-            from cell.robot.model import load_robot
+        from cell.jobbins import places
+        from cell.jobtilt import tilt_problems
+        from cell.robot.model import load_robot
 
-            robot = load_robot(job.robot)
-            for i, m in _place_misses(robot, job.bins, job.items, chosen, where, thrown=True):
-                warnings.append(m)
-                thrown.add(job.bins[i].id)
+        robot = load_robot(job.robot)
+        for i, m in _place_misses(robot, job.bins, job.items, chosen, where, thrown=True):
+            warnings.append(m)
+            thrown.add(job.bins[i].id)
+        sent = {it.bin for it in job.items}
+        throws = [
+            i
+            for i, b in enumerate(job.bins)
+            if b.id in sent and not places(job.policy, job.place_reach_m, b, thrown)
+        ]
+        out += tilt_problems(robot, job.bins, throws, where)
     return out, warnings, frozenset(thrown)
 
 

@@ -182,7 +182,7 @@ def _top_sections(c: Checker, tree: Node, errors: Errors) -> dict[str, Node]:
             )
     for req in ("bins", "items"):
         if req not in top:
-            errors.add(JobError(f"{c.path}, line {tree.line}: the job needs a '{req}' list"))
+            errors.add(JobError(f"{c.path}, line {tree.line}: the job needs its '{req}' list"))
     return top
 
 

@@ -96,11 +96,26 @@ def check_yaml(text: str, path: str) -> None:
 
 
 def _check_events(events: Any, path: str) -> None:
-    """Refuse an alias, nesting deeper than MAX_DEPTH or more than MAX_NODES values in a
-    stream of parser events (InvalidInput naming the line); a YAMLError passes through."""
-    depth = nodes = 0
+    """Refuse an alias, a merge key (`<<`), a second document, nesting deeper than
+    MAX_DEPTH or more than MAX_NODES values in a stream of parser events (InvalidInput
+    naming the line); a YAMLError passes through."""
+    depth = nodes = documents = 0
     for ev in events:
         line = ev.start_mark.line + 1 if ev.start_mark is not None else 0
+        if isinstance(ev, yaml.DocumentStartEvent):
+            documents += 1
+            if documents > 1:
+                raise InvalidInput(
+                    f"{path}, line {line}: a second YAML document starts here (after a "
+                    "`---` or `...`); the file is read as one document: put the second in "
+                    "a file of its own (or delete the `---` where nothing follows it)"
+                )
+        if _merge_key(ev):
+            raise InvalidInput(
+                f"{path}, line {line}: a YAML merge key (<<, unquoted) is not accepted: "
+                "mappings are not merged here; write each key out where it is used (as "
+                "text, quote it: '<<')"
+            )
         if isinstance(ev, yaml.AliasEvent):
             raise InvalidInput(
                 f"{path}, line {line}: YAML aliases (*{ev.anchor}) are not "
@@ -119,6 +134,14 @@ def _check_events(events: Any, path: str) -> None:
             nodes += 1
             if nodes > MAX_NODES:
                 raise InvalidInput(f"{path}: more than {MAX_NODES} values; too large to read")
+
+
+def _merge_key(ev: Any) -> bool:
+    """Is this YAML's merge key: `<<` unquoted (a key, or a value, which YAML reads as
+    the same merge tag), or tagged `!!merge`?"""
+    if not isinstance(ev, yaml.ScalarEvent) or ev.value != "<<":
+        return False
+    return ev.tag == "tag:yaml.org,2002:merge" or (not ev.style and ev.implicit[0])
 
 
 def compose(text: str) -> yaml.Node | None:

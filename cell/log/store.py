@@ -86,6 +86,28 @@ def _num(v: Any) -> float | None:
     return None if math.isnan(f) else f
 
 
+def _unwritable(path: Path) -> str:
+    """Why a store at `path` cannot be written, where its folder says ("" otherwise): a
+    store is written with its -wal and -shm files beside it (WAL mode), so its folder
+    must be writable, whether the store exists or not."""
+    folder = path.resolve().parent
+    try:
+        read_only = bool(os.statvfs(folder).f_flag & os.ST_RDONLY)
+    except OSError:
+        return ""
+    if read_only:
+        why = f"the folder {folder} is on a read-only file system"
+    elif not os.access(folder, os.W_OK):
+        why = f"the folder {folder} is not writable"
+    else:
+        return ""
+    return (
+        f": {why}, and a store is written with its -wal and -shm files beside it; give "
+        "--db a file in a writable folder (or set $CELL_LOG_DB; `cell run --no-log` records "
+        "no throws)"
+    )
+
+
 class ThrowStore:
     """A throw log in an SQLite file.
 
@@ -124,7 +146,9 @@ class ThrowStore:
                 )
                 self._conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
         except sqlite3.OperationalError as exc:
-            raise InvalidInput(f"{self.path}: cannot write the throw-log store ({exc})") from None
+            raise InvalidInput(
+                f"{self.path}: cannot write the throw-log store ({exc}){_unwritable(self.path)}"
+            ) from None
         except sqlite3.DatabaseError as exc:
             raise InvalidInput(f"{self.path}: not a throw-log store ({exc})") from None
 
