@@ -164,3 +164,53 @@ def tennicam_log() -> tuple[list[dict], dict[str, np.ndarray]]:
         })  # fmt: skip
         tracks[tid] = tr
     return rows, tracks
+
+
+CUBE_RATE_HZ = 148.0  # the tracker's rate (the source's files carry no time stamps)
+CUBE_MASS_KG = 0.37  # the source's own figure for its acrylic cube
+CUBE_SIDE_M = 0.1048  # twice the source's half width, 0.0524 m
+CUBE_AFTER_CONTACT = 10  # frames the shipped slice keeps after each toss's first contact
+CUBE_AXIS_FRAMES = 6  # the first frames whose chord gives a toss's logged throw axis
+
+
+def cube_flights(cut_contact: bool = True) -> dict[str, np.ndarray]:
+    """{"c000": (k, 4) t [s] (frame / 148 Hz), x, y, z [m]}: DAIR Lab's cube tossed onto a
+    board, each up to (not including) its first contact with the board when `cut_contact`
+    (the frame the converter found it at), else with the contact and the 10 frames after."""
+    out: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "contactnets_cube" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            out.setdefault(f"c{int(r['toss']):03d}", []).append(
+                [int(r["frame"]) / CUBE_RATE_HZ] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    res = {}
+    for key, v in out.items():
+        a = np.asarray(v)
+        res[key] = a[: len(a) - CUBE_AFTER_CONTACT - 1] if cut_contact else a
+    return res
+
+
+def cube_log(ids: list[str] | None = None) -> tuple[list[dict], dict[str, np.ndarray]]:
+    """The tosses as a throw log of another launcher (no stroke) and their tracks: time 0
+    at the first frame (after the release), the throw axis the chord of the first 6
+    frames, the landing the cube's centre at its first contact, on the plane at that
+    height; the track stops the frame before the contact."""
+    rows, tracks = [], {}
+    uncut = cube_flights(cut_contact=False)
+    for tid, tr in cube_flights().items():
+        if ids is not None and tid not in ids:
+            continue
+        p = tr[:, 1:4]
+        d = p[CUBE_AXIS_FRAMES - 1] - p[0]
+        touch = uncut[tid][len(tr), 1:4]
+        rows.append({
+            "throw_id": tid, "object_id": "acrylic_cube", "shape": "cube",
+            "mass_kg": CUBE_MASS_KG, "size_x_m": CUBE_SIDE_M, "size_y_m": CUBE_SIDE_M,
+            "size_z_m": CUBE_SIDE_M, "stroke_m": "", "x_m": p[0, 0], "y_m": p[0, 1],
+            "z_m": p[0, 2], "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+            "land_z_m": touch[2], "landed_x_m": touch[0], "landed_y_m": touch[1],
+        })  # fmt: skip
+        tracks[tid] = tr
+    return rows, tracks

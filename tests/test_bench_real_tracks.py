@@ -7,11 +7,12 @@ from __future__ import annotations
 import numpy as np
 
 from cell.bench import bench_real_tracks as brt
-from tests.real_tracks import jugglebot_log, tabletennis_flights, tennicam_log
+from tests.real_tracks import cube_log, jugglebot_log, tabletennis_flights, tennicam_log
 from tests.test_gap_real_tracks import (
     CLEAN_TT,
     SKIP,
     TC_SKIP,
+    _cube_usable,
     _independent,
     _independent_tc,
     _independent_tt,
@@ -36,6 +37,11 @@ def test_the_bench_reads_the_tracks_as_the_tests_do() -> None:
     rows, tracks = brt._tennicam_log()
     rows_t, tracks_t = tennicam_log()
     assert rows == rows_t and tracks.keys() == tracks_t.keys() and brt.TC_SKIP == TC_SKIP
+    for tid in tracks:
+        np.testing.assert_array_equal(tracks[tid], tracks_t[tid])
+    rows, tracks, n_all = brt._cube_log()
+    rows_t, tracks_t = cube_log(_cube_usable())
+    assert n_all == 570 and rows == rows_t and tracks.keys() == tracks_t.keys()
     for tid in tracks:
         np.testing.assert_array_equal(tracks[tid], tracks_t[tid])
 

@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import pytest
 
+from tests.figure_checks_cube import check_the_real_cube
 from tests.figure_checks_grip import check_the_grip_page
 from tests.figure_checks_guides import (
     check_the_cli_limits,
@@ -435,6 +436,7 @@ CHECKS: tuple[Callable[[], None], ...] = (
     check_the_real_tracks,
     check_the_real_table_tennis,
     check_the_real_launcher_flights,
+    check_the_real_cube,
     check_the_identify_evidence,
     check_the_cli_limits,
     check_the_layout_sets,

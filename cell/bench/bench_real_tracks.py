@@ -1,19 +1,21 @@
 """What the whole-track fit and `cell gap` find on the real tracked flights shipped under
 tests/data/ (docs/gap-tracks.md quotes these figures).
 
-Three public sets (each folder has its LICENSE and a README saying where it came from):
+Four public sets (each folder has its LICENSE and a README saying where it came from):
 Jugglebot's Ball Butler (`jugglebot_mocap`, 300 Hz motion capture, two sessions),
 table-tennis balls from a ball machine (`tabletennis_3cam`, three-camera triangulation,
-time base 120 Hz) and from MPI-IS's ball launcher (`tabletennis_tennicam`, 180 Hz with
-the tracker's own time stamps, frames missing). Per set: cell's whole-track fit
-(`cell.gap.tracks.fit_tracks`), a second fit written here without `cell.gap` (scipy
-`solve_ivp` + `least_squares`: start state, gravity and a drag constant k free), and for
-Jugglebot and the launcher's flights `cell gap` itself on the flights as a throw log of
-another launcher with their tracks.
+time base 120 Hz), from MPI-IS's ball launcher (`tabletennis_tennicam`, 180 Hz with
+the tracker's own time stamps, frames missing) and DAIR Lab's cube tossed onto a board
+(`contactnets_cube`, AprilTags at 148 Hz, falls of about 0.1 s). Per set: cell's
+whole-track fit (`cell.gap.tracks.fit_tracks`), a second fit written here without
+`cell.gap` (scipy `solve_ivp` + `least_squares`: start state, gravity and a drag constant
+k free; for the cube, whose drag 0.1 s falls do not tell, linear least squares with
+gravity's vector free), and for Jugglebot, the launcher's flights and the cube `cell gap`
+itself on the flights as a throw log of another launcher with their tracks.
 
     python -m cell.bench.bench_real_tracks [--json OUT.json]
 
-(one step of `make figures`, `docs/figures/real_tracks.json`; about a minute).
+(one step of `make figures`, `docs/figures/real_tracks.json`; about 95 CPU-s).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-__all__ = ["jugglebot", "main", "tabletennis", "tennicam"]
+__all__ = ["cube", "jugglebot", "main", "tabletennis", "tennicam"]
 
 DATA = Path(__file__).resolve().parents[2] / "tests" / "data"
 G0 = 9.80665  # [m/s²] standard gravity
@@ -52,6 +54,12 @@ TT_CLEAN = ("tt2", "tt5", "tt6", "tt7", "tt8", "tt9")  # flights whose first str
 TC_AFTER_BOUNCE = 15  # frames the shipped slice keeps after each flight's first bounce
 TC_AXIS_FRAMES = 10  # the first frames whose chord gives a flight's logged throw axis
 TC_SKIP = 18  # frames the second fit skips: 0.1 s, the ball is clear of the launcher
+CB_HZ = 148.0  # the cube's tracker rate (tests/data/contactnets_cube/README.md)
+CB_MASS_KG = 0.37  # the source's figure for its acrylic cube
+CB_SIDE_M = 0.1048  # twice the source's half width
+CB_AFTER_CONTACT = 10  # frames the shipped slice keeps after each toss's first contact
+CB_AXIS_FRAMES = 6  # the first frames whose chord gives a toss's logged throw axis
+CB_GAP_TOSSES = 40  # `cell gap` runs on this many of the tosses of 0.1 s or more
 
 
 def _jugglebot_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
@@ -306,6 +314,89 @@ def tennicam() -> dict[str, Any]:
     }
 
 
+def _cube_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray], int]:
+    """The tosses of 0.1 s or more up to the frame before their first contact, as a throw
+    log of another launcher (no stroke) and their tracks (time 0 at the first frame, the
+    throw axis the chord of the first 6 frames, the landing the cube's centre at the
+    contact on the plane at that height), and how many tosses the slice holds."""
+    seqs: dict[str, list[list[float]]] = {}
+    with gzip.open(DATA / "contactnets_cube" / "flights.csv.gz", "rt") as fh:
+        for r in csv.DictReader(fh):
+            seqs.setdefault(f"c{int(r['toss']):03d}", []).append(
+                [int(r["frame"]) / CB_HZ] + [float(r[c]) for c in ("x_m", "y_m", "z_m")]
+            )
+    rows, tracks = [], {}
+    for tid, v in seqs.items():
+        f = np.asarray(v)
+        tr = f[: len(f) - CB_AFTER_CONTACT - 1]
+        if tr[-1, 0] < 0.1 - 1e-9:
+            continue
+        p, touch = tr[:, 1:4], f[len(tr), 1:4]
+        d = p[CB_AXIS_FRAMES - 1] - p[0]
+        rows.append({
+            "throw_id": tid, "object_id": "acrylic_cube", "shape": "cube", "mass_kg": CB_MASS_KG,
+            "size_x_m": CB_SIDE_M, "size_y_m": CB_SIDE_M, "size_z_m": CB_SIDE_M, "stroke_m": "",
+            "x_m": p[0, 0], "y_m": p[0, 1], "z_m": p[0, 2],
+            "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+            "land_z_m": touch[2], "landed_x_m": touch[0], "landed_y_m": touch[1],
+        })  # fmt: skip
+        tracks[tid] = tr
+    return rows, tracks, len(seqs)
+
+
+def cube() -> dict[str, Any]:
+    """The cube's tosses of 0.1 s or more: the second fit (gravity vector free by linear
+    least squares, the drag left out), cell's track fit, and `cell gap` on 40 of them."""
+    from cell.gap.run import _k_of
+    from cell.gap.tracks import fit_tracks
+    from cell.log.table import ThrowTable
+
+    rows, tracks, n_all = _cube_log()
+    table = ThrowTable.from_records(rows)
+    ids = table.text("throw_id")
+    k = _k_of(table)
+    fit = fit_tracks(ids, tracks, k)
+    g, rms, speed = [], [], []
+    for tid in ids:
+        t, p = tracks[tid][:, 0], tracks[tid][:, 1:4]
+        a = np.c_[np.ones_like(t), t, 0.5 * t**2]
+        c = np.linalg.lstsq(a, p, rcond=None)[0]
+        g.append(c[2])
+        rms.append(np.sqrt(np.mean(np.sum((p - a @ c) ** 2, axis=1))))
+        speed.append(np.linalg.norm(c[1]))
+    gv = np.array(g)
+    g_ind = np.linalg.norm(gv, axis=1) / G0
+    told = np.isfinite(fit.g_ratio)
+    sel = rows[:: len(rows) // CB_GAP_TOSSES][:CB_GAP_TOSSES]
+    gap = _cell_gap(sel, {r["throw_id"]: tracks[r["throw_id"]] for r in sel}, "cube's tosses")
+    return {
+        "tosses": n_all,
+        "tosses_usable": len(ids),
+        "rate_hz": CB_HZ,
+        "mass_kg": CB_MASS_KG,
+        "side_m": CB_SIDE_M,
+        "k_nominal_per_m": float(k[0]),
+        "samples_median": float(np.median([len(t) for t in tracks.values()])),
+        "speed_mps_median": float(np.median(speed)),
+        "drag_over_gravity": float(k[0] * np.median(speed) ** 2 / G0),
+        "second_g_ratio_median": float(np.median(g_ind)),
+        "second_g_ratio_p10_p90": [float(x) for x in np.percentile(g_ind, [10, 90])],
+        "second_horizontal_g_mps2": float(np.linalg.norm(np.median(gv[:, :2], axis=0))),
+        "second_rms_m": float(np.median(rms)),
+        "implied_rate_hz": float(CB_HZ / np.sqrt(np.median(g_ind))),
+        "cell_g_ratio": float(np.median(fit.g_ratio[told])),
+        "cell_gravity_told": int(told.sum()),
+        "cell_drag_ratio": float(np.median(fit.drag_ratio)),
+        "cell_fit_rms_m": float(np.median(fit.rms_m)),
+        "cell_dropped_tracks": int(np.sum(fit.dropped > 0)),
+        "cell_dropped_max": int(np.max(fit.dropped)),
+        "unusable": len(fit.unusable),
+        "gap": gap,
+    }
+
+
 def _cell_fit(fit: Any) -> dict[str, Any]:
     """The medians of cell's whole-track fit over a set's flights (`fit_tracks`' TrackFit)
     and how many tracks it could not use."""
@@ -338,7 +429,12 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m cell.bench.bench_real_tracks")
     p.add_argument("--json", metavar="PATH", help="write the figures as JSON to PATH")
     a = p.parse_args(argv)
-    doc = {"jugglebot": jugglebot(), "tabletennis": tabletennis(), "tennicam": tennicam()}
+    doc = {
+        "jugglebot": jugglebot(),
+        "tabletennis": tabletennis(),
+        "tennicam": tennicam(),
+        "cube": cube(),
+    }
     text = json.dumps(doc, indent=1)
     print(text)
     if a.json:

@@ -205,9 +205,11 @@ def _no_flight_under_gravity(row: dict[str, Any]) -> str | None:
         return None
     axis = int(np.argmax(np.abs(gvec)))
     towards = f"{'-' if gvec[axis] < 0 else '+'}{'xyz'[axis]}"
+    # pulled up along z: a frame with z down, or a track that runs on past a landing
+    lands = ", and does the track stop before the object lands" if towards == "+z" else ""
     return (
         f"no descent under gravity along z: the fit with drag finds gravity towards {towards} "
-        f"({size:.1f} m/s²); is z up?"
+        f"({size:.1f} m/s²); is z up{lands}?"
     )
 
 
