@@ -12,8 +12,7 @@ __all__ = ["job_files"]
 
 def job_files(job: Any) -> list[tuple[str, str]]:
     """(what it is, path) of every file `job` (a `cell.jobs.Job`) reads besides itself."""
-    from cell.robot.mount import is_mount_path, load_mount
-    from cell.robot.paths import example_robot_data_dir, robots_dir
+    from cell.robot.mount import arm_urdf_file, end_effector_file, is_mount_path, load_mount
 
     what = {
         "params": "parameter file",
@@ -32,9 +31,6 @@ def job_files(job: Any) -> list[tuple[str, str]]:
         else f"cell.robot {job.robot!r} of {job.path}"
     )
     out.append((f"the mount file this run reads ({named})", spec.path))
-    erd = example_robot_data_dir()
-    out.append((f"the arm's URDF this run reads (its arm_urdf, {named})", str(erd / spec.arm_urdf)))
-    out.append(
-        (f"the end-effector's URDF this run reads ({named})", str(robots_dir() / spec.end_effector))
-    )
+    out.append((f"the arm's URDF this run reads (its arm_urdf, {named})", str(arm_urdf_file(spec))))
+    out.append((f"the end-effector's URDF this run reads ({named})", str(end_effector_file(spec))))
     return out

@@ -66,10 +66,12 @@ class MountSpec:
         name: the arm's name (the file's `arm` field: "panda", "ur10").
         folder: the name of the folder that holds the mount file.
         path: the mount file, absolute.
-        arm_urdf: the arm's URDF, relative to example-robot-data's robots/ folder.
+        arm_urdf: the arm's URDF, relative to example-robot-data's robots/ folder, else to
+            the mount file's folder, or absolute (`arm_urdf_file`).
         flange: the arm link the end-effector is bolted to.
         drop_below_flange: remove the links downstream of the flange (the arm's own tool).
-        end_effector: the end-effector's URDF, relative to robots/.
+        end_effector: the end-effector's URDF, relative to robots/, else to the mount
+            file's folder, or absolute (`end_effector_file`).
         mount_xyz: ee_base origin in the flange frame [m].
         mount_rpy: ee_base roll, pitch, yaw in the flange frame [rad].
         arm_joints: the arm's actuated joints, base to flange.
@@ -387,6 +389,45 @@ def _check_limits(root: ET.Element, joints: tuple[str, ...], where: str) -> None
             )
 
 
+def _urdf_file(spec: MountSpec, field: str, library: Path, hint: str) -> Path:
+    """The file a mount's URDF field names: an absolute path as it is; a relative one under
+    the library folder (example-robot-data's robots/ for the arm, the cell's robots/ for
+    the end-effector; no `..` there), else from the mount file's own folder (a URDF of the
+    user's own kept beside it).
+
+    Raises:
+        InvalidParameter: no such file, naming the field and the places looked in.
+    """
+    given = getattr(spec, field)
+    own = Path(spec.path).parent
+    if Path(given).is_absolute():
+        looked = [Path(given)]
+    else:
+        looked = [library / given] if ".." not in Path(given).parts else []
+        looked.append(own / given)
+    for path in looked:
+        if path.is_file():
+            return path
+    places = " or ".join(str(p) for p in looked)
+    raise InvalidParameter(
+        f"{spec.path}: field '{field}': {given!r} is not a file ({places}); give a "
+        f"path relative to {library}, to the mount file's folder, or an absolute one{hint}"
+    )
+
+
+def arm_urdf_file(spec: MountSpec) -> Path:
+    """The arm's URDF: `arm_urdf` under example-robot-data's robots/ folder, else from the
+    mount file's folder, or absolute (`_urdf_file`)."""
+    return _urdf_file(spec, "arm_urdf", example_robot_data_dir(), "")
+
+
+def end_effector_file(spec: MountSpec) -> Path:
+    """The end-effector's URDF: `end_effector` under the cell's robots/ folder, else from
+    the mount file's folder, or absolute (`_urdf_file`)."""
+    hint = " (the throwing end-effector is throwing_ee/throwing_ee.urdf)"
+    return _urdf_file(spec, "end_effector", robots_dir(), hint)
+
+
 def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
     """Check a mount against its arm's URDF: the file exists, the flange is one of its
     links, and the arm joints are the movable joints from the base to the flange, in order.
@@ -398,18 +439,8 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
         InvalidParameter: naming the mount file, the field and what would be valid.
     """
     where = spec.path
-    erd = example_robot_data_dir()
-    arm_path = erd / spec.arm_urdf
-    if not arm_path.is_file() or ".." in Path(spec.arm_urdf).parts:
-        raise InvalidParameter(
-            f"{where}: field 'arm_urdf': {spec.arm_urdf!r} is not a file under {erd}"
-        )
-    ee = robots_dir() / spec.end_effector
-    if not ee.is_file() or ".." in Path(spec.end_effector).parts:
-        raise InvalidParameter(
-            f"{where}: field 'end_effector': {spec.end_effector!r} is not a file under "
-            f"{robots_dir()} (the throwing end-effector is throwing_ee/throwing_ee.urdf)"
-        )
+    arm_path = arm_urdf_file(spec)
+    end_effector_file(spec)
     try:
         root = ET.parse(arm_path).getroot()
     except ET.ParseError as exc:
