@@ -11,12 +11,17 @@ calls these; every problem goes into the one report the job is refused with).
 * A bin placed into out of the arm's reach: every bin under `policy: place` (an error),
   those within `limits.place_reach_m` under `auto` (a warning: its items are thrown
   instead, `Job.thrown_bins`), IK of the
-  grip pointing down over the bin's point nearest the base (3 cm in from its walls),
-  the tallest item bound there at the two heights the place takes it through
-  (`cell.arm.place`): over the spot, its lowest point `ArmTuning.lift_m` or 5 cm over the
-  rim (the higher) above the floor plate and the place clearance, and down on the floor
-  plate. An arm whose grip points down only low (the Unitree Z1) or only high (the PR2)
-  failed every place with the check passed while it tested one pose 5 cm over the rim.
+  grip pointing down over the place's own spot nearest the base (`place_spot`: the point
+  of `cell.arm.spots.place_spots`' grid nearest the base, the grid kept the item's
+  footprint and the pads from the walls as `cell.arm.place` keeps it, for the item sent
+  there whose grid keeps farthest in), the tallest item bound there at the two heights
+  the place takes it through (`cell.arm.place`): over the spot, its lowest point
+  `ArmTuning.lift_m` or 5 cm over the rim (the higher) above the floor plate and the place
+  clearance, and down on the floor plate. An arm whose grip points down only low (the
+  Unitree Z1) or only high (the PR2) failed every place with the check passed while it
+  tested one pose 5 cm over the rim; a bin whose point 3 cm in from its walls the arm
+  reached while it missed every spot the place would use (0.30 m at (0, -0.90) m from a
+  Panda, a cube50: its nearest spot missed by 2.5 mm) failed every item with `ik`.
 """
 
 from __future__ import annotations
@@ -29,7 +34,6 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "BIN_INSET_M",
     "STATION_HALF_M",
     "STROKE_RANGE_M",
     "extents_mismatch",
@@ -37,6 +41,7 @@ __all__ = [
     "job_problems",
     "place_miss",
     "place_problems",
+    "place_spot",
     "reach_problems",
     "station_problems",
     "tallest_m",
@@ -45,7 +50,7 @@ __all__ = [
 
 STATION_HALF_M = 0.12  # [m] half the pick station's square top (cell.sim.scene_build)
 STROKE_RANGE_M = (0.03, 0.11)  # [m] the strokes an item is gripped at (MODEL.md)
-BIN_INSET_M = 0.03  # [m] the place pose checked this far in from the bin's near walls
+CHECKED_CUBE_M = 0.05  # [m] the cube a bin no item is sent to is checked for (its side)
 OVER_RIM_M = 0.05  # [m] the item's lowest point over the rim, at least, over the spot
 
 
@@ -230,15 +235,15 @@ def place_problems(
     where: dict[str, str],
 ) -> list[str]:
     """The bins placed into (indices `placed`) that the arm (`cell.robot.model.Robot`) does
-    not reach with the grip pointing down over their nearest point, one message a bin."""
+    not reach with the grip pointing down over the place's spot nearest the base
+    (`place_spot`), one message a bin."""
     return [m for _, m in _place_misses(robot, bins, items, placed, where, thrown=False)]
 
 
-def place_miss(robot: Any, b: Any, tall_m: float) -> tuple[float, np.ndarray]:
+def place_miss(robot: Any, b: Any, tall_m: float, xy: Sequence[float]) -> tuple[float, np.ndarray]:
     """How far the nearest IK solution misses placing an item `tall_m` high into bin `b`
-    (0 when the arm reaches both heights the place takes it through over the bin's point
-    nearest the base, `_place_centres_z`), and the TCP position missed [m, W]."""
-    xy = _nearest_point(b)
+    (0 when the arm reaches both heights the place takes it through over the spot `xy`
+    [m, W], `place_spot`, `_place_centres_z`), and the TCP position missed [m, W]."""
     miss, tcp = 0.0, np.zeros(3)
     for centre_z in _place_centres_z(b.rim_height, tall_m):
         tcp = np.array([xy[0], xy[1], _tcp_z(centre_z, STROKE_RANGE_M[0], tall_m)])
@@ -250,7 +255,40 @@ def place_miss(robot: Any, b: Any, tall_m: float) -> tuple[float, np.ndarray]:
 
 def tallest_m(b: Any, items: Sequence[Any]) -> float:
     """The height [m] of the tallest item the job sends to bin `b` (5 cm when none)."""
-    return max((it.obj.size[2] for it in items if it.bin == b.id), default=0.05)
+    return max((it.obj.size[2] for it in items if it.bin == b.id), default=CHECKED_CUBE_M)
+
+
+def place_spot(b: Any, objs: Sequence[Any]) -> tuple[tuple[float, float], str, float]:
+    """The place's own spot nearest the base in bin `b` (a `cell.jobs.BinSpec`) for the
+    items `objs` (ObjectParams) sent there, and the item it is for: of each item's grid
+    (`cell.arm.spots.floor_grid`, as `place_spots` lays it out, kept half its footprint and
+    the place's wall margin, `place_wall_margin_m`, from the walls), the point nearest the
+    base; of those, the one farthest from the base (x, y) [m, W], the item's name and how
+    far in from the walls that grid is kept [m]. A place tries that point
+    when its first spots are out of reach (`cell.arm.place.Place.spots_to_try`); where the
+    arm does not reach it, it reaches none nearer. Whether the housing goes below the rim
+    (its margin, `housing_below_rim`) is taken at the shortest stroke (`STROKE_RANGE_M`,
+    the TCP lowest, as the poses checked); a place carries at `ArmTuning.pick_stroke_m`
+    (45 mm) or shorter, its housing at most 15 mm higher. No item: a 5 cm cube's (its mass
+    is read by nothing here)."""
+    from cell.arm.spots import floor_grid, footprint_radius, housing_below_rim, place_wall_margin_m
+    from cell.model.objects import ObjectParams
+    from cell.sim.bins import BinSpec
+    from cell.sim.mechanism import DEFAULT_GEOMETRY
+
+    spec = BinSpec(b.id, tuple(b.position), tuple(b.size), b.rim_height)  # type: ignore[arg-type]
+    cube = (CHECKED_CUBE_M,) * 3
+    best: tuple[float, tuple[float, float], str, float] | None = None
+    for o in objs or [ObjectParams("cube", 0.1, cube, f"{CHECKED_CUBE_M * 100:.0f} cm cube")]:
+        h = float(o.size[2])
+        tcp_z = _tcp_z(_place_centres_z(b.rim_height, h)[1], STROKE_RANGE_M[0], h)
+        low = housing_below_rim(DEFAULT_GEOMETRY, tcp_z, b.rim_height)
+        r, wall = footprint_radius(o), place_wall_margin_m(DEFAULT_GEOMETRY, o, low)
+        xy = min(floor_grid(spec, r, wall), key=lambda p: math.hypot(*p))
+        if best is None or math.hypot(*xy) > best[0]:
+            best = (math.hypot(*xy), xy, o.name or f"ad hoc {o.shape}", r + wall)
+    assert best is not None
+    return best[1], best[2], best[3]
 
 
 def _place_misses(
@@ -267,10 +305,10 @@ def _place_misses(
     out: list[tuple[int, str]] = []
     for i in placed:
         b = bins[i]
-        miss, tcp = place_miss(robot, b, tallest_m(b, items))
+        xy, what, inset = place_spot(b, [it.obj for it in items if it.bin == b.id])
+        miss, tcp = place_miss(robot, b, tallest_m(b, items), xy)
         if miss == 0.0:
             continue
-        xy = _nearest_point(b)
         reach = _reach_m(robot, xy, float(tcp[2]))
         r_bin = math.hypot(xy[0], xy[1])
         if thrown:
@@ -289,8 +327,11 @@ def _place_misses(
             (
                 i,
                 f"{where.get(f'bins[{i}]', '?')}, bins[{i}].position_m: the {robot.name} arm "
-                f"cannot place into bin {b.id!r}: the grip pointing down over its nearest "
-                f"point {_fmt(xy)} m, TCP at {_fmt(tcp)} m, is out of reach ({_missed(miss)}; "
+                f"cannot place into bin {b.id!r}: the grip pointing down over the place's "
+                f"spot nearest the base, {_fmt(xy)} m (for a {what}: its footprint and the "
+                f"gripper's margin, {inset * 1000:.0f} mm, from the walls), TCP at "
+                f"{_fmt(tcp)} m, is out of reach "
+                f"({_missed(miss)}; "
                 f"{_out(reach, r_bin)}): {tail}",
             )
         )
@@ -307,15 +348,6 @@ def _place_centres_z(rim_m: float, tall_m: float) -> tuple[float, float]:
     t = ArmTuning()
     down = BIN_WALL_M + tall_m / 2 + t.place_clearance_m
     return (down + max(t.lift_m, rim_m + OVER_RIM_M), down)
-
-
-def _nearest_point(b: Any) -> tuple[float, float]:
-    """The point of bin b's floor nearest the base, BIN_INSET_M in from its walls [m, W]."""
-    hx = max(b.size[0] / 2 - BIN_INSET_M, 0.0)
-    hy = max(b.size[1] / 2 - BIN_INSET_M, 0.0)
-    x = min(max(0.0, b.position[0] - hx), b.position[0] + hx)
-    y = min(max(0.0, b.position[1] - hy), b.position[1] + hy)
-    return (x, y)
 
 
 def job_problems(

@@ -198,48 +198,53 @@ def sortable_bins(
 
 class NearBins:
     """A random layout's bins within the job's place reach, and which of them its load
-    will find the arm cannot place into with the tallest item sent there (`Job.thrown_bins`,
-    `cell.jobcheck.job_problems`, by the same IK: `place_miss`): the job throws into those,
-    so an item goes there only if it can be thrown there, and so can those sent before."""
+    will find the arm cannot place into with the items sent there (`Job.thrown_bins`,
+    `cell.jobcheck.job_problems`, by the same spot and IK: `place_spot`, `place_miss`): the
+    job throws into those, so an item goes there only if it can be thrown there, and so
+    can those sent before."""
 
     def __init__(self, robot: str, bins: list[dict[str, Any]]) -> None:
         self.robot, self._robot = robot, cast(Any, None)
         self._drawn = {b["id"]: b for b in bins if math.hypot(*b["position_m"]) <= PLACE_REACH_M}
         self.near = {i: _spec(b) for i, b in self._drawn.items()}
-        self.sent: dict[str, list[tuple[dict[str, Any], float]]] = {i: [] for i in self.near}
-        self._missed: dict[tuple[str, float], bool] = {}
+        self.sent: dict[str, list[tuple[dict[str, Any], Any]]] = {i: [] for i in self.near}
+        self._missed: dict[tuple[str, float, tuple[float, float]], bool] = {}
 
-    def _misses(self, bin_id: str, tall_m: float) -> bool:
-        """Does the arm miss placing an item `tall_m` high into the bin (cached)?"""
-        key = (bin_id, tall_m)
+    def _misses(self, bin_id: str, objs: list[Any]) -> bool:
+        """Does the arm miss placing the items `objs` (ObjectParams) into the bin (cached)?"""
+        from cell.jobcheck import CHECKED_CUBE_M, place_miss, place_spot
+
+        tall_m = max((float(o.size[2]) for o in objs), default=CHECKED_CUBE_M)
+        xy, _, _ = place_spot(self.near[bin_id], objs)
+        key = (bin_id, tall_m, xy)
         if key not in self._missed:
-            from cell.jobcheck import place_miss
             from cell.robot.model import load_robot
 
             self._robot = self._robot or load_robot(self.robot)
-            self._missed[key] = place_miss(self._robot, self.near[bin_id], tall_m)[0] != 0.0
+            self._missed[key] = place_miss(self._robot, self.near[bin_id], tall_m, xy)[0] != 0.0
         return self._missed[key]
 
-    def _tallest(self, bin_id: str, h: float | None = None) -> float:
-        hs = [t for _, t in self.sent[bin_id]] + ([] if h is None else [h])
-        return max(hs, default=0.05)  # as `cell.jobcheck.tallest_m`
+    def _objs(self, bin_id: str, obj: Any = None) -> list[Any]:
+        """The items sent to the bin (and `obj`), as `cell.jobcheck` reads them."""
+        return [o for _, o in self.sent[bin_id]] + ([] if obj is None else [obj])
 
-    def thrown_with(self, h: float) -> frozenset[str]:
-        """The near bins the job would throw into were an item `h` [m] high sent to each."""
-        return frozenset(i for i in self.near if self._misses(i, self._tallest(i, h)))
+    def thrown_with(self, obj: Any) -> frozenset[str]:
+        """The near bins the job would throw into were the item `obj` (ObjectParams) sent
+        to each."""
+        return frozenset(i for i in self.near if self._misses(i, self._objs(i, obj)))
 
     def keeps_sorted(self, bin_id: str, thrown: frozenset[str], params: Any) -> bool:
         """Can the items sent to `bin_id` before still be sorted there (thrown, where this
         item would have the job throw into a bin it placed into)?"""
-        if bin_id not in thrown or self._misses(bin_id, self._tallest(bin_id)):
+        if bin_id not in thrown or self._misses(bin_id, self._objs(bin_id)):
             return True
         one = [self._drawn[bin_id]]
         return all(sortable_bins(e, one, params, thrown) for e, _ in self.sent[bin_id])
 
-    def send(self, entry: dict[str, Any], h: float) -> None:
-        """The item `entry`, `h` [m] high, is sent to its bin."""
+    def send(self, entry: dict[str, Any], obj: Any) -> None:
+        """The item `entry` (its ObjectParams `obj`) is sent to its bin."""
         if entry["bin"] in self.sent:
-            self.sent[entry["bin"]].append((entry, h))
+            self.sent[entry["bin"]].append((entry, obj))
 
 
 def random_job(
@@ -290,8 +295,8 @@ def random_job(
             entry, is_unseen = {"object": str(rng.choice(unseen))}, True
         else:
             entry, is_unseen = {"object": str(rng.choice(seen))}, False
-        h = float(_object_of(entry).size[2])
-        thrown = near.thrown_with(h)
+        obj = _object_of(entry)
+        thrown = near.thrown_with(obj)
         choices = [
             c
             for c in sortable_bins(entry, bins, params, thrown)
@@ -302,7 +307,7 @@ def random_job(
             continue
         entry["count"] = count
         entry["bin"] = choices[int(rng.integers(len(choices)))]
-        near.send(entry, h)
+        near.send(entry, obj)
         items.append(entry)
         n_unseen += count if is_unseen else 0
         total += count

@@ -77,7 +77,7 @@ def test_random_jobs_send_an_item_only_where_the_loaded_job_sorts_it() -> None:
     """`cell.jobgen.sortable_bins`, told the bins the job would throw into
     (`NearBins.thrown_with`), agrees with the loaded job: `high` is thrown into, `tower`
     refused; a place-reach-only draw (main's, before the job throws into them) took both."""
-    from cell.jobgen import NearBins, sortable_bins
+    from cell.jobgen import NearBins, _object_of, sortable_bins
     from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
@@ -86,7 +86,7 @@ def test_random_jobs_send_an_item_only_where_the_loaded_job_sorts_it() -> None:
         {"id": "tower", "position_m": [0.0, 0.60], "size_m": [0.30, 0.30], "rim_height_m": 1.0},
     ]
     entry = {"object": "cube50"}
-    thrown = NearBins("panda", bins).thrown_with(0.05)  # cube50 is 50 mm high
+    thrown = NearBins("panda", bins).thrown_with(_object_of(entry))
     assert thrown == frozenset({"high", "tower"})
     assert sortable_bins(entry, bins, params) == ["high", "tower"]  # as if placed
     assert sortable_bins(entry, bins, params, thrown) == ["high"]
@@ -137,17 +137,17 @@ def test_a_random_job_sends_no_item_that_would_have_a_bin_thrown_into_with_one_p
     there, a bottle (0.20 m) sent after it would have the job throw into the bin, the
     tetrapack too: `NearBins.keeps_sorted` refuses the bottle that bin, as the loaded job
     (the two items together) is refused."""
-    from cell.jobgen import NearBins, sortable_bins
+    from cell.jobgen import NearBins, _object_of, sortable_bins
     from cell.params import load_params, scene_params_path
 
     params = load_params(scene_params_path())
     row = {"id": "low", "position_m": [0.0, 0.60], "size_m": [0.30, 0.30], "rim_height_m": 0.55}
     near = NearBins("panda", [row])
     pack, bottle = {"object": "o5_tetrapack", "bin": "low"}, {"object": "o6_bottle"}
-    assert near.thrown_with(0.11) == frozenset()
+    assert near.thrown_with(_object_of(pack)) == frozenset()
     assert sortable_bins(pack, [row], params) == ["low"]  # placed
-    near.send(pack, 0.11)
-    thrown = near.thrown_with(0.20)
+    near.send(pack, _object_of(pack))
+    thrown = near.thrown_with(_object_of(bottle))
     assert thrown == frozenset({"low"})
     assert sortable_bins(bottle, [row], params, thrown) == ["low"]  # the bottle is thrown
     assert not near.keeps_sorted("low", thrown, params)  # the tetrapack could not be

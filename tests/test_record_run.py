@@ -15,26 +15,28 @@ import pytest
 from cell.cli import main
 from cell.record.read import read_rows
 
-# "edge": within the job's place reach, its side nearest the base within the arm's reach
-# pointing down (the job check's point), its centre, where the first place goes, 57 mm
-# beyond it: the place fails IK when it is planned, an item failed in the run
+# "edge": within the job's place reach, its centre, where a place goes first, beyond the arm's
+# reach pointing down (27 mm), the place's own spot nearest the base within it (the job
+# check's pose: the bin is placed into, not thrown into): the first cube50 is set down there,
+# the second, with that spot taken, finds none it reaches and fails IK when it is planned,
+# an item failed in the run that the job check cannot know of (it checks an empty bin)
 JOB = """\
 cell: {robot: panda}
 limits: {place_reach_m: 1.0}
 bins:
   - {id: near, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
   - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
-  - {id: edge, position_m: [-0.90, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.12}
+  - {id: edge, position_m: [0.00, 0.85], size_m: [0.30, 0.30], rim_height_m: 0.12}
 items:
   - {object: cube50, count: 1, bin: far}
-  - {object: cube50, count: 1, bin: edge}
+  - {object: cube50, count: 2, bin: edge}
   - {object: cyl70, count: 1, bin: near}
   - {object: duck, count: 1, bin: far}
 """
 BINS = {
     "near": (0.55, 0.30, 0.12),
     "far": (1.40, 0.00, 0.15),
-    "edge": (-0.90, 0.0, 0.12),
+    "edge": (0.0, 0.85, 0.12),
 }  # centre x, y, rim height [m]
 F32 = 2e-6  # [m] Rerun stores positions as float32
 
@@ -119,14 +121,21 @@ def test_the_scene_arm_and_items_are_entities_on_both_timelines(runs) -> None:
         assert len(poses) > (1 if r["action"] == "failed" else 20)
         assert {p["item"] for p in poses} == {r["index"]}
     assert "Clear:is_recursive" in str(rows["/world/items/000_cube50"][-1])
-    assert "| items | 4 |" in rows["/summary"][0]["TextDocument:text"][0]
+    assert "| items | 5 |" in rows["/summary"][0]["TextDocument:text"][0]
 
 
 def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
     _, _, summary, rrd = runs
     rows = read_rows(rrd)
-    assert [r["action"] for r in summary["results"]] == ["throw", "failed", "place", "throw"]
-    (duck,) = rows["/world/landing/003/target"]
+    assert [r["action"] for r in summary["results"]] == [
+        "throw",
+        "place",
+        "failed",
+        "place",
+        "throw",
+    ]
+    assert [r["target_bin"] for r in summary["results"][1:3]] == ["edge", "edge"]
+    (duck,) = rows["/world/landing/004/target"]
     assert np.hypot(*(np.subtract(duck["Points3D:positions"][0][:2], BINS["far"][:2]))) > 0.02
     for r in summary["results"]:
         i = r["index"]

@@ -12,7 +12,13 @@ import numpy as np
 
 from cell.arm.base import ArmBase
 from cell.arm.joints import GRIP_DOWN, spline_within_limits
-from cell.arm.spots import footprint_radius, kept_circles, place_spots
+from cell.arm.spots import (
+    footprint_radius,
+    housing_below_rim,
+    kept_circles,
+    place_spots,
+    place_wall_margin_m,
+)
 from cell.decision import Decision
 from cell.errors import (
     IKFailed,
@@ -35,25 +41,15 @@ class Place(ArmBase):
             self._placing = False
 
     def _carry_to_spot(self, d: Decision, obj: ObjectParams, q_lift: np.ndarray) -> None:
-        from cell.endeffector.pybullet_backend import PLACE_OPENING_M
-
         sc = self.scene
         target = d.state.target
         # a spot on the bin's floor clear of what it holds (its centre while it is empty),
-        # and of the walls by the pads that open beside the item (PLACE_OPENING_M) and 1 cm
-        # (5 mm: an open pad still met a tote's wall as the grip rose out of it)
-        g = sc.geometry
-        pads = PLACE_OPENING_M + g.pad_thickness_m + 0.01
-        # where the housing goes down below the rim (a deep bin), the walls kept as far
-        # from it as well, 1 cm beyond the circle about its sides: its sides are wider
-        # than the pads (random layout 17: seven items placed into a 0.25 m rim bin were
-        # knocked out of the grip as the housing met the bin's walls)
+        # and of the walls by the pads (and the housing, where it goes down below the rim):
+        # `place_wall_margin_m`, which the job check reads as well (`cell.jobcheck`)
         floor = sc.bin_spec(target.id).wall + obj.size[2] / 2 + self.tuning.place_clearance_m
         at_floor = self._tcp_for_item_centre(np.array([0, 0, floor]), *GRIP_DOWN, d.stroke_m, obj)
         housing_low = self._housing_below_rim(at_floor[2], target)
-        if housing_low:
-            r_item = max(obj.size[0], obj.size[1]) / 2
-            pads = max(pads, g.housing_radius_m + 0.01 - r_item)
+        pads = place_wall_margin_m(sc.geometry, obj, housing_low)
 
         # the best spot the arm reaches over and down to, on one IK branch: the down pose
         # solved down the vertical from over the spot, each step from the one above
@@ -132,7 +128,7 @@ class Place(ArmBase):
     def _housing_below_rim(self, tcp_z: float, target: Any) -> bool:
         """Is the housing below the `target` bin's rim + 1 cm with the grip pointing down
         and the TCP at height tcp_z [m]?"""
-        return tcp_z + self.scene.geometry.housing_to_tcp_m < target.rim_height + 0.01
+        return housing_below_rim(self.scene.geometry, tcp_z, target.rim_height)
 
     def descends_straight(
         self,

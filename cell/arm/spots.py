@@ -16,17 +16,63 @@ from cell.model.objects import ObjectParams
 from cell.sim.bins import BinSpec
 
 __all__ = [
+    "SPOT_GRID",
     "THROW_CLEARANCE_M",
     "THROW_WALL_MARGIN_M",
     "clear_spots",
+    "floor_grid",
     "footprint_radius",
+    "housing_below_rim",
     "kept_circles",
     "place_spots",
+    "place_wall_margin_m",
     "throw_spot",
 ]
 
 THROW_CLEARANCE_M = 0.01  # [m] a throw's aim from an item the bin holds (throw_spot)
 THROW_WALL_MARGIN_M = 0.03  # [m] a throw's aim from a wall when it is moved (throw_spot)
+SPOT_GRID = 7  # candidates per side of a bin's floor (place_spots, throw_spot)
+WALL_CLEAR_M = 0.01  # [m] the open pads (or the housing) kept this far from a bin's walls
+
+
+def housing_below_rim(geometry: Any, tcp_z: float, rim_m: float) -> bool:
+    """Is the housing of the end-effector (`cell.sim.mechanism.EEGeometry`) below a bin's
+    rim (at `rim_m` [m]) + 1 cm with the grip pointing down and the TCP at height tcp_z [m]?"""
+    return tcp_z + geometry.housing_to_tcp_m < rim_m + 0.01
+
+
+def place_wall_margin_m(geometry: Any, obj: ObjectParams, housing_low: bool) -> float:
+    """How far from a bin's walls a place keeps the item's footprint [m] (`place_spots`'s
+    wall_margin_m): the pads that open beside the item (PLACE_OPENING_M) and 1 cm (5 mm: an
+    open pad still met a tote's wall as the grip rose out of it); where the housing goes down
+    below the rim (`housing_low`, a deep bin), 1 cm beyond the circle about its sides as
+    well: its sides are wider than the pads (random layout 17: seven items placed into a
+    0.25 m rim bin were knocked out of the grip as the housing met the bin's walls)."""
+    from cell.endeffector.pybullet_backend import PLACE_OPENING_M
+
+    pads = PLACE_OPENING_M + geometry.pad_thickness_m + WALL_CLEAR_M
+    if housing_low:
+        r_item = max(obj.size[0], obj.size[1]) / 2
+        pads = max(pads, geometry.housing_radius_m + WALL_CLEAR_M - r_item)
+    return float(pads)
+
+
+def floor_grid(
+    spec: BinSpec, r_m: float, wall_m: float, grid: int = SPOT_GRID
+) -> list[tuple[float, float]]:
+    """The grid x grid candidate spots (x, y) [m, W] of a bin's floor, kept `r_m` (half the
+    item's footprint) plus `wall_m` [m] from its walls (`clear_spots`)."""
+    hx = max(spec.size_xy[0] / 2 - r_m - wall_m, 0.0)
+    hy = max(spec.size_xy[1] / 2 - r_m - wall_m, 0.0)
+    c, s = np.cos(spec.yaw), np.sin(spec.yaw)
+    return [
+        (
+            float(spec.center_xy[0] + c * x - s * y),
+            float(spec.center_xy[1] + s * x + c * y),
+        )
+        for x in np.linspace(-hx, hx, grid)
+        for y in np.linspace(-hy, hy, grid)
+    ]
 
 
 def kept_circles(plant: Any, bin_id: str) -> list[tuple[np.ndarray, float, float]]:
@@ -53,7 +99,7 @@ def place_spots(
     *,
     margin_m: float = 0.01,
     wall_margin_m: float | None = None,
-    grid: int = 7,
+    grid: int = SPOT_GRID,
 ) -> list[tuple[float, float, float]]:
     """Where in a bin of `plant` (a `cell.sim.CellScene`) to set an item down, clear of
     what the bin already holds: every candidate, best first (for a spot the arm does not
@@ -109,7 +155,7 @@ def throw_spot(
     *,
     margin_m: float = THROW_CLEARANCE_M,
     wall_margin_m: float = THROW_WALL_MARGIN_M,
-    grid: int = 7,
+    grid: int = SPOT_GRID,
     source_xy: Sequence[float] | None = None,
 ) -> tuple[float, float]:
     """Where in a bin of `plant` to aim a throw: the centre, unless the bin holds items
@@ -172,17 +218,7 @@ def clear_spots(
     the walls (`r_new_m`: the radius [m] of its footprint's circle; default half its
     larger side)."""
     r_new = max(obj.size[0], obj.size[1]) / 2 if r_new_m is None else r_new_m
-    hx = max(spec.size_xy[0] / 2 - r_new - wall_m, 0.0)
-    hy = max(spec.size_xy[1] / 2 - r_new - wall_m, 0.0)
-    c, s = np.cos(spec.yaw), np.sin(spec.yaw)
-    cands = [
-        (
-            float(spec.center_xy[0] + c * x - s * y),
-            float(spec.center_xy[1] + s * x + c * y),
-        )
-        for x in np.linspace(-hx, hx, grid)
-        for y in np.linspace(-hy, hy, grid)
-    ]
+    cands = floor_grid(spec, r_new, wall_m, grid)
 
     def room(xy: tuple[float, float]) -> float:
         return min(
