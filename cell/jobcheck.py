@@ -118,16 +118,18 @@ def _tcp_z(centre_z: float, stroke: float, height: float) -> float:
 
 def _reach_m(robot: Any, xy: Sequence[float], z: float) -> float:
     """How far out from the base, toward xy and at TCP height z, the arm reaches with the
-    grip pointing down [m] (bisection on IK, to 1 cm; 0 when not even 0.15 m out is): for
-    the messages ("the arm reaches about ...")."""
+    grip pointing down [m] (bisection on IK, to 1 cm, from the nearest of 0.15 m, 0.25 m,
+    ... out it reaches: a Panda's grip points down at a low height only some way out; 0
+    when none is): for the messages ("the arm reaches about ...")."""
     d = np.array([xy[0], xy[1]], float)
     d = d / (np.linalg.norm(d) or 1.0)
 
     def ok(r: float) -> bool:
         return _reaches(robot, np.array([d[0] * r, d[1] * r, z])) == 0.0
 
-    lo, hi = 0.15, _farthest_m(robot)
-    if not ok(lo):
+    hi = _farthest_m(robot)
+    lo = next((float(r) for r in np.arange(0.15, hi, 0.1) if ok(float(r))), 0.0)
+    if lo == 0.0:
         return 0.0
     while hi - lo > 0.01:
         mid = (lo + hi) / 2
