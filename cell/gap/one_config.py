@@ -18,7 +18,12 @@ alike, and the landings cannot say which effect it was. Two scopes are checked:
   one value too, the throws are one throw repeated: every effect is one shift of the
   landing, and a verdict naming any effect is `unknown`.
 
-Values are one where they agree to 1e-9 of their unit (`cell.gap.laws.distinct`). A
+Values are one where they agree to 1e-9 of their unit (`cell.gap.laws.distinct`); the
+stroke and the elevation are one too where, the launch's other covariates being one value,
+their spread moves the nominal model's landings by no more than the noise floor (RMS, from
+each throw's stroke and elevation to their medians; `spread_moves_m`): a stroke read with
+a jitter of an encoder's count about one setting is one stroke, whose landings cannot tell
+the launch effects apart any better. A
 `none` verdict stands (there is no shift to explain), and so does an `unknown` one. The report's `one_configuration`
 says why in a sentence, with the mean shift of the landings (along and across the throw)
 and the effects that explain it alike (held-out RMSE within `VERDICT_RATIO` of the floor,
@@ -27,6 +32,7 @@ neither refused, at a bound nor implausible), which become the verdict's partial
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -36,7 +42,14 @@ from cell.gap.problem import GapProblem
 from cell.gap.select import VERDICT_RATIO
 from cell.model.effects import EFFECTS
 
-__all__ = ["LAUNCH_COVARIATES", "FLIGHT_COVARIATES", "one_scope", "one_configuration"]
+__all__ = [
+    "LAUNCH_COVARIATES",
+    "FLIGHT_COVARIATES",
+    "SPREAD_COVARIATES",
+    "one_scope",
+    "one_configuration",
+    "spread_moves_m",
+]
 
 LAUNCH_COVARIATES = ("object_id", "shape", "mass_kg", "size_x_m", "stroke_m", "elevation_rad")
 FLIGHT_COVARIATES = (
@@ -70,14 +83,38 @@ def _columns(prob: GapProblem) -> dict[str, np.ndarray]:
     }
 
 
-def one_scope(prob: GapProblem) -> str | None:
+SPREAD_COVARIATES = ("stroke_m", "elevation_rad")  # one where the landings cannot see their spread
+
+
+def spread_moves_m(prob: GapProblem) -> float:
+    """How far [m] (RMS over the throws) the nominal model's landing moves from each
+    throw's logged stroke and elevation to their medians."""
+    b = prob.batch
+    at = replace(
+        b,
+        stroke=np.full_like(b.stroke, float(np.median(b.stroke))),
+        elevation=np.full_like(b.elevation, float(np.median(b.elevation))),
+    )
+    idx = np.arange(len(prob))
+    d = prob.landing(idx).xy - replace(prob, batch=at).landing(idx).xy
+    d = d[np.all(np.isfinite(d), axis=1)]
+    return float(np.sqrt(np.mean(np.sum(d * d, axis=1)))) if d.size else float("inf")
+
+
+def one_scope(prob: GapProblem, floor_m: float | None = None) -> str | None:
     """ "all" where every covariate the model reads is one value across the throws,
     "launch" where only the launch's are, None otherwise (or where a throw was made by
-    another launcher: its launch is its own track's)."""
+    another launcher: its launch is its own track's). With `floor_m`, a stroke and an
+    elevation whose spread moves the model's landings by no more than it
+    (`spread_moves_m`) are one value."""
     if not bool(np.all(prob.has_stroke)) or len(prob) < 2:
         return None
     cols = _columns(prob)
-    if not all(distinct(cols[c]) <= 1 for c in LAUNCH_COVARIATES):
+    if not all(distinct(cols[c]) <= 1 for c in LAUNCH_COVARIATES if c not in SPREAD_COVARIATES):
+        return None
+    if not all(distinct(cols[c]) <= 1 for c in SPREAD_COVARIATES) and (
+        floor_m is None or not spread_moves_m(prob) <= floor_m
+    ):
         return None
     return "all" if all(distinct(cols[c]) <= 1 for c in FLIGHT_COVARIATES) else "launch"
 
@@ -110,8 +147,10 @@ def one_configuration(
         The verdict: ["unknown"] where the scope cannot tell the effects named apart,
         else `verdict`.
     """
-    scope = one_scope(prob)
-    if scope is None or verdict[0] in ("none", "unknown"):
+    if verdict[0] in ("none", "unknown"):
+        return verdict
+    scope = one_scope(prob, report["noise_floor_m"])
+    if scope is None:
         return verdict
     named = list(verdict)
     if scope == "launch" and not any(EFFECTS[n].phase == "launch" for n in named):
@@ -128,6 +167,18 @@ def one_configuration(
         else "one launch configuration (one object, stroke and elevation)"
     )
     moved = "every effect moves" if scope == "all" else "every launch effect moves"
+    cols = _columns(prob)
+    spread = [c for c in SPREAD_COVARIATES if distinct(cols[c]) > 1]
+    moves = spread_moves_m(prob) if spread else 0.0
+    if spread:  # inside the parenthesis `what` closes
+        what = what[:-1] + (
+            f"; their {' and '.join(c.split('_')[0] + 's' for c in spread)} spread by "
+            + " and ".join(
+                f"{float(np.ptp(cols[c])):.3g} {'m' if c == 'stroke_m' else 'rad'}" for c in spread
+            )
+            + f", which moves the model's landings {moves:.4f} m RMS, within the noise floor "
+            f"{report['noise_floor_m']:.4f} m)"
+        )
     names = ", ".join(alike[:-1]) + (" and " if len(alike) > 1 else "") + alike[-1]
     why = (
         f"the {len(prob)} throws are {what}, so {moved} their landings alike: on average they "
@@ -145,6 +196,7 @@ def one_configuration(
         "shift_along_m": a,
         "shift_across_m": c,
         "explained_alike": alike,
+        "spread_moves_m": moves,
         "why": why,
     }
     return ["unknown"]

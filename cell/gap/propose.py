@@ -16,6 +16,7 @@ landing is linear in its coefficient θ near θ = 0:
 | flight | up ∝ v² | θ·|v|² upwards |
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
 | measurement | shift ∝ v with k < 0 (its interval below 0) | the landing logged −k s before the touchdown: no slide ends behind it, a tracker lagging does |
+| landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
 
 A log's drift (a band wearing, a motor warming) and its sessions (a band changed, a
@@ -225,6 +226,11 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
     for name, at in planes:
         terms.append({"phase": "landing", "term": f"landing plane height [m] = k{name}"})
         cols.append(per_m * at[:, None])
+    # every landing moved alike in the world frame: a surface carrying what lands on it (a
+    # conveyor), or the landings' measurement off in its origin
+    for j, axis in enumerate("xy"):
+        terms.append({"phase": "landing", "term": f"landing shift {axis} [m] = k"})
+        cols.append(np.tile(np.eye(2)[j], (len(b), 1)))
     return terms, np.stack(cols, axis=2)
 
 

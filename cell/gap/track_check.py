@@ -31,6 +31,7 @@ MIN_TRAVEL_M = 0.02  # [m] a track that moves less is not a flight
 MAX_GAP_SHARE = 0.5  # a gap longer than this share of the span leaves the flight unseen
 MAX_SAMPLES = 200_000  # samples per track read at most
 UP_CURVE_G = 0.3  # a free flight's height never bends upward (drag stays under gravity)
+APART_FACTOR = 3.0  # samples of one stamp this many stamp-to-stamp steps apart: two objects
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,9 @@ def check_track(raw: object) -> CheckedTrack:
     n_rep = 0
     if arr.shape[0] > 1:
         rep = np.r_[False, np.diff(arr[:, 0]) <= 0]
+        two = _two_places(arr, rep)
+        if two:
+            return CheckedTrack(None, two, tuple(notes))
         if rep.any():
             n_rep = int(rep.sum())
             notes.append(f"{n_rep} repeated time stamps (later ones dropped)")
@@ -128,6 +132,37 @@ def clock_step(t: np.ndarray) -> str | None:
                     "its t_s from its release"
                 )
     return None
+
+
+def _two_places(arr: np.ndarray, rep: np.ndarray) -> str | None:
+    """Why a track whose repeated time stamps hold samples far apart is no one object's
+    (None: it may be). `arr` (k, 4) sorted by time, `rep` marks each sample whose stamp
+    repeats the one before.
+
+    A repeated stamp is mended by keeping its first sample: a sample written again, or a
+    time written at a coarse resolution, whose samples lie about as far apart as the
+    track moves from stamp to stamp. Samples of one stamp a median over
+    `APART_FACTOR` times that step and `MIN_TRAVEL_M` apart are two places at one time:
+    two objects tracked under one throw_id, which keeping the first would mix.
+    """
+    if not rep.any():
+        return None
+    first = np.maximum.accumulate(np.where(rep, 0, np.arange(rep.size)))  # each stamp's first
+    apart = np.linalg.norm(arr[rep, 1:4] - arr[first[rep], 1:4], axis=1)
+    kept = arr[~rep, 1:4]
+    if kept.shape[0] < 2:
+        return None
+    step = float(np.median(np.linalg.norm(np.diff(kept, axis=0), axis=1)))
+    far = float(np.median(apart))
+    if far <= max(APART_FACTOR * step, MIN_TRAVEL_M):
+        return None
+    t = float(arr[rep, 0][int(np.argmax(apart))])
+    return (
+        f"two places at one time: {int(rep.sum())} of its {rep.size} samples repeat a time "
+        f"stamp {far:.3f} m (median) from the sample first written at it ({float(apart.max()):.3f} m "
+        f"at t = {t:.4g} s), where the track moves {step:.3f} m from one stamp to the next "
+        "(two objects tracked under one throw_id?): give each object's flight its own throw_id"
+    )
 
 
 def _unusable(arr: np.ndarray) -> str | None:
