@@ -20,7 +20,7 @@ from cell.cli.common import (
 from cell.errors import CellError, InvalidInput
 from cell.log import read_throws_csv
 from cell.params import load_params
-from cell.residual.learners import LEARNERS
+from cell.residual.learners import LEARNERS, SEARCH_ROWS
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -65,7 +65,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="medium",
         help=(
             "hyper-parameter grids (medium: full's estimators, without the candidates the "
-            "inner CV never chose on 865-throw campaigns; docs/HISTORY.md)"
+            "inner CV never chose on 865-throw campaigns; docs/HISTORY.md); a log of more "
+            f"than {SEARCH_ROWS} throws is searched on {SEARCH_ROWS} of them, each object's "
+            "share, and the choice fitted on all"
         ),
     )
     p.add_argument("--seed", type=int, default=0, help="fold shuffling and learner seed (0)")
