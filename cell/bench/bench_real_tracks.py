@@ -62,6 +62,25 @@ CB_AXIS_FRAMES = 6  # the first frames whose chord gives a toss's logged throw a
 CB_GAP_TOSSES = 40  # `cell gap` runs on this many of the tosses of 0.1 s or more
 
 
+def _log_row(
+    tid: str, obj: tuple[str, str, float, float], start: Any, chord: Any, landing: Any
+) -> dict[str, Any]:
+    """A throw-log row of another launcher (no stroke) for one tracked flight of the object
+    `obj` (its id, shape, mass [kg] and side or diameter [m]): released at `start` [m], its
+    throw axis along `chord` (two of its first samples' difference), landed at `landing`
+    [m] on the plane at that height."""
+    d, (name, shape, mass_kg, size_m) = chord, obj
+    return {
+        "throw_id": tid, "object_id": name, "shape": shape, "mass_kg": mass_kg,
+        "size_x_m": size_m, "size_y_m": size_m, "size_z_m": size_m,
+        "stroke_m": "", "x_m": start[0], "y_m": start[1], "z_m": start[2],
+        "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
+        "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
+        "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
+        "land_z_m": landing[2], "landed_x_m": landing[0], "landed_y_m": landing[1],
+    }  # fmt: skip
+
+
 def _jugglebot_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
     """The flights as a throw log of another launcher (no stroke) and their tracks: time 0
     at the last rest frame, the landing at the lowest sample, the track cut 3 frames
@@ -77,15 +96,9 @@ def _jugglebot_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
         f = np.asarray(v)
         t, p = (f[:, 0] - f[0, 0]) / JB_HZ, f[:, 1:4]
         d = p[29] - p[20]  # frames of free flight: the axis of the throw
-        rows.append({
-            "throw_id": tid, "object_id": "juggling_ball", "shape": "sphere",
-            "mass_kg": JB_MASS_KG, "size_x_m": JB_DIAMETER_M, "size_y_m": JB_DIAMETER_M,
-            "size_z_m": JB_DIAMETER_M, "stroke_m": "", "x_m": p[0, 0], "y_m": p[0, 1],
-            "z_m": p[0, 2], "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
-            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
-            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
-            "land_z_m": p[-1, 2], "landed_x_m": p[-1, 0], "landed_y_m": p[-1, 1],
-        })  # fmt: skip
+        rows.append(
+            _log_row(tid, ("juggling_ball", "sphere", JB_MASS_KG, JB_DIAMETER_M), p[0], d, p[-1])
+        )
         tracks[tid] = np.c_[t, p][: len(t) - 3]
     return rows, tracks
 
@@ -249,15 +262,9 @@ def _tennicam_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
         p = tr[:, 1:4]
         d = p[TC_AXIS_FRAMES - 1] - p[0]
         bounce = f[len(tr), 2:5]
-        rows.append({
-            "throw_id": tid, "object_id": "tt_ball", "shape": "sphere", "mass_kg": TT_MASS_KG,
-            "size_x_m": TT_DIAMETER_M, "size_y_m": TT_DIAMETER_M, "size_z_m": TT_DIAMETER_M,
-            "stroke_m": "", "x_m": p[0, 0], "y_m": p[0, 1], "z_m": p[0, 2],
-            "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
-            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
-            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
-            "land_z_m": bounce[2], "landed_x_m": bounce[0], "landed_y_m": bounce[1],
-        })  # fmt: skip
+        rows.append(
+            _log_row(tid, ("tt_ball", "sphere", TT_MASS_KG, TT_DIAMETER_M), p[0], d, bounce)
+        )
         tracks[tid] = tr
     return rows, tracks
 
@@ -333,15 +340,7 @@ def _cube_log() -> tuple[list[dict[str, Any]], dict[str, np.ndarray], int]:
             continue
         p, touch = tr[:, 1:4], f[len(tr), 1:4]
         d = p[CB_AXIS_FRAMES - 1] - p[0]
-        rows.append({
-            "throw_id": tid, "object_id": "acrylic_cube", "shape": "cube", "mass_kg": CB_MASS_KG,
-            "size_x_m": CB_SIDE_M, "size_y_m": CB_SIDE_M, "size_z_m": CB_SIDE_M, "stroke_m": "",
-            "x_m": p[0, 0], "y_m": p[0, 1], "z_m": p[0, 2],
-            "elevation_rad": math.atan2(d[2], math.hypot(d[0], d[1])),
-            "azimuth_rad": math.atan2(d[1], d[0]), "roll_rad": 0.0, "vx_mps": 0.0,
-            "vy_mps": 0.0, "vz_mps": 0.0, "platform": "arm", "rotor_rpm": 0.0,
-            "land_z_m": touch[2], "landed_x_m": touch[0], "landed_y_m": touch[1],
-        })  # fmt: skip
+        rows.append(_log_row(tid, ("acrylic_cube", "cube", CB_MASS_KG, CB_SIDE_M), p[0], d, touch))
         tracks[tid] = tr
     return rows, tracks, len(seqs)
 
