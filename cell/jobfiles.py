@@ -12,7 +12,8 @@ __all__ = ["job_files"]
 
 def job_files(job: Any) -> list[tuple[str, str]]:
     """(what it is, path) of every file `job` (a `cell.jobs.Job`) reads besides itself."""
-    from cell.robot.mount import arm_urdf_file, end_effector_file, is_mount_path, load_mount
+    from cell.robot.mount import is_mount_path, load_mount
+    from cell.robot.mount_paths import arm_urdf_file, end_effector_file
 
     what = {
         "params": "parameter file",

@@ -1,4 +1,4 @@
-"""A mount file's URDFs of the user's own (`cell.robot.mount.arm_urdf_file`,
+"""A mount file's URDFs of the user's own (`cell.robot.mount_paths.arm_urdf_file`,
 `end_effector_file`): `arm_urdf` and `end_effector` relative to their library folders as
 the shipped arms have them, else to the mount file's folder, or absolute; the arm built from
 a URDF kept beside its mount file is the arm built from the library's copy; a name that is
@@ -16,7 +16,8 @@ import pytest
 from cell.cli import main
 from cell.errors import InvalidParameter
 from cell.robot.model import load_robot
-from cell.robot.mount import arm_urdf_file, end_effector_file, load_mount
+from cell.robot.mount import load_mount
+from cell.robot.mount_paths import arm_urdf_file, end_effector_file
 from cell.robot.paths import example_robot_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]

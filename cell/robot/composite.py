@@ -19,7 +19,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from cell.errors import InvalidParameter
-from cell.robot.mount import MountSpec, check_against_urdf, end_effector_file, load_mount
+from cell.robot.mount import MountSpec, check_against_urdf, load_mount
+from cell.robot.mount_paths import end_effector_file
 from cell.robot.paths import example_robot_data_share, robots_dir
 
 __all__ = [

@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from cell.errors import InvalidInput, InvalidParameter
-from cell.robot.paths import example_robot_data_dir, robots_dir
+from cell.robot.mount_paths import arm_urdf_file, end_effector_file
+from cell.robot.paths import robots_dir
 
 __all__ = [
     "MOUNT_FIELDS",
@@ -387,45 +388,6 @@ def _check_limits(root: ET.Element, joints: tuple[str, ...], where: str) -> None
                 f"{what}: its position limits lower={vals['lower']} and upper={vals['upper']} "
                 "are the wrong way round or equal; lower must be under upper"
             )
-
-
-def _urdf_file(spec: MountSpec, field: str, library: Path, hint: str) -> Path:
-    """The file a mount's URDF field names: an absolute path as it is; a relative one under
-    the library folder (example-robot-data's robots/ for the arm, the cell's robots/ for
-    the end-effector; no `..` there), else from the mount file's own folder (a URDF of the
-    user's own kept beside it).
-
-    Raises:
-        InvalidParameter: no such file, naming the field and the places looked in.
-    """
-    given = getattr(spec, field)
-    own = Path(spec.path).parent
-    if Path(given).is_absolute():
-        looked = [Path(given)]
-    else:
-        looked = [library / given] if ".." not in Path(given).parts else []
-        looked.append(own / given)
-    for path in looked:
-        if path.is_file():
-            return path
-    places = " or ".join(str(p) for p in looked)
-    raise InvalidParameter(
-        f"{spec.path}: field '{field}': {given!r} is not a file ({places}); give a "
-        f"path relative to {library}, to the mount file's folder, or an absolute one{hint}"
-    )
-
-
-def arm_urdf_file(spec: MountSpec) -> Path:
-    """The arm's URDF: `arm_urdf` under example-robot-data's robots/ folder, else from the
-    mount file's folder, or absolute (`_urdf_file`)."""
-    return _urdf_file(spec, "arm_urdf", example_robot_data_dir(), "")
-
-
-def end_effector_file(spec: MountSpec) -> Path:
-    """The end-effector's URDF: `end_effector` under the cell's robots/ folder, else from
-    the mount file's folder, or absolute (`_urdf_file`)."""
-    hint = " (the throwing end-effector is throwing_ee/throwing_ee.urdf)"
-    return _urdf_file(spec, "end_effector", robots_dir(), hint)
 
 
 def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
