@@ -117,9 +117,9 @@ def test_a_continuous_joint_without_a_velocity_limit_is_refused(
     k = text.index("/>", j)
     urdf.write_text(text[:j] + text[k + 2 :])
     monkeypatch.setattr(paths, "example_robot_data_dir", lambda: erd)
-    import cell.robot.mount as mount_mod
+    import cell.robot.mount_paths as mount_paths
 
-    monkeypatch.setattr(mount_mod, "example_robot_data_dir", lambda: erd)
+    monkeypatch.setattr(mount_paths, "example_robot_data_dir", lambda: erd)
     with pytest.raises(InvalidParameter, match="j2s6s200_joint_4.*velocity"):
         composite_urdf_text(str(jaco))
 
