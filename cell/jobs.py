@@ -27,13 +27,12 @@ from cell.jobbins import (
 )
 from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, job_problems, unsorted_warning
+from cell.joblimits import MAX_ITEMS, limits_section
 from cell.jobschema import (
     BIN_KEYS,
     BIN_WALL_M,
     ITEM_KEYS,
-    LIMIT_KEYS,
     PICK_KEYS,
-    PLACE_REACH_M,
     TOP_KEYS,
     job_keys,
 )
@@ -52,7 +51,6 @@ __all__ = [
 ]
 
 POLICIES = ("auto", "place", "throw")
-MAX_ITEMS = 100_000  # items in one job (a count, or limits.max_items); more is refused unbuilt
 # The orders a job's items may be taken in (`Job.expanded_items`, `cell run --order`): as
 # listed, or bin by bin (the items all at hand, as in a tote).
 ORDERS = ("job", "bins")
@@ -376,33 +374,6 @@ def _items(
     return [it for it in out if it is not None]
 
 
-def _limits(c: Checker, top: dict[str, Node]) -> tuple[float, int, float]:
-    """The `limits` section.
-
-    Returns:
-        (place reach [m], max items, time limit per item [s]), defaults where not given.
-    """
-    lim = (
-        c.mapping(top["limits"], "limits", dict.fromkeys(LIMIT_KEYS, "")) if "limits" in top else {}
-    )
-    reach = (
-        c.number(lim["place_reach_m"], "limits.place_reach_m", lo=0.2, hi=1.2)
-        if "place_reach_m" in lim
-        else PLACE_REACH_M
-    )
-    max_items = (
-        c.integer(lim["max_items"], "limits.max_items", 1, MAX_ITEMS)
-        if "max_items" in lim
-        else 1000
-    )
-    tlim = (
-        c.number(lim["item_time_limit_s"], "limits.item_time_limit_s", lo=1.0)
-        if "item_time_limit_s" in lim
-        else 20.0
-    )
-    return reach, max_items, tlim
-
-
 def _where(job: Job, tree: Node, top: dict[str, Node]) -> dict[str, str]:
     """ "file, line N" of the job's parts for `cell.jobcheck`'s messages: "cell",
     "pick_station" and "bins[i]" (i the index in `job.bins`)."""
@@ -448,7 +419,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         errors.run(lambda: c.text(top["policy"], "policy", POLICIES)) if "policy" in top else "auto"
     )
     seed = errors.run(lambda: c.integer(top["seed"], "seed", 0, 2**32 - 1)) if "seed" in top else 0
-    limits = errors.run(_limits, c, top)
+    limits = errors.run(limits_section, c, top)
     parts = (cell, pick, bins, items, policy, seed, limits)
     if errors.messages and any(p is None for p in parts):
         errors.raise_all()
