@@ -7,6 +7,7 @@ error, never constructed.
 
 from __future__ import annotations
 
+import datetime
 import math
 import re
 import unicodedata
@@ -23,11 +24,14 @@ _T = TypeVar("_T")
 
 
 class Node:
-    """A YAML value with its line, for error messages."""
+    """A YAML value with its line, for error messages; `source`, a plain (unquoted)
+    scalar's text as written (`010`, `yes`, `~`), which YAML 1.1 may read as another
+    value (8, True, None): a name's message quotes what the user wrote."""
 
-    def __init__(self, value: Any, line: int) -> None:
+    def __init__(self, value: Any, line: int, source: str | None = None) -> None:
         self.value = value
         self.line = line
+        self.source = source
 
 
 _WITH_UNIT = re.compile(r"\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\W\d_]+[/^²³\w]*\s*")
@@ -56,7 +60,8 @@ def to_tree(node: yaml.Node, path: str) -> Node:
         return Node([to_tree(v, path) for v in node.value], line)
     # resolve the scalar with the safe constructor alone (no reader nor parser built for it)
     value = yaml.constructor.SafeConstructor().construct_object(node, deep=True)  # type: ignore[no-untyped-call]
-    return Node(value, line)
+    plain = isinstance(node, yaml.ScalarNode) and not node.style  # libyaml: "", PyYAML: None
+    return Node(value, line, node.value if plain else None)
 
 
 def same_text(a: str, b: str) -> bool:
@@ -158,8 +163,12 @@ class Checker:
         strict_lo: bool = False,
     ) -> float:
         v = node.value
+        if _leading_zero(node.source):
+            raise self.fail(node, fp, _leading_zero(node.source))
         if isinstance(v, str) and _SCIENTIFIC.fullmatch(v.strip()):
             v = float(v)  # YAML 1.1 reads 5e-2 (no dot) as text; the parameter loader does not
+        if (isinstance(v, bool) or v is None) and _read_as(v, node.source):
+            raise self.fail(node, fp, f"{node.source} is {_read_as(v, node.source)}; give a number")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
             raise self.fail(node, fp, f"{shown(v)} must be a {'finite ' * _nonfinite(v)}number"
                             + _quoted_number(v))  # fmt: skip
@@ -172,6 +181,15 @@ class Checker:
 
     def integer(self, node: Node, fp: str, lo: int, hi: int) -> int:
         v = node.value
+        if _leading_zero(node.source):
+            raise self.fail(node, fp, _leading_zero(node.source))
+        if (isinstance(v, bool) or v is None) and _read_as(v, node.source):
+            raise self.fail(
+                node,
+                fp,
+                f"{node.source} is {_read_as(v, node.source)}; give a whole number "
+                f"from {lo} to {hi}",
+            )
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             raise self.fail(
                 node, fp, f"{shown(v)} must be a whole number from {lo} to {hi}" + _quoted_number(v)
@@ -180,12 +198,8 @@ class Checker:
 
     def text(self, node: Node, fp: str, choices: tuple[str, ...] | None = None) -> str:
         v = node.value
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            raise self.fail(
-                node, fp, f"{shown(v)} is a number; this is a name: write it in quotes, '{v}'"
-            )
         if not isinstance(v, str) or not v:
-            raise self.fail(node, fp, f"{shown(v)} must be a non-empty text")
+            raise self.fail(node, fp, not_text(v, node.source, choices))
         unseen = unseen_problem(v)
         if unseen:
             raise self.fail(node, fp, f"{on_screen(v)!r} {unseen}")
@@ -215,6 +229,58 @@ class Checker:
             self.number(x, f"{fp}[{i}]", lo=0.0 if positive else None, strict_lo=positive)
             for i, x in enumerate(node.value)
         )
+
+
+def not_text(v: Any, source: str | None, choices: tuple[str, ...] | None = None) -> str:
+    """What to say of a name's value `v` that is not text, written `source` (None: in
+    quotes, or not a scalar): YAML 1.1 reads a plain `yes`, `off` or `~` as a boolean or no
+    value, `010` as the number 8, `2026-12-01` as a date; the message quotes the text
+    written and what YAML made of it, and says to quote it (or, where the name is one of
+    `choices`, which are valid)."""
+    what = _read_as(v, source)
+    if v is None and not source:
+        return "has no value: give a name" if not choices else (
+            f"has no value; choose one of {', '.join(map(on_screen, choices))}"
+        )  # fmt: skip
+    if not what or source is None:
+        return f"{shown(v)} must be a non-empty text"
+    number = isinstance(v, (int, float)) and not isinstance(v, bool)  # a name, as before
+    if choices and not number and not any(same_text(source, ch) for ch in choices):
+        return f"{source} is {what}; choose one of {', '.join(map(on_screen, choices))}"
+    return f"{source} is {what}; this is a name: write it in quotes, '{source}'"
+
+
+def _read_as(v: Any, source: str | None) -> str:
+    """What YAML 1.1 made of the plain scalar `source` ("" where it is text, or `source`
+    is None): a boolean, no value, a number (said where it reads otherwise), a date."""
+    if source is None:
+        return ""
+    if isinstance(v, bool):
+        return "a boolean to YAML (yes, no, on, off, true and false are)"
+    if isinstance(v, (int, float)):
+        return "a number" + (f" to YAML ({v})" if source != str(v) else "")
+    if v is None and source:
+        return "no value to YAML (null; ~ and null are)"
+    if isinstance(v, (datetime.date, datetime.datetime)):
+        return "a date to YAML"
+    return ""
+
+
+_LEADING_ZERO = re.compile(r"[-+]?0[0-9_]*[0-9][0-9_]*")
+
+
+def _leading_zero(source: str | None) -> str:
+    """What to say of a plain number written with a leading zero (`010`, `0010`, `09`; ""
+    for anything else): YAML 1.1 reads `010` as the octal 8 (a count of 10 would be 8
+    items) and `09`, no octal, as text; written in quotes, it is text (the field says so)."""
+    if source is None or not _LEADING_ZERO.fullmatch(source):
+        return ""
+    digits = source.replace("_", "")
+    try:
+        read = f"the octal number {int(digits, 8)}"
+    except ValueError:
+        read = "text (a leading 0 marks an octal number, whose digits are 0-7)"
+    return f"{source} has a leading 0, which YAML reads as {read}: write {int(digits, 10)}"
 
 
 def _nonfinite(v: Any) -> bool:

@@ -1,0 +1,142 @@
+"""Inputs written by hand as a new user would, a ninth round: names YAML 1.1 reads as
+something else (`yes`, `off`, `~`, `010`, `0x10`, `1_000`, `.inf`, `2026-12-01`)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from cell.errors import JobError
+from cell.jobs import parse_job
+
+STATION = "pick_station: {position_m: [0.45, -0.40, 0.20]}\n"
+
+
+def _job(name: str) -> str:
+    return (
+        f"cell: {{robot: panda}}\n{STATION}bins:\n"
+        f"  - {{id: {name}, position_m: [1.4, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}}\n"
+        f"items:\n  - {{object: cube50, bin: {name}}}\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("name", "read_as"),
+    [
+        ("yes", "a boolean"),
+        ("off", "a boolean"),
+        ("null", "no value"),
+        ("~", "no value"),
+        ("010", r"a number to YAML \(8\)"),
+        ("0x10", r"a number to YAML \(16\)"),
+        ("1_000", r"a number to YAML \(1000\)"),
+        (".inf", r"a number to YAML \(inf\)"),
+        ("2026-12-01", "a date"),
+    ],
+)
+def test_a_name_yaml_reads_as_another_value_is_quoted_as_written(name: str, read_as: str) -> None:
+    """A bin named `yes` was refused as "True must be a non-empty text", `~` as "None …",
+    a date as "datetime.date(2026, 12, 1) …", none of them the text the user wrote; a bin
+    named `010` was told "8 is a number; … write it in quotes, '8'", a quote that renames
+    the bin. The message now quotes the text as written, says what YAML reads it as and
+    to quote it; and the advice is checked by following it: the job with the name in
+    quotes loads, the bin's id and the item's bin that very text."""
+    with pytest.raises(JobError) as err:
+        parse_job(_job(name), "j.yaml", check_reach=False)
+    said = str(err.value)
+    for field, line in (("bins[0].id", 4), ("items[0].bin", 6)):
+        assert re.search(
+            rf"j\.yaml, line {line}, {re.escape(field)}: {re.escape(name)} is {read_as}"
+            rf".*this is a name: write it in quotes, '{re.escape(name)}'",
+            said,
+        ), said
+    quoted = f"'{name}'"
+    job = parse_job(_job(quoted), "j.yaml", check_reach=False)
+    assert [b.id for b in job.bins] == [name]
+    assert [i.bin for i in job.items] == [name]
+
+
+def test_a_choice_yaml_reads_as_a_boolean_or_no_value_names_the_choices() -> None:
+    """`policy: off` and `shape: null` were "False must be a non-empty text" and "None …";
+    they are said as written, with the valid choices; an `id:` left empty "has no value"."""
+    text = (
+        f"cell: {{robot: panda}}\n{STATION}bins:\n"
+        "  - {id: a, position_m: [1.4, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}\n"
+        "  - {id: , position_m: [1.4, 0.6], size_m: [0.3, 0.3], rim_height_m: 0.15}\n"
+        "items:\n  - {shape: null, mass_kg: 0.05, size_m: [0.05, 0.05, 0.05], bin: a}\n"
+        "policy: off\n"
+    )
+    with pytest.raises(JobError) as err:
+        parse_job(text, "j.yaml", check_reach=False)
+    said = str(err.value)
+    assert "line 5, bins[1].id: has no value: give a name" in said
+    assert (
+        "line 7, items[0].shape: null is no value to YAML (null; ~ and null are); "
+        "choose one of cube, cuboid, cylinder, sphere" in said
+    )
+    assert "line 8, policy: off is a boolean to YAML" in said
+    assert "choose one of auto, place, throw" in said
+
+
+def _counted(count: str, seed: str = "0", max_items: str = "1000") -> str:
+    return (
+        f"cell: {{robot: panda}}\n{STATION}bins:\n"
+        "  - {id: a, position_m: [1.4, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}\n"
+        f"items:\n  - {{object: cube50, bin: a, count: {count}}}\n"
+        f"seed: {seed}\nlimits: {{max_items: {max_items}}}\n"
+    )
+
+
+def test_a_number_with_a_leading_zero_is_refused_not_read_as_octal() -> None:
+    """`count: 010` was read as 8 items, `seed: 0010` as the seed 8 and `max_items: 0100`
+    as 64 (YAML 1.1's octal), without a word; `09` (no octal) as text, "must be a whole
+    number (it is in quotes …)" though it was not. Each is now refused saying what YAML
+    reads and what to write; the same job written as the message says loads with the
+    count, seed and limit the digits say in base ten (counted: the items listed)."""
+    with pytest.raises(JobError) as err:
+        parse_job(_counted("010", "0010", "0100"), "j.yaml", check_reach=False)
+    said = str(err.value)
+    assert (
+        "line 6, items[0].count: 010 has a leading 0, which YAML reads as the octal number 8: write 10"
+        in said
+    )
+    assert (
+        "line 7, seed: 0010 has a leading 0, which YAML reads as the octal number 8: write 10"
+        in said
+    )
+    assert (
+        "limits.max_items: 0100 has a leading 0, which YAML reads as the octal number 64: write 100"
+        in said
+    )
+    with pytest.raises(
+        JobError, match=r"count: 09 has a leading 0, which YAML reads as text .*write 9"
+    ):
+        parse_job(_counted("09"), "j.yaml", check_reach=False)
+    job = parse_job(_counted("10", "10", "100"), "j.yaml", check_reach=False)
+    assert len(job.expanded_items("job")) == 10
+    assert (job.seed, job.max_items) == (10, 100)
+
+
+def test_a_number_yaml_reads_as_a_boolean_or_no_value_is_said_as_written() -> None:
+    """`rim_height_m: ~`, `mass_kg: yes` and `seed: null` were "None must be a number",
+    "True must be a number", "None must be a whole number …": the text written is said,
+    with what YAML reads it as."""
+    text = (
+        f"cell: {{robot: panda}}\n{STATION}bins:\n"
+        "  - {id: a, position_m: [1.4, 0.0], size_m: [0.3, 0.3], rim_height_m: ~}\n"
+        "items:\n  - {shape: cube, mass_kg: yes, size_m: [0.05, 0.05, 0.05], bin: a}\n"
+        "seed: null\n"
+    )
+    with pytest.raises(JobError) as err:
+        parse_job(text, "j.yaml", check_reach=False)
+    said = str(err.value)
+    assert (
+        "line 4, bins[0].rim_height_m: ~ is no value to YAML (null; ~ and null are); give a number"
+        in said
+    )
+    assert "line 6, items[0].mass_kg: yes is a boolean to YAML" in said
+    assert (
+        "line 7, seed: null is no value to YAML (null; ~ and null are); give a whole number from 0 to 4294967295"
+        in said
+    )
