@@ -49,13 +49,20 @@ _MEMO_BYTES = 64_000
 _MEMO_LOCK = threading.Lock()
 
 
+# YAML 1.1's octal: a leading 0 and more digits (`010` is 8; `09` is no number at all)
+_OCTAL = "(?![-+]?0[0-9_]*[0-9][0-9_]*$)"
+
+
 def _without_base60(loader: Any) -> Any:
     """`loader` resolving no YAML 1.1 base-60 number: PyYAML reads `1:30` as the integer
     90 and `1:30.5` as 90.5, which no one writing a job means (YAML 1.2 dropped them); so
-    a scalar with a colon resolves to text, which a number's field refuses by name."""
+    a scalar with a colon resolves to text, which a number's field refuses by name. Nor a
+    YAML 1.1 octal: `count: 010` is 8 to PyYAML and 10 to a reader (and to YAML 1.2), and
+    `facing_half_range_deg: 0120` was 80; written so, it is text, refused by its field
+    (a job's says what YAML would read and what to write: `cell.yamltree`)."""
     resolvers = {
         first: [
-            (tag, re.compile("(?!.*:)" + rx.pattern, rx.flags))
+            (tag, re.compile("(?!.*:)" + _OCTAL * (tag.endswith("int")) + rx.pattern, rx.flags))
             if tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
             else (tag, rx)
             for tag, rx in rules

@@ -3,12 +3,19 @@ something else (`yes`, `off`, `~`, `010`, `0x10`, `1_000`, `.inf`, `2026-12-01`)
 
 from __future__ import annotations
 
+import math
 import re
+from pathlib import Path
 
 import pytest
 
-from cell.errors import JobError
+import cell
+from cell.errors import InvalidParameter, JobError
 from cell.jobs import parse_job
+from cell.robot.mount import load_mount
+from cell.yamlsafe import safe_load
+
+ROOT = Path(cell.__file__).resolve().parents[1]
 
 STATION = "pick_station: {position_m: [0.45, -0.40, 0.20]}\n"
 
@@ -28,7 +35,6 @@ def _job(name: str) -> str:
         ("off", "a boolean"),
         ("null", "no value"),
         ("~", "no value"),
-        ("010", r"a number to YAML \(8\)"),
         ("0x10", r"a number to YAML \(16\)"),
         ("1_000", r"a number to YAML \(1000\)"),
         (".inf", r"a number to YAML \(inf\)"),
@@ -39,7 +45,7 @@ def test_a_name_yaml_reads_as_another_value_is_quoted_as_written(name: str, read
     """A bin named `yes` was refused as "True must be a non-empty text", `~` as "None …",
     a date as "datetime.date(2026, 12, 1) …", none of them the text the user wrote; a bin
     named `010` was told "8 is a number; … write it in quotes, '8'", a quote that renames
-    the bin. The message now quotes the text as written, says what YAML reads it as and
+    the bin (`010` is now the text it shows: below). The message now quotes the text as written, says what YAML reads it as and
     to quote it; and the advice is checked by following it: the job with the name in
     quotes loads, the bin's id and the item's bin that very text."""
     with pytest.raises(JobError) as err:
@@ -140,3 +146,23 @@ def test_a_number_yaml_reads_as_a_boolean_or_no_value_is_said_as_written() -> No
         "line 7, seed: null is no value to YAML (null; ~ and null are); give a whole number from 0 to 4294967295"
         in said
     )
+
+
+def test_a_leading_zero_is_text_in_every_yaml_file_the_cell_reads(tmp_path: Path) -> None:
+    """YAML 1.1 reads `010` as the octal 8: a bin named `010` was refused as the number 8
+    ("write it in quotes, '8'"), and a mount file's `facing_half_range_deg: 0120` was taken
+    as 80° without a word (`cell.yamlsafe`, every job, mount and parameter file). Written
+    so, it is now the text it shows: a name keeps it (the bins `010` and `10` are two), a
+    number's field refuses it by name (the job's: the test above)."""
+    job = parse_job(_job("010"), "j.yaml", check_reach=False)
+    assert [b.id for b in job.bins] == ["010"]
+    assert safe_load("a: 010\nb: 0x10\nc: 0\nd: 1_000\ne: 010.5\n", "x.yaml") == {
+        "a": "010", "b": 16, "c": 0, "d": 1000, "e": 10.5,
+    }  # fmt: skip
+    text = (ROOT / "robots" / "ur5_throwing" / "mount.yaml").read_text()
+    mount = tmp_path / "mount.yaml"
+    mount.write_text(text.replace("arm: ur5", "arm: ur5_stand") + "facing_half_range_deg: 0120\n")
+    with pytest.raises(InvalidParameter, match=r"facing_half_range_deg' must be a number .*'0120'"):
+        load_mount(str(mount))
+    mount.write_text(text.replace("arm: ur5", "arm: ur5_stand") + "facing_half_range_deg: 120\n")
+    assert load_mount(str(mount)).facing_half_range_rad == pytest.approx(math.radians(120.0))
