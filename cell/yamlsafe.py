@@ -196,6 +196,8 @@ def read_yaml_text(path: str | Path, what: str) -> str:
     if len(raw) > MAX_BYTES:
         raise InvalidInput(f"{p}: more than {MAX_BYTES} bytes; a {what} is at most {MAX_BYTES}")
     try:
+        if b"\x00" in raw:  # valid UTF-8, but no text holds a NUL: UTF-16 without its mark
+            raise UnicodeDecodeError("utf-8", raw, raw.index(b"\x00"), len(raw), "NUL")
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         why = _not_utf8(raw, exc.start)
@@ -212,6 +214,14 @@ def _not_utf8(raw: bytes, at: int) -> str:
         return "saved as UTF-32"
     if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
         return "saved as UTF-16 (a Windows editor's 'Unicode')"
+    # ASCII text in UTF-16 without its byte-order mark: every other byte NUL (UTF-32: three
+    # of four), as `cell.log.csvio` tells a log
+    start = raw[:8192]
+    for width, name in ((4, "UTF-32"), (2, "UTF-16")):
+        for first, order in ((0, "big"), (width - 1, "little")):
+            zeros = [start[i::width] for i in range(width) if i != width - 1 - first]
+            if len(start) >= 2 * width and all(set(z) == {0} for z in zeros):
+                return f"saved as {name} ({order}-endian, without a byte-order mark)"
     controls = bytes(range(9)) + bytes(range(14, 32))
     ascii_only = raw.translate(None, bytes(range(128, 256)))
     if len(raw.translate(None, controls)) < len(raw) or 2 * len(ascii_only) < len(raw):

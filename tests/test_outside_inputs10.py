@@ -11,7 +11,7 @@ import pytest
 
 import cell
 from cell.errors import InvalidParameter, JobError
-from cell.jobs import parse_job
+from cell.jobs import load_job, parse_job
 from cell.robot.mount import load_mount
 from cell.yamlsafe import safe_load
 
@@ -166,3 +166,28 @@ def test_a_leading_zero_is_text_in_every_yaml_file_the_cell_reads(tmp_path: Path
         load_mount(str(mount))
     mount.write_text(text.replace("arm: ur5", "arm: ur5_stand") + "facing_half_range_deg: 120\n")
     assert load_mount(str(mount)).facing_half_range_rad == pytest.approx(math.radians(120.0))
+
+
+@pytest.mark.parametrize(
+    ("encoding", "said"),
+    [
+        ("utf-16-le", "UTF-16 (little-endian, without a byte-order mark)"),
+        ("utf-16-be", "UTF-16 (big-endian, without a byte-order mark)"),
+        ("utf-32-le", "UTF-32 (little-endian, without a byte-order mark)"),
+        ("utf-32-be", "UTF-32 (big-endian, without a byte-order mark)"),
+    ],
+)
+def test_a_job_in_utf16_or_utf32_without_its_mark_is_named(
+    tmp_path: Path, encoding: str, said: str
+) -> None:
+    """A job saved as UTF-16 without a byte-order mark decodes as UTF-8 (a NUL is UTF-8)
+    and was refused as "not valid YAML (unacceptable character #x0000: special characters
+    are not allowed in "<unicode string>", position 1)": the encoding is now named, as a
+    log's is. The same text in UTF-8 loads (the judge: Python's own codec wrote the file)."""
+    text = _job("a")
+    f = tmp_path / "job.yaml"
+    f.write_bytes(text.encode(encoding))
+    with pytest.raises(JobError, match=re.escape(f"{f}: saved as {said}; a job file is YAML text")):
+        load_job(f)
+    f.write_bytes(text.encode("utf-8"))
+    assert [b.id for b in load_job(f).bins] == ["a"]
