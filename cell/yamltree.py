@@ -142,7 +142,7 @@ class Checker:
                 # `{mass_kg: 0,05}` is two entries, mass_kg 0 and a key 05 of no value
                 comma = (
                     f" (a decimal comma? in {{…}} YAML reads `N,{k}` as the number N and a key "
-                    f"{k}: write N.{k})"
+                    f"{k}: write N.{k}; a thousands separator: write N{k})"
                     if k.isdigit() and v.value is None
                     else ""
                 )
@@ -293,6 +293,10 @@ def _quoted_number(v: Any) -> str:
     YAML keeps it text."""
     if not isinstance(v, str):
         return ""
+    if _SCIENTIFIC.fullmatch(v.strip()):  # `count: 1e3`: YAML 1.1 needs a dot, so text
+        f = float(v)
+        whole = f"{f:.0f}" if math.isfinite(f) and f.is_integer() else ""
+        return f" (written with an exponent{': write ' + whole if whole else ''})"
     if _WITH_UNIT.fullmatch(v):
         return (
             " (a number with a unit: the unit is the key's, _m metres, _kg kilograms, _s "

@@ -191,3 +191,29 @@ def test_a_job_in_utf16_or_utf32_without_its_mark_is_named(
         load_job(f)
     f.write_bytes(text.encode("utf-8"))
     assert [b.id for b in load_job(f).bins] == ["a"]
+
+
+def test_a_whole_number_with_an_exponent_or_a_thousands_comma_is_told_what_to_write() -> None:
+    """`count: 1e3` (text to YAML 1.1: its exponent has no dot) was "'1e3' must be a whole
+    number … (a number with a unit: …)", the `e3` taken for a unit, and `seed: 1.5e3"
+    alike; `{count: 1,000}` was told "a decimal comma? … write N.000", which for a count
+    is 1.0. Each now says what to write."""
+    text = (
+        f"cell: {{robot: panda}}\n{STATION}bins:\n"
+        "  - {id: a, position_m: [1.4, 0.0], size_m: [0.3, 0.3], rim_height_m: 0.15}\n"
+        "items:\n  - {object: cube50, bin: a, count: 1e3}\n"
+        "  - {object: cube50, bin: a, count: 1,000}\nseed: 1.5e3\n"
+    )
+    with pytest.raises(JobError) as err:
+        parse_job(text, "j.yaml", check_reach=False)
+    said = str(err.value)
+    assert (
+        "line 6, items[0].count: '1e3' must be a whole number from 1 to 100000 (written with an exponent: write 1000)"
+        in said
+    )
+    assert (
+        "seed: '1.5e3' must be a whole number from 0 to 4294967295 (written with an exponent: write 1500)"
+        in said
+    )
+    assert "a unit" not in said
+    assert "write N.000; a thousands separator: write N000)" in said
