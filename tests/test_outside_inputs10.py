@@ -195,7 +195,7 @@ def test_a_job_in_utf16_or_utf32_without_its_mark_is_named(
 
 def test_a_whole_number_with_an_exponent_or_a_thousands_comma_is_told_what_to_write() -> None:
     """`count: 1e3` (text to YAML 1.1: its exponent has no dot) was "'1e3' must be a whole
-    number … (a number with a unit: …)", the `e3` taken for a unit, and `seed: 1.5e3"
+    number … (a number with a unit: …)", the `e3` taken for a unit, and `seed: 1.5e3`
     alike; `{count: 1,000}` was told "a decimal comma? … write N.000", which for a count
     is 1.0. Each now says what to write."""
     text = (
