@@ -338,9 +338,14 @@ def test_the_scene_tracks_show_a_trackers_scale_as_its_apparent_gravity():
     assert bare.tracks is None and bare.records == camp.records
 
 
-def _balls_rolling(**options: Any) -> tuple[Any, Any]:
+@pytest.fixture(scope="module")
+def balls_rolling() -> tuple[Any, Any]:
     """The scene's parameters and 32 throws of three balls that roll on after the landing
-    (`s:bounce-roll`'s world, no tracker scale), `options` to `draw_scene_campaign`."""
+    (`s:bounce-roll`'s world, no tracker scale), their tracks logged (3 mm of scatter):
+    thrown once for the two tests that read them, one its tracks, the other its landings
+    alone (logging the tracks moves no landing:
+    `test_the_scene_tracks_show_a_trackers_scale_as_its_apparent_gravity`; the 32 throws
+    drawn again without them were 3.6 CPU-s)."""
     from cell.params import load_params, scene_params_path
 
     path = scene_params_path()
@@ -350,11 +355,13 @@ def _balls_rolling(**options: Any) -> tuple[Any, Any]:
             "rolling_m": 0.05}  # fmt: skip
     camp = draw_scene_campaign([roll], np.random.default_rng(2), mp, n=32,
                                objects=("sphere40", "sphere55", "sphere70"),
-                               **options)  # fmt: skip
+                               track_noise_m=0.003)  # fmt: skip
     return mp, camp
 
 
-def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g():
+def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show_g(
+    balls_rolling: tuple[Any, Any],
+) -> None:
     """Balls rolling on after the landing (`s:bounce-roll`'s world, no tracker scale): on
     the landings alone a tracker scale (1.057 here) fits part of the roll and nothing
     refuses it; the scene's tracks show g (1.002), and the scale is refused alone, and beside
@@ -365,7 +372,7 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show
     from cell.gap.run import diagnose_log
     from cell.log.table import ThrowTable
 
-    mp, camp = _balls_rolling(track_noise_m=0.003)
+    mp, camp = balls_rolling
     d, _ = diagnose_log(ThrowTable.from_records(camp.records), mp.ee, objects=mp.objects,
                         tracks=camp.tracks, validation=mp.validation)  # fmt: skip
     rep = d.report
@@ -378,7 +385,9 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_tracks_show
     assert rep["verdict"]["laws"] == {"bounce": "drop"}
 
 
-def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_across_show_none():
+def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_across_show_none(
+    balls_rolling: tuple[Any, Any],
+) -> None:
     """Balls rolling on (`s:bounce-roll`'s world, no tracker scale, landings only): a scale
     fitted beside the impact law takes part of the roll along the flight, and no gate of the
     effects alone refuses it; across the impact velocity, where a roll moves no landing, the
@@ -392,7 +401,7 @@ def test_a_trackers_scale_beside_a_rolling_ball_is_refused_where_the_misses_acro
     from cell.log.table import ThrowTable
     from cell.model.effects import BounceImpact, TrackingScale
 
-    mp, camp = _balls_rolling()
+    mp, camp = balls_rolling  # its landings alone (the tracks are not read)
     for s_true in (1.0, 1.03):
         recs = [{**r, "landed_x_m": s_true * r["landed_x_m"],
                  "landed_y_m": s_true * r["landed_y_m"]} for r in camp.records]  # fmt: skip

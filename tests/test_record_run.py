@@ -19,7 +19,9 @@ from cell.record.read import read_rows
 # reach pointing down (27 mm), the place's own spot nearest the base within it (the job
 # check's pose: the bin is placed into, not thrown into): the first cube50 is set down there,
 # the second, with that spot taken, finds none it reaches and fails IK when it is planned,
-# an item failed in the run that the job check cannot know of (it checks an empty bin)
+# an item failed in the run that the job check cannot know of (it checks an empty bin).
+# "near" is sent nothing (a cyl70 placed there, a second place beside the first cube50's,
+# cost 1.2 CPU-s a run): a bin the run leaves empty is drawn all the same
 JOB = """\
 cell: {robot: panda}
 limits: {place_reach_m: 1.0}
@@ -30,7 +32,6 @@ bins:
 items:
   - {object: cube50, count: 1, bin: far}
   - {object: cube50, count: 2, bin: edge}
-  - {object: cyl70, count: 1, bin: near}
   - {object: duck, count: 1, bin: far}
 """
 BINS = {
@@ -121,21 +122,15 @@ def test_the_scene_arm_and_items_are_entities_on_both_timelines(runs) -> None:
         assert len(poses) > (1 if r["action"] == "failed" else 20)
         assert {p["item"] for p in poses} == {r["index"]}
     assert "Clear:is_recursive" in str(rows["/world/items/000_cube50"][-1])
-    assert "| items | 5 |" in rows["/summary"][0]["TextDocument:text"][0]
+    assert "| items | 4 |" in rows["/summary"][0]["TextDocument:text"][0]
 
 
 def test_every_item_lands_in_the_recording_as_in_the_json(runs) -> None:
     _, _, summary, rrd = runs
     rows = read_rows(rrd)
-    assert [r["action"] for r in summary["results"]] == [
-        "throw",
-        "place",
-        "failed",
-        "place",
-        "throw",
-    ]
+    assert [r["action"] for r in summary["results"]] == ["throw", "place", "failed", "throw"]
     assert [r["target_bin"] for r in summary["results"][1:3]] == ["edge", "edge"]
-    (duck,) = rows["/world/landing/004/target"]
+    (duck,) = rows["/world/landing/003/target"]
     assert np.hypot(*(np.subtract(duck["Points3D:positions"][0][:2], BINS["far"][:2]))) > 0.02
     for r in summary["results"]:
         i = r["index"]
