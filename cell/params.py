@@ -37,6 +37,7 @@ import yaml
 from cell.errors import InvalidInput, InvalidParameter, plural
 from cell.model.objects import ObjectParams, denser_than_any_solid, lighter_than_air
 from cell.model.params import EndEffectorParams
+from cell.outfile import write_whole
 from cell.yamlsafe import read_yaml_text, safe_load
 
 __all__ = [
@@ -345,6 +346,5 @@ def save_params(params: ModelParams, path: str | Path) -> None:
         doc["note"] = params.note
     if params.validation is not None:
         doc["validation"] = params.validation.as_dict()
-    tmp = Path(str(path) + ".tmp")
-    tmp.write_text(yaml.safe_dump(doc, sort_keys=False))
-    tmp.replace(path)
+    text = yaml.safe_dump(doc, sort_keys=False)
+    write_whole(path, lambda p: p.write_text(text))

@@ -55,8 +55,21 @@ class Parser(argparse.ArgumentParser):
             r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
         )
 
+    # names `json_spelling` read as no path of --json's (set by `main`): an argument
+    # refused as unrecognized among them is said to be one
+    json_not_paths: tuple[str, ...] = ()
+
     def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
+        head = "unrecognized arguments: "
+        extra = message[len(head) :] if message.startswith(head) else ""
+        for name in (n for n in self.json_not_paths if n and n in extra):
+            message += (
+                f"; --json {name}: a path for --json must end in .json, so --json was read "
+                f"as the bare flag and {name} as another argument (the bare --json prints "
+                "the JSON on standard output)"
+            )
+            break
         self.exit(2, f"cell: error: {message} (see `{self.prog} --help`)\n")
 
 
@@ -113,7 +126,13 @@ def _terminate_as_interrupt(signum: int, frame: object) -> NoReturn:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `cell` console script."""
     parser = build_parser()
-    args = parser.parse_args(json_spelling(sys.argv[1:] if argv is None else list(argv)))
+    given = sys.argv[1:] if argv is None else list(argv)
+    spelled = json_spelling(given)
+    ends = given.index("--") if "--" in given else len(given)
+    if isinstance(parser, Parser):
+        after = zip(given[:ends], given[1:ends], strict=False)
+        parser.json_not_paths = tuple(b for a, b in after if a == "--json")
+    args = parser.parse_args(spelled)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",

@@ -65,10 +65,10 @@ def run_random(args: argparse.Namespace) -> int:
             "its job by hand (docs/jobs.md) with the station within its reach"
         ) from None
     if args.output:
+        from cell.outfile import write_whole
+
         out = Path(args.output)
-        tmp = out.with_name(out.name + ".tmp")
-        tmp.write_text(text)
-        tmp.replace(out)
+        write_whole(out, lambda p: p.write_text(text))
         print(f"wrote {out}", file=sys.stderr)
     else:
         sys.stdout.write(text)

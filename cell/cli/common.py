@@ -16,6 +16,7 @@ import numpy as np
 from cell.catalogue import get_object
 from cell.errors import InvalidInput, InvalidParameter, plural
 from cell.model.objects import SHAPES, ObjectParams
+from cell.outfile import write_whole
 from cell.parallel import add_campaign_args  # --workers N, --ray-address ADDR
 
 __all__ = [
@@ -172,10 +173,7 @@ def write_json(args: argparse.Namespace, obj: Any) -> None:
     if not target or target == "-":
         return
     text = json.dumps(to_jsonable(obj), indent=2) + "\n"
-    out = Path(target)
-    tmp = out.with_name(out.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(out)
+    write_whole(target, lambda p: p.write_text(text))
 
 
 def report(args: argparse.Namespace, doc: Any, lines: Iterable[str]) -> int:

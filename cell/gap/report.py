@@ -14,6 +14,7 @@ import numpy as np
 
 from cell.gap.diagnose import Diagnosis
 from cell.gap.problem import GapProblem
+from cell.outfile import write_whole
 
 __all__ = ["jsonable", "write_json", "format_table", "write_html"]
 
@@ -39,9 +40,7 @@ def jsonable(v: Any) -> Any:
 def write_json(report: dict[str, Any], path: str | Path) -> None:
     """Write the report as strict JSON (no NaN), atomically."""
     text = json.dumps(jsonable(report), indent=2, allow_nan=False)
-    tmp = Path(str(path) + ".tmp")
-    tmp.write_text(text + "\n")
-    tmp.replace(path)
+    write_whole(path, lambda p: p.write_text(text + "\n"))
 
 
 def _fmt_params(p: dict[str, float]) -> str:
@@ -320,6 +319,4 @@ def write_html(d: Diagnosis, prob: GapProblem, path: str | Path) -> None:
     parts.append("</table>")
     parts.append("<h2>JSON</h2><pre>" + html.escape(json.dumps(jsonable(r), indent=1)) + "</pre>")
     parts.append("</body></html>")
-    tmp = Path(str(path) + ".tmp")
-    tmp.write_text("\n".join(parts))
-    tmp.replace(path)
+    write_whole(path, lambda p: p.write_text("\n".join(parts)))

@@ -6,6 +6,7 @@ The table type and its column checks are in `cell.log.table` (re-exported here).
 from __future__ import annotations
 
 import csv
+import logging
 import math
 from pathlib import Path
 from typing import Any
@@ -14,6 +15,7 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.infile import check_input_file
+from cell.log.object_ids import ids_alike_by_case
 from cell.log.table import (
     HEADER_AGAIN,
     NUMERIC_COLUMNS,
@@ -29,6 +31,7 @@ from cell.log.table import (
     parse_cells,
     repeats_header,
 )
+from cell.outfile import write_whole
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -39,6 +42,8 @@ __all__ = [
     "write_throws_csv",
     "read_tracks_csv",
 ]
+
+log = logging.getLogger(__name__)
 
 
 def read_throws_csv(path: str | Path) -> ThrowTable:
@@ -64,7 +69,10 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
         raise LogFormatError(p, None, None, _not_utf8(p)) from None
     except csv.Error as exc:
         raise _csv_error(p, exc, blank=lambda row: not any(c.strip() for c in row)) from None
-    return parse_cells(header, rows, p)
+    table = parse_cells(header, rows, p)
+    for sentence in ids_alike_by_case(table.text("object_id"), p):
+        log.warning(sentence)
+    return table
 
 
 def _csv_error(p: str, exc: csv.Error, blank: Any) -> LogFormatError:
@@ -163,14 +171,16 @@ def _fmt(v: Any) -> str:
 
 def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
     """Write a table in the docs/throw_log.md format (floats at full precision, NaN as empty)."""
-    tmp = Path(str(path) + ".tmp")
-    with open(tmp, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(table.columns)
-        cols = [table.data[c] for c in table.columns]
-        for i in range(len(table)):
-            w.writerow([_fmt(col[i]) for col in cols])
-    tmp.replace(path)
+
+    def write(p: Path) -> None:
+        with open(p, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(table.columns)
+            cols = [table.data[c] for c in table.columns]
+            for i in range(len(table)):
+                w.writerow([_fmt(col[i]) for col in cols])
+
+    write_whole(path, write)
 
 
 # [s] a track's samples lie within this of the release command: no throw of a cell flies

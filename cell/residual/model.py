@@ -25,6 +25,7 @@ from cell.log.table import ThrowTable
 from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.model.throw import Landing, ThrowBatch
+from cell.outfile import write_whole
 from cell.residual.features import FEATURE_NAMES, GripPose, feature_matrix, table_features
 from cell.residual.learners import fit_learner
 from cell.residual.target import ResidualTargets, residual_targets
@@ -129,9 +130,8 @@ class ResidualModel:
             "n_excluded": self.n_excluded,
             "identified_objects": list(self.identified_objects),
         }
-        tmp = Path(str(path) + ".tmp")
-        sio.dump({"format": FORMAT, "meta": json.dumps(meta), "pipeline": self.pipeline}, tmp)
-        tmp.replace(path)
+        doc = {"format": FORMAT, "meta": json.dumps(meta), "pipeline": self.pipeline}
+        write_whole(path, lambda p: sio.dump(doc, p))
 
     @classmethod
     def load(cls, path: str | Path) -> ResidualModel:
