@@ -342,6 +342,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "parameter_throw_to_throw",
         "one_configuration",
         "wind_not_steady",
+        "flight_bends",
     }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())

@@ -34,7 +34,8 @@ Verdict rules:
 * on a log of one configuration, a verdict naming effects the log cannot tell apart is
   `unknown`, those effects its partials (`cell.gap.one_config`);
 * a verdict naming `wind` is `unknown`, the wind partial, where the tracks show its
-  sideways pull growing along the flight (a late gust, `cell.gap.track_gust`).
+  sideways pull growing along the flight (a late gust, `cell.gap.track_gust`); a `none`
+  is `unknown` (flight) where the tracks bend off the model's flight (`flight_bends`).
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ from cell.gap.select import (
     public,
     refusal,
 )
-from cell.gap.track_gust import unsteady_wind
+from cell.gap.track_gust import flight_bends, unsteady_wind
 from cell.model.effects import EFFECTS, FAMILIES, Effect
 
 __all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects",
@@ -327,8 +328,8 @@ def diagnose(
         spread = _spread_verdict(prob, chosen[-1], A, nf)
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
-    # a wind whose pull the tracks show growing along the flight is no steady wind
-    verdict = ["unknown"] if (unsteady := unsteady_wind(verdict, tracks)) else verdict
+    unsteady, bends = unsteady_wind(verdict, tracks), flight_bends(verdict, tracks)
+    verdict = ["unknown"] if unsteady or bends else verdict
     if verdict[0] in ("none", "unknown"):
         v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
     else:
@@ -354,6 +355,7 @@ def diagnose(
         ),
         "rules": _rules(),
         **({"wind_not_steady": unsteady} if unsteady else {}),
+        **({"flight_bends": bends} if bends else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials

@@ -144,6 +144,11 @@ def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
         if where:
             evidence = where["evidence"] + "; " + evidence.replace("no tracks; ", "")
         where = {"phase": "none", "evidence": evidence}
+    if tp is not None and "flight_bends" in rep:  # a `none` the tracks' bend made `unknown`
+        where = {
+            "phase": "flight",
+            "evidence": f"tracks: {tp['evidence']}; {rep['flight_bends']['why']}",
+        }
     if not where:
         where = _phase_from_verdict(d)
     return where

@@ -17,6 +17,10 @@ z-score ‖N D‖ / s (s the scatter of the tracks' differences about N D; under
 D is zero and z² about χ² with two degrees of freedom). Where z exceeds GROW_Z and the end's
 pull is the larger, a verdict naming a steady `wind` is not given: it is `unknown`, the wind
 its partial effect, with the sentence of `unsteady_wind`.
+
+A push early in the flight the whole-track launch state takes in, and the landings may then
+agree with the model (`none`) while the tracks bend off its flight: where the bend's z-score
+(`cell.gap.tracks._bend`) is over BEND_Z, `flight_bends` makes that `unknown` in the flight.
 """
 
 from __future__ import annotations
@@ -28,8 +32,13 @@ import numpy as np
 from cell.gap.track_launch import pad_tracks, start_guess
 from cell.gap.track_ode import fit_ode
 
-__all__ = ["GROW_Z", "pull_along", "unsteady_wind"]
+__all__ = ["BEND_Z", "GROW_Z", "flight_bends", "pull_along", "unsteady_wind"]
 
+# [z] the tracks' bend off the model's flight (`cell.gap.tracks._bend`) that a `none` verdict
+# may not pass over: still air with the model's drag (an own RK4, 40 and 160 tracks at 60-300
+# Hz, 1 mm scatter, 3.5-8 m/s, 6 seeds each) gave z up to 2.0, a gust over the first 30 % of
+# each flight medians of 6.7-12.3 (docs/HISTORY.md, branch `bend63`)
+BEND_Z = 5.0
 GROW_Z = 4.0  # the end's sideways pull differs from the start's by this many standard errors
 PART = 1.0 / 3.0  # the share of a track's kept span fitted at its start and at its end
 MIN_PART_SAMPLES = 8  # samples a part needs
@@ -143,3 +152,25 @@ def unsteady_wind(verdict: list[str], tracks: dict[str, Any] | None) -> dict[str
         f"so this is no steady wind"
     )
     return {"why": why, **pull}
+
+
+def flight_bends(verdict: list[str], tracks: dict[str, Any] | None) -> dict[str, Any] | None:
+    """Why a `none` verdict is `unknown`: the tracks bend off the model's flight with a
+    z-score over BEND_Z (a push the whole-track launch state absorbs, as a gust early in the
+    flight), with the figures; None otherwise (another verdict, no tracks, a bend within)."""
+    bend_z = float((tracks or {}).get("bend_z", float("nan")))
+    if verdict != ["none"] or not bend_z > BEND_Z:
+        return None
+    bend_m = float(tracks["bend_m"])  # type: ignore[index]
+    why = (
+        f"the tracks bend {bend_m:.3f} m off the model's flight (z {bend_z:.1f}, over "
+        f"{BEND_Z:g}): the landings agree with the model from the tracks' launch states, "
+        f"but the flight after launch is not the model's, and no effect explains it"
+    )
+    return {
+        "why": why,
+        "phase": "flight",
+        "bend_m": bend_m,
+        "bend_z": bend_z,
+        "bend_bound_z": BEND_Z,
+    }

@@ -141,10 +141,12 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
     }
     usable, bad, mended = check_tracks(list(throw_ids), tracks)
     samples: list[np.ndarray | None] = [usable.get(t) for t in throw_ids]
-    todo = [
-        i for i, tr in enumerate(samples)
-        if tr is not None and _key(throw_ids[i], tr, float(k[i])) not in _CACHE
-    ]  # fmt: skip
+    keys = {
+        i: _key(throw_ids[i], tr, float(k[i])) for i, tr in enumerate(samples) if tr is not None
+    }
+    # this call's fits held here: a cache cleared as they are fitted (more tracks) loses none
+    fits = {i: _CACHE[key] for i, key in keys.items() if key in _CACHE}
+    todo = [i for i in keys if i not in fits]
     if todo:
         wl = whole_track_launch([samples[i] for i in todo], np.asarray(k, float)[todo])  # type: ignore[misc]
         for j, i in enumerate(todo):
@@ -155,13 +157,14 @@ def fit_tracks(throw_ids: list[str], tracks: dict[str, np.ndarray], k: np.ndarra
             end = end_state(tr, float(k[i]))
             row = {key: wl[key][j] for key in ("t0", "p0", "v0", "a0", "g_ratio", "dropped",
                                                "theta", "rms_m", "drag_ratio")}  # fmt: skip
-            if len(_CACHE) >= _CACHE_MAX:
-                _CACHE.clear()
-            _CACHE[_key(throw_ids[i], tr, float(k[i]))] = (row, hv, end)
+            fits[i] = (row, hv, end)
+        if len(_CACHE) + len(todo) > _CACHE_MAX:
+            _CACHE.clear()
+        _CACHE.update((keys[i], fits[i]) for i in todo[:_CACHE_MAX])
     for i, tr in enumerate(samples):
         if tr is None:
             continue
-        row, hv, end = _CACHE[_key(throw_ids[i], tr, float(k[i]))]
+        row, hv, end = fits[i]
         if not row["rms_m"] <= MAX_FIT_RMS_M:
             why = (
                 f"not one free flight: the whole-track fit with drag misses it by "
