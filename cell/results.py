@@ -115,6 +115,10 @@ class ItemResult:
 class RunSummary:
     """The closing table of a run (JSON keys as `cell run --json`).
 
+    `placed`, `thrown` and `failed` count the items by `ItemResult.action`: `failed`, those
+    stopped before their release (the table's `not released`); the items not at rest in
+    their bin, released or not, are `items - in_bin`, by reason in `failures`.
+
     The planning figures are wall-clock ones (`WALL_CLOCK_KEYS`): `plan_s_median`,
     `plan_s_p95`, `plan_s_max` [s] of the items' `plan_s`, on a machine of `cores`
     CPU cores (`cores`), a decision planned on `plan_workers` processes (1: serially;

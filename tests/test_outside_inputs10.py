@@ -217,3 +217,37 @@ def test_a_whole_number_with_an_exponent_or_a_thousands_comma_is_told_what_to_wr
     )
     assert "a unit" not in said
     assert "write N.000; a thousands separator: write N000)" in said
+
+
+@pytest.mark.parametrize(
+    ("field", "written", "read_as"),
+    [
+        ("arm", "yes", "a boolean"),
+        ("arm", "off", "a boolean"),
+        ("arm", "~", "no value"),
+        ("arm", "2026-12-01", "a date"),
+        ("flange", "on", "a boolean"),
+        ("end_effector", "null", "no value"),
+    ],
+)
+def test_a_mount_files_name_yaml_reads_as_another_value_is_said_as_written(
+    tmp_path: Path, field: str, written: str, read_as: str
+) -> None:
+    """A mount file's `arm: yes` was "field 'arm' must be the arm's name (…), got True": the
+    value YAML 1.1 made of it, not what was written. It is said as the job's names are
+    (`cell.yamltree.not_text`), and written in quotes, the text loads as that name."""
+    text = (ROOT / "robots" / "ur5_throwing" / "mount.yaml").read_text()
+    old = re.search(rf"^{field}: \S+", text, re.M)
+    assert old is not None
+    mount = tmp_path / "mount.yaml"
+    mount.write_text(text.replace(old.group(0), f"{field}: {written}"))
+    with pytest.raises(InvalidParameter) as err:
+        load_mount(str(mount))
+    msg = str(err.value)
+    assert msg.startswith(f"{mount}: field '{field}': {written} is {read_as} to YAML"), msg
+    assert f"write it in quotes, '{written}'" in msg and "got " not in msg, msg
+    if field == "arm":  # the name's rule said too; in quotes, a valid one loads as written
+        assert "lower-case letters" in msg
+        if written[0].isalpha():
+            mount.write_text(text.replace(old.group(0), f"arm: '{written}'"))
+            assert load_mount(str(mount)).name == written

@@ -113,6 +113,17 @@ def json_spelling(argv: list[str]) -> list[str]:
     return out
 
 
+class _Said(logging.Formatter):
+    """The library's warnings said as the command's own, `cell: warning: ...` (a place
+    that had not touched down, a fork that failed); its other records, and every other
+    library's, as `LEVEL logger: ...`."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        if record.levelno == logging.WARNING and record.name.split(".")[0] == "cell":
+            return f"cell: warning: {record.getMessage()}"
+        return super().format(record)
+
+
 class Terminated(KeyboardInterrupt):
     """A SIGTERM (`kill`, `timeout`, a service manager stopping the cell): the command
     ends as Ctrl-C ends it, through every `finally` (the servos' torque off, the throw
@@ -133,10 +144,9 @@ def main(argv: list[str] | None = None) -> int:
         after = zip(given[:ends], given[1:ends], strict=False)
         parser.json_not_paths = tuple(b for a, b in after if a == "--json")
     args = parser.parse_args(spelled)
-    logging.basicConfig(
-        level=logging.INFO if args.verbose else logging.WARNING,
-        format="%(levelname)s %(name)s: %(message)s",
-    )
+    said = logging.StreamHandler()  # standard error
+    said.setFormatter(_Said("%(levelname)s %(name)s: %(message)s"))
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, handlers=[said])
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2

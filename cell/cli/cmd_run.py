@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
 import math
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +28,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "-q",
         "--quiet",
         action="store_true",
-        help="no line per item as it finishes (on standard error)",
+        help="no line per item as it finishes (on standard error), nor the warnings of "
+        "the items' motions (a place that had not touched down); the job's warnings stay",
     )
     p.add_argument("--snapshot", metavar="OUT.png", help="render the scene at the end (headless)")
     p.add_argument(
@@ -204,8 +208,24 @@ def run(args: argparse.Namespace) -> int:
     its wall-clock fields."""
     from cell.parallel import one_blas_thread
 
-    with one_blas_thread():
+    said = not getattr(args, "quiet", False) or getattr(args, "verbose", False)  # -v: said
+    with one_blas_thread(), _library_warnings(said):
         return _run(args)
+
+
+@contextlib.contextmanager
+def _library_warnings(said: bool) -> Iterator[None]:
+    """Under -q the library's warnings (`cell: warning: place: the item had not touched
+    down ...`, of one item's motion) go unsaid, as the items' lines do; the job's
+    warnings, printed by this command before anything moves, are said still."""
+    lib = logging.getLogger("cell")
+    before = lib.level
+    if not said:
+        lib.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        lib.setLevel(before)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -403,6 +423,12 @@ def _fmt(v: float, unit: str = "", digits: int = 3) -> str:
     return "n/a" if not math.isfinite(v) else f"{v:.{digits}f}{unit}"
 
 
+def _not_in_bin(s) -> str:  # type: ignore[no-untyped-def]
+    """The items not at rest in their bin, placed, thrown or not released, and why."""
+    n = s.items - s.in_bin
+    return f"{n} ({', '.join(f'{k} {v}' for k, v in s.failures.items())})" if n else "none"
+
+
 def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
     from cell.cli.columns import column_width, pad
 
@@ -429,8 +455,8 @@ def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
         ("items", f"{s.items}"),
         ("placed", f"{s.placed}"),
         ("thrown", f"{s.thrown}"),
-        ("failed", f"{s.failed}"),
-        ("not in their bin", ", ".join(f"{k} {v}" for k, v in s.failures.items()) or "none"),
+        ("not released", f"{s.failed}"),  # stopped before the release (JSON: `failed`)
+        ("not in their bin", _not_in_bin(s)),
         ("in the right bin", f"{s.in_bin} ({100 * s.in_bin_rate:.1f} %)"),
         ("landing error mean", _fmt(s.mean_landing_error_m, " m")),
         ("landing error p95", _fmt(s.p95_landing_error_m, " m")),

@@ -146,12 +146,38 @@ def robot_names() -> tuple[str, ...]:
     return tuple(sorted(mount_files()))
 
 
+def _as_written(raw: dict[str, Any], key: str, path: Path) -> str:
+    """The job's words (`cell.yamltree.not_text`) for a text field YAML 1.1 read as a
+    boolean, no value or a date (`arm: yes`, `flange: ~`): the value as written, what YAML
+    made of it, and to quote it; "" for any other value."""
+    import datetime
+
+    import yaml
+
+    from cell.yamlsafe import compose, read_yaml_text
+    from cell.yamltree import not_text
+
+    v = raw.get(key)
+    if key not in raw or not (v is None or isinstance(v, (bool, datetime.date))):
+        return ""
+    root = compose(read_yaml_text(path, "mount file"))  # read again, for this message only
+    written = [
+        n.value
+        for k, n in (root.value if isinstance(root, yaml.MappingNode) else ())
+        if k.value == key and isinstance(n, yaml.ScalarNode) and not n.style
+    ]
+    return f"{path}: field '{key}': {not_text(v, written[0] if written else None)}"
+
+
 def _arm_name(raw: dict[str, Any], path: Path) -> str:
     name = raw.get("arm")
     if not isinstance(name, str) or not _NAME.fullmatch(name):
+        rule = "lower-case letters, digits and _, starting with a letter, at most 32"
+        said = _as_written(raw, "arm", path)
         raise InvalidParameter(
-            f"{path}: field 'arm' must be the arm's name (lower-case letters, digits and _, "
-            f"starting with a letter, at most 32), got {name!r}"
+            f"{said} (the arm's name: {rule})"
+            if said
+            else f"{path}: field 'arm' must be the arm's name ({rule}), got {name!r}"
         )
     return name
 
@@ -229,7 +255,8 @@ def _joints(raw: dict[str, Any], path: Path) -> tuple[str, ...]:
 def _text(raw: dict[str, Any], key: str, path: Path) -> str:
     v = raw[key]
     if not isinstance(v, str) or not v:
-        raise InvalidParameter(f"{path}: field '{key}' must be a non-empty text, got {v!r}")
+        said = _as_written(raw, key, path)
+        raise InvalidParameter(said or f"{path}: field '{key}' must be a non-empty text, got {v!r}")
     return v
 
 
