@@ -11,7 +11,6 @@ so the model from the tracks' launch states predicts the landings within 10 % of
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
@@ -21,11 +20,10 @@ from cell.gap.run import diagnose_log
 from cell.gap.track_gust import BEND_Z
 from cell.log.csvio import read_throws_csv
 from cell.model.params import DEFAULT_EE
+from tests.own_flights import fly, tracks_of, write_log
 
-G = 9.81  # [m/s²]
 MASS, DIAM = 0.058, 0.065  # [kg], [m]: a tennis-like ball
 K = 0.5 * 1.225 * 0.47 * math.pi * DIAM**2 / 4 / MASS  # [1/m] ½ρC_dA/m, air 1.225 kg/m³
-DT = 1e-3  # [s] integration step
 RATE_HZ = 120.0  # tracker samples per second
 N = 40  # throws (and tracks)
 GUST = (2.5, -1.0, 0.0)  # [m/s] the air's velocity in the early gust, world frame
@@ -38,35 +36,9 @@ SEED = 2
 
 def _fly(p0: np.ndarray, v0: np.ndarray, t_gust: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:  # fmt: skip
-    """Every flight to z = 0 by RK4, the air at GUST before t_gust [s], still after:
-    landing xy [m], flight time [s], path (k, 4) t, x, y, z."""
-    p, v, t = p0.copy(), v0.copy(), 0.0
-    land, t_land = np.full((N, 2), np.nan), np.full(N, np.nan)
-    path = [[np.r_[0.0, p0[i]]] for i in range(N)]
-    live = np.ones(N, bool)
-
-    def acc(tt: float, vv: np.ndarray) -> np.ndarray:
-        rel = vv - np.where((tt < t_gust)[:, None], GUST, 0.0)
-        a = -K * np.linalg.norm(rel, axis=1)[:, None] * rel
-        a[:, 2] -= G
-        return a
-
-    while live.any():
-        k1p, k1v = v, acc(t, v)
-        k2p, k2v = v + 0.5 * DT * k1v, acc(t + 0.5 * DT, v + 0.5 * DT * k1v)
-        k3p, k3v = v + 0.5 * DT * k2v, acc(t + 0.5 * DT, v + 0.5 * DT * k2v)
-        k4p, k4v = v + DT * k3v, acc(t + DT, v + DT * k3v)
-        p1 = p + DT / 6 * (k1p + 2 * k2p + 2 * k3p + k4p)
-        v1 = v + DT / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        down = live & (p1[:, 2] < 0.0)
-        s = (p[down, 2] / (p[down, 2] - p1[down, 2]))[:, None]  # the crossing, linearly
-        land[down] = (p[down] + s * (p1[down] - p[down]))[:, :2]
-        t_land[down] = t + s[:, 0] * DT
-        live &= ~down
-        p, v, t = p1, v1, t + DT
-        for i in np.flatnonzero(live):
-            path[i].append(np.r_[t, p[i]])
-    return land, t_land, [np.array(x) for x in path]
+    """Every flight to z = 0 (`tests.own_flights.fly`), the air at GUST before t_gust [s],
+    still after."""
+    return fly(p0, v0, K, lambda tt: np.where((tt < t_gust)[:, None], GUST, 0.0))
 
 
 def _campaign(gust: bool, tmp_path: Path, seed: int = SEED):  # type: ignore[no-untyped-def]
@@ -81,24 +53,8 @@ def _campaign(gust: bool, tmp_path: Path, seed: int = SEED):  # type: ignore[no-
     land, t_land, paths = _fly(p0, v0, GUST_UNTIL * t_still if gust else np.zeros(N))
     moved = float(np.sqrt(np.mean(np.sum((land - still) ** 2, axis=1))))
     land = land + rng.normal(0.0, LAND_SIG, land.shape)
-    tracks = {}
-    for i, path in enumerate(paths):
-        t = np.arange(0.0, t_land[i] - 0.005, 1.0 / RATE_HZ)
-        pos = np.stack([np.interp(t, path[:, 0], path[:, j]) for j in (1, 2, 3)], axis=1)
-        tracks[f"b{i:03d}"] = np.c_[t, pos + rng.normal(0.0, 0.001, pos.shape)]
-    cols = ["throw_id", "object_id", "shape", "mass_kg", "size_x_m", "size_y_m", "size_z_m",
-            "stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad", "roll_rad",
-            "vx_mps", "vy_mps", "vz_mps", "platform", "rotor_rpm", "land_z_m", "landed_x_m",
-            "landed_y_m"]  # fmt: skip
-    path = tmp_path / "throws.csv"
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(cols)
-        for i in range(N):
-            w.writerow([f"b{i:03d}", "ball65", "sphere", MASS, DIAM, DIAM, DIAM, "",
-                        *(f"{x:.6f}" for x in p0[i]), f"{el[i]:.6f}", f"{az[i]:.6f}",
-                        0.0, 0.0, 0.0, 0.0, "arm", 0.0, 0.0, f"{land[i, 0]:.6f}",
-                        f"{land[i, 1]:.6f}"])  # fmt: skip
+    tracks = tracks_of(paths, t_land - 0.005, RATE_HZ, rng)
+    path = write_log(tmp_path / "throws.csv", MASS, DIAM, p0, list(el), list(az), land)
     return read_throws_csv(path), tracks, moved
 
 

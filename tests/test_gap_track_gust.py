@@ -10,7 +10,6 @@ only on the flights' last thirds (`cell.gap.track_gust`), and the verdict is `un
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -22,11 +21,10 @@ from cell.gap.run import diagnose_log
 from cell.gap.track_gust import GROW_Z, pull_along
 from cell.log.csvio import read_throws_csv
 from cell.model.params import DEFAULT_EE
+from tests.own_flights import fly, tracks_of, write_log
 
-G = 9.81  # [m/s²]
 MASS, DIAM = 0.058, 0.065  # [kg], [m]: a tennis-like ball
 K = 0.5 * 1.225 * 0.47 * math.pi * DIAM**2 / 4 / MASS  # [1/m] ½ρC_dA/m, air 1.225 kg/m³
-DT = 1e-3  # [s] integration step
 RATE_HZ = 120.0  # tracker samples per second
 N = 48  # throws (and tracks)
 WIND = (1.5, -1.0)  # [m/s] the steady wind
@@ -49,36 +47,8 @@ Air = Callable[[float, np.ndarray], np.ndarray]
 
 def _fly(p0: np.ndarray, v0: np.ndarray, air: Air, t_gust: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:  # fmt: skip
-    """Every flight to z = 0 by RK4: landing xy [m], flight time [s], path (k, 4) t, x, y, z.
-    The air moves at `air(t, t_gust)` (n, 3) [m/s]."""
-    p, v = p0.copy(), v0.copy()
-    t = 0.0
-    land, t_land = np.full((N, 2), np.nan), np.full(N, np.nan)
-    path = [[np.r_[0.0, p0[i]]] for i in range(N)]
-    live = np.ones(N, bool)
-
-    def acc(tt: float, vv: np.ndarray) -> np.ndarray:
-        rel = vv - air(tt, t_gust)
-        a = -K * np.linalg.norm(rel, axis=1)[:, None] * rel
-        a[:, 2] -= G
-        return a
-
-    while live.any():
-        k1p, k1v = v, acc(t, v)
-        k2p, k2v = v + 0.5 * DT * k1v, acc(t + 0.5 * DT, v + 0.5 * DT * k1v)
-        k3p, k3v = v + 0.5 * DT * k2v, acc(t + 0.5 * DT, v + 0.5 * DT * k2v)
-        k4p, k4v = v + DT * k3v, acc(t + DT, v + DT * k3v)
-        p1 = p + DT / 6 * (k1p + 2 * k2p + 2 * k3p + k4p)
-        v1 = v + DT / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        down = live & (p1[:, 2] < 0.0)
-        s = (p[down, 2] / (p[down, 2] - p1[down, 2]))[:, None]  # the crossing, linearly
-        land[down] = (p[down] + s * (p1[down] - p[down]))[:, :2]
-        t_land[down] = t + s[:, 0] * DT
-        live &= ~down
-        p, v, t = p1, v1, t + DT
-        for i in np.flatnonzero(live):
-            path[i].append(np.r_[t, p[i]])
-    return land, t_land, [np.array(x) for x in path]
+    """Every flight to z = 0 (`tests.own_flights.fly`), the air at `air(t, t_gust)`."""
+    return fly(p0, v0, K, lambda tt: air(tt, t_gust))
 
 
 def _still(tt: float, t_gust: np.ndarray) -> np.ndarray:
@@ -101,25 +71,11 @@ def _campaign(air: Air, tmp_path: Path, seed: int = 0):  # type: ignore[no-untyp
     _, t_still, _ = _fly(p0, v0, _still, np.full(N, np.inf))
     land, t_land, paths = _fly(p0, v0, air, GUST_FROM * t_still)
     land = land + rng.normal(0.0, 0.01, land.shape)
-    tracks = {}
-    for i, path in enumerate(paths):
-        t = np.arange(0.0, t_land[i], 1.0 / RATE_HZ)
-        pos = np.stack([np.interp(t, path[:, 0], path[:, j]) for j in (1, 2, 3)], axis=1)
-        tracks[f"b{i:03d}"] = np.c_[t, pos + rng.normal(0.0, 0.001, pos.shape)]
-    cols = ["throw_id", "object_id", "shape", "mass_kg", "size_x_m", "size_y_m", "size_z_m",
-            "stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad", "roll_rad",
-            "vx_mps", "vy_mps", "vz_mps", "platform", "rotor_rpm", "land_z_m", "landed_x_m",
-            "landed_y_m"]  # fmt: skip
-    path = tmp_path / "throws.csv"
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(cols)
-        for i in range(N):
-            sp = float(np.linalg.norm(v0[i]))
-            w.writerow([f"b{i:03d}", "ball65", "sphere", MASS, DIAM, DIAM, DIAM, "",
-                        *(f"{x:.6f}" for x in p0[i]), f"{math.asin(v0[i, 2] / sp):.6f}",
-                        f"{math.atan2(v0[i, 1], v0[i, 0]):.6f}", 0.0, 0.0, 0.0, 0.0, "arm",
-                        0.0, 0.0, f"{land[i, 0]:.6f}", f"{land[i, 1]:.6f}"])  # fmt: skip
+    tracks = tracks_of(paths, t_land, RATE_HZ, rng)
+    sp = [float(np.linalg.norm(v)) for v in v0]
+    el = [math.asin(v0[i, 2] / sp[i]) for i in range(N)]
+    az = [math.atan2(v0[i, 1], v0[i, 0]) for i in range(N)]
+    path = write_log(tmp_path / "throws.csv", MASS, DIAM, p0, el, az, land)
     return read_throws_csv(path), tracks
 
 

@@ -330,10 +330,8 @@ def diagnose(
             verdict = public(chosen[-1].names)
     unsteady, bends = unsteady_wind(verdict, tracks), flight_bends(verdict, tracks)
     verdict = ["unknown"] if unsteady or bends else verdict
-    if verdict[0] in ("none", "unknown"):
-        v_sq = base_sq if verdict[0] == "none" or not chosen else cur_sq
-    else:
-        v_sq = cur_sq
+    named = verdict[0] not in ("none", "unknown")
+    v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq
     if chosen and verdict[0] != "none":
         v_res = prob.residual(all_idx, chosen[-1].full.effects)
     else:

@@ -216,9 +216,7 @@ def _no_flight_under_gravity(row: dict[str, Any]) -> str | None:
     )
 
 
-def launch_arrays(
-    fit: TrackFit,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def launch_arrays(fit: TrackFit) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The observed launch states (p0, v0, t0) and their bias coefficients c0."""
     return fit.p0, fit.v0, fit.t0, fit.c0
 
