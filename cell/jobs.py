@@ -24,6 +24,7 @@ from cell.jobbins import (
     light_item_warnings,
     look_alike_warnings,
     placement_problem,
+    wide_item_warnings,
 )
 from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, job_problems, unsorted_warning
@@ -453,6 +454,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         job = replace(job, thrown_bins=thrown)
     errors.raise_all()
     warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
+    warnings += wide_item_warnings(job)
     warnings += tuple(reach_warnings) + look_alike_warnings(job)
     return replace(job, warnings=warnings)
 
