@@ -5,12 +5,13 @@ permutation control) and the pairs tried when one effect leaves a real gap.
 An effect is refused (does not join, and the report says why) when a parameter sits at a
 bound, when its value is one no real cell has (outside the effect's plausible range), or
 when the tracks contradict it: its phase carries less than AGREE_SHARE of the largest
-phase share of the landing miss the tracks show, a measurement effect without an apparent
-gravity off g, or a tracking scale off the tracks' apparent gravity ratio by more than
-SCALE_AGREE. A tracking scale beside a landing effect is refused, too, where the landing
-misses across the impact velocity do not show it (`across_scale`): a slide moves a landing
-along the impact velocity only, so across it a scale is all that moves the landings in
-proportion to their distance from the tracker's origin.
+phase share of the landing miss the tracks show (a landing's net of the floor F), a
+measurement effect without an apparent gravity off g, a tracking scale off the tracks'
+apparent gravity ratio by more than SCALE_AGREE, or a drag factor the tracks' drag per
+object contradicts (`cell.gap.track_drag`). A tracking scale beside a landing effect is
+refused, too, where the landing misses across the impact velocity do not show it
+(`across_scale`): a slide moves a landing along the impact velocity only, so across it a
+scale is all that moves the landings in proportion to their distance from the origin.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ import numpy as np
 from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
+from cell.gap.track_drag import drag_refusal
 from cell.gap.tracks import phase_evidence
-from cell.model.effects import EFFECTS, FAMILIES, Effect, TrackingScale
+from cell.model.effects import EFFECTS, FAMILIES, DragScale, Effect, TrackingScale
 
 __all__ = [
     "Selection",
@@ -95,10 +97,12 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) ->
     own = ev["shares"].get(eff.phase, float("nan"))
     if not np.isfinite(own) or ev["significant"].get(eff.phase):
         return None
-    if own < AGREE_SHARE * ev["shares"][top]:
+    net = np.sqrt(max(own**2 - floor_m**2, 0.0)) if eff.phase == "landing" else own
+    if net < AGREE_SHARE * ev["shares"][top]:
+        over = f", {net:.3f} m over the floor" if own >= AGREE_SHARE * ev["shares"][top] else ""
         return (
             f"the tracks place the gap in the {top} ({ev['shares'][top]:.3f} m), not the "
-            f"{eff.phase} ({own:.3f} m)"
+            f"{eff.phase} ({own:.3f} m{over})"
         )
     return None
 
@@ -348,9 +352,10 @@ class Selection:
         for e in cand.full.effects:
             if isinstance(e, BandStiffness):
                 continue
-            why = refusal(e, self.tracks, self.floor_m)
-            if why:
+            if why := refusal(e, self.tracks, self.floor_m):
                 return f"{e.name}: {why}"
+        if why := drag_refusal(self.prob, cand.full.effects, self.tracks):
+            return f"{DragScale.name}: {why}"
         why = across_refusal(self.prob, cand.full.effects)
         return f"{TrackingScale.name}: {why}" if why else None
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from cell.gap.problem import GapProblem
 from cell.gap.track_check import check_tracks
+from cell.gap.track_drag import drag_figures
 from cell.gap.track_evidence import evidence, flight_time
 from cell.gap.track_gust import pull_along
 from cell.gap.track_halves import _state, end_state, halves
@@ -440,8 +441,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     b = prob.batch
     k = drag_constant(b.shape, b.mass, b.size)
     idx = np.flatnonzero(ok)
-    kk = k[idx]
-    lz = b.land_z[idx]
+    kk, lz = k[idx], b.land_z[idx]
     # launch and flight shares from the halves (module docstring)
     hv = fit.halves[:, :, idx]
     t_rel0 = np.where(prob.has_stroke[idx], prob.ee.dt, fit.t0[idx])
@@ -490,7 +490,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "flight_time_z": tof_z,
         "dropped_samples_mean": float(np.mean(fit.dropped[idx])),
         "track_fit_rms_m": float(np.median(fit.rms_m[idx])),
-        "drag_ratio": float(np.median(fit.drag_ratio[idx])),
+        **drag_figures(np.asarray(prob.table.text("object_id"))[idx], fit.drag_ratio[idx]),
         "sideways": side,
         "pull_along": pull_along([fit.samples[i] for i in idx], fit.dropped[idx], kk),
     }
