@@ -134,7 +134,7 @@ def _check(args: argparse.Namespace) -> int:
         return _check_other(args)
 
     from cell.gap.check import CASES, check_json, format_check, run_check
-    from cell.gap.report import jsonable
+    from cell.gap.report import jsonable, write_json
 
     truths = tuple(args.truths) if args.truths else CASES
     bad = [t for t in truths if t not in CASES]
@@ -167,8 +167,7 @@ def _check(args: argparse.Namespace) -> int:
     else:
         print(format_check(rows))
     if args.json and args.json != "-":
-        with open(args.json, "w") as fh:
-            json.dump(jsonable(check_json(rows)), fh, indent=2, allow_nan=False)
+        write_json(check_json(rows), args.json)
         print(f"check -> {args.json}")
     return 0 if all(r.correct for r in rows) else 1
 
@@ -182,7 +181,7 @@ def _check_other(args: argparse.Namespace) -> int:
         run_other_check,
     )
     from cell.gap.check_scene import FAST_SCENE, SCENE_CASES, run_scene_check
-    from cell.gap.report import jsonable
+    from cell.gap.report import write_json
 
     scene = args.worlds == "scene"
     fast: tuple[str, ...] = FAST_SCENE if scene else FAST_OTHER
@@ -203,8 +202,7 @@ def _check_other(args: argparse.Namespace) -> int:
                                address=args.ray_address)  # fmt: skip
     print(format_other(rows))
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(jsonable(other_json(rows)), fh, indent=2, allow_nan=False)
+        write_json(other_json(rows), args.json)
         print(f"check -> {args.json}")
     return 0 if all(r["passes"] for r in rows) else 1
 

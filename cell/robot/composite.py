@@ -19,6 +19,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from cell.errors import InvalidParameter
+from cell.outfile import write_whole
 from cell.robot.mount import MountSpec, check_against_urdf, load_mount
 from cell.robot.mount_paths import end_effector_file
 from cell.robot.paths import example_robot_data_share, robots_dir
@@ -242,8 +243,5 @@ def composite_urdf(robot: str) -> Path:
             return path
     except OSError:
         pass
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    write_whole(path, lambda p: p.write_text(text))
     return path
