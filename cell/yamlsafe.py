@@ -49,8 +49,10 @@ _MEMO_BYTES = 64_000
 _MEMO_LOCK = threading.Lock()
 
 
-# YAML 1.1's octal: a leading 0 and more digits (`010` is 8; `09` is no number at all)
-_OCTAL = "(?![-+]?0[0-9_]*[0-9][0-9_]*$)"
+# YAML 1.1's octal: a leading 0 and more digits (`010` is 8; `09` is no number at all);
+# a job's number field says what to write for one (`cell.yamltree`)
+LEADING_ZERO = r"[-+]?0[0-9_]*[0-9][0-9_]*"
+_OCTAL = f"(?!{LEADING_ZERO}$)"
 
 
 def _without_base60(loader: Any) -> Any:

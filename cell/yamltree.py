@@ -17,6 +17,7 @@ from typing import Any, TypeVar
 import yaml
 
 from cell.errors import JobError
+from cell.yamlsafe import LEADING_ZERO
 
 __all__ = ["Checker", "Errors", "Node", "same_text", "shown", "to_tree"]
 
@@ -162,13 +163,11 @@ class Checker:
         hi: float | None = None,
         strict_lo: bool = False,
     ) -> float:
+        if said := _misread(node, "a number"):
+            raise self.fail(node, fp, said)
         v = node.value
-        if _leading_zero(node.source):
-            raise self.fail(node, fp, _leading_zero(node.source))
         if isinstance(v, str) and _SCIENTIFIC.fullmatch(v.strip()):
             v = float(v)  # YAML 1.1 reads 5e-2 (no dot) as text; the parameter loader does not
-        if (isinstance(v, bool) or v is None) and _read_as(v, node.source):
-            raise self.fail(node, fp, f"{node.source} is {_read_as(v, node.source)}; give a number")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
             raise self.fail(node, fp, f"{shown(v)} must be a {'finite ' * _nonfinite(v)}number"
                             + _quoted_number(v))  # fmt: skip
@@ -180,16 +179,9 @@ class Checker:
         return v
 
     def integer(self, node: Node, fp: str, lo: int, hi: int) -> int:
+        if said := _misread(node, f"a whole number from {lo} to {hi}"):
+            raise self.fail(node, fp, said)
         v = node.value
-        if _leading_zero(node.source):
-            raise self.fail(node, fp, _leading_zero(node.source))
-        if (isinstance(v, bool) or v is None) and _read_as(v, node.source):
-            raise self.fail(
-                node,
-                fp,
-                f"{node.source} is {_read_as(v, node.source)}; give a whole number "
-                f"from {lo} to {hi}",
-            )
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             raise self.fail(
                 node, fp, f"{shown(v)} must be a whole number from {lo} to {hi}" + _quoted_number(v)
@@ -266,7 +258,19 @@ def _read_as(v: Any, source: str | None) -> str:
     return ""
 
 
-_LEADING_ZERO = re.compile(r"[-+]?0[0-9_]*[0-9][0-9_]*")
+_LEADING_ZERO = re.compile(LEADING_ZERO)
+
+
+def _misread(node: Node, want: str) -> str:
+    """What to say of a number field's plain value that YAML 1.1 read as another: written
+    with a leading zero (`_leading_zero`), or a boolean or no value (`_read_as`; `want`,
+    what to give instead); "" for any other value."""
+    if said := _leading_zero(node.source):
+        return said
+    v = node.value
+    if (isinstance(v, bool) or v is None) and (what := _read_as(v, node.source)):
+        return f"{node.source} is {what}; give {want}"
+    return ""
 
 
 def _leading_zero(source: str | None) -> str:
