@@ -24,6 +24,8 @@ from pathlib import Path
 from statistics import median
 from typing import Any
 
+from cell.outfile import write_whole
+
 __all__ = ["flywheel", "main"]
 
 DEMO_JOB = Path(__file__).resolve().parents[2] / "tasks" / "bins.yaml"
@@ -90,7 +92,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{f['in_bin_first']}/{f['items']} → {f['in_bin_second']}/{f['items']}"
             )
     if args.json:
-        Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
+        text = json.dumps(doc, indent=2) + "\n"
+        write_whole(args.json, lambda p: p.write_text(text))
     return 0
 
 

@@ -36,6 +36,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
+from cell.outfile import write_whole
+
 __all__ = ["cube", "jugglebot", "main", "tabletennis", "tennicam"]
 
 DATA = Path(__file__).resolve().parents[2] / "tests" / "data"
@@ -437,7 +439,7 @@ def main(argv: list[str] | None = None) -> int:
     text = json.dumps(doc, indent=1)
     print(text)
     if a.json:
-        Path(a.json).write_text(text + "\n")
+        write_whole(a.json, lambda p: p.write_text(text + "\n"))
     return 0
 
 

@@ -10,6 +10,7 @@ from typing import Any
 from cell.bench import available
 from cell.cli.common import add_json_arg, human, json_to_stdout, print_json, write_json
 from cell.jobs import ORDERS
+from cell.outfile import write_whole
 
 
 def _add_sort_run_args(p: argparse.ArgumentParser) -> None:
@@ -143,7 +144,8 @@ def run_sort(args: argparse.Namespace) -> int:
 
     def keep(i: int, res: dict) -> None:  # type: ignore[type-arg]
         if out is not None:  # written by the driver as each layout arrives
-            (out / f"layout_{units[i].seed}.json").write_text(json.dumps(res, indent=1))
+            text = json.dumps(res, indent=1)
+            write_whole(out / f"layout_{units[i].seed}.json", lambda p: p.write_text(text))
 
     layouts = _campaign(args, units, "random layouts", on_result=keep)
     figures = {**_set_figures(args.set, first, args.layouts), **summarise_layouts(layouts)}

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from cell.gap.world_scene import JITTER_REL, LAND_Z_M, draw_plan, repeat_var, throw_plan
+from cell.outfile import write_whole
 from cell.sim.slide_fit import G, drop_fit, extents_and_balls, impact_fit, roll_fit
 
 __all__ = ["slide_laws", "main"]
@@ -127,7 +128,8 @@ def main(argv: list[str] | None = None) -> int:
                   f"{1000 * rj['repeat_sd_crossing_m']:.1f} mm")  # fmt: skip
         doc["cases"][name] = {**r, "inv_mu_per_object": mu, "inv_mu_imp": imp, "jitters": runs}
     if args.json is not None:
-        args.json.write_text(json.dumps(doc, indent=1) + "\n")
+        text = json.dumps(doc, indent=1) + "\n"
+        write_whole(args.json, lambda p: p.write_text(text))
     return 0
 
 
