@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
     doc["saved"] = saved
     if json_to_stdout(args):
         print_json(doc)
-        _say(saved)
+        _say(saved, model)
     else:
         _print(args, summary, compare, model, saved, judged)
     model.save(args.output)  # the results are printed before any file is written
@@ -304,12 +304,13 @@ def _print(
         )
     if saved["residual"] == "none" and null != "zero":  # the held-out judgement's physics alone
         print(
-            f"saved no residual, the physics model alone ({model.learner} trained on "
-            f"{plural(model.n_train, 'throw')} of {plural(len(model.training_objects), 'object')}"
-            f" not saved): {saved['reason']} -> {args.output}"
+            f"saved no residual, the physics model alone: {model.learner} does not beat it on "
+            "the held-out throws (the planner commands the model's own stroke; --keep-learner "
+            f"saves the {model.learner} trained on {plural(model.n_train, 'throw')} of "
+            f"{plural(len(model.training_objects), 'object')}) -> {args.output}"
         )
         return
-    _say(saved)
+    _say(saved, model)
     print(
         f"saved {model.learner} residual ({plural(model.n_train, 'throw')} of "
         f"{plural(len(model.training_objects), 'object')}; "
@@ -318,9 +319,12 @@ def _print(
     )
 
 
-def _say(saved: dict[str, Any]) -> None:
+def _say(saved: dict[str, Any], model: Any) -> None:
     """On standard error: a residual saved without the held-out throws' support (kept by
-    --keep-learner, or not judged), or none saved for want of it."""
+    --keep-learner, or not judged), or none saved for want of it; nothing where the inner
+    cross-validation chose no correction itself (the text output says so)."""
     h = saved["heldout"]
+    if model.best_params.get("null") == "zero":
+        return
     if h is None or not h["beats_physics"]:
         print(f"cell learn: {saved['reason']}", file=sys.stderr)
