@@ -206,7 +206,7 @@ def test_cli_learn_fits_on_two_workers_give_the_serial_table(local_ray, tmp_path
         argv = ["learn", str(log), "-o", str(tmp_path / "r.skops"), "--grid", "small"]
         assert main([*argv, "--compare", "svr", "--json", *extra]) == 0
         docs.append(json.loads(capsys.readouterr().out))
-    assert set(docs[0]) == {"svr"}
+    assert set(docs[0]) == {"svr", "saved"}
     assert len(docs[0]["svr"]["folds"]) == 7  # 14 objects, 2 held out a fold
     assert docs[0] == docs[1]  # every fold's figures and chosen hyper-parameters
 

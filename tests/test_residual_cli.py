@@ -38,7 +38,9 @@ def test_cell_learn_json_is_keyed_by_learner(learned, capsys):
     rc = main([*argv, "--hold-out", "4", "--json"])
     assert rc == 0 and out.is_file()
     doc = json.loads(capsys.readouterr().out)
-    assert set(doc) == {"svr", "rf", "mlp"}
+    assert set(doc) == {"svr", "rf", "mlp", "saved"}
+    saved = doc.pop("saved")  # the saved learner judged on the held-out throws, and kept
+    assert saved["residual"] == "svr" and saved["heldout"]["beats_physics"], saved
     for name, row in doc.items():
         for key in ("dls_mse_mean", "dls_mse_std", "heldout_rmse_before_m", "heldout_rmse_after_m"):
             assert isinstance(row[key], float) and np.isfinite(row[key]), (name, key)

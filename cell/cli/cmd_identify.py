@@ -158,6 +158,10 @@ def _doc(args, table, source, result, held, before, after, params, n_fit) -> dic
         "seconds": result.seconds,
         "rmse_fit_start_m": result.rmse_start_m,
         "rmse_fit_m": result.rmse_fit_m,
+        "objective_start": result.objective_start,
+        "objective_fit": result.objective_fit,
+        "kept_start": result.kept_start,
+        "chi2_per_throw_by_object": {k: v[1] for k, v in result.chi2_by_object.items()},
         "objects": {
             b.object_id: {
                 "n_fit": n_fit.get(b.object_id, result.n_throws),
@@ -193,6 +197,7 @@ def _print(table, source, result, where, before, after, params, start, n_fit) ->
         f"({result.seconds:.1f} s); landing RMSE on the fitted throws "
         f"{result.rmse_start_m:.4f} -> {result.rmse_fit_m:.4f} m"
     )
+    print(_objective_line(result))
     print("end effector (start -> identified, 95 % interval):")
     for k in start.ee.IDENTIFIABLE:
         half = result.intervals.get(k, (0.0, float("nan")))[1]
@@ -200,6 +205,24 @@ def _print(table, source, result, where, before, after, params, start, n_fit) ->
             f"  {k:4s} {getattr(start.ee, k):12.6g} -> {getattr(params.ee, k):12.6g} ± {half:.3g}"
         )
     print("\n".join(evidence_lines(result)))
+
+
+def _objective_line(result) -> str:  # type: ignore[no-untyped-def]
+    """The objective the fit minimised, start and end, and the object that weighs most in it
+    (the landing RMSE is not that objective: cell/identify/objective.py)."""
+    chi2 = result.chi2_by_object
+    total = sum(n * c for n, c in chi2.values())
+    top = max(chi2, key=lambda k: chi2[k][0] * chi2[k][1])
+    n, c = chi2[top]
+    line = (
+        f"objective minimised (landing residuals over the noise model's σ, squared, and the "
+        f"priors; the final weights) {result.objective_start:.1f} -> "
+        f"{result.objective_fit:.1f}; {top}'s throws {n * c / total:.0%} of its residuals, "
+        f"{c:.2f} a throw where the noise model expects 2 (--noise-* sets the noise)"
+    )
+    if result.kept_start:
+        line += "; the fit ended worse on it than the start: the start parameters kept"
+    return line
 
 
 def _noise(args: argparse.Namespace) -> NoiseModel:

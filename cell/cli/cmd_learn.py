@@ -7,6 +7,7 @@ import os
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from typing import Any
 
 from cell.cli.common import (
@@ -30,7 +31,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=(
             "Compute ΔL_s for every logged throw by the model's inverse, evaluate SVR, random "
             "forest and MLP by holding out two objects at a time (Table 5.1), and save the "
-            "chosen learner trained on every object. The planner then commands L_s + ΔL_s."
+            "chosen learner trained on every object. The planner then commands L_s + ΔL_s. "
+            "The saved learner is judged on the round-robin's held-out throws: unless its "
+            "residual lowers their landing RMSE beyond the spread over the held-out objects "
+            "(the 95 % interval of a paired bootstrap over them below 1), no residual is "
+            "saved (the physics model alone), and the command says so; --keep-learner saves "
+            "the learner anyway."
         ),
     )
     p.add_argument("throws", help="throws.csv (docs/throw_log.md)")
@@ -59,6 +65,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="learners of the round-robin table (default: svr,rf,mlp; empty: skip it)",
     )
     p.add_argument("--hold-out", type=int, default=2, metavar="K", help="objects per fold (2)")
+    p.add_argument(
+        "--keep-learner",
+        action="store_true",
+        help=(
+            "save the learner's residual even where it does not beat the physics model alone "
+            "on the round-robin's held-out throws (default: save no residual then, the "
+            "physics model alone, and say so)"
+        ),
+    )
     p.add_argument(
         "--grid",
         choices=("small", "medium", "full"),
@@ -138,11 +153,14 @@ def run(args: argparse.Namespace) -> int:
             f"{args.throws}: too few throws of some objects for the learners' "
             f"cross-validation ({exc}); log more throws of each object"
         ) from None
-    doc = {name: s.as_dict() for name, s in summary.items()}
+    model, saved, judged = _judge(args, data, summary, model)
+    doc: dict[str, Any] = {name: s.as_dict() for name, s in summary.items()}
+    doc["saved"] = saved
     if json_to_stdout(args):
         print_json(doc)
+        _say(saved, model)
     else:
-        _print(args, summary, compare, model)
+        _print(args, summary, compare, model, saved, judged)
     model.save(args.output)  # the results are printed before any file is written
     if args.plot and summary:
         from cell.residual.plot import plot_table51
@@ -202,10 +220,65 @@ def _fit(
         )
 
 
+def _judge(
+    args: argparse.Namespace, data: Any, summary: dict[str, Any], model: Any
+) -> tuple[Any, dict[str, Any], Any]:
+    """The saved learner against the physics model alone on the round-robin's held-out
+    throws (`cell.residual.heldout`): the model to save (none, the physics alone, where the
+    learner does not beat it, unless --keep-learner), the JSON record of the choice, and
+    the judgement (None: the round-robin did not run the saved learner)."""
+    from cell.residual.heldout import judge_summary
+    from cell.residual.model import physics_only
+
+    null = model.best_params.get("null")
+    fitted = {"zero": "none", "mean": "constant"}.get(null, args.learner)
+    if args.learner not in summary:
+        record: dict[str, Any] = {
+            "learner": args.learner,
+            "residual": fitted,
+            "heldout": None,
+            "reason": (
+                f"{args.learner} not judged on held-out throws: --compare does not name it, "
+                "so no fit of it left objects out; saved as the inner cross-validation chose"
+            ),
+        }
+        return replace(model, heldout=record), record, None
+    j = judge_summary(args.learner, summary[args.learner], data.groups, seed=args.seed)
+    record = {"learner": args.learner, "heldout": j.as_dict()}
+    if fitted == "none" or j.beats_physics:
+        record["residual"] = fitted
+        record["reason"] = (
+            "no correction: the inner cross-validation on every throw chose none"
+            if fitted == "none"
+            else f"{args.learner} beats the physics model alone on the held-out throws"
+        )
+    elif args.keep_learner:
+        record["residual"] = fitted
+        record["reason"] = (
+            f"--keep-learner: {args.learner} saved though it does not beat the physics model "
+            "alone on the held-out throws"
+        )
+    else:
+        record["residual"] = "none"
+        record["reason"] = (
+            f"{args.learner} does not beat the physics model alone on the held-out throws: "
+            "no residual saved (the planner commands the model's own stroke); "
+            "--keep-learner saves it anyway"
+        )
+        return physics_only(model, record), record, j
+    return replace(model, heldout=record), record, j
+
+
 def _print(
-    args: argparse.Namespace, summary: dict[str, Any], compare: tuple[str, ...], model: Any
+    args: argparse.Namespace,
+    summary: dict[str, Any],
+    compare: tuple[str, ...],
+    model: Any,
+    saved: dict[str, Any],
+    judged: Any,
 ) -> None:
-    """The Table 5.1 rows and the learner saved, as text."""
+    """The Table 5.1 rows, the saved learner's held-out judgement, and what was saved, as
+    text."""
     if summary:
         print(
             f"Table 5.1: hold out {plural(args.hold_out, 'object')} at a time "
@@ -217,9 +290,11 @@ def _print(
                 f"{name:8s} {s.dls_mse_mean:10.4f} ± {s.dls_mse_std:<8.4f} "
                 f"{s.heldout_rmse_before_m:12.4f} -> {s.heldout_rmse_after_m:.4f}"
             )
+    if judged is not None:
+        print(judged.text())
     params = {k: v for k, v in model.best_params.items() if k not in ("null", "learner_cv_mse_mm2")}
-    if "null" in model.best_params:
-        null = model.best_params["null"]
+    null = model.best_params.get("null")
+    if null is not None and saved["residual"] == {"zero": "none", "mean": "constant"}[null]:
         print(
             f"note: the {model.learner} learner did not beat "
             f"{'no correction' if null == 'zero' else 'a constant correction'} in the inner "
@@ -227,9 +302,29 @@ def _print(
             f"residual saved is that {'zero' if null == 'zero' else 'constant'} correction. "
             "The log shows no systematic ΔL_s this learner can predict."
         )
+    if saved["residual"] == "none" and null != "zero":  # the held-out judgement's physics alone
+        print(
+            f"saved no residual, the physics model alone: {model.learner} does not beat it on "
+            "the held-out throws (the planner commands the model's own stroke; --keep-learner "
+            f"saves the {model.learner} trained on {plural(model.n_train, 'throw')} of "
+            f"{plural(len(model.training_objects), 'object')}) -> {args.output}"
+        )
+        return
+    _say(saved, model)
     print(
         f"saved {model.learner} residual ({plural(model.n_train, 'throw')} of "
         f"{plural(len(model.training_objects), 'object')}; "
         + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
         + f") -> {args.output}"
     )
+
+
+def _say(saved: dict[str, Any], model: Any) -> None:
+    """On standard error: a residual saved without the held-out throws' support (kept by
+    --keep-learner, or not judged), or none saved for want of it; nothing where the inner
+    cross-validation chose no correction itself (the text output says so)."""
+    h = saved["heldout"]
+    if model.best_params.get("null") == "zero":
+        return
+    if h is None or not h["beats_physics"]:
+        print(f"cell learn: {saved['reason']}", file=sys.stderr)

@@ -41,6 +41,7 @@ from scipy.optimize import least_squares
 
 from cell.errors import InvalidParameter, plural
 from cell.identify.directions import Analysis, Direction, analyse, intervals, parameter_names
+from cell.identify.objective import keep_better
 from cell.identify.problem import (
     EE_NAMES,
     ThrowData,
@@ -149,6 +150,10 @@ class IdentifyResult:
             (η_ee: SI; objects: "<id>.mass" etc. as factors of the start values).
         chi2_fit: sum of squared whitened residuals on the fitted throws (-2 log L + c).
         n_params: parameters free in the final fit (determined combinations).
+        objective_start, objective_fit: the objective minimised (`cell.identify.objective`)
+            at the start and at the result, under the final step's weights and widths.
+        kept_start: the fit ended worse on it than the start, which is kept.
+        chi2_by_object: id -> (throws, whitened squared residual a throw; 2 expected).
     """
 
     params: ModelParams
@@ -164,6 +169,10 @@ class IdentifyResult:
     intervals: dict[str, tuple[float, float]] = field(default_factory=dict)
     chi2_fit: float = float("nan")
     n_params: int = 0
+    objective_start: float = float("nan")
+    objective_fit: float = float("nan")
+    kept_start: bool = False
+    chi2_by_object: dict[str, tuple[int, float]] = field(default_factory=dict)
 
 
 def _rmse(res: np.ndarray) -> float:
@@ -441,6 +450,10 @@ def _identify(
     )
     if not all(ana.determined):
         _hold_step(data, st, ana, np.r_[ee_std, std], np.r_[anchor, np.ones(k)], bounds, opt)
+    st.ee, st.factors, cmp = keep_better(  # never worse on the objective than the start
+        data, start.ee, st.ee, st.factors, anchor, opt.prior_rel, std
+    )
+    start_kept = cmp.start_better
     batch = data.batch_with(data.objects_from_factors(st.factors))
     res = data.residual(batch, st.ee)
     rmse_fit = _rmse(res)
@@ -463,6 +476,7 @@ def _identify(
         )
         + f"; {ana.n_determined} of {len(ana.directions)} parameter combinations determined, "
         "the others held at the prior"
+        + ("; the fit ended worse on its objective than the start: the start kept" * start_kept)
     )
     return IdentifyResult(
         params=ModelParams(ee=st.ee, objects=objects, effects={}, note=note),
@@ -478,4 +492,8 @@ def _identify(
         intervals=intervals(names, ee_to_vector(st.ee), st.factors, ana),
         chi2_fit=chi2,
         n_params=ana.n_determined,
+        objective_start=cmp.start,
+        objective_fit=min(cmp.start, cmp.end),
+        kept_start=start_kept,
+        chi2_by_object=cmp.chi2_by_object,
     )

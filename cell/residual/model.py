@@ -13,7 +13,7 @@ import json
 import logging
 import zipfile
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +39,7 @@ __all__ = [
     "train_residual",
     "apply_residual",
     "residual_for_plan",
+    "physics_only",
 ]
 
 log = logging.getLogger(__name__)
@@ -75,6 +76,8 @@ class ResidualModel:
             targets were computed with; a planner adding this residual should plan
             those objects with the same η_o, and every other object with its logged
             (CAD) η_o.
+        heldout: how the learner did against the physics model alone on the round-robin's
+            held-out throws, and what was saved for it (`cell learn`; empty: not judged).
     """
 
     learner: str
@@ -87,6 +90,7 @@ class ResidualModel:
     n_train: int = 0
     n_excluded: int = 0
     identified_objects: tuple[str, ...] = ()
+    heldout: dict[str, Any] = field(default_factory=dict)
 
     def predict_features(self, x: np.ndarray) -> np.ndarray:
         """ΔL_s [m] for feature rows in FEATURE_NAMES order, shape (n,)."""
@@ -129,6 +133,7 @@ class ResidualModel:
             "n_train": self.n_train,
             "n_excluded": self.n_excluded,
             "identified_objects": list(self.identified_objects),
+            "heldout": self.heldout,
         }
         doc = {"format": FORMAT, "meta": json.dumps(meta), "pipeline": self.pipeline}
         write_whole(path, lambda p: sio.dump(doc, p))
@@ -182,6 +187,7 @@ class ResidualModel:
                 n_train=int(meta["n_train"]),
                 n_excluded=int(meta["n_excluded"]),
                 identified_objects=tuple(meta["identified_objects"]),
+                heldout=dict(meta.get("heldout", {})),  # files of before the judgement: none
             )
         except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise InvalidInput(
@@ -225,6 +231,18 @@ def _check_unpacked_size(p: Path) -> None:
             f"{p}: unpacks to {unpacked:,} bytes, over the {MAX_MODEL_UNPACKED_BYTES:,} a "
             "residual model file may (a compressed bomb, or not a file `cell learn` wrote)"
         )
+
+
+def physics_only(model: ResidualModel, heldout: dict[str, Any]) -> ResidualModel:
+    """`model` with its residual replaced by none (ΔL_s = 0 for every throw: the planner
+    commands the model's own stroke), the learner's name, training record and hyper-
+    parameters kept as the record of what was judged, and why in `heldout`."""
+    from sklearn.dummy import DummyRegressor
+    from sklearn.pipeline import Pipeline
+
+    zero = DummyRegressor(strategy="constant", constant=0.0)
+    pipe = Pipeline([("reg", zero)]).fit(np.zeros((1, len(model.feature_names))), [0.0])
+    return replace(model, pipeline=pipe, heldout=heldout)
 
 
 def _plain(v: Any) -> Any:
