@@ -206,8 +206,8 @@ def test_an_arm_urdf_in_millimetres_is_refused_naming_the_likely_unit(tmp_path: 
     about 1.3 km long, whose IK missed the pick station by 26,763 mm while the job check
     said the arm "reaches about 919.08 m out". The mount file is now refused when read,
     naming the field, the chain's length and millimetres. The same copy at scale 1 (the
-    URDF in metres, rewritten the same way) loads, and its chain is the UR5's: the sum of
-    its joint offsets from the datasheet's DH lengths would be near 1.33 m."""
+    URDF in metres, rewritten the same way) loads. The length said is the UR5's, in mm:
+    its datasheet's DH lengths (below) sum to 1.34 m."""
     (tmp_path / "mm").mkdir()
     (tmp_path / "m").mkdir()
     with pytest.raises(InvalidParameter) as err:
@@ -216,9 +216,9 @@ def test_an_arm_urdf_in_millimetres_is_refused_naming_the_likely_unit(tmp_path: 
     assert "field 'arm_urdf'" in said and "is it written in millimetres?" in said, said
     length = float(re.search(r"add up to ([\d,.]+) m", said)[1].replace(",", ""))  # type: ignore[index]
     check_against_urdf(load_mount(str(_mount_in(tmp_path / "m", 1.0))))  # metres: accepted
-    # the UR5's offsets along its chain in metres (example-robot-data's URDF, as Universal
-    # Robots' DH table: d1 0.089159, shoulder 0.13585, a2 0.425, elbow 0.1197, a3 0.39225,
-    # d5 0.09465, d6 0.0823), times 1000
+    # Universal Robots' DH table of the UR5 [m]: d1 0.089159, shoulder offset 0.13585, a2
+    # 0.425, elbow offset 0.1197, a3 0.39225, d5 0.09465, d6 0.0823: 1.34 m, times 1000
+    # (the URDF places its offsets a little differently: a band, not the figure)
     assert 1000 * 1.2 < length < 1000 * 1.45, length
 
 
