@@ -51,6 +51,17 @@ def write_whole(path: str | Path, write: Callable[[Path], object]) -> None:
         write(tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, out)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        if exc.filename not in (None, name, str(tmp)):
+            raise
+        # a failed write (a full disk: ENOSPC, a quota) names no file, or the temporary
+        # one just removed: said of the output, which is as it was
+        raise OSError(
+            exc.errno,
+            f"{exc.strerror or exc}; not written (a file there is left as it was)",
+            str(out),
+        ) from exc
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

@@ -8,6 +8,7 @@ logging configuration and progress bars; the library does neither.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import logging
 import os
@@ -59,8 +60,22 @@ class Parser(argparse.ArgumentParser):
     # refused as unrecognized among them is said to be one
     json_not_paths: tuple[str, ...] = ()
 
+    def parse_args(self, args: Any = None, namespace: Any = None) -> Any:  # type: ignore[override]
+        """argparse's, but an unrecognized argument is refused by the subcommand's parser
+        (its usage, `cell run --help`), with the option nearest a misspelt one."""
+        ns, extras = self.parse_known_args(args, namespace)
+        if extras:
+            owner = subcommand_parser(self, getattr(ns, "command", None)) or self
+            if isinstance(owner, Parser):
+                owner.json_not_paths = self.json_not_paths
+            owner.error(
+                f"unrecognized arguments: {' '.join(extras)}{nearest_option(owner, extras)}"
+            )
+        return ns
+
     def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
+        message += nearest_choice(message)
         head = "unrecognized arguments: "
         extra = message[len(head) :] if message.startswith(head) else ""
         for name in (n for n in self.json_not_paths if n and n in extra):
@@ -71,6 +86,34 @@ class Parser(argparse.ArgumentParser):
             )
             break
         self.exit(2, f"cell: error: {message} (see `{self.prog} --help`)\n")
+
+
+def subcommand_parser(parser: argparse.ArgumentParser, name: str | None) -> Any:
+    """The parser of the subcommand `name` (`cell run`'s), or None."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction) and name in action.choices:
+            return action.choices[name]
+    return None
+
+
+def nearest_option(parser: argparse.ArgumentParser, extras: list[str]) -> str:
+    """`; did you mean --json?` for the first unrecognized option near one of `parser`'s."""
+    options = [o for a in parser._actions for o in a.option_strings]
+    for extra in extras:
+        if extra.startswith("-"):
+            near = difflib.get_close_matches(extra.split("=")[0], options, n=1, cutoff=0.6)
+            if near:
+                return f"; did you mean {near[0]}?"
+    return ""
+
+
+def nearest_choice(message: str) -> str:
+    """`; did you mean 'run'?` for argparse's `invalid choice: 'rn' (choose from 'run', ...)`."""
+    m = re.search(r"invalid choice: '(.*?)' \(choose from (.*)\)", message)
+    if not m:
+        return ""
+    near = difflib.get_close_matches(m[1], re.findall(r"'([^']*)'", m[2]), n=1, cutoff=0.6)
+    return f"; did you mean '{near[0]}'?" if near else ""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -135,7 +178,18 @@ def _terminate_as_interrupt(signum: int, frame: object) -> NoReturn:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the `cell` console script."""
+    """Entry point of the `cell` console script: its standard streams made safe first
+    (`cell.cli.streams`: a closed one given /dev/null, a failing one kept from ending the
+    command before its output files are written)."""
+    from cell.cli.streams import guarded_streams, open_standard_fds, said_failure
+
+    open_standard_fds()
+    with guarded_streams() as (out, err):
+        code = _main(argv)
+    return said_failure(out, err, code)
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     given = sys.argv[1:] if argv is None else list(argv)
     spelled = json_spelling(given)

@@ -231,6 +231,11 @@ def _library_warnings(said: bool) -> Iterator[None]:
 def _run(args: argparse.Namespace) -> int:
     from cell.errors import HardwareError, InvalidInput
 
+    if args.no_log and args.db and not args.learn:  # --learn reads --db; --no-log, none
+        raise InvalidInput(
+            f"--db {args.db} with --no-log: --no-log records no throw, so the store would not "
+            "be written; give one of them (--db with --no-log is the store --learn reads)"
+        )
     job = load_job(args.job)
     refuse_outputs_among(args, job_files(job))  # the files the job names are inputs too
     for warning in job.warnings:  # items left unsorted, a near bin auto throws into

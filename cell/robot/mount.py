@@ -21,6 +21,7 @@ from typing import Any
 from cell.errors import InvalidInput, InvalidParameter
 from cell.robot.mount_paths import arm_urdf_file, end_effector_file
 from cell.robot.paths import robots_dir
+from cell.robot.urdf_scale import check_chain_scale
 
 __all__ = [
     "MOUNT_FIELDS",
@@ -456,9 +457,9 @@ def check_against_urdf(spec: MountSpec) -> tuple[Path, ET.Element]:
             f"{where}: field 'held_joints': {unknown} are not movable joints of "
             f"{arm_path.name}; its movable joints: {', '.join(movable)}"
         )
-    chain = [
-        j.get("name", "") for j in _chain(root, spec.flange, where) if j.get("type") in _MOVABLE
-    ]
+    joints = _chain(root, spec.flange, where)
+    check_chain_scale(joints, where, arm_path.name)  # a URDF in millimetres
+    chain = [j.get("name", "") for j in joints if j.get("type") in _MOVABLE]
     if [j for j in chain if j not in held] != list(spec.arm_joints):
         raise InvalidParameter(
             f"{where}: fields 'arm_joints' and 'flange': the movable joints from the base to "
