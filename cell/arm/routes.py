@@ -309,7 +309,7 @@ class Routes(ArmBase):
         lo, hi = sc.pick_station_bounds()
         reach = self._grip_reach_m()
         ts = np.arange(0.0, traj.duration + sc.dt_s, sc.dt_s)
-        p = self.robot.tcp_positions(traj.sample_many(ts)[0])
+        p = self.robot.tcp_positions(traj.positions(ts))
         near = np.all(p[:, :2] > lo[:2] - reach, axis=1) & np.all(p[:, :2] < hi[:2] + reach, axis=1)
         return not bool(np.any(near & (p[:, 2] < z_min - 1e-3)))
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.model.params import G
+from cell.robot.kept import Kept, array_key
 from cell.robot.model import Robot
 from cell.robot.trajectory import Trajectory
 
@@ -233,6 +234,14 @@ def item_accelerations(
     return _point_motion(robot, qs, dqs, ddqs, offset_tcp_m)[0]
 
 
+# `_point_motion`'s answers by the bytes of its inputs (the robot's, kept with its answer):
+# the carries' plans ask again for the same samples, within a decision and across them
+# (331 of tune layout 0's 2,565 calls, counted on `4645969`). A function of the inputs'
+# bits (Pinocchio's kinematics are deterministic), and its arrays are read-only: nothing
+# writes into one. Bounded: cleared when full.
+_MOTIONS: Kept[tuple[Robot, tuple[np.ndarray, np.ndarray, np.ndarray]]] = Kept(256)
+
+
 def _point_motion(
     robot: Robot,
     qs: np.ndarray,
@@ -242,7 +251,30 @@ def _point_motion(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(acceleration of the point [m/s², W], ee_tcp's angular acceleration [rad/s², W],
     ee_tcp's rotations in W), shapes (k, 3), (k, 3), (k, 3, 3):
-    a = a_o + α × r + ω × (ω × r), from Pinocchio's frame kinematics."""
+    a = a_o + α × r + ω × (ω × r), from Pinocchio's frame kinematics; the same inputs'
+    answer made once (`_MOTIONS`: the same read-only arrays)."""
+    qs, dqs, ddqs = (np.asarray(x, dtype=float) for x in (qs, dqs, ddqs))
+    shapes = (id(robot), qs.shape, dqs.shape, ddqs.shape)
+    key = repr(shapes).encode() + array_key(qs, dqs, ddqs, offset_tcp_m)
+
+    def made() -> tuple[Robot, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        return robot, _point_motion_made(robot, qs, dqs, ddqs, offset_tcp_m)
+
+    kept = _MOTIONS.get(key, made)
+    if kept[0] is not robot:  # another robot at a reused id: made again for this one
+        kept = made()
+        _MOTIONS.put(key, kept)
+    return kept[1]
+
+
+def _point_motion_made(
+    robot: Robot,
+    qs: np.ndarray,
+    dqs: np.ndarray,
+    ddqs: np.ndarray,
+    offset_tcp_m: Sequence[float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_point_motion` worked out, its arrays read-only."""
     import pinocchio as pin
 
     m, d, fr = robot.model, robot.data, robot.tcp_frame
@@ -252,26 +284,28 @@ def _point_motion(
     out = np.empty((3, k, 3))  # a_o, α, ω
     rots = np.empty((k, 3, 3))
     kinematics, place = pin.forwardKinematics, pin.updateFramePlacement
-    classical, spatial, twist = (
-        pin.getFrameClassicalAcceleration,
-        pin.getFrameAcceleration,
-        pin.getFrameVelocity,
-    )
+    classical, twist = pin.getFrameClassicalAcceleration, pin.getFrameVelocity
     a_o, alphas, ws = out
     # The grip's frame alone placed (`updateFramePlacement`, as `Robot.tcp_positions`),
     # not the model's 28, and r = R r_local for all instants at once: the same floats as
     # placing every frame and one product per instant, bit for bit
-    # (tests/test_grip_hold_bits.py), in 0.7 of the time
+    # (tests/test_grip_hold_bits.py), in 0.7 of the time. α is the classical
+    # acceleration's angular part: Pinocchio's `getFrameClassicalAcceleration` is
+    # `getFrameAcceleration` with ω × v added to its linear part alone, so its angular
+    # part is the spatial acceleration's, the same floats, one frame call fewer a sample
     for i, (q, dq, ddq) in enumerate(zip(qs, dqs, ddqs, strict=True)):
         kinematics(m, d, q, dq, ddq)
         rots[i] = place(m, d, fr).rotation
-        a_o[i] = classical(m, d, fr, lwa).linear
-        alphas[i] = spatial(m, d, fr, lwa).angular
+        classical_acc = classical(m, d, fr, lwa)
+        a_o[i] = classical_acc.linear
+        alphas[i] = classical_acc.angular
         ws[i] = twist(m, d, fr, lwa).angular
     r = rots @ r_local
     # the cross products over all instants at once (one np.cross per row cost 3x the
     # kinematics: np.cross's axis handling dominates for single 3-vectors)
     acc = a_o + np.cross(alphas, r) + np.cross(ws, np.cross(ws, r))
+    for a in (acc, alphas, rots):
+        a.setflags(write=False)  # kept and shared (`_MOTIONS`)
     return acc, alphas, rots
 
 

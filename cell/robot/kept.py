@@ -56,3 +56,9 @@ class Kept(Generic[T]):
         if isinstance(found, str) and self.error is not None:
             raise self.error(found)
         return found  # type: ignore[return-value]
+
+    def put(self, key: bytes, value: T) -> None:
+        """Keep `value` for `key` in place of what was kept (cleared first when full)."""
+        if key not in self._table and len(self._table) >= self.max_size:
+            self._table.clear()
+        self._table[key] = value

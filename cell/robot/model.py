@@ -16,6 +16,7 @@ import numpy as np
 from cell.errors import InvalidInput, InvalidParameter, MissingDependency
 from cell.frames import axis_frame
 from cell.robot.composite import composite_urdf
+from cell.robot.kept import Kept
 from cell.robot.limits import JointLimits
 from cell.robot.mount import MountSpec, load_mount
 from cell.robot.paths import example_robot_data_dir, robots_dir
@@ -105,6 +106,8 @@ class Robot:
         # read-only, so no run can change what a later one plans with
         for a in (self.home, *vars(self.limits).values()):
             a.setflags(write=False)
+        # `tcp_positions`' answers by the configurations' bytes (bounded: cleared when full)
+        self._positions_kept: Kept[np.ndarray] = Kept(64)
 
     @property
     def dof(self) -> int:
@@ -128,10 +131,18 @@ class Robot:
 
     def tcp_positions(self, qs: np.ndarray) -> np.ndarray:
         """The grip centre's position [m, W] at each configuration of qs [rad], shape
-        (k, n) → (k, 3): `tcp_pose`'s positions, without copying the rotations."""
+        (k, n) → (k, 3): `tcp_pose`'s positions, without copying the rotations. The same
+        configurations' answer is made once (`_positions_kept`, by their bytes; a
+        read-only array): the arm's route checks ask again for the same configurations,
+        189 of tune layout 0's 1,215 calls (counted on `4645969`)."""
+        qs = np.asarray(qs, dtype=float)
+        key = repr(qs.shape).encode() + qs.tobytes()
+        return self._positions_kept.get(key, lambda: self._tcp_positions(qs))
+
+    def _tcp_positions(self, qs: np.ndarray) -> np.ndarray:
+        """`tcp_positions` worked out, read-only."""
         import pinocchio as pin
 
-        qs = np.asarray(qs, dtype=float)
         out = np.empty((len(qs), 3))
         model, data, fid = self.model, self.data, self.tcp_frame
         # the joints' placements, then the grip's frame alone: the same products as
@@ -142,6 +153,7 @@ class Robot:
         for i, q in enumerate(qs):
             kinematics(model, data, q)
             out[i] = place(model, data, fid).translation
+        out.setflags(write=False)  # kept and shared (`tcp_positions`)
         return out
 
     def throw_axis(self, q: np.ndarray) -> np.ndarray:

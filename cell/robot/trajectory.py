@@ -69,6 +69,11 @@ class Trajectory(ABC):
         t = np.clip(np.asarray(ts, dtype=float).reshape(-1), 0.0, self.duration)
         return self._eval(t)
 
+    def positions(self, ts: np.ndarray | Sequence[float]) -> np.ndarray:
+        """The joint positions [rad] at many times [s], shape (k, dof): `sample_many`'s
+        first array (a move that can give them alone does so: `RuckigTrajectory`)."""
+        return self.sample_many(ts)[0]
+
     def end_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q, dq, ddq) at t = duration."""
         return self.sample(self.duration)
@@ -117,6 +122,11 @@ class RuckigTrajectory(Trajectory):
         )
         out = np.ascontiguousarray(flat.reshape(k, 3, n).transpose(1, 0, 2))
         return out[0], out[1], out[2]
+
+    def positions(self, ts: np.ndarray | Sequence[float]) -> np.ndarray:
+        """`sample_many`'s positions alone: the same floats (ruckig's positions at the same
+        clipped times), without reading its velocities and accelerations."""
+        return self._positions(np.clip(np.asarray(ts, dtype=float).reshape(-1), 0.0, self.duration))
 
     def _positions(self, ts: np.ndarray) -> np.ndarray:
         """The positions [rad] at the times ts [s], shape (k, dof), as `_eval`'s."""
