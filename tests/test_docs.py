@@ -343,6 +343,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "one_configuration",
         "wind_not_steady",
         "flight_bends",
+        "parameter_drifts",
     }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())

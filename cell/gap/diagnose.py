@@ -36,6 +36,8 @@ Verdict rules:
 * a verdict naming `wind` is `unknown`, the wind partial, where the tracks show its
   sideways pull growing along the flight (a late gust, `cell.gap.track_gust`); a `none`
   is `unknown` (flight) where the tracks bend off the model's flight (`flight_bends`).
+* a verdict naming effects is `unknown`, those effects partial, where a parameter of theirs
+  drifts over the log's throw order (`cell.gap.param_drift`: a band that tires).
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ import numpy as np
 from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.one_config import one_configuration
+from cell.gap.param_drift import drift_check
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
     ACROSS_Z,
@@ -192,15 +195,8 @@ def _verdict(B: float, A: float, F: float, chosen: list[Score]) -> list[str]:
     return ["unknown"]
 
 
-def _candidate(
-    s: Score,
-    base_sq: np.ndarray,
-    B: float,
-    laws: dict[str, dict[str, float]],
-    tracks: dict[str, Any] | None,
-    F: float,
-    seed: int,
-) -> dict[str, Any]:
+def _candidate(s: Score, base_sq: np.ndarray, B: float, laws: dict[str, dict[str, float]],
+               tracks: dict[str, Any] | None, F: float, seed: int) -> dict[str, Any]:  # fmt: skip
     """The report's entry for one effect alone: its law, held-out score, shrink over the
     baseline (B [m], base_sq [m²] per throw) with interval, parameters with intervals, and
     why it may not join."""
@@ -329,7 +325,8 @@ def diagnose(
         if spread is not None and spread["names"]:
             verdict = public(chosen[-1].names)
     unsteady, bends = unsteady_wind(verdict, tracks), flight_bends(verdict, tracks)
-    verdict = ["unknown"] if unsteady or bends else verdict
+    drift = drift_check(prob, verdict, chosen, F)  # a named effect's parameter drifting
+    verdict = ["unknown"] if unsteady or bends or drift.get("why") else verdict
     named = verdict[0] not in ("none", "unknown")
     v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq
     if chosen and verdict[0] != "none":
@@ -354,6 +351,7 @@ def diagnose(
         "rules": _rules(),
         **({"wind_not_steady": unsteady} if unsteady else {}),
         **({"flight_bends": bends} if bends else {}),
+        **({"parameter_drifts": drift} if drift else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials

@@ -198,6 +198,8 @@ def format_table(report: dict[str, Any]) -> str:
         rest = "the rest is above 1.3 × F"
         if r.get("wind_not_steady"):
             rest = r["wind_not_steady"]["why"]
+        if (r.get("parameter_drifts") or {}).get("why"):
+            rest = r["parameter_drifts"]["why"]
         lines.append(
             f"                 (partly explained by {' + '.join(v['partial_effects'])}; {rest})"
         )

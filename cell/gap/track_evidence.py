@@ -7,13 +7,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from cell.gap.track_frame import frame_sentence, frame_turn
 from cell.model.flight3d import fly
 
 if TYPE_CHECKING:
     from cell.gap.problem import GapProblem
     from cell.gap.tracks import TrackFit
 
-__all__ = ["evidence", "flight_time"]
+__all__ = ["evidence", "flight_time", "frame_turn"]
 
 
 def flight_time(
@@ -70,6 +71,8 @@ def evidence(r: dict[str, Any]) -> str:
             f"their launch states (z {r['flight_time_z']:.1f})"
         )
     parts.append(f"logged landings lie {r['landing_m']:.3f} m from the tracks' touchdowns")
+    if frame := frame_sentence(r.get("frame") or {}):
+        parts.append(frame)
     if r.get("g_ratio_objects", 2) >= 2:
         spread = f"spread over objects {r['g_ratio_object_spread']:.3f}"
     elif r.get("g_ratio_off"):  # nothing to compare it with: it may be the object's own

@@ -32,7 +32,7 @@ import numpy as np
 from cell.gap.problem import GapProblem
 from cell.gap.track_check import check_tracks
 from cell.gap.track_drag import drag_figures
-from cell.gap.track_evidence import evidence, flight_time
+from cell.gap.track_evidence import evidence, flight_time, frame_turn
 from cell.gap.track_gust import pull_along
 from cell.gap.track_halves import _state, end_state, halves
 from cell.gap.track_launch import whole_track_launch
@@ -493,6 +493,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         **drag_figures(np.asarray(prob.table.text("object_id"))[idx], fit.drag_ratio[idx]),
         "sideways": side,
         "pull_along": pull_along([fit.samples[i] for i in idx], fit.dropped[idx], kk),
+        "frame": frame_turn(prob.observed[idx], end_land),  # the log's frame and the tracks'
     }
     ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
     return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}

@@ -15,6 +15,7 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.infile import check_input_file
+from cell.log.fileformat import other_format
 from cell.log.object_ids import ids_alike_by_case
 from cell.log.table import (
     HEADER_AGAIN,
@@ -31,6 +32,7 @@ from cell.log.table import (
     parse_cells,
     repeats_header,
 )
+from cell.log.track_time import next_time, track_time_problem
 from cell.outfile import write_whole
 
 __all__ = [
@@ -53,6 +55,8 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
         LogFormatError: naming the file, the row (1 = first data row) and the column.
     """
     p = _readable(path)
+    if other := other_format(p):
+        raise LogFormatError(p, None, None, other)
     try:
         with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
@@ -183,23 +187,13 @@ def write_throws_csv(table: ThrowTable, path: str | Path) -> None:
     write_whole(path, write)
 
 
-# [s] a track's samples lie within this of the release command: no throw of a cell flies
-# for minutes (from 100 m up a fall takes 4.5 s). Milliseconds or a clock's time lie beyond.
-MAX_TRACK_TIME_S = 100.0
-
-
-def _track_time_problem(t: float) -> str:
-    """What is wrong with a track sample's time `t` [s] ("" if nothing)."""
-    if abs(t) <= MAX_TRACK_TIME_S:
-        return ""
-    unit = (
-        f"is it {t / 1000.0:g} s written in milliseconds?"
-        if abs(t) / 1000.0 <= MAX_TRACK_TIME_S
-        else "a clock's time? t_s is the time since the throw's release command, in seconds"
-    )
-    return (
-        f"{t:g} s is outside the valid range [{-MAX_TRACK_TIME_S:g}, {MAX_TRACK_TIME_S:g}]: {unit}"
-    )
+def _time_why(p: str, r: int, row: dict, t: float, out: dict[str, list[list[float]]]) -> str:
+    """Why track time `t` of data row `r` is refused, from the step to its track's sample
+    before it (or, for its first, the one after it)."""
+    tid = (row.get("throw_id") or "").strip()
+    before = out.get(tid)
+    nxt = before[-1][0] if before else next_time(p, r, tid)
+    return track_time_problem(t, None if nxt is None else t - nxt)
 
 
 def _number(cell: str | None) -> bool:
@@ -232,6 +226,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             (`RANGES`: ±100 m).
     """
     p = _readable(path)
+    if other := other_format(p):
+        raise LogFormatError(p, None, None, other)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
     try:
         with open(p, newline="", encoding="utf-8-sig") as fh:
@@ -286,8 +282,8 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
                         ) from None
                     if (c == "t_s" or not keep_lost) and not math.isfinite(vals[-1]):
                         raise LogFormatError(p, r, c, f"{cell!r} is not a finite number")
-                    if c == "t_s" and _track_time_problem(vals[-1]):
-                        raise LogFormatError(p, r, c, _track_time_problem(vals[-1]))
+                    if c == "t_s" and track_time_problem(vals[-1]):
+                        raise LogFormatError(p, r, c, _time_why(p, r, row, vals[-1], out))
                     if c != "t_s" and math.isfinite(vals[-1]) and not lo <= vals[-1] <= hi:
                         raise LogFormatError(
                             p,
