@@ -186,7 +186,7 @@ def test_the_downwash_air_follows_the_position_at_every_stage() -> None:
 def test_the_speeds_are_the_sums_written_out_column_by_column() -> None:
     """|rel|² of the rates ((x² + z²) + y²) and |x| of the callback ((x² + y²) + z²), their
     squares taken in one call: the sums of the columns' squares in that order, to the bit."""
-    from cell.model.effects_apply import _norm
+    from cell.model.effects_air import _norm
 
     rel = flight3d._column_major(np.random.default_rng(14).normal(0.0, 3.0, (300, 3)))
     x, y, z = rel[:, 0], rel[:, 1], rel[:, 2]

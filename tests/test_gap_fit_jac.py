@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from scipy.optimize._numdiff import approx_derivative
@@ -132,4 +134,29 @@ def test_score_the_same(
     assert np.array_equal(fast.full.x, slow.full.x)
     assert np.array_equal(fast.heldout, slow.heldout)
     assert fast.heldout_rmse_m == slow.heldout_rmse_m
+    assert np.all(fast.heldout > 0.0)
+
+
+def _scipys_own(one: Any, bounds: Any, rel_step: float) -> tuple[Any, str]:
+    return one, "2-point"
+
+
+@pytest.mark.parametrize(
+    ("classes", "permute"), [([BandMass, Bounce], False), ([BandMass, DragScale], True)]
+)
+def test_side_by_side_fit_is_scipys(
+    prob: GapProblem, classes: list[type[Effect]], permute: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A set that cannot be stacked (a bounce; the permutation control): its Jacobian's
+    perturbed residuals evaluated side by side (`side_by_side_fun_jac`, their flights as
+    one batch) and its folds refitted side by side give, bit for bit, the fit and the
+    held-out misses of scipy's own differences and of the folds one after another."""
+    assert not stackable(classes, permute)
+    fast = score_set(prob, classes, permute=permute)
+    monkeypatch.setattr(fit_mod, "side_by_side_fun_jac", _scipys_own)
+    monkeypatch.setattr(fit_mod, "side_by_side", lambda thunks: [t() for t in thunks])
+    slow = score_set(prob, classes, permute=permute)
+    assert np.array_equal(fast.full.x, slow.full.x)
+    assert np.array_equal(fast.full.ci, slow.full.ci)
+    assert np.array_equal(fast.heldout, slow.heldout)
     assert np.all(fast.heldout > 0.0)

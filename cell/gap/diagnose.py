@@ -69,6 +69,7 @@ from cell.gap.select import (
 )
 from cell.gap.track_gust import flight_bends, unsteady_wind
 from cell.model.effects import EFFECTS, FAMILIES, Effect
+from cell.model.flight_batch import together
 
 __all__ = ["Diagnosis", "diagnose", "NONE_RATIO", "VERDICT_RATIO", "applicable_effects",
            "spread_report"]  # fmt: skip
@@ -159,21 +160,22 @@ def _score_members(
     members: dict[str, type[Effect]] = {}
     member_rank: dict[str, tuple[bool, float]] = {}
     laws: dict[str, dict[str, float]] = {}
-    for family in applicable_families(prob):
-        for cls in family:
-            tick(cls.name + (f" ({cls.law})" if cls.law else ""))
-            warm = None
-            if identified is not None:
-                neutral = fit_start(cls) / np.asarray(cls.scale, float)
-                warm = np.r_[identified.full.x, neutral]
-            sc = score_set(prob, prefix + [cls], warm=warm)
-            if len(family) > 1:
-                laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
-            rank = member_rank_of(sc)
-            if cls.name not in scores or rank < member_rank[cls.name]:
-                scores[cls.name] = sc
-                members[cls.name] = cls
-                member_rank[cls.name] = rank
+    todo = [(family, cls) for family in applicable_families(prob) for cls in family]
+    fits: list[Any] = []
+    for _, cls in todo:
+        tick(cls.name + (f" ({cls.law})" if cls.law else ""))
+        warm = None
+        if identified is not None:
+            warm = np.r_[identified.full.x, fit_start(cls) / np.asarray(cls.scale, float)]
+        fits.append(lambda c=cls, w=warm: score_set(prob, prefix + [c], warm=w))
+    for (family, cls), sc in zip(todo, together(fits), strict=True):  # flights as one batch
+        if len(family) > 1:
+            laws.setdefault(cls.name, {})[cls.law] = sc.heldout_rmse_m
+        rank = member_rank_of(sc)
+        if cls.name not in scores or rank < member_rank[cls.name]:
+            scores[cls.name] = sc
+            members[cls.name] = cls
+            member_rank[cls.name] = rank
     return scores, members, laws
 
 

@@ -11,14 +11,23 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from cell.gap.fit_jac import clipped_blocks, misses_many, refit_folds, stackable, stacked_fun_jac
+from cell.gap.fit_jac import (
+    clipped_blocks,
+    misses_many,
+    refit_folds,
+    side_by_side_fun_jac,
+    stackable,
+    stacked_fun_jac,
+)
 from cell.gap.problem import GapProblem, rmse
 from cell.model.effects import Effect
+from cell.model.flight_batch import together as side_by_side
 
 __all__ = ["Fit", "fit_set", "fit_start", "score_set", "Score"]
 
@@ -107,9 +116,11 @@ def fit_set(
     # scipy's own forward differences, every perturbed vector in one flight (bitwise the
     # same), made with each residual: the Jacobian at an accepted step is already there
     fun: Callable[[np.ndarray], np.ndarray] = one
-    jac: Any = "2-point"
+    jac: Any
     if stackable(classes, permute):
         fun, jac = stacked_fun_jac(prob, classes, train, scale, (lo, hi), DIFF_STEP)
+    else:  # scipy's differences, the perturbed vectors' flights integrated together
+        fun, jac = side_by_side_fun_jac(one, (lo, hi), DIFF_STEP)
     res = least_squares(
         fun,
         start,
@@ -211,15 +222,18 @@ def score_set(
         lo, hi = _layout(classes)[1:3]
         xs = refit_folds(prob, classes, [t for t, _ in flat], full.x, r_all, jac, (lo, hi))
         got = iter(misses_many(prob, classes, [t for _, t in flat], np.array(xs), scale))
+    else:  # each fold refitted and predicted on its own, their flights integrated together
+
+        def fold(train: np.ndarray, test: np.ndarray) -> np.ndarray:
+            x = _refit(prob, classes, train, full.x, r_all, jac, permute)
+            return prob.residual(test, _unpack(classes, x, scale), permute=permute)
+
+        flat = [f for folds in prob.folds.values() for f in folds]
+        got = iter(side_by_side([partial(fold, train, test) for train, test in flat]))
     for folds in prob.folds.values():
         r = np.zeros((n, 2))
-        if together:
-            for _, test in folds:
-                r[test] = next(got).reshape(-1, 2)
-        else:
-            for train, test in folds:
-                x = _refit(prob, classes, train, full.x, r_all, jac, permute)
-                r[test] = prob.residual(test, _unpack(classes, x, scale), permute=permute)
+        for _, test in folds:
+            r[test] = np.reshape(next(got), (-1, 2))
         sq += np.sum(r * r, axis=1)
         schemes += 1
     sq /= max(schemes, 1)

@@ -13,13 +13,16 @@ call and the Jacobian is bitwise scipy's (tests/test_gap_fit_jac.py).
 Only effects whose parameters enter the model elementwise can be given one value per
 stacked row (`STACKABLE`, and the covariate laws of `cell.gap.laws` over them); a set with
 any other effect, or the permutation control (its shuffle depends on the number of rows),
-keeps scipy's own differences.
+keeps scipy's own differences, written out (`side_by_side_fun_jac`) so that its p
+perturbed residuals are made side by side, their flights integrated as one batch
+(`cell.model.flight_batch.together`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import fields
+from functools import partial
 
 import numpy as np
 
@@ -38,9 +41,11 @@ from cell.model.effects import (
     StrokeOffset,
     Wind,
 )
+from cell.model.flight_batch import together
 
-__all__ = ["STACKABLE", "clipped_blocks", "forward_steps", "misses_many", "refit_folds", "stackable", "stacked_fun_jac",
-           "stacked_jacobian", "stacked_misses"]  # fmt: skip
+__all__ = ["STACKABLE", "clipped_blocks", "forward_steps", "misses_many", "refit_folds",
+           "side_by_side_fun_jac", "stackable", "stacked_fun_jac", "stacked_jacobian",
+           "stacked_misses"]  # fmt: skip
 
 # effects whose parameters enter the launch or the flight elementwise (a per-row array
 # gives each row the arithmetic of its own scalar)
@@ -221,6 +226,44 @@ def stacked_fun_jac(
         if j is None:
             j = _misses_and_jacobian(prob, classes, train, scale, bounds, rel_step, x)[1]
         return j
+
+    return fun, jac
+
+
+def side_by_side_fun_jac(
+    one: Callable[[np.ndarray], np.ndarray],
+    bounds: tuple[np.ndarray, np.ndarray],
+    rel_step: float,
+) -> tuple[Callable[[np.ndarray], np.ndarray], Callable[[np.ndarray], np.ndarray]]:
+    """A `fun` and a `jac` for `least_squares` for any residual `one` (a set that cannot be
+    stacked): scipy's '2-point' differences (`_dense_difference`: each perturbed vector a
+    copy of x with one entry x_i + h_i, the steps of `forward_steps`, the base the
+    residual at x), each perturbed residual its own call of `one`, the calls made side by
+    side (`cell.model.flight_batch.together`: their flights integrated as one batch), so
+    the Jacobian is bitwise scipy's."""
+    lo, hi = bounds
+    made: dict[bytes, np.ndarray] = {}
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        r = np.atleast_1d(one(x))
+        made.clear()
+        made[np.asarray(x, float).tobytes()] = r
+        return r
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, float)
+        f0 = made.get(x.tobytes())
+        if f0 is None:
+            f0 = np.atleast_1d(one(x))
+        h = forward_steps(x, lo, hi, rel_step)
+        xs = []
+        for i in range(x.size):
+            x1 = np.copy(x)
+            x1[i] = x[i] + h[i]
+            xs.append(x1)
+        f = together([partial(one, x1) for x1 in xs])
+        dx = [(x[i] + h[i]) - x[i] for i in range(x.size)]
+        return np.array([(np.atleast_1d(fi) - f0) / d for fi, d in zip(f, dx, strict=True)]).T
 
     return fun, jac
 

@@ -37,6 +37,7 @@ is the per-object form's, which pays for its second term.
 from __future__ import annotations
 
 from dataclasses import make_dataclass, replace
+from functools import partial
 from typing import Any, ClassVar
 
 import numpy as np
@@ -354,6 +355,7 @@ def choose_law(
     """
     from cell.gap.fit import score_set
     from cell.gap.stats import bootstrap_cut
+    from cell.model.flight_batch import together
 
     tick = tick or (lambda s: None)
     held = objects_out(prob)
@@ -387,6 +389,7 @@ def choose_law(
             forms += law_forms(base, prob.batch, param)
             if 2 <= n_obj <= MAX_OBJECTS:
                 forms.append(per_object_class(base, prob, param))
+        fits = []
         for form in forms:
             p = const[form.law_param]  # type: ignore[attr-defined]
             common = {k: v for k, v in const.items() if k != form.law_param}  # type: ignore[attr-defined]
@@ -399,7 +402,10 @@ def choose_law(
             warm = np.r_[best.full.x[:at], own, best.full.x[at + nb :]]
             tick(f"{eff.name} ({form.law})")
             cls_j = classes[:j] + [form] + classes[j + 1 :]
-            sc = score_set(prob, cls_j, warm=warm)
+            fits.append(partial(score_set, prob, cls_j, warm=warm))
+        # the forms' fits side by side (`cell.model.flight_batch`); the choice in order
+        for form, sc in zip(forms, together(fits), strict=True):
+            cls_j = classes[:j] + [form] + classes[j + 1 :]
             rows[form.law] = sc.heldout_rmse_m
             # the extra terms over the member's own parameters
             val = sc.heldout_rmse_m * (1.0 + TERM_PENALTY * (len(form.bounds) - nb))

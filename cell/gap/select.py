@@ -17,17 +17,19 @@ scale is all that moves the landings in proportion to their distance from the or
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
-from cell.gap.fit import Score, fit_start, score_set
+from cell.gap.fit import Score, fit_set, fit_start, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
 from cell.gap.track_drag import drag_refusal
 from cell.gap.tracks import phase_evidence
 from cell.model.effects import EFFECTS, FAMILIES, DragScale, Effect, TrackingScale
+from cell.model.flight_batch import together
 
 __all__ = [
     "Selection",
@@ -168,14 +170,11 @@ def _partners(prob: GapProblem, first: Score, rest: list[type[Effect]]) -> list[
     """Effects ranked by how well each alone fits what the chosen ones leave (fitted on all
     throws on top of the chosen effects held at their sizes): a quick ranking of partners,
     whose joint fit and held-out score come after."""
-    from dataclasses import replace
-
-    from cell.gap.fit import fit_set
-
     held = tuple(e for e in first.full.effects if not isinstance(e, BandStiffness))
     fixed = replace(prob, base_effects=prob.base_effects + held)
     all_idx = np.arange(len(prob))
-    fits = {c.name: fit_set(fixed, [c], all_idx, max_nfev=15 * len(c.bounds))[0] for c in rest}
+    run = [partial(fit_set, fixed, [c], all_idx, max_nfev=15 * len(c.bounds)) for c in rest]
+    fits = {c.name: f[0] for c, f in zip(rest, together(run), strict=True)}
     return sorted(fits, key=lambda nm: fits[nm].train_rmse_m)
 
 
@@ -452,25 +451,25 @@ class Selection:
             self.prob, last, [effect_class(sc.names[-1], self.members) for sc in rest]
         )
         pick = list(dict.fromkeys([sc.names[-1] for sc in rest[:tries]] + quick[:tries]))
+        # every law of each partner's family (the member that stood for it alone was chosen
+        # on misses the chosen effects no longer leave), fitted side by side
+        todo, fits = [], []
         for sc in [sc for sc in rest if sc.names[-1] in pick]:
-            # every law of the partner's family: the member that stood for it alone was
-            # chosen on misses the chosen effects no longer leave
-            best: Score | None = None
-            best_rank = (True, np.inf)
             for member in FAMILIES.get(sc.names[-1], (effect_class(sc.names[-1]),)):
                 classes = [effect_class(nm, self.members) for nm in have] + [member]
                 own = sc.full.x[len(self.prefix) :]
                 if member is not self.members.get(sc.names[-1]):
                     own = fit_start(member) / np.asarray(member.scale, float)
-                warm = np.concatenate([last.full.x, own])
                 self.tick("+".join(public(classes_names(classes))))
-                combo = score_set(self.prob, classes, warm=warm)
-                rank = member_rank_of(combo)
-                if best is None or rank < best_rank:
-                    best, best_rank = combo, rank
-            assert best is not None
-            self.scores["+".join(public(best.names))] = best
-            combos.append(best)
+                todo.append(sc.names[-1])
+                fits.append(partial(score_set, self.prob, classes, warm=np.r_[last.full.x, own]))
+        best: dict[str, tuple[tuple[bool, float], Score]] = {}
+        for name, combo in zip(todo, together(fits), strict=True):
+            if name not in best or member_rank_of(combo) < best[name][0]:
+                best[name] = (member_rank_of(combo), combo)
+        for _, combo in best.values():
+            self.scores["+".join(public(combo.names))] = combo
+            combos.append(combo)
         combos.sort(key=lambda c: c.heldout_rmse_m)
         return combos
 

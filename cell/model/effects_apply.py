@@ -13,9 +13,7 @@ import numpy as np
 from cell.model.band import band_angle, band_force, band_stretch
 from cell.model.effects import (
     _CURVED,
-    DOWNWASH_EDGE_M,
     DOWNWASH_REF_RPM,
-    JET_SPREAD,
     BandDamping,
     BandMass,
     Bounce,
@@ -38,7 +36,8 @@ from cell.model.effects import (
     _find,
     effects_from_mapping,
 )
-from cell.model.flight3d import Rows, column_fraction, fly
+from cell.model.effects_air import AirKind, make_accel
+from cell.model.flight3d import fly
 from cell.model.params import EndEffectorParams, G, aero_factor_kg_per_m
 from cell.model.throw import (
     Landing,
@@ -128,61 +127,8 @@ def _flight_accel(
         # the drag the nominal law does not have: (factor - 1) of it
         k_extra = (ds.factor - 1.0) * drag_constant(batch.shape, batch.mass, batch.size)
         per_throw["neg_k_extra"] = -k_extra
-    rows = Rows(per_throw)
-    # made once per set of rows (`Rows`' rule: the integrator hands the same idx object
-    # while its rows stay the same): the parameters at those rows, and, without a
-    # downwash (which varies along the path), the air velocity, the same at every stage
-    held: dict[str, Any] = {"idx": None}
-    # no wind and no downwash: the air is still (the nominal drag's and the spin's and drag
-    # factor's relative velocity is v itself)
-    still = wind is None and dw is None
-
-    def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[Any, Any]:
-        if idx is not held["idx"]:
-            held["idx"], held["r"], held["w"] = idx, {**par, **rows(idx)}, None
-        r = held["r"]
-        w = held["w"]  # None while the air is still
-        if w is None and not still:
-            w = np.empty_like(p)
-            w[:] = r["w"]
-            if dw is None:  # never written below: handed out again at the next stage
-                held["w"] = w
-        if dw is not None:
-            rho = np.hypot(p[:, 0] - r["cx"], p[:, 1] - r["cy"])
-            if jet:
-                depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
-                width = r["radius"] + JET_SPREAD * depth
-                inside = np.exp(-((rho / width) ** 2)) * (r["radius"] / width)
-                inside = np.where(p[:, 2] < r["release_z"], inside, 0.0)
-            else:
-                inside = column_fraction(rho, r["radius"], DOWNWASH_EDGE_M)
-            if decay:
-                depth = np.maximum(r["release_z"] - p[:, 2], 0.0)
-                inside = inside * np.exp(-depth / r["depth"])
-            w[:, 2] -= r["w_dw"] * inside
-        if sp is None and ds is None:
-            return w, None
-        rel = v if still else v - w  # v − 0 is v to the bit
-        speed = _norm(rel)
-        extra = None
-        if sp is not None:
-            speed_sp = np.maximum(speed, 1e-9)
-            # normal to v in its vertical plane, pointing up for backspin
-            nz = 1.0 - (rel[:, 2] / speed_sp) ** 2
-            n = -rel * (rel[:, 2] / speed_sp**2)[:, None]
-            n[:, 2] += 1.0
-            n /= np.sqrt(np.maximum(nz, 1e-12))[:, None]
-            s_ratio = r["spin"] * r["size_radius"] / speed_sp
-            c_l = r["lift_max"] * np.tanh(s_ratio / r["lift_max"])
-            extra = (r["kl"] * c_l * speed_sp**2)[:, None] * n
-        if ds is not None:
-            drag = (r["neg_k_extra"] * speed)[:, None] * rel
-            extra = drag if extra is None else extra + drag
-        return w, extra
-
-    # only a downwash's column reads where the object is (`flight3d._rk4`)
-    accel.reads_position = dw is not None  # type: ignore[attr-defined]
-    return accel
+    kind = AirKind(wind is not None, dw is not None, decay, jet, sp is not None, ds is not None)
+    return make_accel(kind, par, per_throw, len(batch))
 
 
 def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
@@ -197,14 +143,6 @@ def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
     if sp is not None:
         par["spin"], par["lift_max"] = sp.spin_rad_s, sp.lift_max
     return par
-
-
-def _norm(x: np.ndarray) -> np.ndarray:
-    """|x| of each row of x (m, 3): `np.linalg.norm(x, axis=1)`'s arithmetic ((x² + y²) + z²),
-    without its per-call checks, from x's columns (contiguous in the integrator's
-    column-major states): the squares in one call, summed column by column."""
-    sq = x * x
-    return np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])
 
 
 def flight_accel(

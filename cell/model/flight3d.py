@@ -16,8 +16,10 @@ with observed tracks).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +33,9 @@ __all__ = [
     "Rows",
     "acceleration",
     "column_fraction",
+    "current_gather",
     "fly",
+    "route_flights",
     "sample_path",
 ]
 
@@ -168,6 +172,20 @@ def _keep(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return np.asarray(a.T[:, rows].T)
 
 
+# the thread's gatherer of flights (`cell.model.flight_batch.together`), if any
+_ROUTE = threading.local()
+
+
+def route_flights(gather: Any) -> None:
+    """Hand this thread's `fly` calls to `gather` (its `submit`), not integrate them."""
+    _ROUTE.gather = gather
+
+
+def current_gather() -> Any:
+    """This thread's gatherer of flights, or None."""
+    return getattr(_ROUTE, "gather", None)
+
+
 def fly(
     position: np.ndarray,
     velocity: np.ndarray,
@@ -180,6 +198,9 @@ def fly(
     t_max: float = 30.0,
 ) -> FlightResult:
     """Integrate flights until each crosses its plane z = land_z going down.
+
+    In a thread of `cell.model.flight_batch.together` the flights are integrated in one
+    batch with the other threads' (the same crossings, bit for bit).
 
     Args:
         position: start positions [m, W], shape (n, 3).
@@ -194,6 +215,38 @@ def fly(
     Returns:
         The crossings.
     """
+    gather = getattr(_ROUTE, "gather", None)
+    if gather is not None:
+        from cell.model.flight_batch import FlightRequest
+
+        n = position.shape[0]
+        return gather.submit(  # type: ignore[no-any-return]
+            FlightRequest(
+                position=np.asarray(position, float),
+                velocity=np.asarray(velocity, float),
+                k=np.broadcast_to(np.asarray(k, float), (n,)),
+                land_z=np.broadcast_to(np.asarray(land_z, float), (n,)),
+                accel=accel,
+                t0=np.broadcast_to(np.asarray(t0, float), (n,)),
+                step=step,
+                t_max=t_max,
+            )
+        )
+    return _fly(position, velocity, k, land_z, accel=accel, t0=t0, step=step, t_max=t_max)
+
+
+def _fly(
+    position: np.ndarray,
+    velocity: np.ndarray,
+    k: np.ndarray,
+    land_z: np.ndarray,
+    *,
+    accel: Accel | None = None,
+    t0: np.ndarray | float = 0.0,
+    step: float = 0.01,
+    t_max: float = 30.0,
+) -> FlightResult:
+    """`fly` integrated here and now."""
     n = position.shape[0]
     t_start = np.broadcast_to(np.asarray(t0, float), (n,))
     idx = np.arange(n)
