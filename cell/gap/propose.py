@@ -148,9 +148,10 @@ def _turn(v: np.ndarray, vb: np.ndarray, d_el: np.ndarray, d_az: np.ndarray) -> 
     return vb + sp[:, None] * u
 
 
-def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[str, Any]],
-                                                                    np.ndarray]:  # fmt: skip
-    """The candidate terms and their landing sensitivities J (n, 2, p) [m per unit θ]."""
+def library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool = True
+            ) -> tuple[list[dict[str, Any]], np.ndarray]:  # fmt: skip
+    """The candidate terms and their landing sensitivities J (n, 2, p) [m per unit θ]
+    (`lift`: with the lift across v, `cell.gap.propose_terms.lift_terms`)."""
     idx = np.arange(len(prob))
     effs = [e for e in effects if e.name != "band_stiffness"]
     land = prob.landing(idx, effects)
@@ -214,7 +215,7 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
             "force up [1/m] = k · |v|²",
             lambda p, v, i: H_ACC * np.c_[np.zeros((len(v), 2)), np.sum(v * v, axis=1)],
         ),  # fmt: skip
-    ] + lift_terms(b, H_ACC)
+    ] + (lift_terms(b, H_ACC) if lift else [])
     for name, fn in flight:
         add("flight", name, land_xy(v1, fn), H_ACC)
     vh = np.nan_to_num(land.impact_velocity[:, :2])
@@ -264,28 +265,30 @@ def propose(
     floor_m: float,
     keep: np.ndarray | None = None,
     phases: set[str] | None = None,
+    extended: bool = True,
 ) -> tuple[dict[str, Any], np.ndarray]:
     """The law proposed for what the effects leave (see the module docstring), fitted and
     scored on the throws in `keep` (all when None: outliers left out), from the terms of
     `phases` only (all when None: `cell.gap.propose_terms.allowed_phases`), then with the
     terms of one object and another added where they earn their place
-    (`cell.gap.propose_terms`).
+    (`cell.gap.propose_terms`). `extended` False: the library without the lift across v
+    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`).
 
     Returns:
         (the proposal, every throw's miss with the proposed law added (n, 2) [m]).
     """
     with one_blas_thread():  # small least squares: a second BLAS thread only spins
-        return _propose(prob, effects, floor_m, keep, phases)
+        return _propose(prob, effects, floor_m, keep, phases, extended)
 
 
 def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
-             keep: np.ndarray | None, phases: set[str] | None
+             keep: np.ndarray | None, phases: set[str] | None, extended: bool
              ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
     idx = np.arange(len(prob))
     n = len(prob)
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
     r = np.nan_to_num(prob.residual(idx, effects))
-    terms, jac = library(prob, effects)
+    terms, jac = library(prob, effects, lift=extended)
     a_all = jac.reshape(2 * n, -1)  # rows: throw-major (x, y)
     if phases is not None:  # the phases the tracks allow
         on = [t["phase"] in phases for t in terms]
@@ -293,7 +296,7 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
     # terms the ones before them explain (collinear on this log) are left out
     free = independent(a_all[np.repeat(keep, 2)])
     left_out = [t["term"] for t, f in zip(terms, free, strict=True) if not f]
-    per_object = object_columns(prob, terms, a_all)
+    per_object = object_columns(prob, terms, a_all) if extended else []
     terms = [t for t, f in zip(terms, free, strict=True) if f]
     a_all = a_all[:, free]
     y_all = r.reshape(-1)

@@ -264,27 +264,41 @@ def _robust_report(
 
 
 def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis, tp: dict[str, Any] | None
-              ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+              ) -> tuple[dict[str, Any], np.ndarray | None]:  # fmt: skip
     """The law proposed for an `unknown` verdict (`cell.gap.propose`), fitted on the
     throws not left out (pre) but for the rows left out that are one object's gap
     (`cell.gap.propose_terms.one_object_rows`), from the terms of the phases the tracks
     allow (`allowed_phases`): on the baseline's misses and on what the partial effects
-    leave, whichever the law explains better; and every throw's miss under it."""
-    from cell.gap.propose import propose
+    leave, whichever the law explains better. With it, every throw's miss under the law of
+    the library without the lift across v and the objects' terms, on the throws not in pre
+    and from every phase: the misses that flag outliers (`_pass_flags`), so that the
+    passes, and the verdict, do not hang on the proposal's wider library (None where that
+    law has no term)."""
     from cell.gap.propose_terms import allowed_phases, one_object_rows
 
     floor = d.report["noise_floor_m"]
-    phases = allowed_phases(tp, floor)
     back = one_object_rows(full, pre)
-    keep = ~pre | back
-    prop, miss = propose(full, (), floor, keep=keep, phases=phases)
-    out = {**prop, "on_top_of": []}
-    if d.verdict_effects:
-        part, miss_p = propose(full, d.verdict_effects, floor, keep=keep, phases=phases)
-        if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
-            out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
+    out, _ = _best_law(full, d, floor, ~pre | back, allowed_phases(tp, floor), True)
+    flagging, miss = _best_law(full, d, floor, ~pre, None, False)
     if back.any():
         out["object_rows_kept"] = int(back.sum())
+    return out, miss if flagging["law"] else None
+
+
+def _best_law(full: GapProblem, d: Diagnosis, floor: float, keep: np.ndarray,
+              phases: set[str] | None, extended: bool
+              ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+    """The law on the baseline's misses or on what the partial effects leave, whichever
+    explains more (`cell.gap.propose.propose`), and every throw's miss under it."""
+    from cell.gap.propose import propose
+
+    prop, miss = propose(full, (), floor, keep=keep, phases=phases, extended=extended)
+    out = {**prop, "on_top_of": []}
+    if d.verdict_effects:
+        part, miss_p = propose(full, d.verdict_effects, floor, keep=keep, phases=phases,
+                               extended=extended)  # fmt: skip
+        if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
+            out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
     return out, miss
 
 
@@ -304,7 +318,7 @@ def _pass_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, from_law: bool,
     if d.report["verdict"]["effects"] != ["unknown"]:
         return _flags(full, pre, d), None, False
     proposal, miss = _proposal(full, pre, d, tp)
-    if proposal["law"] and not from_law:
+    if miss is not None and not from_law:
         return flag(miss), proposal, True
     return pre.copy(), proposal, from_law
 
