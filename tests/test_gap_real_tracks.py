@@ -92,7 +92,9 @@ def test_jugglebot_cell_gap(jugglebot: tuple, tmp_path) -> None:  # type: ignore
     assert main(["gap", str(throws), "--tracks", str(tpath), "--json", str(out)]) == 0
     rep = json.loads(out.read_text())
     tr = rep["tracks"]
-    assert tr["tracked"] == 35 and tr["unusable"] == []
+    # every track used: by the last pass, or left out of it as an outlier's (the flight law
+    # proposed for the `unknown` leaves one throw, s4-b7, beyond the threshold)
+    assert tr["tracked"] + rep["outliers"]["left_out_of_fit"] == 35 and tr["unusable"] == []
     assert abs(tr["g_ratio"] - 0.993) < 0.005
     assert 1.3 < tr["drag_ratio"] < 1.8
     assert tr["track_fit_rms_m"] < 0.004

@@ -14,10 +14,12 @@ landing is linear in its coefficient θ near θ = 0:
 | flight | along ∝ v, ∝ v² | an acceleration θ·v, θ·|v|·v along the velocity |
 | flight | across ∝ v, ∝ v² | θ·v, θ·|v|·v turned 90° about the vertical (horizontal, to the left) |
 | flight | up ∝ v² | θ·|v|² upwards |
+| flight | lift across v ∝ v², lift coefficient C_L | θ·|v|²·n̂, n̂ across v in v's vertical plane, upwards; θ·½ρA/m·|v|²·n̂ (`cell.gap.propose_terms`) |
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
 | measurement | shift ∝ v with k < 0 (its interval below 0) | the landing logged −k s before the touchdown: no slide ends behind it, a tracker lagging does |
 | landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
+| launch, flight, landing | speed error, lift coefficient, shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`) |
 
 A log's drift (a band wearing, a motor warming) and its sessions (a band changed, a
 launcher set up again) are common on a real cell and outside the vocabulary, so the
@@ -37,8 +39,9 @@ library by sequentially thresholded least squares (SINDy): fit, zero the terms w
 contribution (|θ_j|·‖J_j‖/√n) falls below λ, refit on the rest, repeat. λ is chosen on
 held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term.
 The proposal reports its terms with 95 % intervals, the phase they act in and how far
-the law shrinks the held-out miss. The verdict stays `unknown`: the proposal is what a
-person would test next.
+the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
+holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
+The verdict stays `unknown`: the proposal is what a person would test next.
 """
 
 from __future__ import annotations
@@ -49,10 +52,12 @@ from typing import Any
 import numpy as np
 
 from cell.gap.problem import GapProblem
+from cell.gap.propose_terms import LIFT_CL, LIFT_CL_MAX, MAX_OBJECTS, lift_terms, object_columns
 from cell.model.effects import Effect
 from cell.model.effects_apply import flight_accel
 from cell.model.flight3d import fly
 from cell.model.throw import drag_constant
+from cell.parallel import one_blas_thread
 
 __all__ = ["propose", "library", "log_covariates"]
 
@@ -143,9 +148,10 @@ def _turn(v: np.ndarray, vb: np.ndarray, d_el: np.ndarray, d_az: np.ndarray) -> 
     return vb + sp[:, None] * u
 
 
-def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[str, Any]],
-                                                                    np.ndarray]:  # fmt: skip
-    """The candidate terms and their landing sensitivities J (n, 2, p) [m per unit θ]."""
+def library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool = True
+            ) -> tuple[list[dict[str, Any]], np.ndarray]:  # fmt: skip
+    """The candidate terms and their landing sensitivities J (n, 2, p) [m per unit θ]
+    (`lift`: with the lift across v, `cell.gap.propose_terms.lift_terms`)."""
     idx = np.arange(len(prob))
     effs = [e for e in effects if e.name != "band_stiffness"]
     land = prob.landing(idx, effects)
@@ -209,7 +215,7 @@ def library(prob: GapProblem, effects: tuple[Effect, ...]) -> tuple[list[dict[st
             "force up [1/m] = k · |v|²",
             lambda p, v, i: H_ACC * np.c_[np.zeros((len(v), 2)), np.sum(v * v, axis=1)],
         ),  # fmt: skip
-    ]
+    ] + (lift_terms(b, H_ACC) if lift else [])
     for name, fn in flight:
         add("flight", name, land_xy(v1, fn), H_ACC)
     vh = np.nan_to_num(land.impact_velocity[:, :2])
@@ -258,40 +264,124 @@ def propose(
     effects: tuple[Effect, ...],
     floor_m: float,
     keep: np.ndarray | None = None,
+    phases: set[str] | None = None,
+    extended: bool = True,
 ) -> tuple[dict[str, Any], np.ndarray]:
     """The law proposed for what the effects leave (see the module docstring), fitted and
-    scored on the throws in `keep` (all when None: outliers left out).
+    scored on the throws in `keep` (all when None: outliers left out), from the terms of
+    `phases` only (all when None: `cell.gap.propose_terms.allowed_phases`), then with the
+    terms of one object and another added where they earn their place
+    (`cell.gap.propose_terms`). `extended` False: the library without the lift across v
+    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`).
 
     Returns:
         (the proposal, every throw's miss with the proposed law added (n, 2) [m]).
     """
+    with one_blas_thread():  # small least squares: a second BLAS thread only spins
+        return _propose(prob, effects, floor_m, keep, phases, extended)
+
+
+def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
+             keep: np.ndarray | None, phases: set[str] | None, extended: bool
+             ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
     idx = np.arange(len(prob))
     n = len(prob)
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
     r = np.nan_to_num(prob.residual(idx, effects))
-    terms, jac = library(prob, effects)
+    terms, jac = library(prob, effects, lift=extended)
     a_all = jac.reshape(2 * n, -1)  # rows: throw-major (x, y)
+    if phases is not None:  # the phases the tracks allow
+        on = [t["phase"] in phases for t in terms]
+        terms, a_all = [t for t, o in zip(terms, on, strict=True) if o], a_all[:, on]
     # terms the ones before them explain (collinear on this log) are left out
     free = independent(a_all[np.repeat(keep, 2)])
     left_out = [t["term"] for t, f in zip(terms, free, strict=True) if not f]
+    per_object = object_columns(prob, terms, a_all) if extended else []
     terms = [t for t, f in zip(terms, free, strict=True) if f]
     a_all = a_all[:, free]
     y_all = r.reshape(-1)
     out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
-    out["collinear_left_out"] = left_out
-    at = [t["term"] for t in terms].index(PLANE_CONST) if PLANE_CONST in [
-        t["term"] for t in terms] else None  # fmt: skip
-    if at is not None and any(t["term"] == PLANE_CONST and abs(t["k"]) > PLANE_MAX_M
-                              for t in out["terms"]):  # fmt: skip
+    if PLANE_CONST in [t["term"] for t in terms] and any(
+        t["term"] == PLANE_CONST and abs(t["k"]) > PLANE_MAX_M for t in out["terms"]
+    ):
         # a floor further off its logged height than any cell's: the term stands for
         # something else; the law is fitted again without it
         own = [t for t in out["terms"] if t["term"] == PLANE_CONST][0]["k"]
-        rest = [j for j in range(len(terms)) if j != at]
-        out, miss = _sparse_law(prob, [terms[j] for j in rest], a_all[:, rest], y_all, keep,
-                                floor_m)  # fmt: skip
-        out["collinear_left_out"] = left_out
+        rest = [j for j, t in enumerate(terms) if t["term"] != PLANE_CONST]
+        terms, a_all = [terms[j] for j in rest], a_all[:, rest]
+        out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
         out["implausible_left_out"] = [{"term": PLANE_CONST, "k": float(own)}]
+    out, miss = _object_law(prob, terms, a_all, y_all, keep, floor_m, per_object, out, miss)
+    out["collinear_left_out"] = left_out
+    if phases is not None:
+        out["phases_from_tracks"] = sorted(phases)
     return out, miss
+
+
+def _object_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
+                y_all: np.ndarray, keep: np.ndarray, floor_m: float,
+                per_object: list[tuple[str, list[dict[str, Any]], np.ndarray]],
+                out: dict[str, Any], miss: np.ndarray
+                ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+    """The law with the terms of one object after another (greedily, at most MAX_OBJECTS),
+    each object's terms tried beside the library's (`terms`, `a_all`) and alone with the
+    objects' chosen before; kept where the held-out score, with one term's penalty more
+    for each object chosen, falls and no lift coefficient exceeds LIFT_CL_MAX in size.
+    `out`, `miss`: the law without them."""
+    rows = np.repeat(keep, 2)
+    chosen: list[str] = []
+    own_t: list[dict[str, Any]] = []
+    own_a = np.zeros((a_all.shape[0], 0))
+    score = out.pop("score")
+    for _ in range(MAX_OBJECTS):
+        best = None
+        for o, ts, cols in per_object:
+            if o in chosen:
+                continue
+            for lib_t, lib_a in ((terms, a_all), ([], a_all[:, :0])):
+                a_try = np.c_[lib_a, own_a, cols]
+                free = independent(a_try[rows])
+                free[: lib_a.shape[1]] = True  # the library's terms stand; the object's may not
+                t_try = [t for t, f in zip([*lib_t, *own_t, *ts], free, strict=True) if f]
+                got = _plausible_law(prob, t_try, a_try[:, free], y_all, keep, floor_m, o)
+                if got is None:
+                    continue
+                o_score = got[0] * (1.0 + TERM_PENALTY * (len(chosen) + 1))
+                if o_score < score and (best is None or o_score < best[0]):
+                    best = (o_score, o, *got[1:])
+        if best is None:
+            break
+        score, o, t_got, a_got, out, miss = best
+        chosen.append(o)
+        mine = ["[object = " in t["term"] for t in t_got]
+        own_t, own_a = [t for t, m in zip(t_got, mine, strict=True) if m], a_got[:, mine]
+    if chosen:
+        out["objects"] = chosen
+    return out, miss
+
+
+def _plausible_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
+                   y_all: np.ndarray, keep: np.ndarray, floor_m: float, obj: str
+                   ) -> tuple[float, list[dict[str, Any]], np.ndarray, dict[str, Any],
+                              np.ndarray] | None:  # fmt: skip
+    """The sparse law over these terms, fitted again without a lift coefficient of one
+    object beyond LIFT_CL_MAX in size (a lift no spin gives stands for something else):
+    (its score, the terms and columns it was fitted on, the law, the misses), or None
+    where it takes no term of the object `obj`."""
+    for _ in range(3):
+        out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
+        bad = {
+            t["term"]
+            for t in out["terms"]
+            if t["term"].startswith(LIFT_CL + " · [object") and abs(t["k"]) > LIFT_CL_MAX
+        }
+        if not bad:
+            break
+        on = [t["term"] not in bad for t in terms]  # fmt: skip
+        terms, a_all = [t for t, o in zip(terms, on, strict=True) if o], a_all[:, on]
+    if bad or not any(f"[object = {obj}]" in t["term"] for t in out["terms"]):
+        return None
+    return out.pop("score"), terms, a_all, out, miss
 
 
 def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
@@ -322,12 +412,13 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
         if best is None or val < best[0]:
             best = (val, ho, th_all)
     assert best is not None
-    _, ho, th = best
+    score, ho, th = best
     on = np.flatnonzero(th)
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
         return {"law": None, "terms": [], "heldout_rmse_before_m": base_rmse,
-                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0}, miss  # fmt: skip
+                "heldout_rmse_after_m": base_rmse, "shrink_pct": 0.0,
+                "score": score}, miss  # fmt: skip
     e = y - a @ th
     s2 = float(e @ e) / max(y.size - on.size, 1)
     cov = s2 * np.linalg.pinv(a[:, on].T @ a[:, on])
@@ -357,4 +448,5 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
         "heldout_rmse_after_m": ho,
         "shrink_pct": 100.0 * (1.0 - ho / base_rmse) if base_rmse > 0 else 0.0,
         "within_floor": bool(ho <= 1.3 * floor_m),
+        "score": score,
     }, miss

@@ -19,6 +19,7 @@ from cell.gap.diagnose import AGREE_SHARE, Diagnosis, diagnose
 from cell.gap.noise import NoiseFloor
 from cell.gap.outliers import flag, threshold_sq
 from cell.gap.problem import GapProblem, build_problem
+from cell.gap.track_latency import add_offset
 from cell.gap.tracks import fit_tracks, launch_arrays, phase_evidence, track_phase
 from cell.log.table import ThrowTable
 from cell.model.effects import EFFECTS, Effect
@@ -168,6 +169,7 @@ def _one_pass(
     if tracks:
         tf = fit_tracks(prob.table.text("throw_id"), tracks, _k_of(prob.table))
         tp = track_phase(prob, tf)
+        add_offset(tp, prob, tf.t0, tf.p0, tf.v0)
     return prob, tp, diagnose(prob, identify=identify, tracks=tp, progress=progress)
 
 
@@ -261,17 +263,40 @@ def _robust_report(
     rep["throws"] = len(full)
 
 
-def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis) -> tuple[dict[str, Any], np.ndarray]:
+def _proposal(full: GapProblem, pre: np.ndarray, d: Diagnosis, tp: dict[str, Any] | None
+              ) -> tuple[dict[str, Any], np.ndarray | None]:  # fmt: skip
     """The law proposed for an `unknown` verdict (`cell.gap.propose`), fitted on the
-    throws not left out (pre): on the baseline's misses and on what the partial
-    effects leave, whichever the law explains better; and every throw's miss under it."""
-    from cell.gap.propose import propose
+    throws not left out (pre) but for the rows left out that are one object's gap
+    (`cell.gap.propose_terms.one_object_rows`), from the terms of the phases the tracks
+    allow (`allowed_phases`): on the baseline's misses and on what the partial effects
+    leave, whichever the law explains better. With it, every throw's miss under the law of
+    the library without the lift across v and the objects' terms, on the throws not in pre
+    and from every phase: the misses that flag outliers (`_pass_flags`), so that the
+    passes, and the verdict, do not hang on the proposal's wider library (None where that
+    law has no term)."""
+    from cell.gap.propose_terms import allowed_phases, one_object_rows
 
     floor = d.report["noise_floor_m"]
-    prop, miss = propose(full, (), floor, keep=~pre)
+    back = one_object_rows(full, pre)
+    out, _ = _best_law(full, d, floor, ~pre | back, allowed_phases(tp, floor), True)
+    flagging, miss = _best_law(full, d, floor, ~pre, None, False)
+    if back.any():
+        out["object_rows_kept"] = int(back.sum())
+    return out, miss if flagging["law"] else None
+
+
+def _best_law(full: GapProblem, d: Diagnosis, floor: float, keep: np.ndarray,
+              phases: set[str] | None, extended: bool
+              ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+    """The law on the baseline's misses or on what the partial effects leave, whichever
+    explains more (`cell.gap.propose.propose`), and every throw's miss under it."""
+    from cell.gap.propose import propose
+
+    prop, miss = propose(full, (), floor, keep=keep, phases=phases, extended=extended)
     out = {**prop, "on_top_of": []}
     if d.verdict_effects:
-        part, miss_p = propose(full, d.verdict_effects, floor, keep=~pre)
+        part, miss_p = propose(full, d.verdict_effects, floor, keep=keep, phases=phases,
+                               extended=extended)  # fmt: skip
         if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
             out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
     return out, miss
@@ -281,7 +306,8 @@ MIN_THROWS = 20  # distinct throws: held-out folds, a noise floor and a fit need
 MAX_PASSES = 4  # diagnoses of one log: every throw, then without the rows flagged
 
 
-def _pass_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, from_law: bool
+def _pass_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, from_law: bool,
+                tp: dict[str, Any] | None = None
                 ) -> tuple[np.ndarray, dict[str, Any] | None, bool]:  # fmt: skip
     """The rows a pass's verdict flags (the pass ran without `pre`), the law proposed for
     an `unknown` verdict (`_proposal`, else None), and whether the rows are that law's.
@@ -291,8 +317,8 @@ def _pass_flags(full: GapProblem, pre: np.ndarray, d: Diagnosis, from_law: bool
     (`from_law`) keeps them."""
     if d.report["verdict"]["effects"] != ["unknown"]:
         return _flags(full, pre, d), None, False
-    proposal, miss = _proposal(full, pre, d)
-    if proposal["law"] and not from_law:
+    proposal, miss = _proposal(full, pre, d, tp)
+    if miss is not None and not from_law:
         return flag(miss), proposal, True
     return pre.copy(), proposal, from_law
 
@@ -349,7 +375,7 @@ def diagnose_log(
         raise
     pre = np.zeros(len(full), bool)
     prob, tp, d = _one_pass(full, pre, tracks, identify, progress)
-    flagged, proposal, by_law = _pass_flags(full, pre, d, False)
+    flagged, proposal, by_law = _pass_flags(full, pre, d, False, tp)
     tried = [pre]
     # the rows flagged stay out of the next pass, until the rows a pass is fitted without
     # are the rows its verdict flags: the verdict is judged on the rows it reports (a first
@@ -364,7 +390,7 @@ def diagnose_log(
         prob, tp, d = _one_pass(full, flagged, tracks, identify, progress)
         pre, from_law = flagged, by_law
         tried.append(pre)
-        flagged, proposal, by_law = _pass_flags(full, pre, d, from_law)
+        flagged, proposal, by_law = _pass_flags(full, pre, d, from_law, tp)
     # passes that do not settle (a cycle: rows a proposed law flagged, which the verdict
     # of the pass without them puts back; or MAX_PASSES run) report the last verdict's
     # flags: no row its own effects explain is called an outlier

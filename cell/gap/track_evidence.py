@@ -55,6 +55,16 @@ def evidence(r: dict[str, Any]) -> str:
             f"launch speed from tracks is {abs(speed_pct):.1f}% "
             f"{'below' if speed_pct < 0 else 'above'} the model"
         )
+    off = r.get("time_offset")
+    if off and off["named"]:  # the speed read at the wrong time: a latency
+        at = off["speed_pct_at_offset"]
+        parts.append(
+            f"the tracks' time stamps lie {abs(off['offset_ms']):.1f} ms "
+            f"(±{off['offset_se_ms']:.2g}) {'late' if off['offset_ms'] > 0 else 'early'} "
+            f"against the model's release (a tracker's latency); read at that offset the "
+            f"launch speed from tracks is {abs(at):.1f}% {'below' if at < 0 else 'above'} "
+            "the model"
+        )
     parts.append(
         f"launch accounts for {launch_m:.3f} m of landing miss"
         if np.isfinite(launch_m)
