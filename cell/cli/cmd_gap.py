@@ -16,6 +16,9 @@ CHECK_HELP = (
 )
 
 
+MAX_GAP_THROWS = 100_000  # 2 GB of the diagnosis' memory on a log of band throws
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "gap",
@@ -87,6 +90,12 @@ def run(args: argparse.Namespace) -> int:
 
         import_rerun()
     table = read_throws_csv(args.throws)
+    if len(table) > MAX_GAP_THROWS:  # memory grows about 20 kB a throw (4.1 GB at 200,000)
+        raise InvalidInput(
+            f"{args.throws}: {len(table):,} throws; `cell gap` diagnoses at most "
+            f"{MAX_GAP_THROWS:,} (its memory grows with the log, about 20 kB a throw): give it "
+            "one session, or a sample of the rows, at a time"
+        )
     mp = load_params(args.params)
     try:
         base = tuple(effects_from_mapping(mp.effects))
