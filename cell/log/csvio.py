@@ -55,8 +55,6 @@ def read_throws_csv(path: str | Path) -> ThrowTable:
         LogFormatError: naming the file, the row (1 = first data row) and the column.
     """
     p = _readable(path)
-    if other := other_format(p):
-        raise LogFormatError(p, None, None, other)
     try:
         with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.reader(fh)
@@ -157,13 +155,17 @@ MAX_CSV_BYTES = 512 * 1024 * 1024  # [B] a log of ~2 million throws; larger is r
 
 def _readable(path: str | Path) -> str:
     """Check that `path` is a regular file this process can read, of a bounded size, before
-    opening it (a folder, a device such as /dev/zero or a FIFO is refused by name, unopened)."""
+    opening it (a folder, a device such as /dev/zero or a FIFO is refused by name, unopened),
+    and that it is not a file of another format (`cell.log.fileformat`: a gzipped CSV, a
+    Parquet table, JSON lines ...), named by its first bytes."""
     p = str(path)
     try:
         check_input_file(p, "file", MAX_CSV_BYTES)
     except InvalidInput as exc:
         text = str(exc)
         raise LogFormatError(p, None, None, text.removeprefix(f"{p}: ")) from None
+    if other := other_format(p):
+        raise LogFormatError(p, None, None, other)
     return p
 
 
@@ -226,8 +228,6 @@ def read_tracks_csv(path: str | Path, *, keep_lost: bool = False) -> dict[str, n
             (`RANGES`: ±100 m).
     """
     p = _readable(path)
-    if other := other_format(p):
-        raise LogFormatError(p, None, None, other)
     need = ("throw_id", "t_s", "x_m", "y_m", "z_m")
     try:
         with open(p, newline="", encoding="utf-8-sig") as fh:
