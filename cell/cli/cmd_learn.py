@@ -23,6 +23,9 @@ from cell.log import read_throws_csv
 from cell.params import load_params
 from cell.residual.learners import LEARNERS, SEARCH_ROWS
 
+# the residual saved where the inner cross-validation chose no learner (`best_params['null']`)
+NULL_RESIDUAL = {"zero": "none", "mean": "constant"}
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
@@ -231,7 +234,7 @@ def _judge(
     from cell.residual.model import physics_only
 
     null = model.best_params.get("null")
-    fitted = {"zero": "none", "mean": "constant"}.get(null, args.learner)
+    fitted = NULL_RESIDUAL.get(null, args.learner)
     if args.learner not in summary:
         record: dict[str, Any] = {
             "learner": args.learner,
@@ -294,7 +297,7 @@ def _print(
         print(judged.text())
     params = {k: v for k, v in model.best_params.items() if k not in ("null", "learner_cv_mse_mm2")}
     null = model.best_params.get("null")
-    if null is not None and saved["residual"] == {"zero": "none", "mean": "constant"}[null]:
+    if null is not None and saved["residual"] == NULL_RESIDUAL[null]:
         print(
             f"note: the {model.learner} learner did not beat "
             f"{'no correction' if null == 'zero' else 'a constant correction'} in the inner "
