@@ -14,8 +14,11 @@ from cell.jobschema import BIN_WALL_M
 
 __all__ = [
     "BIN_HINTS",
+    "MAX_BIN_DISTANCE_M",
     "ROBOT_BASE_CLEARANCE_M",
     "capacity_warnings",
+    "millimetre_problem",
+    "station_millimetres",
     "footprints_overlap",
     "light_item_warnings",
     "look_alike_warnings",
@@ -25,6 +28,9 @@ __all__ = [
 ]
 
 ROBOT_BASE_CLEARANCE_M = 0.25  # [m] no bin may come closer to the robot base than this
+# [m] no bin's centre farther from the base (no throw reaches past a few metres; the bound
+# the command line puts on a position, `cell.cli.guard`)
+MAX_BIN_DISTANCE_M = 100.0
 # What a bin's two vectors hold, said where one has another length (a height given to it).
 BIN_HINTS = {
     "position_m": "x y of its centre: a bin stands on the floor, and the height of its "
@@ -40,6 +46,44 @@ def places(policy: str, reach_m: float, b: Any, thrown: Collection[str] = ()) ->
     ids: `Job.thrown_bins`, `cell.jobcheck.job_problems`)."""
     near = math.hypot(*b.position) <= reach_m
     return policy == "place" or (policy == "auto" and near and b.id not in thrown)
+
+
+def millimetre_problem(pos: Sequence[float], size: Sequence[float], rim: float) -> str:
+    """What to say of a bin whose centre lies beyond MAX_BIN_DISTANCE_M of the base or
+    whose rim stands over 1 m, read in metres (a position of [1600, 0], a rim of 150:
+    written in millimetres?), naming what the fields that read as millimetres are in
+    metres; "" where neither."""
+    far = math.hypot(*pos)
+    if far <= MAX_BIN_DISTANCE_M and rim <= 1.0:
+        return ""
+    said, metres = [], []
+    if far > MAX_BIN_DISTANCE_M:
+        said.append(f"its centre {far:,.0f} m from the base (at most {MAX_BIN_DISTANCE_M:g} m)")
+        if ROBOT_BASE_CLEARANCE_M <= far / 1000 <= MAX_BIN_DISTANCE_M:
+            metres.append(f"position_m [{pos[0] / 1000:g}, {pos[1] / 1000:g}]")
+    if max(size) > 5.0 and (far > MAX_BIN_DISTANCE_M or rim > 1.0):
+        metres.append(f"size_m [{size[0] / 1000:g}, {size[1] / 1000:g}]")
+    if rim > 1.0:
+        said.append(f"a rim {rim:g} m high (at most 1 m)")
+        if BIN_WALL_M < rim / 1000 <= 1.0:
+            metres.append(f"rim_height_m {rim / 1000:g}")
+    mm = f"; written in millimetres? In metres: {', '.join(metres)}" if metres else ""
+    return f"read in metres (a job's unit), the bin has {' and '.join(said)}{mm}"
+
+
+def station_millimetres(pick: Sequence[float]) -> str:
+    """What to say of a pick station whose top lies beyond MAX_BIN_DISTANCE_M of the base,
+    read in metres (`[450, -400, 200]`: written in millimetres?), with it in metres where
+    that is within the bound; "" where it lies nearer."""
+    far = math.hypot(*pick)
+    if far <= MAX_BIN_DISTANCE_M:
+        return ""
+    metres = ", ".join(f"{v / 1000:g}" for v in pick)
+    mm = f"; written in millimetres? In metres: [{metres}]" if far / 1000 <= 2.0 else ""
+    return (
+        f"read in metres (a job's unit), the pick table's top lies {far:,.0f} m from the "
+        f"base (at most {MAX_BIN_DISTANCE_M:g} m){mm}"
+    )
 
 
 def footprints_overlap(pos_a: Any, size_a: Any, pos_b: Any, size_b: Any) -> bool:
@@ -224,8 +268,9 @@ def _job_params(job: Any) -> Any:
 
 def look_alike_warnings(job: Any) -> tuple[str, ...]:
     """A warning for each two bins whose ids are one text to the eye but not the same id
-    (`cell.yamltree.look_alike`: `near` and the full-width `ｎear`): both are bins, and an
-    item sent to one is not sent to the other."""
+    (`cell.yamltree.look_alike`: `near` and the full-width `ｎear`), or differ only in
+    case (`near` and `Near`): both are bins, and an item sent to one is not sent to the
+    other."""
     from cell.yamltree import look_alike
 
     out = []
@@ -237,5 +282,10 @@ def look_alike_warnings(job: Any) -> tuple[str, ...]:
                 out.append(
                     f"{job.path}: bins {a!r} and {b!r} look alike but are two bins ({b!r} "
                     f"holds {how}); an item sent to one is not sent to the other"
+                )
+            elif a != b and a.casefold() == b.casefold():  # `near` and `Near`
+                out.append(
+                    f"{job.path}: bins {a!r} and {b!r} differ only in case, and are two bins "
+                    "(an id is matched as written); an item sent to one is not sent to the other"
                 )
     return tuple(out)

@@ -11,7 +11,7 @@ from typing import Any
 
 from cell.jobschema import BASE_SPEED_MAX_MPS, CELL_KEYS, DRONE_KEYS, MOBILE_KEYS
 from cell.kinds import EE_BACKENDS, PLATFORMS
-from cell.yamltree import Checker, Node
+from cell.yamltree import Checker, Node, nearest, shown
 
 __all__ = ["CellSpec", "cell_section"]
 
@@ -110,6 +110,16 @@ def _robot(c: Checker, cell: dict[str, Node], base: Path) -> str:
 
     if "robot" in cell and "mount" in cell:
         raise c.fail(cell["mount"], "cell.mount", "give robot (a name) or mount (a file), not both")
+    for key, one in (("robot", "name"), ("mount", "mount file")):
+        given = cell[key].value if key in cell else None
+        if isinstance(given, list):  # `robot: [panda, ur5]`: two arms
+            raise c.fail(
+                cell[key],
+                f"cell.{key}",
+                f"a list of {len(given)} ({shown(given)}): a job runs one arm, its base at "
+                f"the world frame's origin, from which every position of the job is "
+                f"measured; give one {one}, and sort with another arm in a job of its own",
+            )
     if "mount" in cell:
         node, fp = cell["mount"], "cell.mount"
         p = Path(c.text(node, fp)).expanduser()
@@ -129,8 +139,8 @@ def _robot(c: Checker, cell: dict[str, Node], base: Path) -> str:
             raise c.fail(
                 node,
                 fp,
-                f"{ref!r} is not an arm under robots/; choose one of {', '.join(sorted(names))} "
-                "or give cell.mount, a mount file (docs/arms.md)",
+                f"{ref!r} is not an arm under robots/{nearest(ref, names)}; choose one of "
+                f"{', '.join(sorted(names))} or give cell.mount, a mount file (docs/arms.md)",
             )
     try:
         check_against_urdf(load_mount(ref))

@@ -23,12 +23,15 @@ from cell.jobbins import (
     capacity_warnings,
     light_item_warnings,
     look_alike_warnings,
+    millimetre_problem,
     placement_problem,
+    station_millimetres,
     wide_item_warnings,
 )
 from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, job_problems, unsorted_warning
 from cell.joblimits import MAX_ITEMS, limits_section
+from cell.jobrim import low_rim_warnings
 from cell.jobschema import (
     BIN_KEYS,
     BIN_WALL_M,
@@ -39,7 +42,7 @@ from cell.jobschema import (
 )
 from cell.model.objects import SHAPES, ObjectParams, denser_than_any_solid, lighter_than_air
 from cell.yamlsafe import check_yaml, compose, read_yaml_text
-from cell.yamltree import Checker, Errors, Node, same_text, to_tree
+from cell.yamltree import Checker, Errors, Node, nearest, same_text, to_tree
 
 __all__ = [
     "ROBOT_BASE_CLEARANCE_M",
@@ -176,11 +179,10 @@ def _top_sections(c: Checker, tree: Node, errors: Errors) -> dict[str, Node]:
         if k in TOP_KEYS:
             top[k] = v
         else:
-            errors.add(
-                c.fail(v, k, f"unknown key {k!r}; valid keys here: {', '.join(sorted(TOP_KEYS))}")
-            )
+            valid = ", ".join(sorted(TOP_KEYS))
+            errors.add(c.fail(v, k, f"unknown key {k!r}{nearest(k, TOP_KEYS)}; valid keys here: {valid}"))  # fmt: skip
     for req in ("bins", "items"):
-        if req not in top:
+        if req not in top and req not in (k.casefold() for k in tree.value):  # `Bins:`: said
             errors.add(JobError(f"{c.path}, line {tree.line}: the job needs its '{req}' list"))
     return top
 
@@ -192,6 +194,8 @@ def _pick_position(c: Checker, top: dict[str, Node]) -> tuple[float, float, floa
         ps = c.mapping(top["pick_station"], "pick_station", dict.fromkeys(PICK_KEYS, ""))
         if "position_m" in ps:
             pick = c.vector(ps["position_m"], "pick_station.position_m", 3)  # type: ignore[assignment]
+            if mm := station_millimetres(pick):
+                raise c.fail(ps["position_m"], "pick_station.position_m", mm)
             if pick[2] < 0.0:
                 raise c.fail(
                     ps["position_m"],
@@ -230,7 +234,9 @@ def _bin(c: Checker, bn: Node, fp: str, bins: list[BinSpec], ids: list[str]) -> 
         raise c.fail(b["id"], f"{fp}.id", f"bin id {bid!r} is used twice")
     pos = c.vector(b["position_m"], f"{fp}.position_m", 2, hint=BIN_HINTS["position_m"])
     size = c.vector(b["size_m"], f"{fp}.size_m", 2, positive=True, hint=BIN_HINTS["size_m"])
-    rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m", hi=1.0)
+    rim = c.number(b["rim_height_m"], f"{fp}.rim_height_m")
+    if mm := millimetre_problem(pos, size, rim):  # [1600, 0], a rim of 150: millimetres?
+        raise c.fail(bn, fp, mm)
     if rim <= BIN_WALL_M:  # 0 and below too: the valid range is the plate's thickness up
         raise c.fail(
             b["rim_height_m"],
@@ -301,7 +307,8 @@ def _item_object(
             raise c.fail(
                 it["object"],
                 f"{fp}.object",
-                f"unknown catalogue id {oid!r}; valid: {', '.join(cat)}",
+                f"unknown catalogue id {oid!r}{nearest(oid, cat) or _file_hint(oid)}; "
+                f"valid: {', '.join(cat)}",
             )
         return cat[oid].params
     for req in ("shape", "mass_kg", "size_m"):
@@ -330,6 +337,16 @@ def _item_object(
     if dense:
         raise c.fail(it["mass_kg"], f"{fp}.mass_kg", dense)
     return ObjectParams(shape=shape, mass=mass, size=size, name=f"item{i}_{shape}")  # type: ignore[arg-type]
+
+
+def _file_hint(oid: str) -> str:
+    """What to say of an `object` that names a file (a mesh of the user's own)."""
+    if "/" not in oid and "\\" not in oid and "." not in oid:
+        return ""
+    return (
+        " (a file? a job takes no mesh of its own: an item is a catalogue object or an "
+        "ad-hoc cube, cuboid, cylinder or sphere of its box, shape, mass_kg and size_m)"
+    )
 
 
 def _item(
@@ -454,7 +471,7 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         job = replace(job, thrown_bins=thrown)
     errors.raise_all()
     warnings = unsorted_warning(job) + capacity_warnings(job) + light_item_warnings(job)
-    warnings += wide_item_warnings(job)
+    warnings += wide_item_warnings(job) + low_rim_warnings(job)
     warnings += tuple(reach_warnings) + look_alike_warnings(job)
     return replace(job, warnings=warnings)
 

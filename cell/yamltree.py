@@ -8,10 +8,11 @@ error, never constructed.
 from __future__ import annotations
 
 import datetime
+import difflib
 import math
 import re
 import unicodedata
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
 import yaml
@@ -19,7 +20,7 @@ import yaml
 from cell.errors import JobError
 from cell.yamlsafe import LEADING_ZERO
 
-__all__ = ["Checker", "Errors", "Node", "same_text", "shown", "to_tree"]
+__all__ = ["Checker", "Errors", "Node", "nearest", "same_text", "shown", "to_tree"]
 
 _T = TypeVar("_T")
 
@@ -111,6 +112,16 @@ def on_screen(text: str) -> str:
     )
 
 
+def nearest(v: str, choices: Iterable[str]) -> str:
+    """`; did you mean 'cube50'?` for a name written in another case or width (`Cube50`,
+    `ｃube50`, a key `Bins`), else of a near spelling (`cube-50`); "" where none is near."""
+    names = list(choices)
+    folded = unicodedata.normalize("NFKC", v).casefold()
+    near = [ch for ch in names if unicodedata.normalize("NFKC", ch).casefold() == folded]
+    near = near or difflib.get_close_matches(v, names, n=1, cutoff=0.75)
+    return f"; did you mean {' or '.join(map(repr, near))}?" if near else ""
+
+
 def shown(value: Any, limit: int = 60) -> str:
     """A value as an error message quotes it: lists and mappings with their plain values
     (not the tree's nodes), cut to `limit` characters."""
@@ -150,7 +161,8 @@ class Checker:
                 raise self.fail(
                     v,
                     f"{fp}.{k}" if fp else k,
-                    f"unknown key {k!r}{comma}; valid keys here: {', '.join(sorted(allowed))}",
+                    f"unknown key {k!r}{comma}{nearest(k, allowed)}; valid keys here: "
+                    + ", ".join(sorted(allowed)),
                 )
         return node.value
 
@@ -201,7 +213,11 @@ class Checker:
             if same:
                 return same[0]
             alike = [(ch, look_alike(v, ch)) for ch in choices if look_alike(v, ch)]
-            hint = f" ({v!r} is not {alike[0][0]!r}: it holds {alike[0][1]})" if alike else ""
+            hint = (
+                f" ({v!r} is not {alike[0][0]!r}: it holds {alike[0][1]})"
+                if alike
+                else nearest(v, choices)
+            )
             raise self.fail(
                 node,
                 fp,

@@ -48,9 +48,13 @@ class Parser(argparse.ArgumentParser):
     """argparse's parser, with its refusals said as `cell: error:` lines (exit 2), and
     `-inf`, `-nan` and `-1e300` read as the values they are (argparse's own pattern of a
     negative number takes only `-1` and `-1.5`, and `--at 0 -inf 0` would end the option
-    there, with a message that does not name it)."""
+    there, with a message that does not name it). An option is taken only as written:
+    argparse's prefix matching (`--no-lo` for `--no-log`) is off, so an abbreviation is
+    refused naming the option it abbreviates, and a later option cannot change what it
+    means (the subcommands' parsers are of this class too)."""
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(
             r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
@@ -97,9 +101,15 @@ def subcommand_parser(parser: argparse.ArgumentParser, name: str | None) -> Any:
 
 
 def nearest_option(parser: argparse.ArgumentParser, extras: list[str]) -> str:
-    """`; did you mean --json?` for the first unrecognized option near one of `parser`'s."""
+    """`; did you mean --json?` for the first unrecognized option near one of `parser`'s:
+    the options it is a prefix of (an abbreviation, `--lay` of `--layouts`), else the
+    nearest spelling."""
     options = [o for a in parser._actions for o in a.option_strings]
     for extra in extras:
+        if extra.startswith("--"):
+            longer = [o for o in options if o.startswith(extra.split("=")[0])]
+            if longer:
+                return f"; did you mean {' or '.join(longer)}?"
         if extra.startswith("-"):
             near = difflib.get_close_matches(extra.split("=")[0], options, n=1, cutoff=0.6)
             if near:

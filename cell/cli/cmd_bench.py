@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import platform
 import time
+from pathlib import Path
 from typing import Any
 
 from cell.bench import available
@@ -90,7 +91,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--robots",
         default="panda",
-        help="sort: arms taken in turn, comma-separated (panda; e.g. panda,ur5)",
+        help="sort: arms taken in turn, comma-separated, each a name or a mount file's path "
+        "(panda; e.g. panda,ur5)",
     )
     p.add_argument("--learn", action="store_true", help="sort: the flywheel on (cell run --learn)")
     p.add_argument("--out", metavar="DIR", help="sort: also write each layout's result here")
@@ -196,15 +198,26 @@ def _set_figures(layout_set: str, first: int, layouts: int) -> dict[str, object]
 
 
 def _robots(text: str) -> tuple[str, ...]:
+    """The arms of `--robots`: names under robots/, or mount files of the user's own (as
+    `cell job random --robot` and a job's `cell.mount` take), each checked against its
+    URDF and given by its absolute path."""
     from cell.errors import InvalidInput
-    from cell.robot.mount import robot_names
+    from cell.robot.mount import check_against_urdf, load_mount, robot_names
 
     names = robot_names()
     robots = tuple(r.strip() for r in text.split(",") if r.strip())
-    bad = [r for r in robots if r not in names]
+    bad = [r for r in robots if r not in names and not Path(r).is_file()]
     if bad or not robots:
-        raise InvalidInput(f"--robots {text!r}: give arms from {', '.join(names)}")
-    return robots
+        raise InvalidInput(
+            f"--robots {text!r}: give arms from {', '.join(names)}, or mount files (docs/arms.md)"
+        )
+    mounts = tuple(r if r in names else str(Path(r).resolve()) for r in robots)
+    for r in mounts:
+        try:
+            check_against_urdf(load_mount(r))
+        except ValueError as exc:  # InvalidParameter: the mount file named
+            raise InvalidInput(f"--robots: {exc}") from None
+    return mounts
 
 
 def run_tradeoff(args: argparse.Namespace) -> int:

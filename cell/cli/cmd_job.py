@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -26,7 +27,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="panda",
         help="the arm: a name under robots/ or a mount file's path (docs/arms.md) (panda)",
     )
-    r.add_argument("-o", "--output", metavar="JOB.yaml", help="write here (default: stdout)")
+    r.add_argument(
+        "-o",
+        "--output",
+        metavar="JOB.yaml",
+        help="write here (default: stdout); a name ending in .json is written as JSON, "
+        "which `cell run` reads as it reads YAML",
+    )
     r.set_defaults(func=run_random)
 
 
@@ -51,7 +58,9 @@ def run_random(args: argparse.Namespace) -> int:
     from cell.jobgen import PICK_STATION_XY_M, random_job
     from cell.jobs import parse_job
 
-    text = job_yaml(random_job(args.seed, args.robot))
+    doc = random_job(args.seed, args.robot)
+    as_json = bool(args.output) and str(args.output).lower().endswith(".json")
+    text = json.dumps(doc, indent=2, ensure_ascii=False) + "\n" if as_json else job_yaml(doc)
     try:
         parse_job(text, f"<cell job random --seed {args.seed}>")  # what we write always loads
     except JobError as exc:

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from cell.cli.common import add_json_arg, add_object_args, add_vector_arg, object_from_args, report
-from cell.cli.model_checks import refuse_under_floor, warn_if_not_held
+from cell.cli.model_checks import refuse_under_floor, warn_if_light, warn_if_not_held
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
 from cell.params import load_params
@@ -93,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_under_floor("--target", args.target[2])
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
+    warn_if_light(obj)
     if args.base_velocity is not None and args.moving_base is not None:
         raise InvalidInput("give either --base-velocity or --moving-base, not both")
     try:

@@ -6,12 +6,14 @@ import argparse
 import contextlib
 import logging
 import math
+import re
 import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from cell.cli.columns import terminal_width
 from cell.cli.common import add_json_arg, json_to_stdout, plural, print_json, write_json
 from cell.cli.guard import refuse_outputs_among
 from cell.jobfiles import job_files
@@ -312,7 +314,7 @@ def _run(args: argparse.Namespace) -> int:
     if json_to_stdout(args):
         print_json(summary.as_dict())
     else:
-        _table(summary, job.path, store)
+        _table(summary, job.path, store, terminal_width())
     if image is not None:
         from cell.sim.snapshot import save_png
 
@@ -434,27 +436,25 @@ def _not_in_bin(s) -> str:  # type: ignore[no-untyped-def]
     return f"{n} ({', '.join(f'{k} {v}' for k, v in s.failures.items())})" if n else "none"
 
 
-def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
-    from cell.cli.columns import column_width, pad
+def _table(s, path: str, store, width: int | None = None) -> None:  # type: ignore[no-untyped-def]
+    """The run's rows and closing table; on a terminal of `width` columns narrower than
+    a row, the row broken between its cells (`cell.cli.columns.fitted`)."""
+    from cell.cli.columns import column_width, fitted, pad
 
     print(f"\nsort job {path}")
     wo = column_width(14, (r.object_id for r in s.results))  # names as wide as they show
     wb = column_width(9, (b for r in s.results for b in (r.target_bin, r.bin_id)))
-    print(
-        f"{'item':>4} {pad('object', wo)} {'action':7} {pad('target', wb)} "
-        f"{pad('landed in', wb)} {'error':>8} {'stroke':>8}  failure"
-    )
+    head = ["item", pad("object", wo), f"{'action':7}", pad("target", wb), pad("landed in", wb)]
+    print(fitted([*head, f"{'error':>8}", f"{'stroke':>8}", " failure"], width, 5))
     for r in s.results:
-        print(
-            f"{r.index:4d} {pad(r.object_id, wo)} {r.action:7} {pad(r.target_bin, wb)} "
-            f"{pad(r.bin_id or '-', wb)} {_fmt(r.landing_error_m, ' m'):>8} "
-            f"{_fmt(r.stroke_m, ' m'):>8}  {r.failure}"
-        )
+        cells = [f"{r.index:4d}", pad(r.object_id, wo), f"{r.action:7}", pad(r.target_bin, wb)]
+        cells += [pad(r.bin_id or "-", wb), f"{_fmt(r.landing_error_m, ' m'):>8}"]
+        print(fitted([*cells, f"{_fmt(r.stroke_m, ' m'):>8}", f" {r.failure}"], width, 5))
     failed = [r for r in s.results if r.reason]
     if failed:
         print("\nwhy (full messages):")
         for r in failed:
-            print(f"  item {r.index} ({r.object_id}, {r.failure}): {r.reason}")
+            print(fitted(f"  item {r.index} ({r.object_id}, {r.failure}): {r.reason}".split(" "), width, 4))  # fmt: skip
     print()
     rows = [
         ("items", f"{s.items}"),
@@ -481,5 +481,5 @@ def _table(s, path: str, store) -> None:  # type: ignore[no-untyped-def]
     ]
     if store is not None:
         rows.append(("throw log", f"{store.path}"))
-    for k, v in rows:
-        print(f"  {k:20s} {v}")
+    for k, v in rows:  # a value broken after its commas
+        print(fitted([f"  {k:20s}", *re.split(r"(?<=,) ", v)], width, 23))

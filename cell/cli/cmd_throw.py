@@ -17,7 +17,7 @@ from cell.cli.common import (
     object_from_args,
     report,
 )
-from cell.cli.model_checks import refuse_under_floor, warn_if_not_held
+from cell.cli.model_checks import refuse_under_floor, warn_if_light, warn_if_not_held
 from cell.model import ObjectParams, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
@@ -61,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_under_floor("--land-z", args.land_z)
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
+    warn_if_light(obj)
     batch = ThrowBatch.single(
         obj,
         stroke=args.stroke,

@@ -412,9 +412,11 @@ def _check_limits(root: ET.Element, joints: tuple[str, ...], where: str) -> None
         if not vals["velocity"] > 0.0:
             raise InvalidParameter(f"{what}: its velocity limit {vals['velocity']} must be > 0")
         if kind != "continuous" and not vals["lower"] < vals["upper"]:
+            locked = vals["lower"] == vals["upper"]  # a joint the URDF locks: held_joints
+            held = f"; to hold it still, leave it out of arm_joints and give held_joints: {{{name}: {vals['lower']:g}}}"  # fmt: skip
             raise InvalidParameter(
                 f"{what}: its position limits lower={vals['lower']} and upper={vals['upper']} "
-                "are the wrong way round or equal; lower must be under upper"
+                f"are the wrong way round or equal; lower must be under upper{held * locked}"
             )
 
 
