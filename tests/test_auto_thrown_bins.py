@@ -15,7 +15,7 @@ from __future__ import annotations
 import pytest
 
 from cell.errors import JobError
-from cell.jobs import parse_job
+from cell.jobs import Job, parse_job
 from cell.orchestrator import Orchestrator
 
 HIGH = "{id: high, position_m: [0.0, 0.75], size_m: [0.30, 0.30], rim_height_m: 0.80}"
@@ -29,6 +29,16 @@ def _job(bin_row: str, bin_id: str, policy: str = "auto") -> str:
     )
 
 
+@pytest.fixture(scope="module")
+def loaded() -> dict[str, Job]:
+    """The jobs of one cube50 to `high` and to `tower`, each parsed (and so checked) once for
+    the tests that read them (a `Job` is frozen): the job check's IK of a place missed, and
+    of the reach its message states, is most of a parse (about 0.6 CPU-s each)."""
+    return {
+        b: parse_job(_job(row, b), f"{b}.yaml") for b, row in (("high", HIGH), ("tower", TOWER))
+    }
+
+
 def _run(job):  # type: ignore[no-untyped-def]
     # the decision is checked, not the release search or the turn: both off, for speed
     orch = Orchestrator(job, cycle_search=False, turn_release=False)
@@ -38,8 +48,10 @@ def _run(job):  # type: ignore[no-untyped-def]
         orch.close()
 
 
-def test_auto_throws_into_a_near_bin_the_arm_cannot_place_into_and_it_lands() -> None:
-    job = parse_job(_job(HIGH, "high"), "high.yaml")
+def test_auto_throws_into_a_near_bin_the_arm_cannot_place_into_and_it_lands(
+    loaded: dict[str, Job],
+) -> None:
+    job = loaded["high"]
     assert job.thrown_bins == frozenset({"high"})
     (warning,) = job.warnings
     assert "the panda arm cannot place into bin 'high'" in warning
@@ -62,8 +74,10 @@ def test_policy_place_still_refuses_the_bin() -> None:
         parse_job(_job(HIGH, "high", "place"), "high.yaml")
 
 
-def test_a_near_bin_neither_placed_nor_thrown_into_is_refused_by_its_item_line() -> None:
-    job = parse_job(_job(TOWER, "tower"), "tower.yaml")
+def test_a_near_bin_neither_placed_nor_thrown_into_is_refused_by_its_item_line(
+    loaded: dict[str, Job],
+) -> None:
+    job = loaded["tower"]
     assert job.thrown_bins == frozenset({"tower"})
     with pytest.raises(JobError) as err:
         Orchestrator(job).close()
@@ -73,7 +87,9 @@ def test_a_near_bin_neither_placed_nor_thrown_into_is_refused_by_its_item_line()
     assert "the arm cannot place into it either" in msg
 
 
-def test_random_jobs_send_an_item_only_where_the_loaded_job_sorts_it() -> None:
+def test_random_jobs_send_an_item_only_where_the_loaded_job_sorts_it(
+    loaded: dict[str, Job],
+) -> None:
     """`cell.jobgen.sortable_bins`, told the bins the job would throw into
     (`NearBins.thrown_with`), agrees with the loaded job: `high` is thrown into, `tower`
     refused; a place-reach-only draw (main's, before the job throws into them) took both."""
@@ -91,8 +107,8 @@ def test_random_jobs_send_an_item_only_where_the_loaded_job_sorts_it() -> None:
     assert sortable_bins(entry, bins, params) == ["high", "tower"]  # as if placed
     assert sortable_bins(entry, bins, params, thrown) == ["high"]
     # the loaded job's own verdicts, bin by bin
-    for b, row in (("high", HIGH), ("tower", TOWER)):
-        job = parse_job(_job(row, b), f"{b}.yaml")
+    for b in ("high", "tower"):
+        job = loaded[b]
         assert job.thrown_bins == frozenset({b})
         try:
             Orchestrator(job).close()
@@ -109,8 +125,12 @@ def test_a_random_job_with_such_bins_loads_and_passes_the_runs_check(
     above, `edge` 0.60 m out with its rim 0.70 m up (the Panda places into it an item 30 mm
     high, not one 35 mm high: thrown into once a taller item is sent there), and a chute
     1.5 m out. The job it writes loads and its items pass the run's check (`Orchestrator`'s:
-    a JobError names each item whose bin is neither placed nor thrown into; drawn as if the
-    near bins were placed into, seed 0 sends teddy, cyl70, cube40 and cyl50 to `tower`)."""
+    a JobError names each item whose bin is neither placed nor thrown into). The draw is of
+    12 items (`LayoutRanges.items` held there; a random layout draws 20-40, seed 0 40: 4.1
+    against 1.0 CPU-s for the draw), which send items to `high`, `edge` and `chute` and a
+    0.08 m cylinder to `edge`; drawn as if the near bins were placed into
+    (`NearBins.thrown_with` answering none), they send two o4_cylinder50 to `tower`, which
+    the check refuses."""
     import yaml
 
     from cell import jobgen
@@ -122,6 +142,7 @@ def test_a_random_job_with_such_bins_loads_and_passes_the_runs_check(
         {"id": "chute", "position_m": [1.50, 0.30], "size_m": [0.30, 0.30], "rim_height_m": 0.15},
     ]
     monkeypatch.setattr(jobgen, "_bins", lambda rng, robot: [dict(b) for b in layout])
+    monkeypatch.setattr(jobgen.LayoutRanges, "items", (12, 12))  # the docstring says why
     doc = jobgen.random_job(0, "panda")
     job = parse_job(yaml.safe_dump(doc, sort_keys=False), "random.yaml")
     assert job.thrown_bins == {"tower", "high", "edge"}  # `edge` holds a 0.08 m cylinder

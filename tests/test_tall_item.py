@@ -7,11 +7,13 @@ out) and the route kept it (`Orchestrator._swing_holds`, `_release_branch`,
 re-solved from the pick came out on the other IK branch, its swing rolled the grip 50°,
 and the bottle was released at 25°, where its weight on a pad asks 0.97 of the grip.
 
-Two of the three bottles here (the third took 9 of the test's 27 CPU-s): with the route's
-`_release_branch` or the carry's `_carry_stroke` broken, three bottles land as two do; what
-fails on the latter is the count of bottles logged as carried at the shortest stroke.
+One of the three bottles here (two before; the second took about 2.5 of the file's 9 CPU-s):
+with the grip's use counted without the tilt (`cell.robot.grip_hold.uses`, `tilt=False`)
+the first bottle leaves the pads on its carry (the second of two landed so); with the
+carry's `_carry_stroke` broken it lands, and what fails is its log line of the shortest
+stroke. With the route's `_release_branch` broken three bottles landed as two do.
 
-Independent check: the scene's physics, the bottles at rest in their bin."""
+Independent check: the scene's physics, the bottle at rest in its bin."""
 
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ bins:
   - {id: bin_2, position_m: [-0.079, -2.962], size_m: [0.314, 0.362], rim_height_m: 0.119}
   - {id: bin_3, position_m: [-0.203, 1.36], size_m: [0.287, 0.278], rim_height_m: 0.293}
 items:
-  - {object: o6_bottle, count: 2, bin: bin_3}
+  - {object: o6_bottle, count: 1, bin: bin_3}
 policy: auto
 seed: 5
 """
@@ -42,11 +44,11 @@ def test_tall_bottles_stay_in_the_grip_and_land(
     monkeypatch.chdir(tmp_path)
     with caplog.at_level(logging.INFO, logger="cell.arm"):
         rows = job_rows(JOB, tmp_path, "tall")
-    assert rows == [("throw", "", True)] * 2, rows
-    # each carried at the shortest stroke (`Orchestrator._carry_stroke`): the level swing at
-    # the throw's asks more of the grip at rest than a carry may
+    assert rows == [("throw", "", True)], rows
+    # carried at the shortest stroke (`Orchestrator._carry_stroke`): the level swing at the
+    # throw's asks more of the grip at rest than a carry may
     short = [r for r in caplog.records if "carried at the 0.030 m stroke" in r.getMessage()]
-    assert len(short) == 2, [r.getMessage() for r in caplog.records]
+    assert len(short) == 1, [r.getMessage() for r in caplog.records]
 
 
 THROW_STROKE_M = 0.075  # the strokes the bottle is thrown at on random layouts: 0.071-0.084 m
