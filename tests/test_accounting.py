@@ -60,6 +60,9 @@ def test_cycles_add_up_to_the_whole_run_and_only_sorted_items_count():
     assert abs(s.items_per_hour - 3600.0 * 2 / s.sim_time_s) < 1e-6
 
 
+# two throws: the first flies while the second is picked (a cyl50 into "far" after them,
+# a second overlap, cost 4.6 of the test's 8.8 CPU-s: the run 8.05 s against 10.28 s waited,
+# now 6.78 s against 7.68 s, 0.40 s inside the 0.5 s asked for)
 THROWS = """
 bins:
   - {id: far, position_m: [1.40, 0.00], size_m: [0.30, 0.30], rim_height_m: 0.15}
@@ -67,7 +70,6 @@ bins:
 items:
   - {object: cube50, count: 1, bin: far}
   - {object: sphere40, count: 1, bin: side}
-  - {object: cyl50, count: 1, bin: far}
 """
 
 
@@ -89,7 +91,7 @@ def test_the_next_pick_starts_while_a_thrown_item_flies_and_scores_the_same():
     for a, b in zip(overlapped.results, waited, strict=True):
         assert (a.action, a.bin_id, a.in_bin) == (b.action, b.bin_id, b.in_bin)
         assert abs(a.landing_error_m - b.landing_error_m) < 0.02  # the same throw, 2 cm
-    # the first two flights (each longer than 0.25 s: a 1.4 m throw) overlap the next picks
+    # the first flight (longer than 0.25 s: a 1.4 m throw) overlaps the next pick
     assert overlapped.sim_time_s < sum(r.cycle_time_s for r in waited) - 0.5
 
 
