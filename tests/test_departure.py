@@ -27,6 +27,10 @@ from cell.robot.carry import plan_carry
 # the departure and the level carry are checked, not the release search or the turn
 FAST: dict[str, Any] = {"cycle_search": False, "turn_release": False}
 
+# two throws, two ways from the pick (a cube30 into "far" after them, cut on 2026-12-02):
+# each carry of the three saved 0.09-0.14 s (Panda) and 0.50-0.71 s (UR5) against the
+# lift's route, so the first does what `sooner` asks; the Panda's first leaves the station
+# too low sideways once `_rises_from_station` is not asked (the UR5's three do not)
 JOB = """\
 cell: {robot: %s}
 pick_station: {position_m: [0.45, -0.40, 0.20]}
@@ -36,7 +40,6 @@ bins:
 items:
   - {object: cube50, count: 1, bin: far}
   - {object: cyl50, count: 1, bin: back}
-  - {object: cube30, count: 1, bin: far}
 seed: 0
 """
 
@@ -138,6 +141,9 @@ def test_a_path_that_slides_the_item_across_the_station_is_refused(
     assert orch._rises_from_station([q_pick, at(0.03, 0.10)])  # up more than sideways
 
 
+# three boxes: with `descends_straight` always yes, the second box (Panda) and the third
+# (UR5) meet the tote's walls; with the boxes already in the tote not kept clear of, the
+# Panda's third fails (a cyl70 after them, a fourth place, cut on 2026-12-02)
 PLACE_JOB = """\
 cell: {robot: %s}
 pick_station: {position_m: [0.45, -0.40, 0.20]}
@@ -145,7 +151,6 @@ bins:
   - {id: tote, position_m: [0.55, 0.30], size_m: [0.30, 0.30], rim_height_m: 0.12}
 items:
   - {object: cuboid_c, count: 3, bin: tote}
-  - {object: cyl70, count: 1, bin: tote}
 seed: 0
 """
 
@@ -190,19 +195,21 @@ def test_a_place_that_does_not_stop_over_its_spot_touches_no_wall_and_rests_ther
     monkeypatch.setattr(sc, "set_arm", record)
     summary = orch.run()
     joined = orch.joined
-    assert [r.action for r in summary.results] == ["place"] * 4
-    assert summary.in_bin == 4  # every item rests in the tote
+    assert [r.action for r in summary.results] == ["place"] * 3
+    assert summary.in_bin == 3  # every item rests in the tote
     assert any(joined)  # at least one place passed over its spot without stopping
     assert not any(walls)
 
 
+# one box (three before 2026-12-02: each of the three carries left the swing out, 1.22-1.25 s
+# against the swing's 1.58-1.61 s, turned 0.03-0.05 deg in the grip)
 LEVEL_JOB = """\
 cell: {robot: ur5}
 bins:
   - {id: bin_5, position_m: [0.404, 1.276], size_m: [0.345, 0.292], rim_height_m: 0.242}
   - {id: bin_6, position_m: [0.687, -1.031], size_m: [0.302, 0.287], rim_height_m: 0.234}
 items:
-  - {object: cuboid_c, count: 3, bin: bin_6}
+  - {object: cuboid_c, count: 1, bin: bin_6}
 seed: 1
 """
 
@@ -259,7 +266,7 @@ def test_a_level_item_takes_the_route_without_the_swing_where_that_holds_it(
 
     orch.watch = carried
     summary = orch.run()
-    assert summary.in_bin == 3, [r.reason for r in summary.results]
+    assert summary.in_bin == 1, [r.reason for r in summary.results]
     assert unswung, "no carry left the swing out"
     for turn, took, swing_s in unswung:
         assert turn < 2.0 and took < swing_s, (turn, took, swing_s)
