@@ -109,7 +109,10 @@ def test_the_static_route_timed_before_the_pick_is_the_one_carried(tmp_path: Pat
         turn_release=False,
     )
     try:
-        for index, spec in enumerate(o.job.expanded_items()[:4]):
+        # one item of each kind: the first 51 mm cube and the first cube50 (the second of
+        # each, cut on 2026-12-02, gave the same route and a gap 0.0001 s from the first's:
+        # 0.0004, 0.0005 s and 0.0002, 0.0002 s against the 0.02 s asked for)
+        for index, spec in list(enumerate(o.job.expanded_items()))[::2]:
             obj, target = spec.obj, o.job.bin(spec.bin)
             item = o.present(index, obj)
             d = o.decide(index, obj, target)
