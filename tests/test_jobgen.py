@@ -26,7 +26,7 @@ SEEDS = range(6)
 
 
 # The bins each drawn item can go to (`cell.jobgen.sortable_bins`: the pads' sides and
-# `check_sortable`'s plans, nine tenths of a draw's CPU), as the first draws answered them,
+# `check_sortable`'s plans, nearly all of a draw's CPU), as the first draws answered them,
 # by the call's arguments: a draw again asks the same and replays the answer (a call not
 # made before is answered by the function). Seed 4's second draw (the cheapest of the
 # six, 0.6 CPU-s) asks the function itself: the same-seed test reads it, so the answers'
