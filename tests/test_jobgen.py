@@ -39,13 +39,17 @@ def _key(entry: dict, bins: list, params: object, thrown: frozenset[str] = froze
     return pickle.dumps((sorted(entry.items()), bins, params, sorted(thrown)))
 
 
-def _recorded(entry, bins, params, thrown=frozenset()):  # type: ignore[no-untyped-def]
+def _recorded(
+    entry: dict, bins: list, params: object, thrown: frozenset[str] = frozenset()
+) -> list[str]:
     got = sortable_bins(entry, bins, params, thrown)
     ANSWERED[_key(entry, bins, params, thrown)] = list(got)
     return got
 
 
-def _replayed(entry, bins, params, thrown=frozenset()):  # type: ignore[no-untyped-def]
+def _replayed(
+    entry: dict, bins: list, params: object, thrown: frozenset[str] = frozenset()
+) -> list[str]:
     got = ANSWERED.get(_key(entry, bins, params, thrown))
     return list(got) if got is not None else sortable_bins(entry, bins, params, thrown)
 
