@@ -70,6 +70,8 @@ def evidence(r: dict[str, Any]) -> str:
         if np.isfinite(launch_m)
         else "no launch comparison (no stroke logged)"
     )
+    if (r.get("unseen") or {}).get("sentence"):  # tracks begun mid-flight (`tracks_unseen`)
+        parts.append(r["unseen"]["sentence"])
     parts.append(
         f"the flight after launch bends {r['bend_m']:.3f} m off the nominal path over the tracks "
         f"(z {r['bend_z']:.1f}; {r['flight_m']:.3f} m at the landing from the release)"

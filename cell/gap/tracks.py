@@ -37,6 +37,7 @@ from cell.gap.track_gust import pull_along
 from cell.gap.track_halves import _state, end_state, halves
 from cell.gap.track_launch import whole_track_launch
 from cell.gap.track_sideways import scale_or_wind
+from cell.gap.tracks_unseen import release_unseen
 from cell.model.effects_apply import launch_overrides
 from cell.model.flight3d import fly, sample_path
 from cell.model.params import G
@@ -458,8 +459,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
     flight_land_m, flight_z = _cross_rms(
         (bent_land[0] - rel_land[0])[has_h], (bent_land[1] - rel_land[1])[has_h]
     )
-    # the bend of the path: the nominal flight from the whole-track launch state against
-    # the track's last state
+    # the path's bend: nominal flight from the whole-track launch state vs the track's last one
     t_rel = (fit.t1[idx] - fit.t0[idx])[:, None]
     p_last = sample_path(fit.p0[idx], fit.v0[idx], kk, t_rel, step=prob.step)[:, 0, :]
     flight_m = _rms(np.linalg.norm(p_last - fit.p1[idx], axis=1))
@@ -494,6 +494,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "sideways": side,
         "pull_along": pull_along([fit.samples[i] for i in idx], fit.dropped[idx], kk),
         "frame": frame_turn(prob.observed[idx], end_land),  # the log's frame and the tracks'
+        "unseen": release_unseen(back, fit_span(fit, idx)),  # tracks begun mid-flight
     }
     ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
     return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}

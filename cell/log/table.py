@@ -20,6 +20,7 @@ import numpy as np
 
 from cell.errors import InvalidInput, LogFormatError
 from cell.kinds import PLATFORMS
+from cell.log.units_row import units_row_problem
 from cell.model.objects import (
     MAX_DENSITY_KG_M3,
     MIN_DENSITY_KG_M3,
@@ -320,6 +321,16 @@ HEADER_AGAIN = (
 )
 
 
+def _more_headers(rows: list[list[str]], r: int, names: list[str]) -> str:
+    """The data rows after row `r` (1 = the first) that are the header again too, said at
+    once (three sessions appended make two; naming the first alone told one at a time)."""
+    more = [k for k, row in enumerate(rows[r:], start=r + 1) if repeats_header(row, names)]
+    if not more:
+        return ""
+    shown = ", ".join(str(k) for k in more[:5]) + (", …" if len(more) > 5 else "")
+    return f"; row{'s' if len(more) > 1 else ''} {shown} too ({len(more) + 2} files in all?)"
+
+
 def comment_line(line: str | None) -> str | None:
     """The refusal of a row of the wrong width whose text (its cells joined by commas)
     begins with `#`: a comment line, which neither a throw log nor a tracks file has
@@ -366,7 +377,9 @@ def parse_cells(header: list[str], rows: list[list[str]], path: str) -> ThrowTab
     names = sorted(header)
     for r, row in enumerate(rows, start=1):
         if row[0].strip() in pos and repeats_header(row, names):
-            raise LogFormatError(path, r, None, HEADER_AGAIN)
+            raise LogFormatError(path, r, None, HEADER_AGAIN + _more_headers(rows, r, names))
+        if units := units_row_problem(header, row, NUMERIC_COLUMNS):
+            raise LogFormatError(path, r, None, units)
         if len(row) != len(header):
             why = (
                 comment_line(",".join(row)) or f"has {len(row)} cells; the header has {len(header)}"
