@@ -174,8 +174,6 @@ def _neighbours(prob: GapProblem, r: np.ndarray, land: Landing, kmax: int = 10) 
 
 
 def _model(prob: GapProblem, r: np.ndarray, x: np.ndarray, land: Landing) -> float:
-    from sklearn.ensemble import HistGradientBoostingRegressor
-
     n = len(prob)
     # along and across the flight direction: most effects act along it
     rel = np.nan_to_num(land.xy - prob.batch.position[:, :2])
@@ -189,16 +187,33 @@ def _model(prob: GapProblem, r: np.ndarray, x: np.ndarray, land: Landing) -> flo
     ]
     pred = np.zeros_like(r)
     fid = np.random.default_rng(prob.seed + 1).permutation(n) % 4
+    # sklearn's OpenMP loaded before the limit (threadpoolctl limits loaded libraries)
+    from sklearn.ensemble import HistGradientBoostingRegressor  # noqa: F401
+
+    # one OpenMP thread: eight fits of a few hundred rows each; on a busy machine the
+    # threads spin waiting for a core (a 60-throw world: 33.3 CPU-s with them, 12.1
+    # without, the report the same); the fits' results do not depend on the threads
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="openmp"):
+        _fit_folds(x, r, fid, pred, prob.seed)
+    return float(np.sqrt(np.mean(np.sum((r - pred) ** 2, axis=1))))
+
+
+def _fit_folds(x: np.ndarray, r: np.ndarray, fid: np.ndarray, pred: np.ndarray, seed: int) -> None:
+    """Each fold's held-out misses predicted by boosted trees fitted on the others, into
+    `pred` (along and across)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+
     for f in range(4):
         tr, te = fid != f, fid == f
         for j in range(2):
             m = HistGradientBoostingRegressor(
                 max_iter=150, learning_rate=0.08, max_leaf_nodes=8, min_samples_leaf=8,
-                random_state=prob.seed,
+                random_state=seed,
             )  # fmt: skip
             m.fit(x[tr], r[tr, j])
             pred[te, j] = m.predict(x[te])
-    return float(np.sqrt(np.mean(np.sum((r - pred) ** 2, axis=1))))
 
 
 def noise_floor(prob: GapProblem, residual: np.ndarray, land: Landing) -> NoiseFloor:
