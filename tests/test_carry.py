@@ -255,41 +255,90 @@ def test_the_pads_couple_of_a_cylinder_is_that_of_a_line_contact():
     assert h_box.torque_nm > 1.3 * h_cyl.torque_nm  # the box's face has width as well
 
 
-def test_the_level_swing_stays_on_one_ik_branch_after_a_throw_behind_the_arm():
-    """After a throw behind the UR5, the level swing's waypoints toward a bin on its
-    right were solved from the previous waypoint and, where that did not converge, from
-    home: the carry went 4.4 rad round in a joint between waypoints a third of the swing
-    apart (4.6 s, and items flung from the pads). No joint may move more than π between
-    two of the carry's waypoints, and every item lands in its bin."""
-    job = parse_job(
-        "cell: {robot: ur5}\n"
-        "bins:\n"
-        "  - {id: back, position_m: [-1.972, -0.915], size_m: [0.335, 0.33], rim_height_m: 0.14}\n"
-        "  - {id: far, position_m: [1.532, -2.13], size_m: [0.312, 0.4], rim_height_m: 0.192}\n"
-        "items:\n"
-        "  - {object: cube50, bin: back}\n"
-        "  - {object: sphere40, count: 2, bin: far}\n",
-        "swing.yaml",
-    )
+# Level swings from the lift over the default pick station, (0.45, -0.40) m, to a release
+# behind the UR5 thrown away from its base: (the lift's TCP height [m, W], the release's TCP
+# [m, W], its elevation [rad], the throw's azimuth [rad], the grip's roll [rad]), both ends
+# solved by the arm's own IK (the lift from home, the release from the lift). Waypoints
+# solved from home or from the joint line between the ends land on another IK branch in
+# both (more than π in a joint between two of them); the chain from the lift stays on the
+# ends' branch in "chained" (the largest joint step 3.00 rad, the ends 3.08 rad apart) and
+# goes round in "round" (3.68 rad in a joint; the ends 2.50 rad apart). Found by a seeded
+# search of such releases.
+SWINGS_BEHIND_UR5 = {
+    "chained": (0.193, (-0.381, 0.06, 0.76), 0.111, 3.296, 0.0),
+    "round": (0.21, (-0.256, -0.105, 0.792), 0.565, -3.093, 0.0),
+}
+
+
+def _joint_steps(path: list[np.ndarray]) -> list[float]:
+    """The largest joint move [rad] between each two consecutive configurations."""
+    return [float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:], strict=True)]
+
+
+@pytest.fixture(scope="module")
+def ur5_orchestrator():
+    job = parse_job(JOB % "object: cube50" + "cell: {robot: ur5}\n", "swing_behind.yaml")
     orc = Orchestrator(job)
-    steps: list[float] = []
-    move = orc.move
+    yield orc
+    orc.close()
 
-    def recorded(waypoints: list[np.ndarray], settle_s: float | None = None) -> float:
-        if orc.ee.item is not None:
-            path = [orc.q, *waypoints]
-            steps.extend(
-                float(np.max(np.abs(b - a))) for a, b in zip(path[:-1], path[1:], strict=True)
-            )
-        return move(waypoints, settle_s)
 
-    orc.move = recorded  # type: ignore[method-assign]
-    try:
-        summary = orc.run()
-    finally:
-        orc.close()
-    assert steps and max(steps) < math.pi, steps
-    assert [r.in_bin for r in summary.results] == [True] * 3, summary.results
+@pytest.mark.parametrize("case", sorted(SWINGS_BEHIND_UR5))
+def test_the_level_swing_is_the_chain_from_the_lift_or_none_never_round(ur5_orchestrator, case):
+    """The level swing's waypoints (`Routes._swing_waypoints`, at the tuned count) between
+    a lift over the station and a release behind the UR5: each solved from the one before
+    (from the lift for the first), where that chain stays on the ends' IK branch; none
+    where it goes round and the joint line's does too. Never a route with a joint moving
+    more than π between two waypoints, the steps computed here, nor waypoints off their
+    poses (the TCP on the straight line between the ends', by forward kinematics). A
+    swing once seeded from home came out 4.4 rad round in a joint and flung the item."""
+    from types import SimpleNamespace
+
+    from cell.errors import IKFailed
+    from cell.robot.ik import ReleasePose, solve_ik
+
+    orc = ur5_orchestrator
+    rb = orc.robot
+    z, rel, elevation, az, roll = SWINGS_BEHIND_UR5[case]
+    orc._frame = (az, roll)
+    q_lift = orc.ik_frame(np.array([0.45, -0.40, z]), rb.home)
+    q_rel = orc._ik_gripped(np.array(rel), elevation, az, q_lift)
+    n = TUNING.swing_waypoints
+    fs = [k / (n + 1) for k in range(1, n + 1)]
+    p0, p1 = rb.tcp_pose(q_lift)[0], rb.tcp_pose(q_rel)[0]
+    poses = [
+        ReleasePose.from_angles(
+            p0 + f * (p1 - p0), -math.pi / 2 + f * (elevation + math.pi / 2), az, roll
+        )
+        for f in fs
+    ]
+
+    def solved(seed_of) -> list[np.ndarray] | None:
+        out: list[np.ndarray] = []
+        try:
+            for f, pose in zip(fs, poses, strict=True):
+                out.append(solve_ik(rb, pose, seed_of(f, out), random_seeds=0, solutions=1).q)
+        except IKFailed:
+            return None
+        return out
+
+    # the poor seeds land on another branch (or find no IK): what the swing must refuse
+    for poor in (lambda f, out: rb.home, lambda f, out: q_lift + f * (q_rel - q_lift)):
+        way = solved(poor)
+        assert way is None or max(_joint_steps([q_lift, *way, q_rel])) > math.pi
+    chain = solved(lambda f, out: out[-1] if out else q_lift)
+    assert chain is not None
+    on_branch = max(_joint_steps([q_lift, *chain, q_rel])) < math.pi
+    assert on_branch == (case == "chained")
+
+    got = orc._swing_waypoints(q_lift, q_rel, SimpleNamespace(elevation_rad=elevation), n)
+    assert max(_joint_steps([q_lift, *got, q_rel])) < math.pi, _joint_steps([q_lift, *got, q_rel])
+    if on_branch:
+        assert len(got) == n and all(np.allclose(a, b) for a, b in zip(got, chain, strict=True))
+    else:
+        assert got == []
+    for f, q in zip(fs, got, strict=False):  # none where the swing is refused
+        assert np.linalg.norm(rb.tcp_pose(q)[0] - (p0 + f * (p1 - p0))) < 1e-3
 
 
 # A throw's carry on random layout 0 (Panda): the lift over the station, three waypoints of
