@@ -53,7 +53,7 @@ def _physical(prop: dict, table: ThrowTable, speed: np.ndarray) -> list[str]:
         ):
             bad.append(t["term"])
         power = [p for u, p in FORCES.items() if head.endswith(u)]
-        if head.startswith(("force", "lift across")) and not np.all(abs(k) * speed**power[0] < G):
+        if head.startswith(("force", "lift across")) and not np.all(abs(k) * speed ** power[0] < G):
             bad.append(t["term"])
         if head == "landing plane height [m]" and not tail and abs(k) > 0.25:
             bad.append(t["term"])
