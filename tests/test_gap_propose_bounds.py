@@ -65,7 +65,8 @@ def test_a_log_no_law_explains_gets_no_impossible_term(seed):
     """On main, every one of these six logs was proposed a term beyond a physical limit
     (speed errors of 2.1-2.5, elevation errors of 3.9 rad, forces along v of 18 m/s² and
     more, landing shifts of 11.7 m); now every term is within them, and a law that needed
-    one is named in `implausible_left_out`, with `why` where no law is left."""
+    one is named in `implausible_left_out`, with `why` where no law is left; a law that
+    predicts the held-out throws no better than none is not proposed."""
     table, floor = _one_configuration(seed)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     speed = np.linalg.norm(prob.landing(np.arange(len(prob))).launch_velocity, axis=1)
@@ -73,8 +74,12 @@ def test_a_log_no_law_explains_gets_no_impossible_term(seed):
     assert not _physical(prop, table, speed), prop["law"]
     for out in prop.get("implausible_left_out", []):
         assert out["size"] > out["bound"], out
-    if prop["law"] is None and prop.get("implausible_left_out"):
-        assert "beyond" in prop["why"], prop
+    # a law proposed predicts the held-out throws better than none (on main, seeds 3 and
+    # 5 were proposed laws that left 0.918 m against none's 0.720, 0.380 against 0.343)
+    if prop["law"] is not None:
+        assert prop["heldout_rmse_after_m"] < prop["heldout_rmse_before_m"], prop
+    else:
+        assert prop["why"], prop
 
 
 def test_the_report_of_such_a_log_proposes_no_impossible_law():

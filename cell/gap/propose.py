@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 
 from cell.gap.problem import GapProblem
-from cell.gap.propose_bounds import PLANE_MAX_M, beyond, within_bounds, written
+from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
 from cell.gap.propose_radial import radial_term
 from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
 from cell.model.effects import Effect
@@ -335,8 +335,23 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
         terms, a_all = [terms[j] for j in rest], a_all[:, rest]
         out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
         out["implausible_left_out"] = [{"term": PLANE_CONST, "k": float(own)}]
+    dropped = out.get("implausible_left_out")
     out, miss = _object_law(prob, terms, a_all, y_all, keep, floor_m, per_object, out, miss,
                             ctx)  # fmt: skip
+    if dropped:
+        out["implausible_left_out"] = dropped
+    if extended and out["law"] and out["heldout_rmse_after_m"] >= out["heldout_rmse_before_m"]:
+        # a law that predicts the held-out throws no better than none is no law
+        before, law = out["heldout_rmse_before_m"], out["law"]
+        why = (f"no law of the library predicts the held-out throws better than none: the "
+               f"best, {law}, leaves {out['heldout_rmse_after_m']:.4g} m against {before:.4g} m")  # fmt: skip
+        out = {k: v for k, v in out.items() if k not in ("phase", "within_floor", "objects")}
+        out.update(law=None, terms=[], heldout_rmse_after_m=before, shrink_pct=0.0, why=why)
+        miss = r
+    elif extended and out["law"] is None:
+        out["why"] = why_none(dropped) if dropped else (
+            f"no term of the library predicts the held-out throws better by more than its "
+            f"penalty ({TERM_PENALTY:.0%} of the held-out miss per term)")  # fmt: skip
     out["collinear_left_out"] = left_out
     if phases is not None:
         out["phases_from_tracks"] = sorted(phases)

@@ -38,7 +38,16 @@ import numpy as np
 
 from cell.gap.propose_terms import LIFT_CL_MAX
 
-__all__ = ["BOUNDS", "G", "PLANE_MAX_M", "beyond", "size_of", "within_bounds", "written"]
+__all__ = [
+    "BOUNDS",
+    "G",
+    "PLANE_MAX_M",
+    "beyond",
+    "size_of",
+    "why_none",
+    "within_bounds",
+    "written",
+]
 
 G = 9.81  # [m/s²]
 SPEED_SHARE_MAX = 0.5  # [-] a speed error's share on any throw
@@ -139,8 +148,7 @@ def within_bounds(
     """The sparse law `out` (its misses `miss`) fitted again (`fit`: terms, their columns
     -> the law, its misses) without its term furthest beyond its bound at each step, until
     every term is within its bound or none is left: (the law, its misses, the terms and
-    columns left). The terms left out are listed in `implausible_left_out`; where no law
-    is left, `why` says so."""
+    columns left). The terms left out are listed in `implausible_left_out`."""
     left: list[dict[str, Any]] = []
     while True:
         bad = beyond(out["terms"], ctx, keep)
@@ -153,11 +161,14 @@ def within_bounds(
         out, miss = fit(terms, a_all)
     if left:
         out["implausible_left_out"] = left
-        if out["law"] is None:
-            out["why"] = (
-                "no law within the terms' bounds: the sparse law's terms were beyond them ("
-                + "; ".join(f"{written(b['term'], b['k'])}: {b['size']:.3g} against "
-                            f"{b['bound']:.3g}" for b in left)
-                + ", `cell.gap.propose_bounds`)"
-            )  # fmt: skip
     return out, miss, terms, a_all
+
+
+def why_none(left: list[dict[str, Any]]) -> str:
+    """Why no law is proposed where the terms left out (`within_bounds`) were the law's."""
+    return (
+        "no law within the terms' bounds: the sparse law's terms were beyond them ("
+        + "; ".join(f"{written(b['term'], b['k'])}: {b['size']:.3g} against {b['bound']:.3g}"
+                    for b in left)
+        + ", `cell.gap.propose_bounds`)"
+    )  # fmt: skip
