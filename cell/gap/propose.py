@@ -41,7 +41,10 @@ held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per 
 The proposal reports its terms with 95 % intervals, the phase they act in and how far
 the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
 holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
-The verdict stays `unknown`: the proposal is what a person would test next.
+A term beyond its kind's bound on a throw (a speed error over half, an angle over 0.5
+rad, a force over the weight and thrice the drag: `cell.gap.propose_bounds`) is left out
+and the law fitted again. The verdict stays `unknown`: the proposal is what a person would
+test next.
 """
 
 from __future__ import annotations
@@ -52,7 +55,9 @@ from typing import Any
 import numpy as np
 
 from cell.gap.problem import GapProblem
-from cell.gap.propose_terms import LIFT_CL, LIFT_CL_MAX, MAX_OBJECTS, lift_terms, object_columns
+from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
+from cell.gap.propose_radial import radial_term
+from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
 from cell.model.effects import Effect
 from cell.model.effects_apply import flight_accel
 from cell.model.flight3d import fly
@@ -70,10 +75,6 @@ COLLINEAR_TOL = 0.01  # a term less than this share independent of the terms bef
 SHIFT_V = "landing shift [s] = k · v_h"
 MAX_SESSIONS = 6  # a log of more sessions than this has no session terms (its order terms stay)
 MIN_VZ = 0.5  # [m/s] a landing plane's terms are nil for throws descending slower than this
-# [m] the largest height a landing plane's constant term may give: the tool's own worlds
-# land on planes at 0 and 0.25 m (`cell.gap.world`), so a throw logged onto the other one
-# is 0.25 m off; a surface further off its logged height than that is no cell's
-PLANE_MAX_M = 0.25
 PLANE_CONST = "landing plane height [m] = k"
 
 
@@ -152,6 +153,13 @@ def library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool = True
             ) -> tuple[list[dict[str, Any]], np.ndarray]:  # fmt: skip
     """The candidate terms and their landing sensitivities J (n, 2, p) [m per unit θ]
     (`lift`: with the lift across v, `cell.gap.propose_terms.lift_terms`)."""
+    terms, jac, _ = _library(prob, effects, lift)
+    return terms, jac
+
+
+def _library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool
+             ) -> tuple[list[dict[str, Any]], np.ndarray, dict[str, Any]]:  # fmt: skip
+    """`library`, and what the terms' bounds read (`cell.gap.propose_bounds.size_of`)."""
     idx = np.arange(len(prob))
     effs = [e for e in effects if e.name != "band_stiffness"]
     land = prob.landing(idx, effects)
@@ -237,7 +245,14 @@ def library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool = True
     for j, axis in enumerate("xy"):
         terms.append({"phase": "landing", "term": f"landing shift {axis} [m] = k"})
         cols.append(np.tile(np.eye(2)[j], (len(b), 1)))
-    return terms, np.stack(cols, axis=2)
+    ctx = {
+        "cov": {**{c: _cov(prob, c) for c in COVS}, **in_log},
+        "object": prob.table.text("object_id"),
+        "speed": np.linalg.norm(v1, axis=1),
+        "drag_k": k,
+        "xy": x0,
+    }  # fmt: skip
+    return terms, np.stack(cols, axis=2), ctx
 
 
 def _stlsq(a: np.ndarray, y: np.ndarray, lam: float, iters: int = 8) -> np.ndarray:
@@ -288,8 +303,11 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
     n = len(prob)
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
     r = np.nan_to_num(prob.residual(idx, effects))
-    terms, jac = library(prob, effects, lift=extended)
+    terms, jac, ctx = _library(prob, effects, lift=extended)
     a_all = jac.reshape(2 * n, -1)  # rows: throw-major (x, y)
+    if extended:  # a camera's radial distortion (`cell.gap.propose_radial`)
+        rad, col, ctx["cov"]["r² d"] = radial_term(ctx["xy"], prob.table.landed, r, keep)
+        terms, a_all = [*terms, rad], np.c_[a_all, col]
     if phases is not None:  # the phases the tracks allow
         on = [t["phase"] in phases for t in terms]
         terms, a_all = [t for t, o in zip(terms, on, strict=True) if o], a_all[:, on]
@@ -301,7 +319,13 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
     a_all = a_all[:, free]
     y_all = r.reshape(-1)
     out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
-    if PLANE_CONST in [t["term"] for t in terms] and any(
+    if extended:  # every term held to its kind's bound (`cell.gap.propose_bounds`)
+
+        def fit(ts: list[dict[str, Any]], a: np.ndarray) -> tuple[dict[str, Any], np.ndarray]:
+            return _sparse_law(prob, ts, a, y_all, keep, floor_m)
+
+        out, miss, terms, a_all = within_bounds(fit, terms, a_all, keep, ctx, out, miss)
+    elif PLANE_CONST in [t["term"] for t in terms] and any(
         t["term"] == PLANE_CONST and abs(t["k"]) > PLANE_MAX_M for t in out["terms"]
     ):
         # a floor further off its logged height than any cell's: the term stands for
@@ -311,7 +335,23 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
         terms, a_all = [terms[j] for j in rest], a_all[:, rest]
         out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
         out["implausible_left_out"] = [{"term": PLANE_CONST, "k": float(own)}]
-    out, miss = _object_law(prob, terms, a_all, y_all, keep, floor_m, per_object, out, miss)
+    dropped = out.get("implausible_left_out")
+    out, miss = _object_law(prob, terms, a_all, y_all, keep, floor_m, per_object, out, miss,
+                            ctx)  # fmt: skip
+    if dropped:
+        out["implausible_left_out"] = dropped
+    if extended and out["law"] and out["heldout_rmse_after_m"] >= out["heldout_rmse_before_m"]:
+        # a law that predicts the held-out throws no better than none is no law
+        before, law = out["heldout_rmse_before_m"], out["law"]
+        why = (f"no law of the library predicts the held-out throws better than none: the "
+               f"best, {law}, leaves {out['heldout_rmse_after_m']:.4g} m against {before:.4g} m")  # fmt: skip
+        out = {k: v for k, v in out.items() if k not in ("phase", "within_floor", "objects")}
+        out.update(law=None, terms=[], heldout_rmse_after_m=before, shrink_pct=0.0, why=why)
+        miss = r
+    elif extended and out["law"] is None:
+        out["why"] = why_none(dropped) if dropped else (
+            f"no term of the library predicts the held-out throws better by more than its "
+            f"penalty ({TERM_PENALTY:.0%} of the held-out miss per term)")  # fmt: skip
     out["collinear_left_out"] = left_out
     if phases is not None:
         out["phases_from_tracks"] = sorted(phases)
@@ -321,13 +361,13 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
 def _object_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
                 y_all: np.ndarray, keep: np.ndarray, floor_m: float,
                 per_object: list[tuple[str, list[dict[str, Any]], np.ndarray]],
-                out: dict[str, Any], miss: np.ndarray
+                out: dict[str, Any], miss: np.ndarray, ctx: dict[str, Any]
                 ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
     """The law with the terms of one object after another (greedily, at most MAX_OBJECTS),
     each object's terms tried beside the library's (`terms`, `a_all`) and alone with the
     objects' chosen before; kept where the held-out score, with one term's penalty more
-    for each object chosen, falls and no lift coefficient exceeds LIFT_CL_MAX in size.
-    `out`, `miss`: the law without them."""
+    for each object chosen, falls and every term is within its bound
+    (`cell.gap.propose_bounds`). `out`, `miss`: the law without them."""
     rows = np.repeat(keep, 2)
     chosen: list[str] = []
     own_t: list[dict[str, Any]] = []
@@ -343,7 +383,8 @@ def _object_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
                 free = independent(a_try[rows])
                 free[: lib_a.shape[1]] = True  # the library's terms stand; the object's may not
                 t_try = [t for t, f in zip([*lib_t, *own_t, *ts], free, strict=True) if f]
-                got = _plausible_law(prob, t_try, a_try[:, free], y_all, keep, floor_m, o)
+                got = _plausible_law(prob, t_try, a_try[:, free], y_all, keep, floor_m, o,
+                                     ctx)  # fmt: skip
                 if got is None:
                     continue
                 o_score = got[0] * (1.0 + TERM_PENALTY * (len(chosen) + 1))
@@ -361,20 +402,17 @@ def _object_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
 
 
 def _plausible_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray,
-                   y_all: np.ndarray, keep: np.ndarray, floor_m: float, obj: str
+                   y_all: np.ndarray, keep: np.ndarray, floor_m: float, obj: str,
+                   ctx: dict[str, Any]
                    ) -> tuple[float, list[dict[str, Any]], np.ndarray, dict[str, Any],
                               np.ndarray] | None:  # fmt: skip
-    """The sparse law over these terms, fitted again without a lift coefficient of one
-    object beyond LIFT_CL_MAX in size (a lift no spin gives stands for something else):
-    (its score, the terms and columns it was fitted on, the law, the misses), or None
-    where it takes no term of the object `obj`."""
+    """The sparse law over these terms, fitted again without the terms beyond their bounds
+    (`cell.gap.propose_bounds`: a lift coefficient over LIFT_CL_MAX, one no spin gives,
+    stands for something else): (its score, the terms and columns it was fitted on, the
+    law, the misses), or None where it takes no term of the object `obj`."""
     for _ in range(3):
         out, miss = _sparse_law(prob, terms, a_all, y_all, keep, floor_m)
-        bad = {
-            t["term"]
-            for t in out["terms"]
-            if t["term"].startswith(LIFT_CL + " · [object") and abs(t["k"]) > LIFT_CL_MAX
-        }
+        bad = {b["term"] for b in beyond(out["terms"], ctx, keep)}
         if not bad:
             break
         on = [t["term"] not in bad for t in terms]  # fmt: skip
@@ -438,10 +476,7 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
             t["phase"] = "measurement"
     phases = [t["phase"] for t in out_terms]
     return {
-        "law": " + ".join(
-            f"{t['term'].split(' = ')[0]} = {t['k']:.4g}{t['term'].split(' = k')[1]}"
-            for t in out_terms
-        ),  # fmt: skip
+        "law": " + ".join(written(t["term"], t["k"]) for t in out_terms),
         "phase": phases[0],
         "terms": out_terms,
         "heldout_rmse_before_m": base_rmse,
