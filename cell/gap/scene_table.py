@@ -61,7 +61,8 @@ def _params(row: dict[str, Any]) -> str:
     if row.get("proposal"):
         terms = row["proposal"].split(" + ")
         first = " + ".join(terms[:2]).replace("|", "\\|")  # a cell of the table
-        text += f" proposal ({len(terms)} terms): {first} + …"
+        more = " + …" if len(terms) > 2 else ""
+        text += f" proposal ({len(terms)} term{'s' if len(terms) > 1 else ''}): {first}{more}"
     return text
 
 
