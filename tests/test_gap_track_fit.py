@@ -205,8 +205,10 @@ def test_scale_told_from_wind(effect: object, prefers: str) -> None:
 def test_tracks_only_two_percent_scale_is_not_wind() -> None:
     """The whole diagnosis of a tracker 2 % off in scale, another launcher's throws seen
     only through their tracks: not `wind`; the scale adopted agrees with the tracks'
-    apparent gravity."""
-    camp = draw_tracked_campaign((TrackingScale(1.02),), np.random.default_rng(11), n=160)
+    apparent gravity. 100 throws (160 before): the tracks' χ² gain of the scale over the
+    wind 24,800 against its threshold 2,550 (36,100 against 3,740 at 160), the scale
+    0.0002 off the apparent gravity (0.0006), 27 % less CPU."""
+    camp = draw_tracked_campaign((TrackingScale(1.02),), np.random.default_rng(11), n=100)
     d, _ = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
     rep = d.report
     assert "wind" not in rep["verdict"]["effects"]
