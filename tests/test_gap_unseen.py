@@ -55,7 +55,7 @@ def test_two_sessions_are_no_repeats_and_their_step_is_proposed(tmp_path):
 
 
 def test_a_drift_over_the_log_is_proposed_in_the_throw_order(tmp_path):
-    camp, table = _log("band_wear", tmp_path)
+    camp, table = _log("band_wear", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     top = prop["terms"][0]
@@ -66,7 +66,7 @@ def test_a_drift_over_the_log_is_proposed_in_the_throw_order(tmp_path):
 
 
 def test_a_tilted_floor_is_proposed_as_a_landing_plane_rising_with_x_and_y(tmp_path):
-    camp, table = _log("tilted_floor", tmp_path)
+    camp, table = _log("tilted_floor", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     k = {t["term"]: t["k"] for t in prop["terms"]}
@@ -82,7 +82,7 @@ def test_a_tilted_floor_is_proposed_as_a_landing_plane_rising_with_x_and_y(tmp_p
 
 
 def test_a_tracker_lagging_is_proposed_as_a_measurement_shift_back_along_the_flight(tmp_path):
-    camp, table = _log("latency", tmp_path)
+    camp, table = _log("latency", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     top = prop["terms"][0]
