@@ -224,9 +224,11 @@ def test_tracks_only_scale_on_one_object_is_a_tracker_scale() -> None:
     """A tracker 2 % off in scale seen through the tracks of one object only (another
     launcher's throws of cube30): the tracks' apparent gravity is off g on that one object,
     and that is still a measurement gap: the scale is the verdict, within 0.5 % (refused
-    on one object, it was named a drag 1.15 x)."""
+    on one object, it was named a drag 1.15 x). 40 throws (60 before): the apparent gravity
+    1.0193 ± 0.0013 (1.0196 ± 0.0022), 0.0193 off g against the bound max(1.5 %, 4 standard
+    errors) 0.015; the scale 1.0192 (1.0208)."""
     camp = draw_tracked_campaign(
-        (TrackingScale(1.02),), np.random.default_rng(11), n=60, objects=("cube30",)
+        (TrackingScale(1.02),), np.random.default_rng(11), n=40, objects=("cube30",)
     )
     assert set(camp.table.text("object_id")) == {"cube30"}
     d, _ = diagnose_log(camp.table, DEFAULT_EE, tracks=camp.tracks)
