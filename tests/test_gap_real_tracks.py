@@ -22,56 +22,23 @@ from tests.real_tracks import jugglebot_log, write_log
 G0 = 9.80665
 SKIP = 30  # frames after the last rest frame: the ball has left the launcher (0.1 s)
 
-Accel = Callable[[np.ndarray, np.ndarray], np.ndarray]
-
-
-def _flight_lsq(t: np.ndarray, p: np.ndarray, th0: np.ndarray, accel: Accel, t0: float,
-                **tol: float) -> np.ndarray:  # fmt: skip
-    """Least squares (scipy's least_squares) of the parameters th = (p0 at t0, v0, dynamics)
-    of a flight through samples p (m, 3) at times t (m,), the flight ṗ = v,
-    v̇ = accel(th, v) integrated by solve_ivp (RK45, tolerances `tol`). The Jacobian is
-    scipy's own forward differences (its '2-point' steps), its perturbed flights integrated
-    together as one system with the unperturbed one (they were one solve each)."""
-
-    def fly(ths: np.ndarray) -> np.ndarray:  # (q, n) -> positions (q, m, 3)
-        q = len(ths)
-
-        def rhs(_: float, y: np.ndarray) -> np.ndarray:
-            s = y.reshape(q, 6)
-            return np.c_[s[:, 3:], accel(ths, s[:, 3:])].ravel()
-
-        sol = solve_ivp(rhs, (t0, float(t[-1])), ths[:, :6].ravel(), t_eval=t, **tol)
-        return sol.y.reshape(q, 6, -1)[:, :3].transpose(0, 2, 1)
-
-    def jac(th: np.ndarray) -> np.ndarray:
-        h = np.sqrt(np.finfo(float).eps) * np.where(th >= 0, 1.0, -1.0) * np.maximum(1, abs(th))
-        h = (th + h) - th
-        f = fly(np.vstack([th, th + np.diag(h)]))
-        return ((f[1:] - f[0]) / h[:, None, None]).reshape(len(th), -1).T
-
-    return least_squares(lambda th: (fly(th[None])[0] - p).ravel(), th0, jac=jac).x
-
-
-def _drag_g(ths: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """v̇ = g - k|v|v, g = th[6:9] [m/s²], k = th[9] [1/m] (q parameter vectors)."""
-    return ths[:, 6:9] - ths[:, 9:10] * np.linalg.norm(v, axis=1)[:, None] * v
-
-
-def _drag_gz(ths: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """v̇ = -g e_z - k|v|v, g = th[6] [m/s²], k = th[7] [1/m] (q parameter vectors)."""
-    a = -ths[:, 7:8] * np.linalg.norm(v, axis=1)[:, None] * v
-    a[:, 2] -= ths[:, 6]
-    return a
-
 
 def _independent(tr: np.ndarray) -> np.ndarray:
     """Start state, gravity vector [m/s²] and drag constant k [1/m] fitted to a track's
     free flight by least squares through solve_ivp (ṗ = v, v̇ = g - k|v|v)."""
     t = tr[SKIP:, 0] - tr[SKIP, 0]
     p = tr[SKIP:, 1:4]
+
+    def sim(th: np.ndarray) -> np.ndarray:
+        def rhs(_: float, s: np.ndarray) -> np.ndarray:
+            return np.r_[s[3:], th[6:9] - th[9] * np.linalg.norm(s[3:]) * s[3:]]
+
+        sol = solve_ivp(rhs, (0.0, float(t[-1])), th[:6], t_eval=t, rtol=1e-9, atol=1e-11)
+        return sol.y[:3].T
+
     v = (p[3] - p[0]) / (t[3] - t[0])
     th0 = np.r_[p[0], v, 0.0, 0.0, -G0, 0.013]
-    return _flight_lsq(t, p, th0, _drag_g, 0.0, rtol=1e-9, atol=1e-11)
+    return least_squares(lambda th: (sim(th) - p).ravel(), th0).x
 
 
 @pytest.fixture(scope="module")
@@ -143,9 +110,18 @@ def _independent_tt(tr: np.ndarray) -> np.ndarray:
     """Start state, gravity's size [m/s²] and k [1/m] of a flight (time in frames of the
     120 Hz base), by least squares through solve_ivp (v̇ = -g e_z - k|v|v)."""
     t, p = tr[:, 0], tr[:, 1:4]
+
+    def sim(th: np.ndarray) -> np.ndarray:
+        def rhs(_: float, s: np.ndarray) -> np.ndarray:
+            return np.r_[
+                s[3:], np.array([0.0, 0.0, -th[6]]) - th[7] * np.linalg.norm(s[3:]) * s[3:]
+            ]
+
+        return solve_ivp(rhs, (0.0, float(t[-1])), th[:6], t_eval=t, rtol=1e-9, atol=1e-12).y[:3].T
+
     v = (p[3] - p[0]) / (t[3] - t[0])
     th0 = np.r_[p[0], v, G0, 0.1]
-    return _flight_lsq(t, p, th0, _drag_gz, 0.0, rtol=1e-9, atol=1e-12)
+    return least_squares(lambda th: (sim(th) - p).ravel(), th0).x
 
 
 CLEAN_TT = ("tt2", "tt5", "tt6", "tt7", "tt8", "tt9")  # flights whose first stretch is clean
@@ -225,8 +201,12 @@ def _independent_tc(tr: np.ndarray) -> tuple[np.ndarray, Callable[[float], np.nd
             s[3:], np.array([0.0, 0.0, -th[6]]) - th[7] * np.linalg.norm(s[3:]) * s[3:]
         ]
 
+    def sim(th: np.ndarray) -> np.ndarray:
+        sol = solve_ivp(rhs(th), (t[0], t[-1]), th[:6], t_eval=t, rtol=1e-9, atol=1e-11)
+        return sol.y[:3].T
+
     v = (p[3] - p[0]) / (t[3] - t[0])
-    th = _flight_lsq(t, p, np.r_[p[0], v, G0, 0.1], _drag_gz, float(t[0]), rtol=1e-9, atol=1e-11)
+    th = least_squares(lambda th: (sim(th) - p).ravel(), np.r_[p[0], v, G0, 0.1]).x
 
     def state(tq: float) -> np.ndarray:
         return solve_ivp(rhs(th), (t[0], tq), th[:6], rtol=1e-9, atol=1e-11).y[:, -1]
