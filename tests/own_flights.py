@@ -25,20 +25,26 @@ def fly(p0: np.ndarray, v0: np.ndarray, k: float, air: Air
     p, v = p0.copy(), v0.copy()
     t = 0.0
     land, t_land = np.full((n, 2), np.nan), np.full(n, np.nan)
-    path = [[np.r_[0.0, p0[i]]] for i in range(n)]
+    # each step's time and positions, and how many steps each flight lived: the paths are
+    # cut from them once the last flight lands (they were grown sample by sample)
+    times, points = [0.0], [p0.copy()]
+    steps = np.zeros(n, int)
     live = np.ones(n, bool)
 
-    def acc(tt: float, vv: np.ndarray) -> np.ndarray:
-        rel = vv - air(tt)
-        a = -k * np.linalg.norm(rel, axis=1)[:, None] * rel
+    def acc(air_v: np.ndarray, vv: np.ndarray) -> np.ndarray:
+        rel = vv - air_v
+        # |rel|: np.linalg.norm's arithmetic without its per-call checks
+        a = -k * np.sqrt(np.add.reduce(rel * rel, axis=1))[:, None] * rel
         a[:, 2] -= G
         return a
 
     while live.any():
-        k1p, k1v = v, acc(t, v)
-        k2p, k2v = v + 0.5 * DT * k1v, acc(t + 0.5 * DT, v + 0.5 * DT * k1v)
-        k3p, k3v = v + 0.5 * DT * k2v, acc(t + 0.5 * DT, v + 0.5 * DT * k2v)
-        k4p, k4v = v + DT * k3v, acc(t + DT, v + DT * k3v)
+        # the air at the step's middle taken once for its two stages
+        air_0, air_h, air_1 = air(t), air(t + 0.5 * DT), air(t + DT)
+        k1p, k1v = v, acc(air_0, v)
+        k2p, k2v = v + 0.5 * DT * k1v, acc(air_h, v + 0.5 * DT * k1v)
+        k3p, k3v = v + 0.5 * DT * k2v, acc(air_h, v + 0.5 * DT * k2v)
+        k4p, k4v = v + DT * k3v, acc(air_1, v + DT * k3v)
         p1 = p + DT / 6 * (k1p + 2 * k2p + 2 * k3p + k4p)
         v1 = v + DT / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         down = live & (p1[:, 2] < 0.0)
@@ -47,9 +53,11 @@ def fly(p0: np.ndarray, v0: np.ndarray, k: float, air: Air
         t_land[down] = t + s[:, 0] * DT
         live &= ~down
         p, v, t = p1, v1, t + DT
-        for i in np.flatnonzero(live):
-            path[i].append(np.r_[t, p[i]])
-    return land, t_land, [np.array(x) for x in path]
+        steps += live
+        times.append(t)
+        points.append(p)
+    tt, pp = np.array(times), np.array(points)
+    return land, t_land, [np.c_[tt[: m + 1], pp[: m + 1, i]] for i, m in enumerate(steps)]
 
 
 def tracks_of(paths: list[np.ndarray], t_end: np.ndarray, rate_hz: float,

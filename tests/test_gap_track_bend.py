@@ -49,8 +49,11 @@ def _campaign(gust: bool, tmp_path: Path, seed: int = SEED):  # type: ignore[no-
     sp, el, az = rng.uniform(3.5, 6.0, N), rng.uniform(0.3, 1.0, N), rng.uniform(-0.9, 0.9, N)
     v0 = sp[:, None] * np.c_[np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]
     p0 = np.c_[rng.uniform(0.2, 0.4, N), rng.uniform(-0.1, 0.1, N), np.full(N, 0.8)]
-    still, t_still, _ = _fly(p0, v0, np.zeros(N))
-    land, t_land, paths = _fly(p0, v0, GUST_UNTIL * t_still if gust else np.zeros(N))
+    still, t_still, paths = _fly(p0, v0, np.zeros(N))
+    # in still air the flights are the still ones (flown once: the same numbers)
+    land, t_land = still, t_still
+    if gust:
+        land, t_land, paths = _fly(p0, v0, GUST_UNTIL * t_still)
     moved = float(np.sqrt(np.mean(np.sum((land - still) ** 2, axis=1))))
     land = land + rng.normal(0.0, LAND_SIG, land.shape)
     tracks = tracks_of(paths, t_land - 0.005, RATE_HZ, rng)

@@ -42,12 +42,17 @@ HEADER = (
 
 def _accel(v: np.ndarray, k: np.ndarray, kl: np.ndarray) -> np.ndarray:
     """Gravity, drag −k|v|v and a lift kl|v|² across v, up in v's vertical plane [m/s²]."""
-    sp = np.linalg.norm(v, axis=1)
+    sp = np.sqrt(np.add.reduce(v * v, axis=1))  # |v|, np.linalg.norm's arithmetic
     a = -(k * sp)[:, None] * v
     a[:, 2] -= G
-    hor = np.c_[-v[:, 1], v[:, 0], np.zeros(len(v))]
-    side = np.cross(v, hor)  # in v's vertical plane, across v, up
-    n = np.linalg.norm(side, axis=1)
+    # v × (−v_y, v_x, 0), in v's vertical plane, across v, up: np.cross's arithmetic
+    # without its per-call set-up (the same numbers; the world's flights were 2.2 × slower)
+    vx, vy, vz = v[:, 0], v[:, 1], v[:, 2]
+    side = np.empty_like(v)
+    side[:, 0] = vy * 0.0 - vz * vx
+    side[:, 1] = vz * -vy - vx * 0.0
+    side[:, 2] = vx * vx - vy * -vy
+    n = np.sqrt(np.add.reduce(side * side, axis=1))
     return a + (kl * sp * sp / np.where(n > 0, n, 1.0))[:, None] * side
 
 

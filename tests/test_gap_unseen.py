@@ -55,7 +55,7 @@ def test_two_sessions_are_no_repeats_and_their_step_is_proposed(tmp_path):
 
 
 def test_a_drift_over_the_log_is_proposed_in_the_throw_order(tmp_path):
-    camp, table = _log("band_wear", tmp_path)
+    camp, table = _log("band_wear", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     top = prop["terms"][0]
@@ -66,7 +66,7 @@ def test_a_drift_over_the_log_is_proposed_in_the_throw_order(tmp_path):
 
 
 def test_a_tilted_floor_is_proposed_as_a_landing_plane_rising_with_x_and_y(tmp_path):
-    camp, table = _log("tilted_floor", tmp_path)
+    camp, table = _log("tilted_floor", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     k = {t["term"]: t["k"] for t in prop["terms"]}
@@ -82,7 +82,7 @@ def test_a_tilted_floor_is_proposed_as_a_landing_plane_rising_with_x_and_y(tmp_p
 
 
 def test_a_tracker_lagging_is_proposed_as_a_measurement_shift_back_along_the_flight(tmp_path):
-    camp, table = _log("latency", tmp_path)
+    camp, table = _log("latency", tmp_path, n=100)
     prob = build_problem(table, DEFAULT_EE, seed=0)
     prop, _ = propose(prob, (), camp["floor_m"])
     top = prop["terms"][0]
@@ -94,8 +94,11 @@ def test_a_tracker_lagging_is_proposed_as_a_measurement_shift_back_along_the_fli
 def test_where_is_the_proposals_phase_when_no_effect_cuts_the_gap(tmp_path):
     """A throw axis turned in azimuth by 0.6 rad/kg × mass: no effect of the vocabulary
     cuts the misses (the best, tracking_scale, 0.1 %), and `where` named that effect's
-    phase, measurement; the proposal (azimuth error ∝ mass) is in the launch."""
-    camp, table = _log("yaw_mass", tmp_path)
+    phase, measurement; the proposal (azimuth error ∝ mass) is in the launch. 100 throws
+    (160 before): the proposal's held-out miss 0.0153 m against the best plausible
+    effect's 0.0556 (the bounce, landing; 0.0136 against 0.0500 at 160), its law 0.603 ·
+    mass (0.600; the world's 0.6)."""
+    camp, table = _log("yaw_mass", tmp_path, n=100)
     d, _ = diagnose_log(table, DEFAULT_EE, seed=0)
     rep = d.report
     assert rep["verdict"]["effects"] == ["unknown"]

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from cell.cli import main
 from cell.errors import LogFormatError
@@ -150,18 +151,35 @@ def _k(code: int, cd: float, kg: float, a: float) -> float:
     return 0.5 * RHO * cd * area / kg
 
 
-def _land(p: np.ndarray, v: np.ndarray, k: float) -> np.ndarray:
-    """The landing (x, y) on the floor by scipy's RK45 to 1e-10: a second solver."""
+def _lands(p: np.ndarray, v: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """The landings (x, y) on the floor of flights from p [m], v [m/s] (n, 3) with drag
+    k [1/m] (n,), by scipy's RK45 to 1e-10: a second solver. The flights are one system
+    (they were one solve each), flown until the last is down; each touchdown is the root
+    of its height on the step that crosses the floor (brentq on that step's interpolant)."""
+    n = len(p)
 
     def rates(_t: float, s: np.ndarray) -> np.ndarray:
-        return np.r_[s[3:], -k * np.linalg.norm(s[3:]) * s[3:] - [0.0, 0.0, G]]
+        st = s.reshape(n, 6)
+        a = -k[:, None] * np.linalg.norm(st[:, 3:], axis=1)[:, None] * st[:, 3:]
+        a[:, 2] -= G
+        return np.c_[st[:, 3:], a].ravel()
 
-    def floor(_t: float, s: np.ndarray) -> float:
-        return float(s[2])
+    def down(_t: float, s: np.ndarray) -> float:
+        return float(np.max(s[2::6]))
 
-    floor.terminal, floor.direction = True, -1  # type: ignore[attr-defined]
-    sol = solve_ivp(rates, (0.0, 30.0), np.r_[p, v], events=floor, rtol=1e-10, atol=1e-10)
-    return sol.y_events[0][0][:2]
+    down.terminal, down.direction = True, -1  # type: ignore[attr-defined]
+    sol = solve_ivp(rates, (0.0, 30.0), np.c_[p, v].ravel(), events=down, dense_output=True,
+                    rtol=1e-10, atol=1e-10)  # fmt: skip
+    z = sol.y[2::6]  # (n, steps) heights at the solver's steps, the last at the event
+    out = np.empty((n, 2))
+    for i in range(n):
+        below = np.flatnonzero(z[i] <= 0.0)
+        j = int(below[0]) if below.size else z.shape[1] - 1
+        seg = sol.sol.interpolants[j - 1]  # the step's own interpolant, to its own end
+        t_down = brentq(lambda t, i=i, seg=seg: seg(t)[6 * i + 2], sol.t[j - 1],
+                        sol.t[j] if below.size else seg.t_max, xtol=1e-14)  # fmt: skip
+        out[i] = seg(t_down)[6 * i : 6 * i + 2]
+    return out
 
 
 def _tiring_log(path: Path, loss_over_log: float, seed: int, steady: float = 0.0) -> None:
@@ -184,16 +202,15 @@ def _tiring_log(path: Path, loss_over_log: float, seed: int, steady: float = 0.0
     )
     fast = predict_landing(b, DEFAULT_EE)
     conf = rng.permutation(np.repeat(np.arange(m), 2))
+    speed = 1.0 - steady - loss_over_log * np.arange(len(conf)) / (len(conf) - 1)
+    land = _lands(fast.launch_position[conf], speed[:, None] * fast.launch_velocity[conf],
+                  np.array([_k(*OBJECTS[obj[i]]) for i in conf]))  # fmt: skip
     with path.open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(HEADER.split(",") + ["time_s"])
         for k, i in enumerate(conf):
             code, cd, kg, a = OBJECTS[obj[i]]
-            speed = 1.0 - steady - loss_over_log * k / (len(conf) - 1)
-            xy = _land(
-                fast.launch_position[i], speed * fast.launch_velocity[i], _k(code, cd, kg, a)
-            )
-            xy = xy + rng.normal(0.0, 0.01, 2)
+            xy = land[k] + rng.normal(0.0, 0.01, 2)
             p = b.position[i]
             w.writerow([f"t{k:03d}", obj[i], "cube" if code == 0 else "sphere", kg, a, a, a,
                         f"{b.stroke[i]:.6f}", f"{p[0]:.6f}", f"{p[1]:.6f}", f"{p[2]:.6f}",
