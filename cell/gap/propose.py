@@ -42,9 +42,9 @@ The proposal reports its terms with 95 % intervals, the phase they act in and ho
 the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
 holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
 A term beyond its kind's bound on a throw (a speed error over half, an angle over 0.5
-rad, a force over the weight and thrice the drag: `cell.gap.propose_bounds`) is left out
-and the law fitted again. The verdict stays `unknown`: the proposal is what a person would
-test next.
+rad, a force over a third of the weight plus thrice the model's drag:
+`cell.gap.propose_bounds`) is left out and the law fitted again. The verdict stays
+`unknown`: the proposal is what a person would test next.
 """
 
 from __future__ import annotations
