@@ -1,14 +1,11 @@
-"""The order test files are handed to `make test`'s workers: the slowest first.
+"""The order test files are handed to `make test`'s workers: the heaviest first.
 
 `make test` runs `pytest -n 2 --dist loadfile --no-loadscope-reorder`: each file goes
-whole to the next free worker, in collection order. pytest-xdist's own order (the
-files with the most tests first) left the slow files of few tests to the end, one
-worker running the last of them alone: 4.9 % and 3.5 % over the even split in two
-measured runs of the suite (`--durations=0`, each file's sum handed out in that order
-to 2 workers). With the files below first, the rest in name order, the same sums come
-within 0.4 % and 0.2 % of it. The list is the slowest files of a measured run (see
-SLOW_FILES); it orders, it never selects: a file missing from it, or renamed,
-runs in its place by name.
+whole to the next free worker, in collection order. The files go in the order of their
+weights (tests/file_weights.py: each file's seconds in a measured run of the whole suite),
+heaviest first, so that the last files handed out are short and the two workers end
+together. A file the table does not know (new or renamed) goes first: run last, a slow one
+would leave the other worker idle for its length. The weights order, they never select.
 """
 
 from __future__ import annotations
@@ -19,6 +16,8 @@ from typing import Any
 
 import pytest
 from threadpoolctl import threadpool_limits
+
+from tests.file_weights import WEIGHTS
 
 # One BLAS thread in each test process and the processes it starts (the `cell` CLI in a
 # subprocess, Ray's workers take OMP_NUM_THREADS=1 themselves): `make test`'s two workers
@@ -34,35 +33,10 @@ threadpool_limits(limits=1)
 # of the forked planning (tests/test_plan_fork.py) ask for two themselves
 os.environ["CELL_PLAN_WORKERS"] = "1"
 
-# slow first, from `pytest -n 2 --dist loadfile --durations=0 tests` (per-file sums): the
-# sixteen slowest files of the run at cd14b54 (2026-11-30, 805 s of test time), with the
-# savings of branch `suite9` (each changed test's fresh-process CPU ratio before/after applied
-# to its own duration; the gap files as in that run), slowest first; handed out so, the
-# estimated sums end within 0.2 s of each other (0.4 s with the sixteen listed before)
-SLOW_FILES = (
-    "test_parallel.py",
-    "test_gap_rules.py",
-    "test_gap_laws.py",
-    "test_gap_scene.py",
-    "test_same_result.py",
-    "test_gap_jet.py",
-    "test_gap.py",
-    "test_envelope_edges.py",
-    "test_residual_learning.py",
-    "test_departure.py",
-    "test_accounting.py",
-    "test_carry.py",
-    "test_release_choice.py",
-    "test_record_run.py",
-    "test_grip_probe.py",
-    "test_release_search_cost.py",
-)
-
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    rank = {name: k for k, name in enumerate(SLOW_FILES)}
     # a stable sort on the file alone: each file's tests stay together and in their order
-    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))
+    items.sort(key=lambda item: -WEIGHTS.get(item.path.name, float("inf")))
 
 
 class Calls:

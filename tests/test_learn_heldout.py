@@ -67,7 +67,11 @@ def test_keep_learner_saves_the_svr_with_a_warning(
 ) -> None:
     log, _ = no_effect
     out = tmp_path / "r.skops"
-    rc = main(["learn", str(log), "-o", str(out), "--compare", "svr", "--keep-learner"])
+    # 2 folds of 4 objects, not 4 of 2: the flag is what is read, and an SVR trained on 4
+    # objects beats the physics still less (ratio 1.72, interval 1.06-2.49; 4 folds: 1.002,
+    # 1.000-1.006); 5 fits -> 3
+    argv = ["learn", str(log), "-o", str(out), "--compare", "svr", "--hold-out", "4"]
+    rc = main([*argv, "--keep-learner"])
     assert rc == 0
     io = capsys.readouterr()
     assert "the residual does not beat the physics model alone" in io.out
@@ -98,7 +102,11 @@ def test_a_shape_effect_beats_the_physics_and_the_svr_is_saved(
     ids = [SHAPES[i % len(SHAPES)] for i in range(200)]
     log, _ = write_log(tmp_path / "shape.csv", ids, 2064, scatter_m=0.003, curved_stretch=0.1)
     out = tmp_path / "r.skops"
-    rc = main(["learn", str(log), "-o", str(out), "--compare", "svr", "--json"])
+    # 2 folds (4 and 6 objects held out), not 5 of 2: each fold's SVR trains on fewer objects,
+    # so beating the physics is no easier (ratio 0.259, interval 0.175-0.379; 5 folds: 0.229,
+    # 0.108-0.482); the saved SVR, fitted on all 10, is the same; 6 fits -> 3
+    argv = ["learn", str(log), "-o", str(out), "--compare", "svr", "--hold-out", "4"]
+    rc = main([*argv, "--json"])
     assert rc == 0
     saved = json.loads(capsys.readouterr().out)["saved"]
     assert saved["residual"] == "svr", saved

@@ -90,7 +90,10 @@ def test_residual_does_no_harm_without_an_unmodelled_effect(plain_data):
         world, model, unseen_ids(), model_ee=DEFAULT_EE, throws_per_object=10, seed=5
     )
     assert tt.rmse(True) <= 1.05 * tt.rmse(False), (tt.rmse(False), tt.rmse(True))
-    rr = round_robin(data, learners=("svr",), grid="small")["svr"]
+    # 4 folds (3, 3, 3 and 5 objects), not 7 of 2: 2.2 -> 0.7 CPU-s; the inner CV chooses no
+    # residual in every fold either way (ratio 1.0); with the null candidates never chosen the
+    # ratio is 1.113 (7 folds: 1.079; 3 folds of 4, 4 and 6: 1.032, which would pass)
+    rr = round_robin(data, learners=("svr",), grid="small", hold_out=3)["svr"]
     assert rr.heldout_rmse_after_m <= 1.05 * rr.heldout_rmse_before_m
 
 
