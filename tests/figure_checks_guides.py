@@ -40,7 +40,7 @@ def check_the_gap_tracks_rules() -> None:
     assert float(rms) == 100 * MAX_FIT_RMS_M
     (need,) = quoted(page, r"`cell gap` says it needs at least (\d+)")
     assert int(need) == MIN_THROWS
-    from cell.gap.tracks import DOWN_COS
+    from cell.gap.track_gravity import DOWN_COS
 
     (deg,) = quoted(page, r"the fit with drag finds gravity over (\d+)° from −z")
     close(str(math.cos(math.radians(float(deg)))), DOWN_COS, 9)

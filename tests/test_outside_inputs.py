@@ -578,7 +578,8 @@ def test_tracks_with_no_fall_under_gravity_are_named_unusable() -> None:
     0.25 g) were fitted as flights, a free constant acceleration absorbing gravity, and
     their throws ended as outliers. They are named unusable, the apparent gravity said,
     with what to check; the same flight with its own time stamps is used (1 g)."""
-    from cell.gap.tracks import GRAVITY_MIN_G, fit_tracks
+    from cell.gap.track_gravity import GRAVITY_MIN_G
+    from cell.gap.tracks import fit_tracks
     from cell.model.params import G
 
     rng = np.random.default_rng(3)
