@@ -31,6 +31,7 @@ from cell.jobbins import (
 from cell.jobcell import cell_section
 from cell.jobcheck import extents_mismatch, items_fit, job_problems, unsorted_warning
 from cell.joblimits import MAX_ITEMS, limits_section
+from cell.jobresidual import residual_problems
 from cell.jobrim import low_rim_warnings
 from cell.jobschema import (
     BIN_KEYS,
@@ -463,7 +464,9 @@ def parse_job(text: str, path: str = "<job>", *, check_reach: bool = True) -> Jo
         rotor_rpm=cell.rotor_rpm,
         base_speed_mps=cell.base_speed_mps,
     )
-    errors.messages += items_fit(path, items, bins)
+    errors.messages += items_fit(path, items, bins) + residual_problems(
+        job, _where(job, tree, top)["cell"]
+    )
     reach_warnings: list[str] = []
     if cell.platform == "arm":  # and which of auto's near bins the arm cannot place into
         problems, reach_warnings, thrown = job_problems(job, _where(job, tree, top), check_reach)

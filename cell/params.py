@@ -327,7 +327,11 @@ def _mass_rule(node: Any, path: str) -> tuple[float, float, float] | None:
 
 def save_params(params: ModelParams, path: str | Path) -> None:
     """Write a parameter file (atomically)."""
-    doc: dict[str, Any] = {"end_effector": params.ee.as_dict()}
+    # every end-effector key, L_e at 0 too (`as_dict` leaves it out when off): a file
+    # `cell identify`, `cell synth --save-world` or `cell calibrate` writes gives them all,
+    # and reading it warns of no reference value taken
+    ee = {**params.ee.as_dict(), "L_e": float(params.ee.L_e)}
+    doc: dict[str, Any] = {"end_effector": ee}
     if params.objects:
         doc["objects"] = {
             k: {"shape": o.shape, "mass_kg": float(o.mass), "size_m": [float(s) for s in o.size]}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,7 +47,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="share of each object's throws held out of the fit (default 0.2; 0 = fit all)",
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the held-out split")
-    p.add_argument("--max-iter", type=int, default=30, help="most stage-1 + stage-2 iterations")
+    p.add_argument(
+        "--max-iter",
+        type=int,
+        default=30,
+        help="most stage-1 + stage-2 iterations of a pass (the fit makes a second pass once "
+        "the objects' priors are chosen, unless --ee-only)",
+    )
     p.add_argument("--tol", type=float, default=2e-3, help="relative parameter change to stop at")
     p.add_argument("--ee-only", action="store_true", help="stage 1 only (keep the objects' η_o)")
     for flag, meta, text in (
@@ -127,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
         n_fit[oid] = n_fit.get(oid, 0) + 1
     doc = _doc(args, table, source, result, held, before, after, params, n_fit)
     if not json_to_stdout(args):  # the results are printed before any file is written
-        _print(table, source, result, where, before, after, params, start, n_fit)
+        _print(table, source, result, where, before, after, params, start, n_fit, args.max_iter)
     save_params(params, args.output)
     plots = []
     if args.plot:
@@ -182,7 +188,19 @@ def _doc(args, table, source, result, held, before, after, params, n_fit) -> dic
     }
 
 
-def _print(table, source, result, where, before, after, params, start, n_fit) -> None:  # type: ignore[no-untyped-def]
+def _iterations(result: Any, max_iter: int) -> str:
+    """The fit's iterations and how it ended: a count over --max-iter is two passes (the
+    second once the objects' priors are chosen), each of at most --max-iter."""
+    end = "converged" if result.converged else f"stopped at --max-iter {max_iter}"
+    if result.iterations <= max_iter:
+        return f"{plural(result.iterations, 'iteration')}, {end}"
+    return (
+        f"{plural(result.iterations, 'iteration')} in two passes (the second once the "
+        f"objects' priors were chosen), each of at most --max-iter {max_iter}; the second {end}"
+    )
+
+
+def _print(table, source, result, where, before, after, params, start, n_fit, max_iter) -> None:  # type: ignore[no-untyped-def]
     """The results as text."""
     from cell.identify.report import evidence_lines, format_table
 
@@ -192,8 +210,7 @@ def _print(table, source, result, where, before, after, params, start, n_fit) ->
     print(f"fitted on {plural(result.n_throws, 'throw')}; errors below are on {where}")
     print(format_table(before, after, params, n_fit))
     print(
-        f"\n{plural(result.iterations, 'iteration')}, "
-        f"{'converged' if result.converged else 'stopped at --max-iter'} "
+        f"\n{_iterations(result, max_iter)} "
         f"({result.seconds:.1f} s); landing RMSE on the fitted throws "
         f"{result.rmse_start_m:.4f} -> {result.rmse_fit_m:.4f} m"
     )

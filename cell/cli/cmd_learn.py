@@ -314,11 +314,31 @@ def _print(
         )
         return
     _say(saved, model)
+    if null is not None and saved["residual"] == NULL_RESIDUAL[null]:  # not the learner's
+        print(f"saved {_null_text(model, null)} -> {args.output}")
+        return
     print(
         f"saved {model.learner} residual ({plural(model.n_train, 'throw')} of "
         f"{plural(len(model.training_objects), 'object')}; "
         + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in params.items())
         + f") -> {args.output}"
+    )
+
+
+def _null_text(model: Any, null: str) -> str:
+    """What a residual the inner cross-validation chose instead of the learner is: the
+    zero correction or a constant one (its value), not the learner's hyper-parameters."""
+    import numpy as np
+
+    what = (
+        "the zero correction (ΔL_s = 0 for every throw: the physics model alone"
+        if null == "zero"
+        else "a constant correction (ΔL_s = "
+        f"{float(np.ravel(model.pipeline[-1].constant_)[0]):+.2f} mm for every throw"
+    )
+    return (
+        f"{what}; fitted on {plural(model.n_train, 'throw')} of "
+        f"{plural(len(model.training_objects), 'object')}, not the {model.learner} learner)"
     )
 
 
