@@ -191,16 +191,17 @@ def calibrated_width_m() -> float:
 def wide_item_warnings(job: Any) -> tuple[str, ...]:
     """A warning for each item line thrown (not placed: `places`) that a throw may grip
     across a side wider than the throw model is calibrated on (`calibrated_width_m`): a
-    side the pads hold briskly (`cell.arm.grip_side.throw_sides`: the planner may take it,
-    the side with the shorter cycle estimate, though a narrower one holds). There the
+    side the pads hold briskly (`cell.arm.grip_side.throw_sides`) where no narrower side
+    held briskly gives a throw into the bin by the model (the planner takes a narrower
+    one where it does: `GripSideChoice._throw_side`). There the
     model extrapolates, and the scene's pads still squeeze an item wider than 85 mm as it
     slides out of them at the carriage's end stop (the band is not slack there), which
     the model does not have: a light one lands short. Measured in the scene (boxes
     [a, 0.03, 0.1] thrown at a stroke of 0.09 m, 25 deg up, from 0.7 m; the model put
     them 1.19-1.27 m out at 30 g): 30 g boxes 100, 110, 120 mm across 0.11, 0.24, 0.39 m
     short of the model, 90 g ones 0.03, 0.09, 0.24 m; 90 mm within 0.03 m. A warning
-    only: no decision changes. The pads' hold is the job's parameter file's (the
-    scene's calibrated one by default)."""
+    only. The pads' hold is the job's parameter file's (the scene's calibrated one by
+    default)."""
     from cell.arm.grip_side import grip_sides
     from cell.catalogue import pad_width_m
 
@@ -223,11 +224,17 @@ def wide_item_warnings(job: Any) -> tuple[str, ...]:
             continue
         w = max(held)
         narrow = [w for w in thrown if w <= widest + 1e-9]
+        if narrow and params is not None and _narrow_reaches(params, sides, b, widest):
+            continue  # the planner throws it across the narrower side
         though = (
-            f" (the planner may take it though the {min(narrow) * 1000:.0f} mm side holds: "
-            "it takes the side with the shorter cycle estimate)"
-            if narrow
-            else ""
+            ""
+            if not narrow
+            else f" (though the {min(narrow) * 1000:.0f} mm side holds: the planner takes it "
+            "where a throw across it reaches the bin, which the parameter file, unread, "
+            "does not tell)"
+            if params is None
+            else f" (its {min(narrow) * 1000:.0f} mm side, which the planner takes where a "
+            "throw across it is found, gives no throw into the bin by the model)"
         )
         out.append(
             f"{job.path}, line {it.line}, size_m: {w * 1000:.0f} mm across the pads is wider "
@@ -240,6 +247,23 @@ def wide_item_warnings(job: Any) -> tuple[str, ...]:
             "it placed"
         )
     return tuple(out)
+
+
+def _narrow_reaches(params: Any, sides: list[Any], bin_spec: Any, widest: float) -> bool:
+    """Does a throw gripped across one of `sides` no wider than `widest` [m], held briskly,
+    land in `bin_spec` by the planner's model (`cell.arm.launch.side_throw_error`)?"""
+    from cell.arm.grip_limits import grip_strokes
+    from cell.arm.grip_side import GripSide
+    from cell.arm.launch import side_throw_error
+    from cell.catalogue import pad_width_m
+
+    for s in sides:
+        s_max, brisk = grip_strokes(params, s)
+        if s_max is None or not brisk or pad_width_m(s) > widest + 1e-9:
+            continue
+        if side_throw_error(params, GripSide(0.0, s, s_max), bin_spec) is None:
+            return True
+    return False
 
 
 def _throw_side(params: Any, side: Any) -> bool:

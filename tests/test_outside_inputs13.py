@@ -8,6 +8,7 @@ import json
 import re
 from dataclasses import fields, replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -16,8 +17,10 @@ import yaml
 from sklearn.dummy import DummyRegressor
 from sklearn.pipeline import Pipeline
 
-from cell.errors import JobError
+from cell.arm.grip_side import GripSideChoice, holding_sides, throw_sides
+from cell.errors import JobError, UnreachableTarget
 from cell.jobs import parse_job
+from cell.model.objects import ObjectParams
 from cell.model.params import EndEffectorParams
 from cell.params import ModelParams, load_params, save_params, scene_params_path
 from cell.residual.features import FEATURE_NAMES
@@ -129,7 +132,7 @@ def test_learn_names_a_saved_constant_correction_not_the_learners_parameters(
     from argparse import Namespace
 
     from cell.cli.cmd_learn import _print
-    from cell.residual.model import GripPose, ObjectParams
+    from cell.residual.model import GripPose
 
     path = _residual(tmp_path / "c.skops", ModelParams().ee, constant_mm=2.5)
     model = ResidualModel.load(path)
@@ -140,3 +143,64 @@ def test_learn_names_a_saved_constant_correction_not_the_learners_parameters(
     delta_mm = 1000 * model.delta_strokes([cube], [GripPose(0.07, 0.4, 0.0)])[0]
     assert f"saved a constant correction (ΔL_s = {delta_mm:+.2f} mm for every throw" in out
     assert "reg__C" not in out and "saved svr residual" not in out, out
+
+
+class _Sides(GripSideChoice):
+    """`GripSideChoice._throw_side` with the planner stubbed: each side's width [mm] is
+    recorded as planned; a width in `fail` finds no throw, the others cost their width."""
+
+    def __init__(self, fail: tuple[int, ...] = ()) -> None:  # no arm: nothing else is read
+        self.fail, self.planned = fail, []
+
+    def _plan(self, obj, target, index, stroke_max_m, beat):  # type: ignore[no-untyped-def]
+        w = round(obj.width * 1000)
+        self.planned.append(w)
+        if w in self.fail:
+            raise UnreachableTarget(f"{w} mm: no throw")
+        return SimpleNamespace(cost=(False, float(w)))
+
+    def _budget_spent(self) -> bool:
+        return False
+
+
+def test_a_throw_grips_a_side_the_model_is_calibrated_on_where_one_gives_a_throw() -> None:
+    """A 30 g box 30 x 120 mm was thrown gripped across 120 mm where that side's cycle
+    estimate was the shorter: the pads squeeze so wide an item as it leaves them, and it
+    landed short. The narrower side (within `calibrated_width_m`, 90 mm) is planned first,
+    the wider only where it finds no throw; sides all within 90 mm are chosen as before,
+    by their estimates (cuboid_a's 30 and 50 mm)."""
+    params = load_params(scene_params_path())
+    box = ObjectParams("cuboid", 0.03, (0.03, 0.12, 0.1))
+    sides = throw_sides(holding_sides(params, box), box)
+    assert sorted(round(s.width_m * 1000) for s in sides) == [30, 120]
+    wide_first = sorted(sides, key=lambda s: -s.width_m)  # the wide side cheaper, first
+    arm = _Sides()
+    side, _ = arm._throw_side(wide_first, (1.4, 0.0, 0.15), 0)
+    assert round(side.width_m * 1000) == 30 and arm.planned == [30]
+    arm = _Sides(fail=(30,))  # the narrow side finds no throw: the wide one is planned
+    side, _ = arm._throw_side(wide_first, (3.5, 0.0, 0.15), 0)
+    assert round(side.width_m * 1000) == 120 and arm.planned == [30, 120]
+    cub = ObjectParams("cuboid", 0.03, (0.05, 0.03, 0.1))  # 50 and 30 mm: both planned
+    both = throw_sides(holding_sides(params, cub), cub)
+    arm = _Sides()
+    side, _ = arm._throw_side(both, (1.4, 0.0, 0.15), 0)
+    assert sorted(arm.planned) == [30, 50] and round(side.width_m * 1000) == 30
+
+
+def test_a_light_box_with_a_narrow_side_is_thrown_into_its_bin(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """In the scene (the plant, not the planner's model): a 30 g box [0.03, 0.12, 0.1]
+    thrown to a bin 2.19 m out (tune layout 1's bin_4) came to rest outside it, 0.35 m
+    from its aim, gripped across 120 mm; across its 30 mm side it rests in the bin."""
+    job = tmp_path / "wide.yaml"
+    job.write_text(
+        "bins:\n  - {id: b, position_m: [1.692, -1.395], size_m: [0.379, 0.388], "
+        "rim_height_m: 0.278}\npolicy: throw\n"
+        "items:\n  - {shape: cuboid, mass_kg: 0.03, size_m: [0.03, 0.12, 0.1], bin: b}\n"
+    )
+    out = tmp_path / "out.json"
+    assert cell_exit(["run", str(job), "--no-log", "-q", "--json", str(out)]) == 0
+    (r,) = json.loads(out.read_text())["results"]
+    assert r["in_bin"] and r["bin_id"] == "b", r
+    assert r["landing_error_m"] < 0.05, r

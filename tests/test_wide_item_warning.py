@@ -40,12 +40,25 @@ def _wide(text: str) -> list[str]:
 
 def test_a_light_box_thrown_across_120_mm_is_warned_of_by_line() -> None:
     """robjob63's job: a 30 g box [0.03, 0.12, 0.1] thrown 1.4 m was gripped across its
-    120 mm side (the shorter cycle estimate) and missed by 0.50 m without a word."""
-    (w,) = _wide(JOB % "{shape: cuboid, mass_kg: 0.03, size_m: [0.03, 0.12, 0.1], bin: far}")
+    120 mm side (the shorter cycle estimate) and missed by 0.50 m without a word. Since
+    robjob66 the planner throws it across its 30 mm side, whose throw reaches the bin
+    (`GripSideChoice._throw_side`): no warning. A 60 g box [0.11, 0.035, 0.09] into a bin
+    3.5 m out, which no throw across its 35 mm side reaches (the pads hold it briskly
+    there only to a stroke of 0.065 m), is thrown across 110 mm: warned, saying why."""
+    box = "{shape: cuboid, mass_kg: 0.03, size_m: [0.03, 0.12, 0.1], bin: far}"
+    assert _wide(JOB % box) == []
+    far = JOB.replace("[1.4, 0.0]", "[3.5, 0.0]")
+    (w,) = _wide(far % "{shape: cuboid, mass_kg: 0.06, size_m: [0.11, 0.035, 0.09], bin: far}")
     assert w.startswith(
-        "j.yaml, line 5, size_m: 120 mm across the pads is wider than the widest grip the "
-        "throw model is calibrated on (90 mm): thrown to bin 'far' gripped across it (the "
-        "planner may take it though the 30 mm side holds"
+        "j.yaml, line 5, size_m: 110 mm across the pads is wider than the widest grip the "
+        "throw model is calibrated on (90 mm): thrown to bin 'far' gripped across it (its "
+        "35 mm side, which the planner takes where a throw across it is found, gives no "
+        "throw into the bin by the model)"
+    )
+    # 3.2 m out, a throw across the 35 mm side reaches: no warning
+    near = JOB.replace("[1.4, 0.0]", "[3.2, 0.0]")
+    assert (
+        _wide(near % "{shape: cuboid, mass_kg: 0.06, size_m: [0.11, 0.035, 0.09], bin: far}") == []
     )
     # a box held briskly across its wide side only: no narrower side to name
     (w,) = _wide(JOB % "{shape: cuboid, mass_kg: 0.09, size_m: [0.12, 0.03, 0.1], bin: far}")

@@ -132,24 +132,18 @@ def check_sortable(
     are thrown into under `auto` though near) is not checked here but by the job's load."""
     from cell.arm.grip_side import holding_sides, throw_sides
     from cell.jobbins import places
-    from cell.optimize.bounds import ThrowBounds
 
     if sides is None:
         sides = holding_sides(params, obj)
     if places(policy, place_reach_m, bin_spec, thrown_bins):
         return
     sides = throw_sides(sides, obj)
-    goal = (*bin_spec.position, bin_spec.rim_height)
     err: Exception | None = None
     for side in sides:
-        b = bounds or ThrowBounds()
-        try:
-            if b.stroke_max is None or side.stroke_max_m < b.stroke_max:
-                b = grip_bounds(b, params, side.stroke_max_m, obj.name or obj.shape)
-            plan_clean(params, side.obj, params.model_object(side.obj), goal, b)
+        e = side_throw_error(params, side, bin_spec, bounds, obj.name or obj.shape)
+        if e is None:
             return
-        except (CannotGrip, UnreachableTarget) as exc:
-            err = err or exc
+        err = err or e
     assert err is not None
     if bin_spec.id in thrown_bins:  # the reason it is thrown, not placed, said too
         raise type(err)(
@@ -157,3 +151,22 @@ def check_sortable(
             "cannot place into it either (its place pose is out of reach: the job's warning)"
         ) from None
     raise err
+
+
+def side_throw_error(
+    params: ModelParams, side: Any, bin_spec: Any, bounds: Any = None, name: str = ""
+) -> Exception | None:
+    """Why no throw gripped across `side` (a `cell.arm.grip_side.GripSide`) lands in
+    `bin_spec` by the planner's model within `bounds` (`ThrowBounds`, default: the
+    planner's) and the strokes the pads hold it at (None: a throw does)."""
+    from cell.optimize.bounds import ThrowBounds
+
+    goal = (*bin_spec.position, bin_spec.rim_height)
+    b = bounds or ThrowBounds()
+    try:
+        if b.stroke_max is None or side.stroke_max_m < b.stroke_max:
+            b = grip_bounds(b, params, side.stroke_max_m, name or side.obj.name or side.obj.shape)
+        plan_clean(params, side.obj, params.model_object(side.obj), goal, b)
+    except (CannotGrip, UnreachableTarget) as exc:
+        return exc
+    return None
