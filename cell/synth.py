@@ -314,7 +314,14 @@ def draw_campaign(world: World, campaign: Campaign | None = None, *, seed: int =
     cat = catalogue()
     unknown = [o for o in c.objects if o not in cat]
     if unknown:
-        raise InvalidInput(f"unknown object id(s) {unknown}; the catalogue has: {', '.join(cat)}")
+        from cell.yamltree import nearest
+
+        near = [(o, nearest(o, cat).removeprefix("; did you mean ")[:-1]) for o in unknown]
+        named = [f"{n} for {o!r}" for o, n in near if n]
+        hint = f"; did you mean {', '.join(named)}?" if named else ""
+        raise InvalidInput(
+            f"unknown object id(s) {unknown}{hint}; the catalogue has: {', '.join(cat)}"
+        )
     rng = np.random.default_rng(seed)
     k = len(c.objects)
     which = rng.permutation(np.arange(c.n) % k)

@@ -204,3 +204,26 @@ def test_a_light_box_with_a_narrow_side_is_thrown_into_its_bin(
     (r,) = json.loads(out.read_text())["results"]
     assert r["in_bin"] and r["bin_id"] == "b", r
     assert r["landing_error_m"] < 0.05, r
+
+
+def test_synth_objects_a_repeat_refused_and_a_misspelling_told_the_id(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell synth --objects cube50 cube50` drew a campaign of cube50 alone and said "of 2
+    objects" (a repeat takes a second equal share: `cube50 cube50 cyl50` throws cube50
+    twice as often, without a word); `--objects Cube50` listed the catalogue with no
+    nearest id, where a job's `object: Cube50` is told 'cube50'."""
+    out = tmp_path / "s.csv"
+    assert cell_exit(["synth", "-o", str(out), "--n", "6", "--objects", "cube50", "cube50"]) == 2
+    err = capsys.readouterr().err
+    assert "--objects lists 'cube50' more than once" in err and "Traceback" not in err, err
+    assert not out.exists()
+    argv = ["synth", "-o", str(out), "--n", "6", "--objects", "Cube50", "cyl-50", "zzz"]
+    assert cell_exit(argv) == 2
+    err = capsys.readouterr().err
+    assert "did you mean 'cube50' for 'Cube50', 'cyl50' for 'cyl-50'?" in err, err
+    argv = ["synth", "-o", str(out), "--n", "6", "--objects", "cube50", "cyl50"]
+    assert cell_exit(argv) == 0  # each once: an equal share, said as 2 objects
+    assert "drew 6 throws of 2 objects" in capsys.readouterr().out
+    rows = out.read_text().splitlines()[1:]
+    assert sorted(r.split(",")[1] for r in rows) == ["cube50"] * 3 + ["cyl50"] * 3

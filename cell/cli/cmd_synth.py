@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from cell.cli.common import plural
+    from cell.errors import InvalidInput
     from cell.log import ThrowStore, write_throws_csv
     from cell.params import load_params, save_params
     from cell.synth import Campaign, NoiseModel, default_world, draw_campaign, world_from_params
@@ -83,6 +84,12 @@ def run(args: argparse.Namespace) -> int:
     world = (
         world_from_params(load_params(args.world), noise) if args.world else default_world(noise)
     )
+    twice = sorted({o for o in args.objects or () if args.objects.count(o) > 1})
+    if twice:  # the campaign throws each listed id an equal share: a repeat doubles it
+        raise InvalidInput(
+            f"--objects lists {', '.join(map(repr, twice))} more than once; a campaign "
+            "throws each id listed an equal share of --n: give each id once"
+        )
     campaign = (
         Campaign(n=args.n) if not args.objects else Campaign(n=args.n, objects=tuple(args.objects))
     )
