@@ -227,3 +227,46 @@ def test_synth_objects_a_repeat_refused_and_a_misspelling_told_the_id(
     assert "drew 6 throws of 2 objects" in capsys.readouterr().out
     rows = out.read_text().splitlines()[1:]
     assert sorted(r.split(",")[1] for r in rows) == ["cube50"] * 3 + ["cyl50"] * 3
+
+
+def test_throw_and_plan_with_a_parameter_file_model_the_object_as_the_run_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell throw --params robots/cell_scene/ee_params.yaml --object cube50` predicted with
+    the catalogue's 60 g, where `cell run` plans with the file's identified η_o (39.5 g):
+    0.77 m out where the scene's throw lands 1.33 m; `cell plan` gave a stroke the cell
+    would not command. Against the plant (a bare scene's throw, no arm): the landing within
+    0.05 m, the stroke that lands there within 2 mm of the one thrown.
+    Without --params (the reference values, no objects, no mass rule) as before."""
+    from cell.endeffector.factory import make_end_effector
+    from cell.sim import CellScene
+    from cell.workflows.campaign import throw_once
+
+    scene_file = str(scene_params_path())
+    pose = ["--at", "0", "0", "0.7", "--elevation", "0.4363", "--land-z", "0.1"]
+    sc = CellScene(robot=None, bins=(), pick_station_xy=(-1.0, -1.0))
+    try:
+        ee = make_end_effector("pybullet", plant=sc)
+        for name, stroke in (("cube50", 0.07), ("cyl70", 0.08)):
+            rec = throw_once(
+                sc, ee, name, stroke=stroke, position=(0, 0, 0.7), elevation=0.4363, land_z=0.1
+            )
+            out = tmp_path / f"{name}.json"
+            argv = ["throw", "--params", scene_file, "--object", name, "--stroke", str(stroke)]
+            assert cell_exit([*argv, *pose, "--json", str(out)]) == 0
+            said = capsys.readouterr().out
+            assert "modelled as" in said and "identified η_o, as `cell run` plans it" in said
+            predicted = json.loads(out.read_text())["landed_x_m"]
+            assert abs(predicted - rec["landed_x_m"]) < 0.05, (name, predicted, rec)
+            # cell plan, held to that release and elevation: the stroke the scene threw
+            at = ["--current", "0", "0", "0.7", "--elevation-range", "0.4362", "0.4364"]
+            at += ["--box", "-0.001", "-0.001", "0.699", "0.001", "0.001", "0.701"]
+            target = ["--target", f"{rec['landed_x_m']:.4f}", "0", "0.1"]
+            argv = ["plan", "--params", scene_file, "--object", name, *target, *at]
+            assert cell_exit([*argv, "--json", "-"]) == 0
+            plan = json.loads(capsys.readouterr().out)
+            assert abs(plan["stroke_m"] - stroke) < 0.002, (name, plan["stroke_m"])
+    finally:
+        sc.close()
+    assert cell_exit(["throw", "--object", "cube50", *pose]) == 0  # the reference: unchanged
+    assert "modelled as" not in capsys.readouterr().out

@@ -8,7 +8,12 @@ from collections.abc import Iterator
 from typing import Any
 
 from cell.cli.common import add_json_arg, add_object_args, add_vector_arg, object_from_args, report
-from cell.cli.model_checks import refuse_under_floor, warn_if_light, warn_if_not_held
+from cell.cli.model_checks import (
+    modelled,
+    refuse_under_floor,
+    warn_if_light,
+    warn_if_not_held,
+)
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
 from cell.params import load_params
@@ -97,8 +102,9 @@ def run(args: argparse.Namespace) -> int:
     if args.base_velocity is not None and args.moving_base is not None:
         raise InvalidInput("give either --base-velocity or --moving-base, not both")
     try:
+        model, said = modelled(mp, obj)
         plan = plan_throw(
-            obj,
+            model,
             tuple(args.target),
             mp.ee,
             _bounds(args),
@@ -108,12 +114,14 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
-    return report(args, plan.as_dict(), _text(plan, obj))
+    return report(args, plan.as_dict(), _text(plan, obj, said))
 
 
-def _text(plan: Any, obj: ObjectParams) -> Iterator[str]:
+def _text(plan: Any, obj: ObjectParams, said: str = "") -> Iterator[str]:
     """The plan as a person reads it, line by line."""
     yield f"object        {plan.as_dict()['object_id']}  ({obj.mass:.3f} kg, {obj.shape})"
+    if said:
+        yield said
     yield (
         f"target        x = {plan.target_x_m:.4f} m, y = {plan.target_y_m:.4f} m "
         f"on z = {plan.land_z_m:.3f} m (world frame)"

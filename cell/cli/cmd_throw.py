@@ -17,7 +17,12 @@ from cell.cli.common import (
     object_from_args,
     report,
 )
-from cell.cli.model_checks import refuse_under_floor, warn_if_light, warn_if_not_held
+from cell.cli.model_checks import (
+    modelled,
+    refuse_under_floor,
+    warn_if_light,
+    warn_if_not_held,
+)
 from cell.model import ObjectParams, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
 
@@ -62,8 +67,9 @@ def run(args: argparse.Namespace) -> int:
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
     warn_if_light(obj)
+    model, said = modelled(mp, obj)
     batch = ThrowBatch.single(
-        obj,
+        model,
         stroke=args.stroke,
         position=tuple(args.at),
         elevation=args.elevation,
@@ -72,9 +78,10 @@ def run(args: argparse.Namespace) -> int:
         land_z=args.land_z,
     )
     land = predict_landing(batch, mp.ee)
-    band = band_state(args.stroke, obj.width, mp.ee)
+    band = band_state(args.stroke, model.width, mp.ee)
     out = {
         "object": obj.name or obj.shape,
+        "model_mass_kg": model.mass,
         "stroke_m": args.stroke,
         "landed_x_m": float(land.x[0]),
         "landed_y_m": float(land.y[0]),
@@ -86,12 +93,14 @@ def run(args: argparse.Namespace) -> int:
         "grip_force_n": float(band.grip),
         "stored_energy_j": float(band.energy),
     }
-    return report(args, out, _text(out, obj, args.land_z))
+    return report(args, out, _text(out, obj, args.land_z, said))
 
 
-def _text(out: dict[str, Any], obj: ObjectParams, land_z: float) -> Iterator[str]:
+def _text(out: dict[str, Any], obj: ObjectParams, land_z: float, said: str) -> Iterator[str]:
     """The prediction as a person reads it, line by line."""
     yield f"object        {out['object']}  ({obj.mass:.3f} kg, {obj.shape})"
+    if said:
+        yield said
     yield (
         f"lands at      x = {out['landed_x_m']:.4f} m, y = {out['landed_y_m']:.4f} m "
         f"on z = {land_z:.3f} m (world frame)"

@@ -61,3 +61,22 @@ def warn_if_light(obj: ObjectParams) -> None:
             "misses where it is aimed (25 mm cubes thrown 1.5 m missed by 0.24 m at 2 g)",
             file=sys.stderr,
         )
+
+
+def modelled(params: ModelParams, obj: ObjectParams) -> tuple[ObjectParams, str]:
+    """The object as the planner models it with `params` (`ModelParams.model_object`: the
+    file's identified η_o of a catalogue object, else the mass rule's effective mass), and
+    a line saying so where that differs from `obj` ("" where it does not). `cell throw`
+    and `cell plan --params` predicted with the catalogue's mass where `cell run` plans
+    with the file's: cube50 at a stroke of 0.07 m, 30° up from 0.6 m, with the scene's
+    calibrated file, 0.765 m out against the planner's 1.333 m."""
+    model = params.model_object(obj)
+    if model == obj:
+        return obj, ""
+    why = (
+        "the parameter file's identified η_o"
+        if obj.name and obj.name in params.objects
+        else "the parameter file's mass rule, an effective mass"
+    )
+    size = " x ".join(f"{s:.4f}" for s in model.size)
+    return model, f"modelled as   {model.mass:.4f} kg, {size} m ({why}, as `cell run` plans it)"
