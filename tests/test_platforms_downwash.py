@@ -170,3 +170,40 @@ def test_bad_inputs_raise():
         predict_drone_landing(_batch(2), DEFAULT_EE, 0.0, [[0, 0, 1]] * 3, LAW)
     with pytest.raises(NoLanding):
         predict_drone_landing(_batch(1, land_z=5.0), DEFAULT_EE, 0.0, ROTOR, LAW)
+
+
+def test_a_batch_lands_each_throw_where_it_lands_alone():
+    # throws of one batch under drones of their own: spun and not, gated and not, the
+    # third thrown up through its drone's rotor plane (air only below it) while the
+    # others fly below theirs, the last dropped down its drone's column from 8 m, the
+    # longest flight. They land one by one, so the rows integrated shrink, at the end to
+    # the last one alone, still in its column. Each lands where it lands flown alone: a
+    # row's air is its own drone's, at its own place, whatever else the batch holds
+    b = ThrowBatch.build(
+        stroke=[0.08, 0.06, 0.05, 0.09],
+        position=[(0.1, 0.0, 2.0), (0.0, 0.1, 1.2), (0.0, 0.0, 1.0), (0.0, 0.0, 8.0)],
+        elevation=np.array([0.2, -0.3, 0.9, -1.5]),
+        azimuth=np.array([0.5, -0.4, 0.0, 1.0]),
+        shape=CUBE.code,
+        mass=CUBE.mass,
+        size=CUBE.size,
+    )
+    rpm = np.array([0.0, 12000.0, 14860.0, 8900.0])
+    pose = np.array([[0.1, 0.0, 2.3], [0.05, 0.1, 1.5], [0.0, 0.0, 1.1], [0.0, 0.0, 8.3]])
+    exit_m = np.array([0.0, 0.05, 0.0, 0.0])
+    law = LAW.with_params(threshold_rpm=1000.0)
+    both = predict_drone_landing(b, DEFAULT_EE, rpm, pose, law, exit_distance_m=exit_m)
+    assert np.all(np.diff(both.t_flight[[1, 0, 2, 3]]) > 0.05)  # the rows leave one by one
+    for i in range(4):
+        one = predict_drone_landing(
+            b.take(np.array([i])), DEFAULT_EE, rpm[i], pose[i], law, exit_distance_m=exit_m[i]
+        )
+        got = (both.x[i], both.y[i], both.t_flight[i])
+        assert got == pytest.approx((one.x[0], one.y[0], one.t_flight[0]), abs=1e-12), i
+    # the third leaves below its rotor plane rising fast enough to pass it (its apex
+    # without drag 0.1 m or more above it; a cube's drag takes a few mm off it)
+    p1, v1 = launch_state(b.take(np.array([2])), DEFAULT_EE)
+    assert p1[0, 2] < 1.1 < p1[0, 2] + v1[0, 2] ** 2 / (2 * 9.81) - 0.1
+    # the last one's downwash pushes it down sooner than still air would
+    still = predict_drone_landing(b.take(np.array([3])), DEFAULT_EE, 0.0, pose[3], law)
+    assert both.t_flight[3] < still.t_flight[0] - 0.05

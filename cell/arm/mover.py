@@ -165,7 +165,7 @@ class Mover(ArmBase):
         sc.set_timestep(sc.dt_s)
         ts = np.arange(sc.dt_s, traj.duration + sc.dt_s, sc.dt_s)
         qs, _, _ = traj.sample_many(ts)
-        for q in qs:
+        for q in qs.tolist():  # each row as Python floats, the values `set_arm` sends
             sc.set_arm(q)
             sc.step()
         if settle_s > 0:

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cell.errors import InvalidParameter
-from cell.model.flight3d import column_fraction, fly
+from cell.model.flight3d import Rows, column_fraction, fly
 from cell.model.params import RHO_AIR, EndEffectorParams
 from cell.model.throw import (
     Landing,
@@ -145,19 +145,32 @@ def air_velocity(
     p = np.asarray(points, float).reshape(-1, 3)
     c = np.broadcast_to(np.asarray(rotor_centre, float), p.shape)
     v_i = np.broadcast_to(law.induced_speed(rotor_rpm), (p.shape[0],))
+    return _column_air(p, (c[:, 0], c[:, 1], c[:, 2]), v_i, law)
+
+
+def _column_air(
+    p: np.ndarray, centre: tuple[np.ndarray, ...], v_i: np.ndarray, law: DownwashLaw
+) -> np.ndarray:
+    """`air_velocity` at points p (n, 3) [m, W] below rotor-plane centres given as their
+    columns (x, y, z) [m, W], each shape (n,), with induced speeds v_i (n,) [m/s]: the same
+    operations element by element. Where every point is below its disc and spun, the
+    masks' `np.where` would hand back its own operand: it is left out (the same bits)."""
     out = np.zeros_like(p)
-    s = c[:, 2] - p[:, 2]  # depth below the disc [m]
+    s = centre[2] - p[:, 2]  # depth below the disc [m]
     below = (s > 0) & (v_i > 0)
-    if not below.any():
-        return out
-    s = np.where(below, s, 0.0)
+    every = bool(below.all())
+    if not every:
+        if not below.any():
+            return out
+        s = np.where(below, s, 0.0)
     r0 = law.wake_radius_m
     accel = 1.0 + s / np.sqrt(s * s + r0 * r0)  # w_ideal / v_i, 1 → 2
     f = 1.0 / (1.0 + s / law.decay_m)
     radius = r0 / np.sqrt(accel) / f
-    rho = np.hypot(p[:, 0] - c[:, 0], p[:, 1] - c[:, 1])
+    rho = np.hypot(p[:, 0] - centre[0], p[:, 1] - centre[1])
     inside = column_fraction(rho, radius, law.edge_m)
-    out[:, 2] = -np.where(below, v_i * accel * f * inside, 0.0)
+    w = v_i * accel * f * inside
+    out[:, 2] = -(w if every else np.where(below, w, 0.0))
     return out
 
 
@@ -237,11 +250,23 @@ def predict_drone_landing(
     p0 = batch.position
     u = throw_axis(batch.elevation, batch.azimuth)
     gated = exit_m > 0
+    any_gated = bool(gated.any())
+    # the rotor planes' centres and the induced speeds at the rows being integrated, taken
+    # once per set of rows (`Rows`); v_i elementwise, so its rows are induced_speed(rpm[idx])
+    rows = Rows(
+        {
+            "cx": centre[:, 0],
+            "cy": centre[:, 1],
+            "cz": centre[:, 2],
+            "v_i": params.induced_speed(rpm),
+        }
+    )
 
     def accel(p: np.ndarray, v: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, None]:
         del v
-        w = air_velocity(p, centre[idx], rpm[idx], params)
-        if gated.any():
+        r = rows(idx)
+        w = _column_air(p, (r["cx"], r["cy"], r["cz"]), r["v_i"], params)
+        if any_gated:
             along = np.einsum("ij,ij->i", p - p0[idx], u[idx])
             out = 0.5 * (1.0 + np.tanh((along - exit_m[idx]) / _EXIT_EDGE_M))
             w *= np.where(gated[idx], out, 1.0)[:, None]

@@ -127,7 +127,7 @@ class CellScene:
         self.ee_body, self.geometry = load_end_effector(cl)
         self.band = BandDrive(cl, self.ee_body, band, self.geometry)
         self._mount = mount_constraint(cl, self.ee_body)
-        self._mount_pose: tuple[list[float], list[float]] = ([0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0])
+        self._mount_pose: tuple[Sequence[float], ...] = ((0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 1.0))
         self._arm_motion: Callable[[float], Sequence[float]] | None = None
         self.items: list[Item] = []
         self._trackers: dict[int, Tracker] = {}
@@ -169,7 +169,10 @@ class CellScene:
         self._stepping += 1
         try:
             pos, orn = scene_arm.pose_arm(self.client, self.arm, self.arm_joints, self._flange, q)
-            self.hold_ee(pos, orn, teleport=teleport)
+            if teleport:
+                self.hold_ee(pos, orn, teleport=True)
+            else:  # PyBullet's tuples of floats: `hold_ee`'s own, without its copies
+                self._hold(pos, orn)
         finally:
             self._count_wall(t0)
 
@@ -206,13 +209,17 @@ class CellScene:
         With teleport, E and the item it holds jump there (the item keeps its
         pose relative to E); otherwise the mount constraint pulls E over.
         """
-        cl = self.client
         pos, orn = [float(v) for v in position], [float(v) for v in orientation]
         if teleport:
             scene_arm.teleport_ee(self, pos, orn)
+        self._hold(pos, orn)
+
+    def _hold(self, pos: Sequence[float], orn: Sequence[float]) -> None:
+        """`hold_ee` without a teleport, for a position [m, W] and quaternion (x, y, z, w)
+        already of floats: the mount's target set there."""
         self._mount_pose = (pos, orn)
-        cl.changeConstraint(self._mount, jointChildPivot=pos, jointChildFrameOrientation=orn,
-                            maxForce=MOUNT_FORCE_N)  # fmt: skip
+        self.client.changeConstraint(self._mount, jointChildPivot=pos,
+                                     jointChildFrameOrientation=orn, maxForce=MOUNT_FORCE_N)  # fmt: skip
 
     def ee_collides_with_station(self, collide: bool) -> None:
         """Let the end-effector collide with the pick station (the physical pick), or not
@@ -377,13 +384,15 @@ class CellScene:
         t0 = time.perf_counter()
         self._stepping += 1
         try:
+            apply_band, step_physics = self.band.apply, cl.stepSimulation
             for _ in range(n):
                 if self._arm_motion is not None:
                     self.set_arm(self._arm_motion(self.t))
-                self.band.apply(self._dt_now)
+                dt = self._dt_now
+                apply_band(dt)
                 self._item_forces()
-                cl.stepSimulation()
-                self.t += self._dt_now
+                step_physics()
+                self.t += dt
                 if self._trackers:  # none while nothing is tracked
                     watch.sample_trackers(self)
         finally:

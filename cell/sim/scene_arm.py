@@ -52,11 +52,16 @@ def pose_arm(
     """Set the kinematic arm's joint positions q [rad] and return where its mount holds the
     end-effector frame E: position [m, W] and quaternion (x, y, z, w). E, the base plate's
     face, lies FLANGE_TO_EE_M along the `ee_base` link's z."""
-    for j, v in zip(joints, q, strict=True):
+    # a row of an array as Python floats at once (the same values `float` gives each)
+    for j, v in zip(joints, q.tolist() if isinstance(q, np.ndarray) else q, strict=True):
         cl.resetJointState(arm, j, float(v))
     st = cl.getLinkState(arm, flange, computeForwardKinematics=True)
-    pos, orn = cl.multiplyTransforms(st[4], st[5], [0, 0, FLANGE_TO_EE_M], [0, 0, 0, 1])
-    return pos, orn
+    return cl.multiplyTransforms(st[4], st[5], _EE_OFFSET, _NO_TURN)  # type: ignore[no-any-return]
+
+
+# E from the `ee_base` link's frame: FLANGE_TO_EE_M along its z, unturned
+_EE_OFFSET = (0.0, 0.0, FLANGE_TO_EE_M)
+_NO_TURN = (0.0, 0.0, 0.0, 1.0)
 
 
 def teleport_ee(scene: CellScene, pos: list[float], orn: list[float]) -> None:
