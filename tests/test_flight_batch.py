@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from cell.model import flight3d
+from cell.model import flight3d, flight_batch, planar
 from cell.model.effects import (
     Downwash,
     DownwashDecay,
@@ -26,7 +26,7 @@ from cell.model.effects_air import stack_accels
 from cell.model.effects_apply import flight_accel, predict_with_effects
 from cell.model.flight_batch import together
 from cell.model.params import EndEffectorParams
-from cell.model.throw import ThrowBatch, drag_constant, launch_state
+from cell.model.throw import ThrowBatch, drag_constant, launch_state, predict_landing
 
 EE = EndEffectorParams()
 
@@ -193,3 +193,62 @@ def test_the_thunks_keep_the_callers_numpy_error_state() -> None:
     with np.errstate(all="ignore"):
         got = together([np.geterr, np.geterr])
     assert got == [np.geterr() | {k: "ignore" for k in np.geterr()}] * 2
+
+
+def _planar(seed: int, n: int, light: bool = False) -> Callable[[], Any]:
+    """The fast path's landings (no effect: the planar flight); `light`: 2.7 g spheres of
+    40 mm (a ping-pong ball), whose fast drag shortens the planar steps."""
+    b = _batch(seed, n)
+    if light:
+        b = ThrowBatch.build(
+            stroke=b.stroke, position=b.position, elevation=b.elevation, azimuth=b.azimuth,
+            shape=np.full(n, 3), mass=np.full(n, 0.0027), size=np.full((n, 3), 0.04),
+            base_velocity=b.base_velocity, land_z=b.land_z, roll=0.0,
+        )  # fmt: skip
+    return lambda: predict_landing(b, EE, strict=False, check_stroke=False)
+
+
+def _planar_calls(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, bool]]:
+    """The planar integrations made (rows, all steps full), counted where the batch calls
+    them."""
+    calls: list[tuple[int, bool]] = []
+    inner = planar.planar_full_steps
+
+    def counted(*a: Any, **kw: Any) -> Any:
+        res, full = inner(*a, **kw)
+        calls.append((a[0].shape[0], full))
+        return res, full
+
+    monkeypatch.setattr(flight_batch, "planar_full_steps", counted)
+    return calls
+
+
+def test_planar_flights_of_the_batch_are_each_their_own_call(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Five sets of throws on the fast path (no effect), together: each gets its own call's
+    landings bit for bit, from one planar integration with every step full."""
+    sets = [(31, 23), (32, 40), (33, 17), (34, 2), (35, 29)]
+    ref = [_planar(*s)() for s in sets]
+    calls = _planar_calls(monkeypatch)
+    got = together([_planar(*s) for s in sets])
+    assert calls == [(sum(n for _, n in sets), True)]
+    for a, b in zip(ref, got, strict=True):
+        for u, w in zip(_fields(a), _fields(b), strict=True):
+            assert np.array_equal(u, w, equal_nan=True)
+    assert all(np.all(r.landed) for r in ref)
+
+
+def test_a_shortened_planar_step_flies_each_request_on_its_own(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Ping-pong balls shorten the batch's planar steps: the batch is flown again request by
+    request, so the other throws keep the full steps of their own call, bit for bit."""
+    thunks = [_planar(41, 20), _planar(42, 12, light=True), _planar(43, 25)]
+    ref = [t() for t in thunks]
+    calls = _planar_calls(monkeypatch)
+    got = together(thunks)
+    assert calls == [(57, False), (20, True), (12, False), (25, True)]
+    for a, b in zip(ref, got, strict=True):
+        for u, w in zip(_fields(a), _fields(b), strict=True):
+            assert np.array_equal(u, w, equal_nan=True)

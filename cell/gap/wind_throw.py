@@ -169,11 +169,25 @@ def _nll_grid_one(y: np.ndarray, jac: np.ndarray, s: np.ndarray, sig: np.ndarray
     return 0.5 * np.sum(quad + np.log(a * den) + 2 * _LN2PI, axis=1), mu
 
 
+# `_nll_grid_one` takes a large grid this many (grid point, throw) pairs at a time: each
+# grid point's arithmetic is its own (elementwise, and its sums over the throws), so the
+# blocks give the same numbers as the whole grid, without temporaries of tens of MB (the
+# profile interval's 9,211 points × 1,000 throws: 2.9 → 0.5 s)
+_GRID_BLOCK = 1 << 15
+
+
 def _nll(y: np.ndarray, jac: np.ndarray, s: np.ndarray, sig: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """(nll (g,), μ (g, K)) for J (n, 2, K): the wind's two level components or one
     parameter of another effect."""
-    return (_nll_grid_one if jac.shape[2] == 1 else _nll_grid)(y, jac, s, sig)
+    if jac.shape[2] != 1:  # its sums over the throws are BLAS products: kept whole
+        return _nll_grid(y, jac, s, sig)
+    rows = max(1, _GRID_BLOCK // max(y.shape[0], 1))
+    if s.size <= rows:
+        return _nll_grid_one(y, jac, s, sig)
+    parts = [_nll_grid_one(y, jac, s[i : i + rows], sig[i : i + rows])
+             for i in range(0, s.size, rows)]  # fmt: skip
+    return np.concatenate([v for v, _ in parts]), np.concatenate([m for _, m in parts])
 
 
 def _grid(sig0: float, steady: bool, unit: float = 1.0) -> tuple[np.ndarray, np.ndarray]:

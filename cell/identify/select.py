@@ -20,12 +20,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from cell.errors import plural
 from cell.identify.problem import ThrowData
+from cell.model.flight_batch import together
 from cell.model.params import EndEffectorParams
 
 __all__ = ["ObjectChoice", "choose_object_priors", "column_priors"]
@@ -125,16 +127,19 @@ def choose_object_priors(
     counts = np.bincount(data.obj, minlength=n_obj)
     widths = sorted(set(grid) | {0.0})
     per = np.zeros((len(widths), len(data)))  # each throw's held-out score per width
-    for w_i, p in enumerate(widths):
-        for f in range(folds):
-            test = fold == f
-            if p == 0:
-                x = np.ones(k)
-            else:
-                x = solve(data.take(np.flatnonzero(~test)), np.full(k, p))
-            part = data.take(np.flatnonzero(test))
-            res = part.wres(part.batch_with(part.objects_from_factors(x)), ee)
-            per[w_i, test] = np.sum(res**2, axis=1)
+
+    def heldout(p: float, f: int) -> np.ndarray:
+        """The held-out residuals of fold f under prior width p."""
+        test = fold == f
+        x = np.ones(k) if p == 0 else solve(data.take(np.flatnonzero(~test)), np.full(k, p))
+        part = data.take(np.flatnonzero(test))
+        return part.wres(part.batch_with(part.objects_from_factors(x)), ee)
+
+    # every (width, fold) fit side by side, their flights integrated as one batch
+    cells = [(w_i, p, f) for w_i, p in enumerate(widths) for f in range(folds)]
+    got = together([partial(heldout, p, f) for _, p, f in cells])
+    for (w_i, _, f), res in zip(cells, got, strict=True):
+        per[w_i, fold == f] = np.sum(res**2, axis=1)
     out = []
     for j, oid in enumerate(data.object_ids):
         if counts[j] < 4:

@@ -9,6 +9,7 @@ Jacobian of both blocks is what the degenerate-direction analysis reads.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ from cell.identify.problem import (
     push_jacobian,
 )
 from cell.model.band import push_force
+from cell.model.flight_batch import together
 from cell.model.params import EndEffectorParams
 from cell.model.throw import ThrowBatch
 
@@ -55,11 +57,18 @@ def stage1_problem(
         f_o: np.ndarray = cache["f_o"]
         res: np.ndarray = cache["res"]
         h_f = 1e-4 * np.maximum(np.abs(f_o), 1.0)  # [N]
-        d_push = (data.wres(batch, e, push=f_o + h_f) - res) / h_f[:, None]
-        j = d_push[:, :, None] * push_jacobian(batch, e)[:, None, :]
         h_dt = 1e-4 * z[7]
         e_dt = ee_from_vector(z + np.eye(8)[7] * h_dt, ee)
-        j[:, :, 7] = (data.wres(batch, e_dt, push=f_o) - res) / h_dt
+        # the two perturbed predictions side by side (their flights as one batch)
+        r_push, r_dt = together(
+            [
+                partial(data.wres, batch, e, push=f_o + h_f),
+                partial(data.wres, batch, e_dt, push=f_o),
+            ]
+        )
+        d_push = (r_push - res) / h_f[:, None]
+        j = d_push[:, :, None] * push_jacobian(batch, e)[:, None, :]
+        j[:, :, 7] = (r_dt - res) / h_dt
         return np.vstack([j.reshape(2 * n, 8), w * np.eye(8)])
 
     return fun, jac
@@ -93,6 +102,7 @@ def stage2_problem(
         j = np.zeros((n, 2, k))
         h = 1e-5
         rows = np.arange(n)
+        steps = []
         for s in range(nslot):
             cols = col[:, s]
             has = cols >= 0
@@ -100,7 +110,13 @@ def stage2_problem(
             # step backwards where a factor sits at its upper bound
             sign = np.where(x[cols[has]] + h > upper, -1.0, 1.0)
             step[cols[has]] = h * sign
-            r2 = data.wres(data.batch_with(data.objects_from_factors(x + step)), ee)
+            steps.append(step)
+        # the slots' perturbed predictions side by side (their flights as one batch)
+        got = together(
+            [partial(_wres_at, data, ee, x + step) for step in steps]  # fmt: skip
+        )
+        for s, (step, r2) in enumerate(zip(steps, got, strict=True)):
+            cols = col[:, s]
             c_row = cols[data.obj]
             ok = c_row >= 0
             d = (r2 - res) / np.where(ok, step[np.maximum(c_row, 0)], 1.0)[:, None]
@@ -108,6 +124,11 @@ def stage2_problem(
         return np.vstack([j.reshape(2 * n, k), np.diag(np.broadcast_to(w, (k,)).astype(float))])
 
     return fun, jac
+
+
+def _wres_at(data: ThrowData, ee: EndEffectorParams, factors: np.ndarray) -> np.ndarray:
+    """The whitened residuals (n, 2) with the objects' factors `factors`."""
+    return data.wres(data.batch_with(data.objects_from_factors(factors)), ee)
 
 
 def joint_jacobian(data: ThrowData, ee: EndEffectorParams, factors: np.ndarray) -> np.ndarray:

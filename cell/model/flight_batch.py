@@ -1,4 +1,4 @@
-"""Independent computations run side by side, their 3-D flights integrated as one batch.
+"""Independent computations run side by side, their flights integrated as one batch.
 
 A diagnosis fits many effect sets that do not depend on one another (every member of
 every family alone, every partner of the chosen effects, every law of an effect). Each
@@ -20,6 +20,12 @@ request's crossings are those of its own call, bit for bit, whatever else shares
 batch (tests/test_flight_batch.py). Where one request has an air velocity or an extra
 acceleration and another none, the other's rows get zeros: v − 0 is v to the bit, and
 a + 0 is a but for the sign of a zero.
+
+The planar flights of the fast path (`cell.model.planar.flight_planar`, the flight of
+every fit without a flight effect) are batched alike, but their steps are the batch's: a
+step is shortened where the batch's largest k|v| asks for it. A batch none of whose steps
+was shortened gives every request its own call's numbers (each request's steps would have
+been full too); one that shortened a step is integrated again request by request.
 """
 
 from __future__ import annotations
@@ -35,8 +41,9 @@ import numpy as np
 from cell.model import flight3d
 from cell.model.effects_air import stack_accels
 from cell.model.flight3d import Accel, FlightResult
+from cell.model.planar import planar_full_steps
 
-__all__ = ["FlightRequest", "fly_merged", "together"]
+__all__ = ["FlightRequest", "PlanarRequest", "fly_merged", "planar_merged", "together"]
 
 T = TypeVar("T")
 
@@ -53,6 +60,57 @@ class FlightRequest:
     t0: np.ndarray
     step: float
     t_max: float
+
+
+@dataclass(frozen=True)
+class PlanarRequest:
+    """The arguments of one `cell.model.planar.flight_planar` call (arrays of shape (n,))."""
+
+    z: np.ndarray
+    vh: np.ndarray
+    vz: np.ndarray
+    k: np.ndarray
+    land_z: np.ndarray
+    max_step: float
+    t_max: float
+
+
+def planar_merged(requests: Sequence[PlanarRequest]) -> list[tuple[np.ndarray, ...]]:
+    """Each request's `flight_planar` result: the requests of one largest step and time
+    limit integrated as one batch; where the batch shortened a step (its largest k|v|),
+    each of its requests again on its own (`planar.planar_full_steps`: only full steps
+    give every row its own call's numbers)."""
+    out: list[tuple[np.ndarray, ...] | None] = [None] * len(requests)
+    groups: dict[tuple[float, float], list[int]] = {}
+    for i, r in enumerate(requests):
+        groups.setdefault((r.max_step, r.t_max), []).append(i)
+    for (max_step, t_max), members in groups.items():
+        reqs = [requests[i] for i in members]
+        z, vh, vz, k, lz = (np.concatenate([getattr(r, f) for r in reqs]) for f in _PLANAR)
+        res, full = planar_full_steps(z, vh, vz, k, lz, max_step, t_max)
+        if not full and len(reqs) > 1:
+            for i, r in zip(members, reqs, strict=True):
+                out[i] = planar_full_steps(r.z, r.vh, r.vz, r.k, r.land_z, max_step, t_max)[0]
+            continue
+        cuts = np.cumsum([r.z.shape[0] for r in reqs])[:-1]
+        for i, *parts in zip(members, *(np.split(a, cuts) for a in res), strict=True):
+            out[i] = tuple(parts)
+    return [r for r in out if r is not None]
+
+
+_PLANAR = ("z", "vh", "vz", "k", "land_z")
+
+
+def _merged(requests: Sequence[Any]) -> list[Any]:
+    """Each request's result: the 3-D flights (`fly_merged`) and the planar ones
+    (`planar_merged`) each as their batches."""
+    out: list[Any] = [None] * len(requests)
+    for kind, run in ((FlightRequest, fly_merged), (PlanarRequest, planar_merged)):
+        idx = [i for i, r in enumerate(requests) if isinstance(r, kind)]
+        if idx:
+            for i, res in zip(idx, run([requests[i] for i in idx]), strict=True):
+                out[i] = res
+    return out
 
 
 class _Composite:
@@ -156,9 +214,9 @@ class _Gather:
     def __init__(self, live: int) -> None:
         self.cond = threading.Condition()
         self.live = live
-        self.pending: list[tuple[FlightRequest, dict[str, Any]]] = []
+        self.pending: list[tuple[FlightRequest | PlanarRequest, dict[str, Any]]] = []
 
-    def submit(self, req: FlightRequest) -> FlightResult:
+    def submit(self, req: FlightRequest | PlanarRequest) -> Any:
         """In a thunk's thread: wait for the batch that holds this flight."""
         slot: dict[str, Any] = {}
         with self.cond:
@@ -168,7 +226,7 @@ class _Gather:
                 self.cond.wait()
         if "error" in slot:
             raise slot["error"]
-        return slot["result"]  # type: ignore[no-any-return]
+        return slot["result"]
 
     def leave(self) -> None:
         """In a thunk's thread: it has finished."""
@@ -187,7 +245,7 @@ class _Gather:
                     return
                 batch, self.pending = self.pending, []
                 try:
-                    got = fly_merged([r for r, _ in batch])
+                    got = _merged([r for r, _ in batch])
                     for (_, slot), res in zip(batch, got, strict=True):
                         slot["result"] = res
                 except Exception as exc:  # handed to every thunk that waited on it

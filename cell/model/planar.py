@@ -14,10 +14,18 @@ from typing import Any
 
 import numpy as np
 
+from cell.model.flight3d import current_gather
 from cell.model.integrate import hermite, hermite_root
 from cell.model.params import G
 
-__all__ = ["flight_planar", "flight_planar_one", "hermite", "hermite_root", "rk4_planar"]
+__all__ = [
+    "flight_planar",
+    "flight_planar_one",
+    "hermite",
+    "hermite_root",
+    "planar_full_steps",
+    "rk4_planar",
+]
 
 # step ≤ this / (k |v|): keeps the drag change per step small. At 0.5 a ping-pong ball
 # (2.7 g, 40 mm, launched by the band at 40-93 m/s, k|v| up to 12/s) landed up to 25 mm
@@ -139,8 +147,38 @@ def flight_planar(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Planar flight under gravity and drag from horizontal distance 0.
 
+    In a thread of `cell.model.flight_batch.together` the flights are integrated in one
+    batch with the other threads' where that gives each the same numbers, bit for bit
+    (`planar_full_steps`).
+
     Returns (distance, time, landed, vh_at_impact, vz_at_impact), each shape (n,).
     """
+    gather = current_gather()
+    if gather is not None:
+        from cell.model.flight_batch import PlanarRequest
+
+        return gather.submit(  # type: ignore[no-any-return]
+            PlanarRequest(z, vh, vz, k, land_z, max_step, t_max)
+        )
+    return planar_full_steps(z, vh, vz, k, land_z, max_step, t_max)[0]
+
+
+def planar_full_steps(
+    z: np.ndarray,
+    vh: np.ndarray,
+    vz: np.ndarray,
+    k: np.ndarray,
+    land_z: np.ndarray,
+    max_step: float,
+    t_max: float = 30.0,
+) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray], bool]:
+    """`flight_planar` integrated here and now, and whether every step was `max_step`.
+
+    A step is shortened where the drag is fast (the batch's largest k|v|), so the rows of
+    one batch share their steps. Where no step was shortened, each row's numbers are those
+    of its own batch: its steps would have been `max_step` too (its k|v| are among the
+    batch's), and a row's arithmetic reads only its own row. So flights of several callers
+    integrated as one batch are each the caller's own call's where this is True."""
     n = z.shape[0]
     idx = np.arange(n)
     h_pos = np.zeros(n)
@@ -152,9 +190,12 @@ def flight_planar(
     lz = land_z.copy()
     neg_k = -k
     crossed: list[tuple[np.ndarray, ...]] = []  # the crossing steps, located at the end
+    full = True
     while idx.size and t < t_max:
         speed = np.sqrt(vh * vh + vz * vz)
-        step = min(max_step, float(_DRAG_STEP_SCALE / max((k * speed).max(), 1e-9)))
+        drag_step = float(_DRAG_STEP_SCALE / max((k * speed).max(), 1e-9))
+        step = min(max_step, drag_step)
+        full = full and drag_step >= max_step  # False for NaN too
         h1, z1, vh1, vz1 = _rk4_arrays(h_pos, z, vh, vz, neg_k, step, speed)
         below = z1 <= lz
         cross = (z > lz) & below
@@ -172,7 +213,7 @@ def flight_planar(
             h_pos, z, vh, vz = h1, z1, vh1, vz1
     out_h, out_t, out_vh, out_vz = _crossings(n, crossed)
     landed = np.isfinite(out_t)
-    return out_h, out_t, landed, out_vh, out_vz
+    return (out_h, out_t, landed, out_vh, out_vz), full
 
 
 def _crossings(
