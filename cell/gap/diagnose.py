@@ -270,6 +270,7 @@ def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
         "model_m": nf.model_m,
         "validated_m": nf.validated_m,
         "validated_share": nf.validated_share,
+        **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {}),
     }
 
 
