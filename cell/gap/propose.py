@@ -19,6 +19,7 @@ landing is linear in its coefficient θ near θ = 0:
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
 | measurement | shift ∝ v with k < 0 (its interval below 0) | the landing logged −k s before the touchdown: no slide ends behind it, a tracker lagging does |
 | landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
+| landing | plane height × [x > x_b] | a step in the surface landed on beyond x_b, fitted (`cell.gap.plane_step`) |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
 | launch, flight, landing | speed error, lift coefficient, shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`) |
 
@@ -55,6 +56,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.gap.plane_step import step_term
 from cell.gap.problem import GapProblem
 from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
 from cell.gap.propose_radial import radial_term
@@ -260,24 +262,27 @@ def propose(
     keep: np.ndarray | None = None,
     phases: set[str] | None = None,
     extended: bool = True,
+    step: bool = False,
 ) -> tuple[dict[str, Any], np.ndarray]:
     """The law proposed for what the effects leave (see the module docstring), fitted and
     scored on the throws in `keep` (all when None: outliers left out), from the terms of
     `phases` only (all when None: `cell.gap.propose_terms.allowed_phases`), then with the
     terms of one object and another added where they earn their place
     (`cell.gap.propose_terms`). `extended` False: the library without the lift across v
-    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`).
+    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`). `step`:
+    with a step in the landing plane (`cell.gap.plane_step`, where its rule made the
+    verdict `unknown`).
 
     Returns:
         (the proposal, every throw's miss with the proposed law added (n, 2) [m]).
     """
     with one_blas_thread():  # small least squares: a second BLAS thread only spins
-        return _propose(prob, effects, floor_m, keep, phases, extended)
+        return _propose(prob, effects, floor_m, keep, phases, extended, step)
 
 
 def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
-             keep: np.ndarray | None, phases: set[str] | None, extended: bool
-             ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+             keep: np.ndarray | None, phases: set[str] | None, extended: bool,
+             step: bool = False) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
     idx = np.arange(len(prob))
     n = len(prob)
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
@@ -287,6 +292,9 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
     if extended:  # a camera's radial distortion (`cell.gap.propose_radial`)
         rad, col, ctx["cov"]["r² d"] = radial_term(ctx["xy"], prob.table.landed, r, keep)
         terms, a_all = [*terms, rad], np.c_[a_all, col]
+    if extended and step:  # a step in the floor (`cell.gap.plane_step`)
+        st, col = step_term(prob, r, keep)
+        terms, a_all = [*terms, st], np.c_[a_all, col]
     if phases is not None:  # the phases the tracks allow
         on = [t["phase"] in phases for t in terms]
         terms, a_all = [t for t, o in zip(terms, on, strict=True) if o], a_all[:, on]
