@@ -137,7 +137,7 @@ def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
     rep = d.report
     where: dict[str, Any] = {}
     if tp is not None:
-        rep["tracks"] = tp
+        rep["tracks"] = {k: v for k, v in tp.items() if not k.startswith("_")}
         if tp.get("phase"):
             where = _where_from_tracks(d, tp)
     if rep["verdict"]["effects"] == ["none"]:
