@@ -29,6 +29,7 @@ from cell.gap.noise import noise_floor
 from cell.gap.problem import build_problem
 from cell.gap.run import diagnose_log
 from cell.log import read_throws_csv
+from cell.log.csvio import read_tracks_csv
 from cell.model.params import DEFAULT_EE
 
 G, RHO, H, PUSH_S, NOISE = 9.81, 1.225, 5e-4, 0.012, 0.010
@@ -42,6 +43,7 @@ OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("cubeD", "cube", 0.030, (0.040, 0.040, 0.040)),
 ]
 STEP_M = 0.05  # E4's step
+TRACK_HZ = 100.0  # E4's tracks: 1 mm of scatter per axis
 PITCH_PER_MPS = 0.008  # E3's elevation error per m/s of launch speed
 WINDS = ((0.0, 0.8), (0.8, -0.8))  # E5's morning and afternoon
 
@@ -74,8 +76,10 @@ def _throws(rng: np.random.Generator) -> list[dict]:
     return [dict(rows[i]) for i in rng.permutation(len(rows))]
 
 
-def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float) -> np.ndarray:
-    """Every throw's landing xy [m] in the lab's world."""
+def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float,
+         tracks: list[list[tuple[float, ...]]] | None = None) -> np.ndarray:  # fmt: skip
+    """Every throw's landing xy [m] in the lab's world; with `tracks`, each flight's
+    positions at TRACK_HZ from the push's end appended to it as (t [s], x, y, z)."""
     n = len(throws)
     m = np.array([t["obj"][2] for t in throws])
     kd = np.array([0.5 * RHO * CD[t["obj"][1]] * _area(t["obj"][1], t["obj"][3])
@@ -111,7 +115,14 @@ def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float) -
         v = sp[:, None] * np.c_[np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)]
     land = np.full((n, 2), np.nan)
     live = np.ones(n, bool)
-    while live.any():
+    t, every = PUSH_S, round(1 / (TRACK_HZ * H))
+    for k in range(10**6):
+        if not live.any():
+            break
+        if tracks is not None and k % every == 0:
+            for i in np.flatnonzero(live):
+                tracks[i].append((t, *p[i]))
+        t += H
         p1, v1 = rk4(p, v, False)
         floor = np.where(p1[:, 0] > step_x, STEP_M, 0.0) if world == "E4" else np.zeros(n)
         hit = live & (p1[:, 2] <= floor) & (v1[:, 2] < 0)
@@ -152,6 +163,22 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     out = {w: _write(d / f"{w}.csv", throws, _fly(throws, w, times > 12 * 3600, step_x) + noise,
                      times) for w in ("E0", "E3", "E4", "E5")}  # fmt: skip
     out["one"] = _write(d / "one.csv", throws, plain + noise, 9 * 3600 + 30.0 * np.arange(n))
+    samples: list[list[tuple[float, ...]]] = [[] for _ in throws]
+    _fly(throws, "E4", times > 12 * 3600, step_x, samples)
+    with (d / "E4_tracks.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["throw_id", "t_s", "x_m", "y_m", "z_m"])
+        for i, track in enumerate(samples):
+            for t, *xyz in track:
+                e = rng.normal(0.0, 0.001, 3)
+                w.writerow(
+                    [
+                        f"L{i:03d}",
+                        f"{t:.4f}",
+                        *(f"{a + b:.5f}" for a, b in zip(xyz, e, strict=True)),
+                    ]
+                )
+    out["E4_tracks"] = d / "E4_tracks.csv"
     out["step_x"] = step_x  # type: ignore[assignment]
     return out
 
@@ -233,6 +260,22 @@ def test_a_step_in_the_floor_is_no_effect_of_the_vocabulary(lab: dict[str, Path]
     steps = [t for t in rep["proposal"]["terms"] if "[x_m >" in t["term"]]
     assert steps and steps[0]["k"] == pytest.approx(STEP_M, rel=0.25)
     assert rep["where"]["phase"] == "landing"
+
+
+def test_tracks_that_do_not_bend_refute_a_flight_effect(lab: dict[str, Path]) -> None:
+    """E4 with tracks (100 Hz, 1 mm): a flight effect fitted to the short far landings
+    bends the tracked flights by centimetres where the tracks bend by a millimetre: it is
+    refused (main: joined, `spin` on the eleventh round's lab), and the verdict is still
+    `unknown`, placed at the landing."""
+    d, _ = diagnose_log(read_throws_csv(lab["E4"]), DEFAULT_EE, seed=0,
+                        tracks=read_tracks_csv(lab["E4_tracks"], keep_lost=True))  # fmt: skip
+    rep = d.report
+    flight = [k for k, t in rep["tests"].items()
+              if k in ("spin", "wind", "drag_scale") and "bends the tracked" in (t.get("refused") or "")]  # fmt: skip
+    assert flight, {k: t.get("refused") for k, t in rep["tests"].items()}
+    assert rep["verdict"]["effects"] == ["unknown"]
+    assert not set(rep["verdict"]["partial_effects"]) & {"spin", "wind", "drag_scale"}
+    assert "_bend_parts" not in rep["tracks"]
 
 
 # --- E3: an elevation error ∝ launch speed (cell.gap.law_speed) ---

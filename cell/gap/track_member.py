@@ -6,12 +6,16 @@ first state over the track's span, against its own last position; the two halves
 measures the bend's square free of the tracker's scatter. A flight effect fitted to the
 landings bends the same flights by its own amount: flown from the same states over the same
 spans with the effect and without it, the product of the two halves' differences is the
-bend it claims. Where that exceeds the tracks' mean product by more than `BEND_Z` of its
-standard errors, the tracks refute the effect: it stands for something the landings show
+bend it claims. Where the tracks show no bend (their z-score under `Z_SIG`, 3) and the
+effect's claim exceeds the tracks' mean product by more than `BEND_Z` of its standard
+errors, the tracks refute the effect: it stands for something the landings show
 and the flight does not (a step in the floor named `spin` at −78.6 rad/s, whose far throws
 would bend by centimetres, against tracks bending 0.0011 m at z 0.5: the eleventh lab
 round's E4, docs/HISTORY.md). `magnus63`'s drag factor the tracks' drag contradicts is the
-same rule for one parameter (`cell.gap.track_drag`).
+same rule for one parameter (`cell.gap.track_drag`). Tracks that bend are left alone:
+there a flight effect is right and its law may bend them more or less than they do (the
+own table's rotor jet, z 7.5, was named `downwash` by its column law, whose claim exceeds
+the jet's bend; refused, the first pass was `unknown` and 60 rows were left out).
 
 The tracks' evidence carries what the rule reads under `_bend_parts` (the tracked throws'
 indices, their halves' fits, drag constants, which have both halves, and spans); the report
@@ -26,6 +30,7 @@ import numpy as np
 
 from cell.gap.problem import GapProblem
 from cell.gap.track_gust import BEND_Z
+from cell.gap.tracks import Z_SIG
 from cell.model.effect_base import Effect
 from cell.model.effects_apply import flight_accel
 from cell.model.flight3d import sample_path
@@ -61,12 +66,13 @@ def member_bend(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
 def bend_refusal(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
                  tracks: dict[str, Any] | None) -> str | None:  # fmt: skip
     """Why a set with a flight effect may not join (None: it may, or it has none, or the
-    tracks give no bend): its own bend over the tracks exceeds theirs by more than BEND_Z
-    standard errors."""
-    parts = (tracks or {}).get("_bend_parts")
-    flight = [e for e in effects if e.phase == "flight"]
-    if parts is None or not flight:
-        return None
+    tracks give no bend): the tracks show no bend (their z-score under
+    `cell.gap.tracks.Z_SIG`) and the set's own bend over them exceeds theirs by more than
+    BEND_Z standard errors."""
+    tr = tracks or {}
+    parts, flight = tr.get("_bend_parts"), [e for e in effects if e.phase == "flight"]
+    if parts is None or not flight or not float(tr.get("bend_z", np.inf)) < Z_SIG:
+        return None  # tracks that bend, or may: a flight effect's law is judged elsewhere
     claim, seen, se = member_bend(prob, effects, parts)
     if not (np.isfinite(claim) and se > 0):
         return None
