@@ -324,7 +324,7 @@ def diagnose(
             verdict = public(chosen[-1].names)
     unsteady, bends = unsteady_wind(verdict, tracks), flight_bends(verdict, tracks)
     drift = drift_check(prob, verdict, chosen, F)  # a named effect's parameter drifting
-    step = step_check(prob, verdict, r0, cur_sq)  # a step in the floor predicts better
+    step = step_check(prob, verdict, r0, cur_sq if chosen else base_sq)  # a step in the floor
     verdict = ["unknown"] if unsteady or bends or drift.get("why") or step.get("why") else verdict
     named = verdict[0] not in ("none", "unknown")
     v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq

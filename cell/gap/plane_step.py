@@ -15,11 +15,12 @@ at each and x_b where the misses' sum of squares is least (`fit_step`). Held out
 (`step_heldout`): on each of the problem's random folds x_b, h0, h1 fitted on the other
 folds predict its throws, so the breakpoint's choice is paid for on held-out throws.
 
-The rule (`step_check`): a verdict that names effects is `unknown` where the step,
-fitted to the baseline's misses, predicts the held-out throws better than the verdict's
-effects by a cut whose bootstrap 95 % interval lies above zero and h1 is `STEP_Z`
-standard errors from zero: then the report's `landing_step` says so, and the proposal
-(`cell.gap.propose`, whose library holds the step at the fitted breakpoint,
+The rule (`step_check`): the step beats a verdict where, fitted to the baseline's misses,
+it predicts the held-out throws better than the verdict's effects (an `unknown`'s
+partial effects, or the baseline where none joined) by a cut whose bootstrap 95 % interval
+lies above zero and h1 is `STEP_Z` standard errors from zero. A verdict that names
+effects is then `unknown`, and the report's `landing_step` says why; for either, the
+proposal (`cell.gap.propose`, whose library then holds the step at the fitted breakpoint,
 `step_term`) says what is left.
 """
 
@@ -84,14 +85,15 @@ def step_heldout(prob: GapProblem, per_m: np.ndarray, x: np.ndarray, r: np.ndarr
 
 def step_check(prob: GapProblem, verdict: list[str], r0: np.ndarray, v_sq: np.ndarray
                ) -> dict[str, Any]:  # fmt: skip
-    """For a verdict that names effects, the report's `landing_step`: the step fitted on
+    """For a verdict other than `none`, the report's `landing_step`: the step fitted on
     every throw (`break_x_m`, `height_m` h0 and `step_m` h1 with its `step_z`), its
-    held-out RMSE against the verdict's with the cut's interval, and `why` (one sentence)
-    where it beats the verdict (module docstring), which makes the verdict `unknown`;
-    {} otherwise."""
+    held-out RMSE against the verdict's (an `unknown`'s: its partial effects', else the
+    baseline's) with the cut's interval, whether it `beats` the verdict (module docstring;
+    the proposal then holds the step), and for a verdict that names effects `why` (one
+    sentence) where it does, which makes the verdict `unknown`; {} for `none`."""
     from cell.gap.stats import bootstrap_cut
 
-    if verdict[0] in ("none", "unknown"):
+    if verdict[0] == "none":
         return {}
     r = np.nan_to_num(np.asarray(r0, float))
     per_m, x = _columns(prob)
@@ -107,8 +109,9 @@ def step_check(prob: GapProblem, verdict: list[str], r0: np.ndarray, v_sq: np.nd
         "heldout_rmse_m": float(np.sqrt(sq.mean())),
         "verdict_heldout_rmse_m": float(np.sqrt(np.mean(v_sq))),
         "cut_m": cut, "cut_ci95_m": [lo, hi], "step_bound_z": STEP_Z,
+        "beats": bool(lo > 0 and z > STEP_Z),
     }  # fmt: skip
-    if lo > 0 and z > STEP_Z:
+    if out["beats"] and verdict[0] != "unknown":
         out["why"] = (
             f"the landing plane {h[1]:+.3f} m beyond x = {xb:.3f} m (z {z:.1f}) predicts the "
             f"held-out throws better than {' + '.join(verdict)}: {out['heldout_rmse_m']:.4f} "

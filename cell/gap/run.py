@@ -292,7 +292,7 @@ def _best_law(full: GapProblem, d: Diagnosis, floor: float, keep: np.ndarray,
     explains more (`cell.gap.propose.propose`), and every throw's miss under it."""
     from cell.gap.propose import propose
 
-    step = bool(d.report.get("landing_step", {}).get("why"))  # `cell.gap.plane_step`
+    step = bool(d.report.get("landing_step", {}).get("beats"))  # `cell.gap.plane_step`
     prop, miss = propose(full, (), floor, keep=keep, phases=phases, extended=extended, step=step)
     out = {**prop, "on_top_of": []}
     if d.verdict_effects:
