@@ -97,7 +97,7 @@ def session_split(prob: GapProblem, residual: np.ndarray) -> dict[str, Any] | No
         return None
     ms_w, ms_b = ss_w / dof_w, ss_b / dof_b
     f = ms_b / ms_w if ms_w > 0 else float("inf")
-    p = float(fisher.sf(f, 2 * dof_b, 2 * dof_w))
+    p_value = float(fisher.sf(f, 2 * dof_b, 2 * dof_w))
     ts = np.asarray(prob.table.num("time_s"), float)
     sessions = [
         {"from_s": float(ts[label == s].min()), "to_s": float(ts[label == s].max()),
@@ -111,7 +111,7 @@ def session_split(prob: GapProblem, residual: np.ndarray) -> dict[str, Any] | No
         "across_m": float(np.sqrt(ms_b)),
         "across_dof": dof_b,
         "f": float(f),
-        "p": p,
+        "p": p_value,
         "alpha": SESSION_ALPHA,
-        "used": bool(p < SESSION_ALPHA and dof_w >= MIN_REPEAT_DOF),
+        "used": bool(p_value < SESSION_ALPHA and dof_w >= MIN_REPEAT_DOF),
     }
