@@ -344,6 +344,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "wind_not_steady",
         "flight_bends",
         "parameter_drifts",
+        "landing_step",
     }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())

@@ -53,6 +53,7 @@ from cell.gap.fit import Score, fit_start, score_set
 from cell.gap.noise import NoiseFloor, noise_floor
 from cell.gap.one_config import one_configuration
 from cell.gap.param_drift import drift_check
+from cell.gap.plane_step import step_check
 from cell.gap.problem import BandStiffness, GapProblem, rmse
 from cell.gap.select import (
     ACROSS_Z,
@@ -270,20 +271,15 @@ def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
         "model_m": nf.model_m,
         "validated_m": nf.validated_m,
         "validated_share": nf.validated_share,
+        **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {}),
     }
 
 
 def _rules() -> dict[str, float]:
     """The rules' thresholds, as the report states them."""
-    return {
-        "agree_share": AGREE_SHARE,
-        "scale_agree": SCALE_AGREE,
-        "across_z": ACROSS_Z,
-        "none_ratio": NONE_RATIO,
-        "verdict_ratio": VERDICT_RATIO,
-        "min_cut_share": MIN_CUT,
-        "permutation_share": PERM_SHARE,
-    }
+    return {"agree_share": AGREE_SHARE, "scale_agree": SCALE_AGREE, "across_z": ACROSS_Z,
+            "none_ratio": NONE_RATIO, "verdict_ratio": VERDICT_RATIO, "min_cut_share": MIN_CUT,
+            "permutation_share": PERM_SHARE}  # fmt: skip
 
 
 def diagnose(
@@ -328,7 +324,8 @@ def diagnose(
             verdict = public(chosen[-1].names)
     unsteady, bends = unsteady_wind(verdict, tracks), flight_bends(verdict, tracks)
     drift = drift_check(prob, verdict, chosen, F)  # a named effect's parameter drifting
-    verdict = ["unknown"] if unsteady or bends or drift.get("why") else verdict
+    step = step_check(prob, verdict, r0, cur_sq if chosen else base_sq)  # a step in the floor
+    verdict = ["unknown"] if unsteady or bends or drift.get("why") or step.get("why") else verdict
     named = verdict[0] not in ("none", "unknown")
     v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq
     if chosen and verdict[0] != "none":
@@ -354,6 +351,7 @@ def diagnose(
         **({"wind_not_steady": unsteady} if unsteady else {}),
         **({"flight_bends": bends} if bends else {}),
         **({"parameter_drifts": drift} if drift else {}),
+        **({"landing_step": step} if step else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials

@@ -102,10 +102,20 @@ def law_text(base: type[Effect], covariate: str | None, intercept: bool,
     return f"{p} = a + k · {covariate}" if intercept else f"{p} = k · {covariate}"
 
 
+def covariate_values(form: Any, batch: ThrowBatch) -> np.ndarray:
+    """A form's covariate over a batch's throws: a logged quantity (`COVARIATES`), or one
+    of the model's throw read with the end-effector the form carries
+    (`cell.gap.law_speed.MODEL_COVARIATES`)."""
+    from cell.gap.law_speed import MODEL_COVARIATES
+
+    if form.covariate in MODEL_COVARIATES:
+        return np.asarray(MODEL_COVARIATES[form.covariate][0](batch, form.ee), float)
+    return np.asarray(COVARIATES[form.covariate][0](batch), float)
+
+
 def _per_throw(self: Any, batch: ThrowBatch, permutation: np.ndarray | None = None) -> Effect:
     base: type[Effect] = self.law_base
-    read, _ = COVARIATES[self.covariate]
-    c = np.asarray(read(batch), float)
+    c = covariate_values(self, batch)
     if permutation is not None:
         c = c[permutation]
     lo, hi = base.bounds[base.param_names().index(self.law_param)]
@@ -125,21 +135,24 @@ def _held_fields(base: type[Effect], param: str) -> tuple[list[tuple[str, type, 
 
 
 def law_class(base: type[Effect], covariate: str, intercept: bool,
-              param: str | None = None) -> type[Effect]:  # fmt: skip
+              param: str | None = None, ee: Any = None) -> type[Effect]:  # fmt: skip
     """The effect class of `base` whose parameter `param` (by default its first of
     `law_params`) follows a + k · covariate (intercept) or k · covariate.
 
     Its fields: `a` (in the parameter's units, with intercept) and `k` (its units per
     covariate unit), then the base's other parameters, common to every throw; its law
     text is `law_text`. Its phase and name are the base's, and it hangs on the covariate
-    (the permutation control shuffles the covariate)."""
+    (the permutation control shuffles the covariate). A covariate of the model's throw
+    (`cell.gap.law_speed.MODEL_COVARIATES`) is read with the end-effector `ee`."""
+    from cell.gap.law_speed import MODEL_COVARIATES
+
     param = _param(base, param)
     key = (base, covariate, intercept, param)
-    if key in _CACHE:
+    if key in _CACHE and ee is None:
         return _CACHE[key]
     i = base.param_names().index(param)
     (lo, hi), sc = base.bounds[i], base.scale[i]
-    cmax = COVARIATES[covariate][1]
+    cmax = {**COVARIATES, **MODEL_COVARIATES}[covariate][1]
     neutral = float(base.neutral().vector()[i])
     span = (hi - lo) / cmax
     k_bounds = (lo / cmax, hi / cmax) if not intercept else (-span, span)
@@ -171,14 +184,16 @@ def law_class(base: type[Effect], covariate: str, intercept: bool,
         "covariate": covariate,
         "intercept": intercept,
         "per_throw": _per_throw,
+        "ee": ee,
     }
     cls_name = f"{base.__name__}_{'lin' if intercept else 'prop'}_{covariate}"
     cls_name += f"_{param}" if len(base.bounds) > 1 else ""
     cls = make_dataclass(cls_name, flds, bases=(Effect,), frozen=True, namespace=ns)
-    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible"):
+    for nm in ("name", "phase", "bounds", "scale", "hangs_on", "law", "plausible", "ee"):
         cls.__annotations__[nm] = ClassVar
     cls.__module__ = __name__
-    _CACHE[key] = cls
+    if ee is None:
+        _CACHE[key] = cls
     return cls
 
 
@@ -284,9 +299,8 @@ def law_range(eff: Effect, batch: ThrowBatch) -> tuple[float, float]:
         p: str = eff.law_param  # type: ignore[attr-defined]
         v = np.asarray(getattr(eff.per_throw(batch), p), dtype=float)
     else:
-        read, _ = COVARIATES[eff.covariate]  # type: ignore[attr-defined]
         a = eff.a if eff.intercept else 0.0  # type: ignore[attr-defined]
-        v = a + eff.k * np.asarray(read(batch), float)  # type: ignore[attr-defined]
+        v = a + eff.k * covariate_values(eff, batch)  # type: ignore[attr-defined]
     return float(np.min(v)), float(np.max(v))
 
 
@@ -354,6 +368,7 @@ def choose_law(
         (the set's score with the chosen forms; per effect, each form's held-out RMSE [m]).
     """
     from cell.gap.fit import score_set
+    from cell.gap.law_speed import MODEL_FORMS
     from cell.gap.stats import bootstrap_cut
     from cell.model.flight_batch import together
 
@@ -387,6 +402,9 @@ def choose_law(
         forms: list[type[Effect]] = []
         for param in law_params(base):
             forms += law_forms(base, prob.batch, param)
+            forms += [
+                law_class(base, c, False, param, prob.ee) for c in MODEL_FORMS.get(base.name, ())
+            ]
             if 2 <= n_obj <= MAX_OBJECTS:
                 forms.append(per_object_class(base, prob, param))
         fits = []
@@ -397,8 +415,8 @@ def choose_law(
                 own = np.r_[np.full(len(form.object_ids), p), list(common.values())]  # type: ignore[attr-defined]
                 own = own / np.asarray(form.scale, float)
             else:
-                read, _ = COVARIATES[form.covariate]  # type: ignore[attr-defined]
-                own = _warm(form, p, float(np.mean(read(prob.batch))), common)
+                cov = covariate_values(form, prob.batch)
+                own = _warm(form, p, float(np.mean(cov)), common)
             warm = np.r_[best.full.x[:at], own, best.full.x[at + nb :]]
             tick(f"{eff.name} ({form.law})")
             cls_j = classes[:j] + [form] + classes[j + 1 :]

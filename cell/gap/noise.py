@@ -20,6 +20,11 @@ Three estimates of it:
 Without repeats F is the smaller of the last two (each is biased up by what
 it cannot resolve).
 
+Throws of two sessions of the log's clock (`time_s` in clusters hours apart, no
+`session` column) are repeats of each other too, unless those across the sessions part
+significantly more than those within one: then the floor is the within-session
+repeats' (`cell.gap.noise_sessions`).
+
 Repeats see only what scatters between throws of one configuration (the
 tracker). What the configured model misses on each configuration by its own
 amount, not smooth in the logged quantities, is floor too, and repeats cannot
@@ -38,6 +43,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -69,6 +75,7 @@ class NoiseFloor:
     method: str
     validated_m: float = float("nan")
     validated_share: float = 0.0
+    time_sessions: dict[str, Any] | None = None
 
 
 def features(prob: GapProblem) -> np.ndarray:
@@ -228,8 +235,14 @@ def noise_floor(prob: GapProblem, residual: np.ndarray, land: Landing) -> NoiseF
         The floor (repeats when there are enough, else the smaller other estimate)
         and each estimate.
     """
+    from cell.gap.noise_sessions import session_split
+
     x = features(prob)
     rep, dof = _repeats(prob, residual)
+    split = session_split(prob, residual)
+    if split is not None and split["used"]:
+        # repeats across sessions of the log's clock part by what changed between them
+        rep, dof = split["within_m"], split["within_dof"]
     nn = _neighbours(prob, residual, land)
     # the flexible model is slow and biased up: only when there are no repeats to go by
     need_model = not np.isfinite(rep) and len(prob) >= 50
@@ -255,6 +268,7 @@ def noise_floor(prob: GapProblem, residual: np.ndarray, land: Landing) -> NoiseF
         method=method,
         validated_m=val,
         validated_share=share,
+        time_sessions=split,
     )
 
 

@@ -11,6 +11,7 @@ landing is linear in its coefficient θ near θ = 0:
 | launch | speed, elevation, azimuth error × order | the same, growing over the log: order = 0 at its first throw, 1 at its last (by `time_s` where every row has it, else by row) |
 | launch | speed, elevation, azimuth error × session | the same, in every session but the first (`session`, 2 to MAX_SESSIONS of them) |
 | flight | force x, force y | a constant acceleration θ [m/s²] along world x or y |
+| flight | wind x, wind y × session | air moving at θ [m/s] along world x or y in every session but the first (a wind or a draught changed between sessions) |
 | flight | along ∝ v, ∝ v² | an acceleration θ·v, θ·|v|·v along the velocity |
 | flight | across ∝ v, ∝ v² | θ·v, θ·|v|·v turned 90° about the vertical (horizontal, to the left) |
 | flight | up ∝ v² | θ·|v|² upwards |
@@ -18,6 +19,7 @@ landing is linear in its coefficient θ near θ = 0:
 | landing | shift ∝ v, ∝ v² | the landing moved by θ·v_h or θ·|v_h|·v_h along the impact velocity |
 | measurement | shift ∝ v with k < 0 (its interval below 0) | the landing logged −k s before the touchdown: no slide ends behind it, a tracker lagging does |
 | landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
+| landing | plane height × [x > x_b] | a step in the surface landed on beyond x_b, fitted, where such a step beats the verdict (`cell.gap.plane_step`) |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
 | launch, flight, landing | speed error, lift coefficient, shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`) |
 
@@ -54,9 +56,11 @@ from typing import Any
 
 import numpy as np
 
+from cell.gap.plane_step import step_term
 from cell.gap.problem import GapProblem
 from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
 from cell.gap.propose_radial import radial_term
+from cell.gap.propose_sessions import MAX_SESSIONS, log_covariates, session_winds
 from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
 from cell.model.effects import Effect
 from cell.model.effects_apply import flight_accel
@@ -64,7 +68,7 @@ from cell.model.flight3d import fly
 from cell.model.throw import drag_constant
 from cell.parallel import one_blas_thread
 
-__all__ = ["propose", "library", "log_covariates"]
+__all__ = ["propose", "library", "log_covariates", "MAX_SESSIONS"]
 
 TERM_PENALTY = 0.03  # held-out RMSE raised by this share per term
 COVS = {"1": None, "stroke_m": "stroke", "mass_kg": "mass", "size_x_m": "width"}
@@ -73,7 +77,6 @@ H_SPEED = 1e-3
 H_ACC = 0.05
 COLLINEAR_TOL = 0.01  # a term less than this share independent of the terms before it is out
 SHIFT_V = "landing shift [s] = k · v_h"
-MAX_SESSIONS = 6  # a log of more sessions than this has no session terms (its order terms stay)
 MIN_VZ = 0.5  # [m/s] a landing plane's terms are nil for throws descending slower than this
 PLANE_CONST = "landing plane height [m] = k"
 
@@ -112,34 +115,6 @@ def independent(a: np.ndarray, tol: float = COLLINEAR_TOL) -> np.ndarray:
     return keep
 
 
-def log_covariates(prob: GapProblem) -> dict[str, np.ndarray]:
-    """The throw-order and session covariates of a log (name -> values over its throws).
-
-    `order` runs from 0 at the first throw to 1 at the last: by `time_s` where every
-    diagnosed row has one (and they differ), else by the rows' order in the log. A
-    `session = s` indicator is there for each session but the first (in order of
-    appearance) where the log has 2 to MAX_SESSIONS sessions, each of 2 throws or more."""
-    t = prob.table
-    n = len(prob)
-    out: dict[str, np.ndarray] = {}
-    if n < 2:
-        return out
-    order = np.arange(n, dtype=float)
-    if "time_s" in t.columns:
-        ts = np.asarray(t.num("time_s"), float)
-        if np.all(np.isfinite(ts)) and np.ptp(ts) > 0:
-            order = ts
-    out["order"] = (order - order.min()) / np.ptp(order)
-    if "session" in t.columns:
-        sess = t.text("session")
-        names = list(dict.fromkeys(sess))
-        counts = [sess.count(s) for s in names]
-        if 2 <= len(names) <= MAX_SESSIONS and min(counts) >= 2:
-            for s in names[1:]:
-                out[f"[session = {s}]"] = np.array([x == s for x in sess], float)
-    return out
-
-
 def _turn(v: np.ndarray, vb: np.ndarray, d_el: np.ndarray, d_az: np.ndarray) -> np.ndarray:
     rel = v - vb
     sp = np.linalg.norm(rel, axis=1)
@@ -171,15 +146,19 @@ def _library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool
     base_acc = flight_accel(b, list(prob.base_effects) + effs, prob.rotor_rpm)
     t0 = prob.ee.dt
 
-    def land_xy(v: np.ndarray, extra: Callable[..., np.ndarray] | None = None) -> np.ndarray:
+    def land_xy(v: np.ndarray, extra: Callable[..., np.ndarray] | None = None,
+                air: Callable[..., np.ndarray] | None = None) -> np.ndarray:  # fmt: skip
         def acc(p: np.ndarray, vv: np.ndarray, i: np.ndarray) -> tuple[Any, Any]:
             w, ex = base_acc(p, vv, i) if base_acc is not None else (None, None)
             if extra is not None:
                 e2 = extra(p, vv, i)
                 ex = e2 if ex is None else ex + e2
+            if air is not None:
+                w2 = air(p, vv, i)
+                w = w2 if w is None else w + w2
             return w, ex
 
-        use = acc if (extra is not None or base_acc is not None) else None
+        use = acc if (extra is not None or air is not None or base_acc is not None) else None
         return fly(p1, v, k, b.land_z, accel=use, t0=t0, step=prob.step).position[:, :2]
 
     x0 = land_xy(v1)
@@ -226,6 +205,8 @@ def _library(prob: GapProblem, effects: tuple[Effect, ...], lift: bool
     ] + (lift_terms(b, H_ACC) if lift else [])
     for name, fn in flight:
         add("flight", name, land_xy(v1, fn), H_ACC)
+    for name, fn, h in session_winds(in_log):  # a wind changed between sessions
+        add("flight", name, land_xy(v1, air=fn), h)
     vh = np.nan_to_num(land.impact_velocity[:, :2])
     terms.append({"phase": "landing", "term": SHIFT_V})
     cols.append(vh)
@@ -281,24 +262,27 @@ def propose(
     keep: np.ndarray | None = None,
     phases: set[str] | None = None,
     extended: bool = True,
+    step: bool = False,
 ) -> tuple[dict[str, Any], np.ndarray]:
     """The law proposed for what the effects leave (see the module docstring), fitted and
     scored on the throws in `keep` (all when None: outliers left out), from the terms of
     `phases` only (all when None: `cell.gap.propose_terms.allowed_phases`), then with the
     terms of one object and another added where they earn their place
     (`cell.gap.propose_terms`). `extended` False: the library without the lift across v
-    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`).
+    and the objects' terms (the law whose misses flag outliers, `cell.gap.run`). `step`:
+    with a step in the landing plane (`cell.gap.plane_step`, where its rule made the
+    verdict `unknown`).
 
     Returns:
         (the proposal, every throw's miss with the proposed law added (n, 2) [m]).
     """
     with one_blas_thread():  # small least squares: a second BLAS thread only spins
-        return _propose(prob, effects, floor_m, keep, phases, extended)
+        return _propose(prob, effects, floor_m, keep, phases, extended, step)
 
 
 def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
-             keep: np.ndarray | None, phases: set[str] | None, extended: bool
-             ) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
+             keep: np.ndarray | None, phases: set[str] | None, extended: bool,
+             step: bool = False) -> tuple[dict[str, Any], np.ndarray]:  # fmt: skip
     idx = np.arange(len(prob))
     n = len(prob)
     keep = np.ones(n, bool) if keep is None else np.asarray(keep, bool)
@@ -308,6 +292,9 @@ def _propose(prob: GapProblem, effects: tuple[Effect, ...], floor_m: float,
     if extended:  # a camera's radial distortion (`cell.gap.propose_radial`)
         rad, col, ctx["cov"]["r² d"] = radial_term(ctx["xy"], prob.table.landed, r, keep)
         terms, a_all = [*terms, rad], np.c_[a_all, col]
+    if extended and step:  # a step in the floor (`cell.gap.plane_step`)
+        st, col = step_term(prob, r, keep)
+        terms, a_all = [*terms, st], np.c_[a_all, col]
     if phases is not None:  # the phases the tracks allow
         on = [t["phase"] in phases for t in terms]
         terms, a_all = [t for t, o in zip(terms, on, strict=True) if o], a_all[:, on]

@@ -15,6 +15,7 @@ all within their bounds, or there is none (`law` None, `why` saying so).
 | speed error [share] | \\|θ·c\\| | 0.5 | the landing distance goes as the launch speed squared: a speed (1 + θ)·v moves it by 2θ + θ² of itself, and the first-order term misses θ/2 of its own step: a quarter at θ = 0.5 (a share of −1 is no launch at all) |
 | elevation, azimuth error [rad] | \\|θ·c\\| | 0.5 rad | a launch turned by Δ moves its landing along the chord 2 sin(Δ/2) where the first-order term moves it along the arc Δ, a direction off by Δ/2: a quarter of a radian at 0.5 rad (29°); the physical limit, a throw turned past the vertical or backwards, is ±π/2 |
 | force x, y; along, across v; up; lift across v | \\|θ\\|·\\|v\\|^p at the launch speed (p = 0, 1, 2 by the unit: m/s², 1/s, 1/m) | g/3 + 3·k\\|v\\|² | a third of the object's weight: a force a against gravity stretches the time of flight by (1 − a/g)^−½ − 1 = a/2g + 3a²/8g² + …, whose second-order part is a quarter of the first at a = g/3 (no air of a cell pushes a thrown object of 20-500 g that hard: a 10 m/s wind's drag on a 35 g cube is 1.7 m/s²); plus three times the drag the model gives it there (k = ½ρC_dA/m: the vocabulary's drag factor is plausible up to 4, so a drag three times the model's more is the air's), for light objects whose drag is large |
+| wind x, y × session [m/s] | \\|θ\\| | 10 m/s (`WIND_MAX_MPS`) | the change of the air between two sessions (`cell.gap.propose_sessions`): 10 m/s is a gale, no cell's air |
 | lift coefficient C_L [-] | \\|θ\\| | 1.5 (`LIFT_CL_MAX`) | no spin gives a lift coefficient over about 0.6 |
 | landing shift [s] (∝ v_h) | \\|θ\\| | 1 s | the vocabulary's rolling bounce rolls on at most 1 s per m/s (`BounceRolling`'s bound); a tracker a second late is no tracker |
 | landing shift [s²/m] (∝ \\|v_h\\| v_h) | \\|θ\\| | 1 / (2 · 0.05 · g) = 1.02 s²/m | a slide v_h² / (2 μ g) with μ at least 0.05 (ice on steel is 0.03, no surface of a cell) |
@@ -57,6 +58,9 @@ DRAG_MORE = 3.0  # ... plus DRAG_MORE times the model's drag at the launch speed
 SHIFT_TIME_MAX_S = 1.0  # [s] a landing shift ∝ v_h
 MU_MIN = 0.05  # the least friction coefficient of a slide ∝ |v_h| v_h
 SHIFT_MAX_M = 1.0  # [m] every landing moved alike
+# [m/s] a wind's change between two sessions (`cell.gap.propose_sessions`): a gale of
+# 10 m/s inside a cell is no cell's air
+WIND_MAX_MPS = 10.0
 RADIAL_MAX = 0.25  # [-] a camera's radial distortion k r² at any landing
 # [m] the largest height a landing plane's term may give: the tool's own worlds land on
 # planes at 0 and 0.25 m (`cell.gap.world`), so a throw logged onto the other one is
@@ -70,6 +74,8 @@ BOUNDS: dict[str, tuple[str, float]] = {
     "azimuth error [rad]": ("share", ANGLE_MAX_RAD),
     "force x [m/s²]": ("accel0", 1.0),
     "force y [m/s²]": ("accel0", 1.0),
+    "wind x [m/s]": ("coef", WIND_MAX_MPS),
+    "wind y [m/s]": ("coef", WIND_MAX_MPS),
     "force along v [1/s]": ("accel1", 1.0),
     "force across v [1/s]": ("accel1", 1.0),
     "force along v [1/m]": ("accel2", 1.0),

@@ -137,7 +137,7 @@ def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
     rep = d.report
     where: dict[str, Any] = {}
     if tp is not None:
-        rep["tracks"] = tp
+        rep["tracks"] = {k: v for k, v in tp.items() if not k.startswith("_")}
         if tp.get("phase"):
             where = _where_from_tracks(d, tp)
     if rep["verdict"]["effects"] == ["none"]:
@@ -292,11 +292,12 @@ def _best_law(full: GapProblem, d: Diagnosis, floor: float, keep: np.ndarray,
     explains more (`cell.gap.propose.propose`), and every throw's miss under it."""
     from cell.gap.propose import propose
 
-    prop, miss = propose(full, (), floor, keep=keep, phases=phases, extended=extended)
+    step = bool(d.report.get("landing_step", {}).get("beats"))  # `cell.gap.plane_step`
+    prop, miss = propose(full, (), floor, keep=keep, phases=phases, extended=extended, step=step)
     out = {**prop, "on_top_of": []}
     if d.verdict_effects:
         part, miss_p = propose(full, d.verdict_effects, floor, keep=keep, phases=phases,
-                               extended=extended)  # fmt: skip
+                               extended=extended, step=step)  # fmt: skip
         if part["heldout_rmse_after_m"] < out["heldout_rmse_after_m"]:
             out, miss = {**part, "on_top_of": [e.name for e in d.verdict_effects]}, miss_p
     return out, miss

@@ -8,7 +8,8 @@ when the tracks contradict it: its phase carries less than AGREE_SHARE of the la
 phase share of the landing miss the tracks show (a landing's net of the floor F), a
 measurement effect without an apparent gravity off g, a tracking scale off the tracks'
 apparent gravity ratio by more than SCALE_AGREE, or a drag factor the tracks' drag per
-object contradicts (`cell.gap.track_drag`). A tracking scale beside a landing effect is
+object contradicts (`cell.gap.track_drag`), or a flight effect whose own bend over the
+tracks exceeds theirs (`cell.gap.track_member`). A tracking scale beside a landing effect is
 refused, too, where the landing misses across the impact velocity do not show it
 (`across_scale`): a slide moves a landing along the impact velocity only, so across it a
 scale is all that moves the landings in proportion to their distance from the origin.
@@ -27,21 +28,13 @@ from cell.gap.fit import Score, fit_set, fit_start, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
 from cell.gap.track_drag import drag_refusal
+from cell.gap.track_member import bend_refusal
 from cell.gap.tracks import phase_evidence
 from cell.model.effects import EFFECTS, FAMILIES, DragScale, Effect, TrackingScale
 from cell.model.flight_batch import together
 
-__all__ = [
-    "Selection",
-    "refusal",
-    "across_scale",
-    "across_refusal",
-    "scale_beside_landing",
-    "at_bound",
-    "public",
-    "effect_class",
-    "member_rank_of",
-]
+__all__ = ["Selection", "refusal", "across_scale", "across_refusal", "scale_beside_landing",
+           "at_bound", "public", "effect_class", "member_rank_of"]  # fmt: skip
 
 VERDICT_RATIO = 1.30  # A ≤ this × F: explained
 MIN_CUT = 0.10  # an effect must cut this share of what is left
@@ -355,6 +348,8 @@ class Selection:
                 return f"{e.name}: {why}"
         if why := drag_refusal(self.prob, cand.full.effects, self.tracks):
             return f"{DragScale.name}: {why}"
+        if why := bend_refusal(self.prob, cand.full.effects, self.tracks):
+            return f"{'+'.join(e.name for e in cand.full.effects if e.phase == 'flight')}: {why}"
         why = across_refusal(self.prob, cand.full.effects)
         return f"{TrackingScale.name}: {why}" if why else None
 

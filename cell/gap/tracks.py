@@ -457,6 +457,7 @@ def track_phase(prob: GapProblem, fit: TrackFit) -> dict[str, Any]:
         "pull_along": pull_along([fit.samples[i] for i in idx], fit.dropped[idx], kk),
         "frame": frame_turn(prob.observed[idx], end_land),  # the log's frame and the tracks'
         "unseen": release_unseen(back, fit_span(fit, idx)),  # tracks begun mid-flight
+        "_bend_parts": (idx, hv, kk, has_h, fit_span(fit, idx)),  # `cell.gap.track_member`
     }
     ev = evidence(figures) if finite else "no phase share could be computed from the tracks"
     return {"tracked": n_tr, "phase": phase, "evidence": ev, **figures, **named}
