@@ -27,6 +27,7 @@ calls these; every problem goes into the one report the job is refused with).
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from functools import lru_cache
 from typing import Any
@@ -90,22 +91,41 @@ def _farthest_m(robot: Any) -> float:
     return 1.05 * max(float(np.linalg.norm(robot.tcp_pose(q)[0])) for q in qs)
 
 
+# [robot][the TCP position's bytes] -> `_reaches`' answer: a pose a check (or another
+# check of the process: a job loaded again, the draw's `NearBins` then the load) asks
+# again is not searched again (the search is seeded: the same answer)
+_REACHED: weakref.WeakKeyDictionary[Any, dict[bytes, float]] = weakref.WeakKeyDictionary()
+
+
 def _reaches(robot: Any, tcp: np.ndarray) -> float:
     """0 when the grip pointing down reaches TCP position `tcp` [m, W], else how far the
-    nearest solution found misses it [m]."""
+    nearest solution found misses it [m] (kept per arm and position: `_REACHED`).
+
+    The search stops at the first seed that converges (`solutions=1`): whether one does,
+    and the nearest miss where none does (every seed tried, then the polish), are those
+    of the default search's three solutions, which only a success's configuration (not
+    read here) depends on."""
     from cell.errors import IKFailed
     from cell.robot.ik import ReleasePose, solve_ik
 
+    tcp = np.asarray(tcp, float)
+    kept = _REACHED.setdefault(robot, {})
+    key = tcp.tobytes()
+    if key in kept:
+        return kept[key]
     far = float(np.linalg.norm(tcp)) - _farthest_m(robot)
     if not far < 0.0:  # beyond any configuration (or not finite): no search
-        return far if math.isfinite(far) else math.inf
-    pose = ReleasePose(np.asarray(tcp, float), np.array([0.0, 0.0, -1.0]))
-    try:
-        solve_ik(robot, pose, robot.home)
-        return 0.0
-    except IKFailed as exc:
-        miss = getattr(exc, "position_error_m", None)
-        return float(miss) if miss is not None else float("nan")
+        miss = far if math.isfinite(far) else math.inf
+    else:
+        pose = ReleasePose(tcp, np.array([0.0, 0.0, -1.0]))
+        try:
+            solve_ik(robot, pose, robot.home, solutions=1)
+            miss = 0.0
+        except IKFailed as exc:
+            err = getattr(exc, "position_error_m", None)
+            miss = float(err) if err is not None else float("nan")
+    kept[key] = miss
+    return miss
 
 
 def _tcp_z(centre_z: float, stroke: float, height: float) -> float:

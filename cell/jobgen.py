@@ -209,6 +209,22 @@ class NearBins:
         self.near = {i: _spec(b) for i, b in self._drawn.items()}
         self.sent: dict[str, list[tuple[dict[str, Any], Any]]] = {i: [] for i in self.near}
         self._missed: dict[tuple[str, float, tuple[float, float]], bool] = {}
+        self._sorts: dict[tuple[Any, str, bool], bool] = {}
+
+    def sortable(
+        self, entry: dict[str, Any], bins: list[dict[str, Any]], params: Any, thrown: frozenset[str]
+    ) -> list[str]:
+        """`sortable_bins` with each bin's answer kept for the draw: by the item's
+        ObjectParams (all `sortable_bins` reads of the entry), the bin, and whether the
+        job throws into it though near (all `check_sortable` reads of `thrown`); the
+        bins not answered before are asked together."""
+        obj = _object_of(entry)
+        asked = [b for b in bins if (obj, b["id"], b["id"] in thrown) not in self._sorts]
+        if asked:
+            ok = set(sortable_bins(entry, asked, params, thrown))
+            for b in asked:
+                self._sorts[(obj, b["id"], b["id"] in thrown)] = b["id"] in ok
+        return [b["id"] for b in bins if self._sorts[(obj, b["id"], b["id"] in thrown)]]
 
     def _misses(self, bin_id: str, objs: list[Any]) -> bool:
         """Does the arm miss placing the items `objs` (ObjectParams) into the bin (cached)?"""
@@ -239,7 +255,7 @@ class NearBins:
         if bin_id not in thrown or self._misses(bin_id, self._objs(bin_id)):
             return True
         one = [self._drawn[bin_id]]
-        return all(sortable_bins(e, one, params, thrown) for e, _ in self.sent[bin_id])
+        return all(self.sortable(e, one, params, thrown) for e, _ in self.sent[bin_id])
 
     def send(self, entry: dict[str, Any], obj: Any) -> None:
         """The item `entry` (its ObjectParams `obj`) is sent to its bin."""
@@ -299,7 +315,7 @@ def random_job(
         thrown = near.thrown_with(obj)
         choices = [
             c
-            for c in sortable_bins(entry, bins, params, thrown)
+            for c in near.sortable(entry, bins, params, thrown)
             if near.keeps_sorted(c, thrown, params)
         ]
         if not choices:
