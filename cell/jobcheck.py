@@ -95,6 +95,7 @@ def _farthest_m(robot: Any) -> float:
 # check of the process: a job loaded again, the draw's `NearBins` then the load) asks
 # again is not searched again (the search is seeded: the same answer)
 _REACHED: weakref.WeakKeyDictionary[Any, dict[bytes, float]] = weakref.WeakKeyDictionary()
+_REACHED_MAX = 4096  # answers kept per arm (a job asks a few dozen poses)
 
 
 def _reaches(robot: Any, tcp: np.ndarray) -> float:
@@ -113,6 +114,8 @@ def _reaches(robot: Any, tcp: np.ndarray) -> float:
     key = tcp.tobytes()
     if key in kept:
         return kept[key]
+    if len(kept) >= _REACHED_MAX:  # a long-lived process checking many jobs: bounded
+        kept.clear()
     far = float(np.linalg.norm(tcp)) - _farthest_m(robot)
     if not far < 0.0:  # beyond any configuration (or not finite): no search
         miss = far if math.isfinite(far) else math.inf

@@ -61,3 +61,16 @@ def test_a_pose_asked_again_is_not_searched_again(ik_solve_calls: Any) -> None:
     other = load_robot("ur5")  # another arm: its own search
     jobcheck._reaches(other, tcp)
     assert ik_solve_calls.n == 1
+
+
+def test_the_answers_kept_per_arm_are_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A long-lived process checking many jobs keeps at most `_REACHED_MAX` answers an
+    arm, and an answer asked again after the store emptied is the same."""
+    robot = load_robot("panda")
+    jobcheck._REACHED.clear()
+    monkeypatch.setattr(jobcheck, "_REACHED_MAX", 2)
+    first = [jobcheck._reaches(robot, np.array(p)) for p in POSES[:3]]
+    assert len(jobcheck._REACHED[robot]) <= 2
+    again = [jobcheck._reaches(robot, np.array(p)) for p in POSES[:3]]
+    assert again == first
+    assert len(jobcheck._REACHED[robot]) <= 2
