@@ -139,7 +139,8 @@ def _where(d: Diagnosis, tp: dict[str, Any] | None) -> dict[str, Any]:
     if tp is not None:
         rep["tracks"] = {k: v for k, v in tp.items() if not k.startswith("_")}
         if tp.get("phase"):
-            where = _where_from_tracks(d, tp)
+            where = _where_from_tracks(d, tp)  # adds the phases' significance to tp
+            rep["tracks"].update((k, v) for k, v in tp.items() if not k.startswith("_"))
     if rep["verdict"]["effects"] == ["none"]:
         evidence = _phase_from_verdict(d)["evidence"]
         if where:
