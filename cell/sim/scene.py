@@ -56,7 +56,7 @@ from cell.sim.scene_build import (
     load_end_effector,
     mount_constraint,
     pick_station_body,
-    reload_arm_with_visuals,
+    show_arm,
 )
 from cell.sim.settle import Outcome, Tracker
 
@@ -451,17 +451,8 @@ class CellScene:
 
     # -- output ----------------------------------------------------------------
     def show_arm(self) -> None:
-        """Give the arm its visual shapes if the scene was built without them (DIRECT):
-        the arm is loaded again with them, at the joint positions it has now (a new
-        body id in `arm`). The arm is kinematic and collides with nothing, so this
-        changes no step of the physics."""
-        if self.arm is None or self._arm_visuals or self.robot is None:
-            return
-        x, y, z = self.robot_base_xyz
-        self.arm, self.arm_joints, self._flange = reload_arm_with_visuals(
-            self.client, self.robot, (x, y, z), self.arm, self.arm_joints
-        )
-        self._arm_visuals = True
+        """The arm given its visual shapes if built without them (`scene_build.show_arm`)."""
+        show_arm(self)
 
     def render(self, **camera: Any) -> np.ndarray:
         """The scene as an RGB image (h, w, 3), headless; camera keywords as `snapshot.render`."""

@@ -116,7 +116,7 @@ def load_arm(
     physically driven end-effector body follows its `ee_base` link, so the mount
     (flange offset and yaw) is the mount file's, as in the planner's model. Without
     `visuals` its visual shapes are not loaded (the Panda's Collada meshes: 0.3 s of
-    CPU a scene), which only a picture of the scene needs (`CellScene.show_arm`).
+    CPU a scene), which only a picture of the scene needs (`show_arm`).
 
     Returns:
         (the arm's body, its joints' indices, `ee_base`'s link index, the ready
@@ -147,22 +147,22 @@ def load_arm(
     )
 
 
-def reload_arm_with_visuals(
-    cl: Any, robot: str, base_xyz: tuple[float, float, float], arm: int, joints: list[int]
-) -> tuple[int, list[int], int]:
-    """The arm loaded again with its visual shapes, at the joint positions [rad] `arm` has
-    now (`CellScene.show_arm`): the arm is kinematic and collides with nothing, so this
-    changes no step of the physics.
-
-    Returns:
-        (the new arm body, its joints' indices, `ee_base`'s link index).
-    """
+def show_arm(scene: Any) -> None:
+    """Give a `CellScene`'s arm its visual shapes if the scene was built without them
+    (DIRECT): the arm is loaded again with them, at the joint positions [rad] it has now (a
+    new body id in `scene.arm`). The arm is kinematic and collides with nothing, so this
+    changes no step of the physics."""
+    if scene.arm is None or scene._arm_visuals or scene.robot is None:
+        return
+    cl, arm, joints = scene.client, scene.arm, scene.arm_joints
     q = [cl.getJointState(arm, j)[0] for j in joints]
     cl.removeBody(arm)
-    new_arm, new_joints, flange, _ = load_arm(cl, robot, base_xyz, visuals=True)
+    x, y, z = scene.robot_base_xyz
+    new_arm, new_joints, flange, _ = load_arm(cl, scene.robot, (x, y, z), visuals=True)
     for j, v in zip(new_joints, q, strict=True):
         cl.resetJointState(new_arm, j, float(v))
-    return new_arm, new_joints, flange
+    scene.arm, scene.arm_joints, scene._flange = new_arm, new_joints, flange
+    scene._arm_visuals = True
 
 
 def build_floor(cl: Any, data_path: str, dt_s: float) -> int:
