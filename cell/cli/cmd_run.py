@@ -231,7 +231,9 @@ def _library_warnings(said: bool) -> Iterator[None]:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from cell.arm.base import check_speed_scale
     from cell.errors import HardwareError, InvalidInput
+    from cell.log.store import StoreWriteError
 
     if args.no_log and args.db and not args.learn:  # --learn reads --db; --no-log, none
         raise InvalidInput(
@@ -242,8 +244,8 @@ def _run(args: argparse.Namespace) -> int:
     refuse_outputs_among(args, job_files(job))  # the files the job names are inputs too
     for warning in job.warnings:  # items left unsorted, a near bin auto throws into
         print(f"cell: warning: {warning}", file=sys.stderr)
-    if not 0.0 < args.speed_scale <= 1.0:
-        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
+    arm = job.robot if job.platform == "arm" else None  # the other platforms run no arm
+    check_speed_scale(args.speed_scale, arm, "--speed-scale")
     kind = args.ee or job.ee
     if args.emulate and kind != "dynamixel":
         raise InvalidInput(
@@ -289,12 +291,14 @@ def _run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return EXIT_HARDWARE_FAULT
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, StoreWriteError) as exc:
             kept = (
                 f"; {plural(len(store), 'throw')} kept in {store.path}"
                 if store is not None
                 else " (--no-log: no throw recorded)"
             )
+            if isinstance(exc, StoreWriteError):  # said by `cell.cli.main` after these lines
+                kept += ", the next one's record refused by the store (below)"
             print(
                 f"cell run: stopped after {len(done)} of {plural(total, 'item')}{kept}",
                 file=sys.stderr,

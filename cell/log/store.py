@@ -32,7 +32,7 @@ from cell.errors import InvalidInput, LogFormatError, plural
 from cell.infile import check_input_file, check_path_length
 from cell.log.table import NUMERIC_COLUMNS, REQUIRED_COLUMNS, ThrowTable
 
-__all__ = ["DEFAULT_DB", "ThrowStore", "default_db_path"]
+__all__ = ["DEFAULT_DB", "StoreWriteError", "ThrowStore", "default_db_path"]
 
 log = logging.getLogger(__name__)
 
@@ -105,6 +105,26 @@ def _unwritable(path: Path) -> str:
         f": {why}, and a store is written with its -wal and -shm files beside it; give "
         "--db a file in a writable folder (or set $CELL_LOG_DB; `cell run --no-log` records "
         "no throws)"
+    )
+
+
+class StoreWriteError(OSError):
+    """A write the store's file refused (a full disk, a quota, a file-size limit, the file
+    gone read-only): what was committed before it is kept, this write is not. An OSError,
+    not a `CellError`: a run stops at it (`cell run`), never scoring it as an item's
+    failure; the command line says it as `cell: error: PATH: ...` (exit 2)."""
+
+
+def _write_failed(path: Path, exc: sqlite3.Error) -> StoreWriteError:
+    """The error of a write to the store at `path` that SQLite refused with `exc`."""
+    why = str(exc)
+    if "disk I/O error" in why or "full" in why:  # ENOSPC says "full"; EFBIG an I/O error
+        why += ": a full disk, a quota or a file-size limit (`ulimit -f`)?"
+    return StoreWriteError(
+        0,
+        f"cannot write the throw-log store ({why}); the throws committed before are kept, "
+        f"this write is not{_unwritable(path)}",
+        str(path),
     )
 
 
@@ -212,10 +232,21 @@ class ThrowStore:
             raise InvalidInput(f"{self.path}: the store is read-only here ({exc})") from None
         try:
             yield self._conn
+            self._conn.execute("COMMIT")
+        except sqlite3.OperationalError as exc:  # the file refused the write
+            self._rollback()
+            raise _write_failed(self.path, exc) from None
         except BaseException:
-            self._conn.execute("ROLLBACK")
+            self._rollback()
             raise
-        self._conn.execute("COMMIT")
+
+    def _rollback(self) -> None:
+        """Undo the open transaction, if SQLite has not already (a failed COMMIT may)."""
+        if self._conn.in_transaction:
+            try:
+                self._conn.execute("ROLLBACK")
+            except sqlite3.Error as exc:  # the write's own error is the one said
+                log.warning("%s: rollback failed: %s", self.path, exc)
 
     def existing_ids(self, ids: list[str]) -> set[str]:
         """Those of `ids` already in the store (to refuse a campaign before it runs)."""

@@ -1,0 +1,131 @@
+"""Inputs a new user's cell gives, a thirteenth round: a store the disk refuses mid-run,
+an arm slowed past what any arm is."""
+
+from __future__ import annotations
+
+import json
+import resource
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from cell.log.store import ThrowStore
+from cell.robot.mount import MIN_ACCELERATION, load_mount
+from tests.cli_exit import cell_exit
+
+FAR = "{id: far, position_m: [1.60, 0.00], size_m: [0.40, 0.40], rim_height_m: 0.15}"
+
+
+def _job(tmp_path: Path, items: str, cell: str = "{robot: panda}") -> Path:
+    job = tmp_path / "job.yaml"
+    job.write_text(f"cell: {cell}\nbins:\n  - {FAR}\nitems:\n{items}")
+    return job
+
+
+class _FileSizeLimit:
+    """RLIMIT_FSIZE of one byte while in the block: every file write past its first byte
+    fails with EFBIG (Python ignores SIGXFSZ), as on a full disk."""
+
+    def __enter__(self) -> None:
+        self.before = resource.getrlimit(resource.RLIMIT_FSIZE)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (1, self.before[1]))
+
+    def __exit__(self, *exc: object) -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, self.before)
+
+
+def test_a_store_the_disk_refuses_mid_run_stops_the_run_keeping_what_was_recorded(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A full disk (here a file-size limit, `ulimit -f`) when `cell run` records its second
+    throw: on main, sqlite3's "disk I/O error" came out of the run as a traceback (exit 1)
+    and the --json summary was not written. Now the run stops there: `cell: error:` names
+    the store and what refused it (exit 2), the first throw is in the store, read back
+    whole, and the JSON holds the item finished, marked interrupted."""
+    db, out = tmp_path / "s.db", tmp_path / "out.json"
+    real = ThrowStore.append
+    calls: list[int] = []
+
+    def append(self: ThrowStore, *a: object, **k: object) -> None:
+        calls.append(1)
+        if len(calls) < 2:
+            return real(self, *a, **k)
+        with _FileSizeLimit():  # the disk fills at the second throw
+            return real(self, *a, **k)
+
+    monkeypatch.setattr(ThrowStore, "append", append)
+    job = _job(tmp_path, "  - {object: cube50, count: 3, bin: far}\n")
+    argv = ["run", str(job), "--db", str(db), "--json", str(out), "-q", "--plan-workers", "1"]
+    assert cell_exit(argv + ["--no-cycle-search", "--no-turn-release"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err, err
+    assert f"cell: error: {db}: cannot write the throw-log store (disk I/O error" in err, err
+    assert "stopped after 1 of 3 items; 1 throw kept in" in err, err
+    assert len(calls) == 2  # the run stopped at the refused write, the third item not taken
+    doc = json.loads(out.read_text())
+    assert doc["interrupted"] and doc["items"] == 1 and doc["items_planned"] == 3, doc
+    (r,) = doc["results"]
+    with sqlite3.connect(db) as conn:  # the store as SQLite reads it, not as `cell` does
+        assert conn.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+        rows = conn.execute("SELECT throw_id, object_id FROM throws").fetchall()
+    assert rows == [(r["throw_id"], "cube50")], (rows, r)
+
+
+def test_an_import_the_disk_refuses_is_said_and_leaves_the_store_as_it_was(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`cell log import` of a log larger than the room left on the disk (the store opened,
+    its import refused): on main, sqlite3's OperationalError came out as a traceback; now
+    `cell: error:` names the store (exit 2), the throws committed before stay, and the same
+    import goes in once there is room."""
+    a, b, db = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "s.db"
+    for path, seed in ((a, "1"), (b, "2")):
+        assert cell_exit(["synth", "-o", str(path), "--n", "6", "--seed", seed]) == 0
+    assert cell_exit(["log", "--db", str(db), "import", str(a)]) == 0
+    capsys.readouterr()
+    real = ThrowStore.import_table
+
+    def full(self: ThrowStore, *a: object, **k: object) -> int:
+        with _FileSizeLimit():
+            return real(self, *a, **k)
+
+    with monkeypatch.context() as m:
+        m.setattr(ThrowStore, "import_table", full)
+        code = cell_exit(["log", "--db", str(db), "import", str(b)])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err, err
+    assert f"cell: error: {db}: cannot write the throw-log store (disk I/O error" in err, err
+    with sqlite3.connect(db) as conn:  # the store as SQLite reads it, not as `cell` does
+        assert conn.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+        assert conn.execute("SELECT COUNT(*) FROM throws").fetchone() == (6,)
+    assert cell_exit(["log", "--db", str(db), "import", str(b)]) == 0
+    with ThrowStore(db, read_only=True) as store:
+        assert len(store) == 12
+
+
+def test_a_speed_scale_slower_than_any_arm_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell run --speed-scale 1e-9` came out of its first move as a traceback (NumPy asked
+    for a 5.8 TiB array), `--speed-scale 0.001` ran for minutes growing past 2 GB. Refused
+    now where the arm's slowest joint would accelerate under MIN_ACCELERATION, what a
+    mount file may give (the mount's own limits, not a constant of this test); the least
+    scale the message gives is taken."""
+    job = _job(tmp_path, "  - {object: cube50, bin: far}\n")
+    slowest = min(load_mount("panda").acceleration_limits)
+    least = MIN_ACCELERATION / slowest
+    for scale in ("1e-9", "0.001", f"{least * 0.99:.6f}"):
+        assert cell_exit(["run", str(job), "--no-log", "--speed-scale", scale]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err, err
+        assert f"--speed-scale {float(scale):g}: the panda arm's slowest joint" in err, err
+        assert f"an acceleration limit of {slowest:g} rad/s²" in err, err
+    given = float(err.split("; give ")[1].split(" to 1")[0])
+    assert least <= given < least + 1e-4
+    for argv in (
+        ["bench", "sort", "--layouts", "1", "--robots", "ur10", "--speed-scale", "0.02"],
+        ["bench", "tradeoff", "--layouts", "1", "--robots", "ur10", "--scales", "0.02,1"],
+    ):
+        assert cell_exit(argv) == 2
+        assert "the ur10 arm's slowest joint" in capsys.readouterr().err
