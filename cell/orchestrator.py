@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from cell.arm.base import check_speed_scale
 from cell.arm.flywheel import Flywheel, LandingCorrection
 from cell.arm.fork import PlanFork
 from cell.arm.grip_limits import GripUse
@@ -74,10 +75,9 @@ log = logging.getLogger(__name__)
 ARM_SPEED_SCALE = 1.0  # fraction of the joint velocity/acceleration limits used
 
 
-def _check_options(speed_scale: float, pick: str, release: str, order: str) -> None:
-    """InvalidInput naming the option and what would be valid."""
-    if not (0.0 < speed_scale <= 1.0):
-        raise InvalidInput(f"speed_scale {speed_scale!r}: give a fraction in (0, 1]")
+def _check_options(speed_scale: float, pick: str, release: str, order: str, arm: str) -> None:
+    """InvalidInput naming the option and what would be valid (`arm`: the job's robot)."""
+    check_speed_scale(speed_scale, arm)
     if pick not in PICKS:
         raise InvalidInput(f"pick {pick!r}: valid are {list(PICKS)}")
     if release not in RELEASES:
@@ -181,7 +181,7 @@ class Orchestrator(
         from cell.robot.model import load_robot
         from cell.sim import BinSpec, CellScene
 
-        _check_options(speed_scale, pick, release, order)  # before the scene is built
+        _check_options(speed_scale, pick, release, order, job.robot)  # before the scene
         _load_planning_libraries()
         self.tuning = tuning
         self._init_forks(plan_workers)  # `cell.arm.fork`

@@ -7,6 +7,7 @@ which sets this state up; each part reads it and calls the others through it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -16,7 +17,33 @@ from cell.arm.tuning import ArmTuning
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
-__all__ = ["ArmBase"]
+__all__ = ["ArmBase", "check_speed_scale"]
+
+
+def check_speed_scale(scale: float, robot: str | None, option: str = "speed_scale") -> None:
+    """InvalidInput unless `scale` (the fraction of its joint velocity and acceleration
+    limits the arm's moves use) is in (0, 1] and, for the arm `robot` (a name or a mount
+    file; None: not checked), leaves its slowest joint's acceleration limit at
+    `cell.robot.mount.MIN_ACCELERATION` or more: what a mount file may give at the least.
+    Slower, a move's timing and stepping grow as 1/scale (at 1e-9 the first move asked for
+    a 5.8 TiB array; at 1e-3 a one-item run took minutes and gigabytes)."""
+    from cell.errors import InvalidInput
+
+    if not 0.0 < scale <= 1.0:
+        raise InvalidInput(f"{option} {scale}: give a fraction in (0, 1]")
+    if robot is None:
+        return
+    from cell.robot.mount import MIN_ACCELERATION, load_mount
+
+    slowest = min(load_mount(robot).acceleration_limits)
+    least = MIN_ACCELERATION / slowest
+    if scale < least:
+        raise InvalidInput(
+            f"{option} {scale:g}: the {robot} arm's slowest joint (an acceleration limit of "
+            f"{slowest:g} rad/s²) would accelerate at {scale * slowest:.3g} rad/s², under the "
+            f"{MIN_ACCELERATION:g} rad/s² a mount file may give at the least (docs/arms.md); "
+            f"give {math.ceil(least * 1e4) / 1e4:g} to 1 for this arm"
+        )
 
 
 class ArmBase:

@@ -118,17 +118,18 @@ def run_sort(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
+    from cell.arm.base import check_speed_scale
     from cell.bench.bench_sort import first_seed, layout_units, summarise_layouts
     from cell.errors import InvalidInput
 
     robots = _robots(args.robots)
     if not 1 <= args.layouts <= 10_000:
         raise InvalidInput(f"--layouts {args.layouts}: give 1 to 10000")
+    for robot in robots:
+        check_speed_scale(args.speed_scale, robot, "--speed-scale")
     out = Path(args.out) if args.out else None
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-    if not 0.0 < args.speed_scale <= 1.0:
-        raise InvalidInput(f"--speed-scale {args.speed_scale}: give a fraction in (0, 1]")
     first = first_seed(args.set, args.layouts, args.seed)
     units = layout_units(
         args.layouts,
@@ -223,6 +224,7 @@ def _robots(text: str) -> tuple[str, ...]:
 def run_tradeoff(args: argparse.Namespace) -> int:
     import json
 
+    from cell.arm.base import check_speed_scale
     from cell.bench.bench_sort import first_seed
     from cell.bench.bench_tradeoff import plot_tradeoff, tradeoff_rows, tradeoff_units
     from cell.errors import InvalidInput
@@ -233,12 +235,13 @@ def run_tradeoff(args: argparse.Namespace) -> int:
         scales = ()
     if not scales or not all(0.0 < s <= 1.0 for s in scales):
         raise InvalidInput(f"--scales {args.scales!r}: give fractions in (0, 1], e.g. 0.5,1.0")
+    robots = _robots(args.robots)
+    for robot in robots:
+        check_speed_scale(scales[0], robot, "--scales")  # the slowest
     if not 1 <= args.layouts <= 10_000:
         raise InvalidInput(f"--layouts {args.layouts}: give 1 to 10000")
     first = first_seed(args.set, args.layouts, args.seed)
-    units = tradeoff_units(
-        scales, args.layouts, first, _robots(args.robots), max(0, args.max_items)
-    )
+    units = tradeoff_units(scales, args.layouts, first, robots, max(0, args.max_items))
     results = _campaign(args, units, "layouts x speed scales")
     rows = tradeoff_rows(results)
     doc = {**_set_figures(args.set, first, args.layouts), "points": rows}
