@@ -129,3 +129,26 @@ def test_a_speed_scale_slower_than_any_arm_is_refused(
     ):
         assert cell_exit(argv) == 2
         assert "the ur10 arm's slowest joint" in capsys.readouterr().err
+
+
+def test_bench_sort_records_a_layout_its_arm_cannot_sort_and_goes_on(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell bench sort --robots panda,ur3`: a random layout keeps the default pick station,
+    0.60 m out, beyond what the UR3's grip pointing down reaches (docs/arms.md). On main
+    the job check's refusal ended the whole benchmark (exit 2) after the Panda's layout had
+    run, its results lost; now the UR3's layout is recorded refused, its reason said, and
+    the Panda's is reported. Every layout refused exits 4, as a run that sorts nothing."""
+    out = tmp_path / "b.json"
+    argv = ["bench", "sort", "--set", "tune", "--max-items", "1", "--workers", "1"]
+    argv += ["--no-cycle-search", "--no-turn-release"]
+    assert cell_exit(argv + ["--layouts", "2", "--robots", "panda,ur3", "--json", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "layout 1 (ur3) refused: <random layout 1>, line " in err, err
+    assert "the ur3 arm does not reach the pick station" in err, err
+    doc = json.loads(out.read_text())
+    assert doc["layouts_refused"] == 1 and doc["items"] == 1, doc
+    rows = {r["robot"]: r for r in doc["per_layout"]}
+    assert rows["ur3"]["refused"] and not rows["panda"]["refused"], rows
+    assert cell_exit(argv + ["--layouts", "1", "--robots", "ur3", "--json", str(out)]) == 4
+    assert "every layout was refused" in capsys.readouterr().err

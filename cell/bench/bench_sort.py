@@ -178,9 +178,6 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
     refused: list[str] = []  # kinds drawn that no bin could take, drawn again
     doc = random_job(unit.seed, unit.robot, refused=refused)
     name = f"<random layout {unit.seed}>"
-    job = parse_job(yaml.safe_dump(doc, sort_keys=False), name)
-    if unit.max_items:
-        job = replace(job, max_items=unit.max_items)
     cat = catalogue()
     out: dict[str, Any] = {
         "seed": unit.seed,
@@ -191,7 +188,10 @@ def _run_layout(unit: LayoutUnit) -> dict[str, Any]:
         "kinds_drawn": len(doc["items"]) + len(refused),
         "items": [],
     }
-    try:
+    try:  # a layout its arm cannot sort (the station out of its reach) is refused, not the run
+        job = parse_job(yaml.safe_dump(doc, sort_keys=False), name)
+        if unit.max_items:
+            job = replace(job, max_items=unit.max_items)
         orch = Orchestrator(
             job,
             learn=unit.learn,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import platform
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -173,6 +174,13 @@ def run_sort(args: argparse.Namespace) -> int:
                 + ("  (refused)" if r["refused"] else "")
             )
         write_json(args, figures)
+    for lay in layouts:  # why, in the job check's words (its last line: its first error)
+        if lay["refused"]:
+            why = lay["refused"].splitlines()[-1]
+            print(f"layout {lay['seed']} ({lay['robot']}) refused: {why}", file=sys.stderr)
+    if all(lay["refused"] for lay in layouts):
+        print("cell bench sort: every layout was refused (above)", file=sys.stderr)
+        return 4  # as `cell run` that sorts nothing (EXIT_NOTHING_SORTED)
     return 0
 
 
