@@ -152,3 +152,35 @@ def test_bench_sort_records_a_layout_its_arm_cannot_sort_and_goes_on(
     assert rows["ur3"]["refused"] and not rows["panda"]["refused"], rows
     assert cell_exit(argv + ["--layouts", "1", "--robots", "ur3", "--json", str(out)]) == 4
     assert "every layout was refused" in capsys.readouterr().err
+
+
+def test_a_release_under_the_floor_is_refused_and_a_moved_current_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`cell plan --box` wholly under the floor planned a release at z = -0.2 m; `cell throw
+    --at 0 0 -0.5` told the user to lower the landing plane (under the floor, which it
+    refuses); `cell plan --current` below the release box released elsewhere, silently.
+    Refused now, by flag; a --current outside the box is said with the point the plan
+    released from, which the JSON's release point is."""
+    plan = ["plan", "--object", "cube50", "--target", "1.0", "0", "0.1"]
+    for argv, flag in (
+        (plan + ["--box", "0.2", "-0.4", "-0.5", "0.6", "0.4", "-0.2"], "--box"),
+        (plan + ["--current", "0.4", "0", "-0.3"], "--current"),
+        (["throw", "--object", "cube50", "--at", "0", "0", "-0.5"], "--at"),
+    ):
+        assert cell_exit(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert f"cell: error: {flag}: a release point z = -" in err, err
+        assert "is under the floor" in err, err
+    out = tmp_path / "p.json"
+    argv = plan + ["--current", "0.4", "0", "0.3", "--method", "fast", "--json", str(out)]
+    assert cell_exit(argv) == 0
+    err = capsys.readouterr().err
+    doc = json.loads(out.read_text())
+    at = (doc["x_m"], doc["y_m"], doc["z_m"])
+    assert at != (0.4, 0.0, 0.3), doc  # not released where --current is
+    said = ", ".join(f"{v:.2f}" for v in at)
+    assert "--current (0.40, 0.00, 0.30) m lies outside the release box" in err, err
+    assert f"releases from its nearest point, ({said}) m, instead" in err, err
+    assert cell_exit(plan + ["--current", "0.4", "0", "0.6", "--method", "fast"]) == 0
+    assert "outside the release box" not in capsys.readouterr().err  # inside: not said

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from collections.abc import Iterator
 from typing import Any
+
+import numpy as np
 
 from cell.cli.common import add_json_arg, add_object_args, add_vector_arg, object_from_args, report
 from cell.cli.model_checks import (
     modelled,
+    refuse_release_under_floor,
     refuse_under_floor,
     warn_if_light,
     warn_if_not_held,
@@ -39,7 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         default="auto",
         help="fast inverse, full NLP, or fast with the NLP as fallback (auto)",
     )
-    add_vector_arg(p, "--current", "current grip centre [m]: the fast path releases there")
+    add_vector_arg(
+        p,
+        "--current",
+        "current grip centre [m]: the fast path releases there (moved into --box, said)",
+    )
     add_vector_arg(
         p,
         "--base-velocity",
@@ -96,6 +104,10 @@ def run(args: argparse.Namespace) -> int:
 
     obj = object_from_args(args)
     refuse_under_floor("--target", args.target[2])
+    if args.box is not None:
+        refuse_release_under_floor("--box", args.box[2])
+    if args.current is not None:
+        refuse_release_under_floor("--current", args.current[2])
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
     warn_if_light(obj)
@@ -114,7 +126,27 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
+    _say_current_moved(args.current, _bounds(args))
     return report(args, plan.as_dict(), _text(plan, obj, said))
+
+
+def _say_current_moved(current: Any, bounds: Any) -> None:
+    """A line on standard error where --current lies outside the release box: the fast path
+    releases at the box's point nearest it, not there (`cell.optimize.plan_throw`)."""
+    if current is None:
+        return
+    inside = bounds.clip_position(np.asarray(current, float))
+    if np.allclose(inside, current, rtol=0.0, atol=1e-12):
+        return
+    at, to, lo, hi = (
+        ", ".join(f"{v:.2f}" for v in p)
+        for p in (current, inside, bounds.position_min, bounds.position_max)
+    )
+    print(
+        f"cell plan: --current ({at}) m lies outside the release box (--box: ({lo}) to "
+        f"({hi}) m); the fast path releases from its nearest point, ({to}) m, instead",
+        file=sys.stderr,
+    )
 
 
 def _text(plan: Any, obj: ObjectParams, said: str = "") -> Iterator[str]:

@@ -19,6 +19,7 @@ from cell.cli.common import (
 )
 from cell.cli.model_checks import (
     modelled,
+    refuse_release_under_floor,
     refuse_under_floor,
     warn_if_light,
     warn_if_not_held,
@@ -64,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     obj = object_from_args(args)
     refuse_under_floor("--land-z", args.land_z)
+    refuse_release_under_floor("--at", args.at[2])
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
     warn_if_light(obj)

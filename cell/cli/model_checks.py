@@ -14,7 +14,7 @@ from cell.errors import InvalidInput
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
-__all__ = ["refuse_under_floor", "warn_if_light", "warn_if_not_held"]
+__all__ = ["refuse_release_under_floor", "refuse_under_floor", "warn_if_light", "warn_if_not_held"]
 
 
 def refuse_under_floor(flag: str, z_m: float) -> None:
@@ -27,6 +27,20 @@ def refuse_under_floor(flag: str, z_m: float) -> None:
         raise InvalidInput(
             f"{flag}: the landing plane z = {z_m:g} m is under the floor (z = 0 m in the "
             "world frame W); give 0 or more (a bin's rim height, or 0 for the floor)"
+        )
+
+
+def refuse_release_under_floor(flag: str, z_m: float) -> None:
+    """Refuse a release point (its z, `z_m`) under the floor: no arm of the cell reaches
+    there, and the model would fly the item up through the floor.
+
+    Raises:
+        InvalidInput: `z_m` < 0, naming the flag and what is valid.
+    """
+    if z_m < 0.0:
+        raise InvalidInput(
+            f"{flag}: a release point z = {z_m:g} m is under the floor (z = 0 m in the world "
+            "frame W, where the arm's base stands); give a height of 0 or more"
         )
 
 
