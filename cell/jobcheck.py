@@ -34,6 +34,8 @@ from typing import Any
 
 import numpy as np
 
+from cell.jobbins import ROBOT_BASE_CLEARANCE_M as _CLEAR_M
+
 __all__ = [
     "STATION_HALF_M",
     "STROKE_RANGE_M",
@@ -173,7 +175,7 @@ def _inner(reach: float, here_m: float) -> bool:
     return here_m < reach - 0.01
 
 
-def _out(reach: float, here_m: float) -> str:
+def _out(reach: float, here_m: float, for_bin: bool = True) -> str:
     """How far out the grip pointing down reaches at a height, in words; `here_m` is how
     far out the pose missed lies [m]: nearer than `reach`, the gap is an inner one (the
     joints' limits keep the grip from pointing down that close to the base)."""
@@ -184,15 +186,34 @@ def _out(reach: float, here_m: float) -> str:
             f"the arm's grip pointing down reaches about {reach:.2f} m out at that height, "
             "but not this near the base (its joints' limits)"
         )
+    if for_bin and _too_near(reach):
+        return (
+            f"the arm's grip pointing down reaches about {reach:.2f} m out at that height, "
+            f"nearer the base than a bin may stand ({_CLEAR_M} m)"
+        )
     return f"the arm's grip pointing down reaches about {reach:.2f} m out at that height"
+
+
+def _too_near(reach: float) -> bool:
+    """Does the grip pointing down reach out at a height only where no bin may stand
+    (`cell.jobbins.ROBOT_BASE_CLEARANCE_M`: a bin's nearest wall at least that far out)?
+    An arm hung from the ceiling over the floor's bins: no bin closer places."""
+    return 0.0 < reach < _CLEAR_M
+
+
+def _whither(reach: float, here_m: float) -> str:
+    """Where to move a station the grip pointing down misses, in words (`_out`'s cases)."""
+    if reach <= 0.0:  # nowhere out at that height
+        return "to a height the grip reaches pointing down (`cell reach --elevation -1.5708`)"
+    return "farther out" if _inner(reach, here_m) else "within that"
 
 
 def _move(reach: float, here_m: float) -> str:
     """Where to move a bin whose place pose the arm misses (`_out`'s cases), in words;
     none where the grip does not point down at that height at all (the Z1 over a bin: the
     carry lifts the item `ArmTuning.lift_m` over the floor plate at least)."""
-    if reach <= 0.0:  # not at that height anywhere out: no other spot helps
-        return ""
+    if reach <= 0.0 or (_too_near(reach) and not _inner(reach, here_m)):
+        return ""  # not at that height anywhere a bin may stand: no other spot helps
     return f"move the bin {'farther out' if _inner(reach, here_m) else 'closer'}, or "
 
 
@@ -245,8 +266,8 @@ def reach_problems(
             f"({what}: the grip pointing down with its TCP at {_fmt(tcp)} m, "
             f"{_missed(miss)}); the station's centre is "
             f"{r_pick:.2f} m from the base and "
-            f"{_out(reach, r_pick)}: move the station "
-            f"{'farther out' if _inner(reach, r_pick) else 'within that'}, or choose another arm"
+            f"{_out(reach, r_pick, for_bin=False)}: move the station {_whither(reach, r_pick)}, "
+            "or choose another arm"
         )
         break
     return out + place_problems(robot, bins, items, placed, where)

@@ -184,3 +184,61 @@ def test_a_release_under_the_floor_is_refused_and_a_moved_current_said(
     assert f"releases from its nearest point, ({said}) m, instead" in err, err
     assert cell_exit(plan + ["--current", "0.4", "0", "0.6", "--method", "fast"]) == 0
     assert "outside the release box" not in capsys.readouterr().err  # inside: not said
+
+
+def _ceiling_ur5(tmp_path: Path) -> Path:
+    """A mount file of the UR5 hung from a ceiling 1.3 m up, upside down: a copy of its
+    URDF whose `world_joint` has that origin (docs/arms.md: a stand or a turn is written
+    so), the meshes by absolute path."""
+    from cell.robot.paths import example_robot_data_dir
+
+    erd = Path(example_robot_data_dir())
+    text = (erd / "ur_description/urdf/ur5_robot.urdf").read_text()
+    old = '<child link="base_link"/>\n    <origin rpy="0.0 0.0 0.0" xyz="0.0 0.0 0.0"/>'
+    assert old in text
+    text = text.replace(
+        old,
+        old.replace('rpy="0.0', 'rpy="3.141592653589793').replace(
+            'xyz="0.0 0.0 0.0"', 'xyz="0.0 0.0 1.3"'
+        ),
+    )
+    text = text.replace("package://example-robot-data/robots/", f"{erd}/")
+    (tmp_path / "ur5_ceil.urdf").write_text(text)
+    mount = Path(__file__).parents[1] / "robots/ur5_throwing/mount.yaml"
+    spec = mount.read_text().replace("arm: ur5", "arm: ur5_ceil")
+    spec = spec.replace("arm_urdf: ur_description/urdf/ur5_robot.urdf", "arm_urdf: ur5_ceil.urdf")
+    (tmp_path / "mount.yaml").write_text(spec)
+    return tmp_path / "mount.yaml"
+
+
+def test_an_arm_hung_from_the_ceiling_is_not_told_to_place_nearer_than_a_bin_may_stand(
+    tmp_path: Path,
+) -> None:
+    """The UR5 hung 1.3 m up reaches down to a bin's place pose only 0.21 m out, nearer the
+    base than a bin may stand (ROBOT_BASE_CLEARANCE_M): on main the warning ended "to have
+    them placed, move the bin closer", which no job can do, and a station below its reach
+    was told "move the station within that" of a reach it had none of. Now the warning says
+    the reach lies nearer than a bin may stand, and the station's error where to look."""
+    from cell.errors import JobError
+    from cell.jobbins import ROBOT_BASE_CLEARANCE_M
+    from cell.jobs import load_job
+
+    _ceiling_ur5(tmp_path)
+    near = "{id: near, position_m: [0.55, 0.35], size_m: [0.30, 0.30], rim_height_m: 0.12}"
+    items = "  - {object: cube50, bin: far}\n  - {object: cyl50, bin: near}\n"
+    job = tmp_path / "job.yaml"
+    job.write_text(
+        "cell: {mount: mount.yaml}\npick_station: {position_m: [0.40, -0.30, 0.75]}\n"
+        f"bins:\n  - {near}\n  - {FAR}\nitems:\n{items}"
+    )
+    (warning,) = [w for w in load_job(job).warnings if "cannot place into bin 'near'" in w]
+    reach = float(warning.split("reaches about ")[1].split(" m out")[0])
+    assert 0.0 < reach < ROBOT_BASE_CLEARANCE_M, warning
+    assert "move the bin closer" not in warning, warning
+    assert f"nearer the base than a bin may stand ({ROBOT_BASE_CLEARANCE_M} m)" in warning
+    job.write_text(job.read_text().replace("[0.40, -0.30, 0.75]", "[0.45, -0.40, 0.20]"))
+    with pytest.raises(JobError) as exc:
+        load_job(job)
+    said = str(exc.value)
+    assert "does not get there at that height: move the station to a height the grip" in said
+    assert "within that" not in said, said
