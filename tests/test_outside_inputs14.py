@@ -242,3 +242,18 @@ def test_an_arm_hung_from_the_ceiling_is_not_told_to_place_nearer_than_a_bin_may
     said = str(exc.value)
     assert "does not get there at that height: move the station to a height the grip" in said
     assert "within that" not in said, said
+
+
+def test_a_plan_onto_the_arms_own_base_is_warned(capsys: pytest.CaptureFixture[str]) -> None:
+    """`cell plan --target 0 0 0.1` planned a throw onto the arm's base without a word (the
+    model has no arm in it; a job refuses a bin within ROBOT_BASE_CLEARANCE_M of the base).
+    Warned now, with the target's distance from the base; a target beyond it is not."""
+    from cell.jobbins import ROBOT_BASE_CLEARANCE_M
+
+    plan = ["plan", "--object", "cube50", "--target"]
+    assert cell_exit(plan + ["0.1", "-0.1", "0.1"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the target is 0.14 m from the arm's base" in err, err
+    assert f"within the {ROBOT_BASE_CLEARANCE_M} m a job keeps its bins from it" in err, err
+    assert cell_exit(plan + [str(ROBOT_BASE_CLEARANCE_M + 0.01), "0", "0.1"]) == 0
+    assert "arm's base" not in capsys.readouterr().err

@@ -127,7 +127,23 @@ def run(args: argparse.Namespace) -> int:
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
     _say_current_moved(args.current, _bounds(args))
+    _say_at_the_base(args.target)
     return report(args, plan.as_dict(), _text(plan, obj, said))
+
+
+def _say_at_the_base(target: Any) -> None:
+    """A warning where the target lies within ROBOT_BASE_CLEARANCE_M of the arm's base (the
+    world frame's origin), where a job refuses a bin: the model flies through the arm."""
+    from cell.jobbins import ROBOT_BASE_CLEARANCE_M
+
+    r = math.hypot(target[0], target[1])
+    if r < ROBOT_BASE_CLEARANCE_M:
+        print(
+            f"cell plan: warning: the target is {r:.2f} m from the arm's base (the world "
+            f"frame's origin), within the {ROBOT_BASE_CLEARANCE_M} m a job keeps its bins "
+            "from it; the model flies through the arm standing there",
+            file=sys.stderr,
+        )
 
 
 def _say_current_moved(current: Any, bounds: Any) -> None:
