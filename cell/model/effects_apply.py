@@ -172,13 +172,15 @@ def _after_landing(
     size: np.ndarray | None = None,
     shape: np.ndarray | None = None,
     land_z: np.ndarray | None = None,
+    k_drag: np.ndarray | None = None,
 ) -> np.ndarray:
     """The landing points xy [m] (n, 2) moved on by the landing effects (a bounce, a roll)
     from the impact velocities v_imp [m/s] (n, 3) at the landing plane; `size` (n, 3) [m]
     the objects' extents (the drop law's fall ends at the smallest half-extent), `shape`
     (n,) their shape codes (`cell.model.objects.SHAPES`: the roll law moves balls alone;
     None: every object a ball), `land_z` (n,) [m] the landing planes' heights above the
-    floor (the roll law's fall; None: 0, no fall)."""
+    floor (the roll law's fall; None: 0, no fall), `k_drag` (n,) [1/m] the air's drag
+    constant on each object as it slides (the drop law's slide; None: no drag)."""
     # a parameter is one value, or one per throw (a law in a covariate, `cell.gap.laws`)
     bo = _find(effs, Bounce)
     if bo is not None and np.any(np.asarray(bo.inv_mu) > 0):
@@ -202,7 +204,7 @@ def _after_landing(
     if bd is not None and (
         np.any(np.asarray(bd.inv_mu_drop) > 0) or np.any(np.asarray(bd.depth_m) > 0)
     ):
-        xy = xy + drop_slide(v_imp, bd.inv_mu_drop, bd.depth_m, size)
+        xy = xy + drop_slide(v_imp, bd.inv_mu_drop, bd.depth_m, size, k_drag)
     bl = _find(effs, BounceRoll)
     if bl is not None and np.any(np.asarray(bl.inv_mu_r_per_m) > 0):
         move = roll_move(v_imp, bl.inv_mu_r_per_m, 0.0 if land_z is None else land_z, size)
@@ -246,16 +248,47 @@ def roll_move(
     return vh * (along / np.maximum(speed, 1e-12))[:, None]
 
 
-def drop_slide(v_imp: np.ndarray, inv_mu: Any, depth_m: Any, size: np.ndarray | None) -> np.ndarray:
+def drop_slide(
+    v_imp: np.ndarray,
+    inv_mu: Any,
+    depth_m: Any,
+    size: np.ndarray | None,
+    k_drag: Any = None,
+) -> np.ndarray:
     """The drop law's move (n, 2) [m] (`cell.model.effects_bounce.BounceDrop`) from the
     landing plane's crossing at v_imp [m/s] (n, 3): the free fall over depth_m − r (r the
     smallest half-extent of `size` (n, 3) [m]; 0 without sizes) at v_h, the impact at
-    v_z' = √(v_z² + 2 g (depth_m − r)) taking μ v_z' off v_h, the slide (v_h')² / (2 μ g)."""
+    v_z' = √(v_z² + 2 g (depth_m − r)) taking μ v_z' off v_h, the slide (v_h')² / (2 μ g),
+    or, with the air's drag on the sliding object (k_drag [1/m] per throw or one value:
+    the deceleration μ g + k v²), ln(1 + k v_h'² / (μ g)) / (2 k)."""
     vh, speed, vz, _, vz_floor = _fall(v_imp, depth_m, size)
     inv_mu = np.asarray(inv_mu, float)
     left = np.maximum(speed - vz_floor / np.maximum(inv_mu, 1e-12), 0.0)
-    along = speed * (vz_floor - vz) / G + left**2 * inv_mu / (2 * G)
+    slide = left**2 * inv_mu / (2 * G)
+    if k_drag is not None:
+        slide = slide * _log1p_ratio(2.0 * np.asarray(k_drag, float) * slide)
+    along = speed * (vz_floor - vz) / G + slide
     return vh * (along / np.maximum(speed, 1e-12))[:, None]
+
+
+def _log1p_ratio(z: np.ndarray) -> np.ndarray:
+    """ln(1 + z) / z (1 at z = 0, its series below 1e-6): a slide s without drag becomes
+    s · ln(1 + 2 k s) / (2 k s) with it."""
+    z = np.asarray(z, float)
+    small = np.abs(z) < 1e-6
+    safe = np.where(small, 1.0, z)
+    return np.where(small, 1.0 - z / 2.0, np.log1p(safe) / safe)
+
+
+def _slide_drag(batch: ThrowBatch, effs: Sequence[Effect]) -> np.ndarray | None:
+    """The air's drag constant k [1/m] (n,) on each object as it slides after a drop law's
+    impact: the flight's (½ ρ C_d A / m, times a drag scale's factor where there is one);
+    None where no drop law is among the effects (nothing else reads it)."""
+    if _find(effs, BounceDrop) is None:
+        return None
+    ds = _find(effs, DragScale)
+    k = drag_constant(batch.shape, batch.mass, batch.size)
+    return k * np.asarray(ds.factor, float) if ds is not None else k
 
 
 def _given_launch(
@@ -361,7 +394,18 @@ def predict_with_effects(
         k = drag_constant(batch.shape, batch.mass, batch.size)
         res = fly(p1, v1, k, batch.land_z, accel=accel, t0=t1, step=step)
         xyz_t, v_imp, t_fl, landed = res.position, res.velocity, res.t, res.landed
-    xy = _after_landing(xyz_t[:, :2].copy(), v_imp, effs, batch.size, batch.shape, batch.land_z) * s
+    xy = (
+        _after_landing(
+            xyz_t[:, :2].copy(),
+            v_imp,
+            effs,
+            batch.size,
+            batch.shape,
+            batch.land_z,
+            _slide_drag(batch, effs),
+        )
+        * s
+    )
     if strict and not np.all(landed):
         raise no_landing_error(np.flatnonzero(~landed), batch)
     return Landing(

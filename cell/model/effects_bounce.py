@@ -68,10 +68,13 @@ class BounceDrop(Effect):
     half-extent) above it, moving v_h · t_d further (t_d the free fall's time over
     depth_m − r from the crossing's v_z), hits the floor at v_z' = √(v_z² + 2 g (depth_m − r))
     as the impact law's plastic Coulomb contact (v_h loses μ v_z', or stops), then slides
-    (v_h − μ v_z')² / (2 μ g) to rest. A ball whose rolling resistance holds its spin at
-    nil (Bullet's rolling friction, a torque up to μ_r N, outlasts the friction's μ N r
-    where μ_r ≥ μ r) slides so; the impact law taken at the plane misses the fall by a
-    length that hangs on v_h / v_z and on the object's size.
+    to rest braked by the friction and by the air as in its flight (dv/dt = −μ g − k v²,
+    k = ½ ρ C_d A / m its drag constant, times a drag scale's factor where there is one):
+    ln(1 + k v_h'² / (μ g)) / (2 k), (v_h − μ v_z')² / (2 μ g) where k → 0 (on a slide of
+    a metre or two the air takes a few per cent off). A ball whose rolling resistance
+    holds its spin at nil (Bullet's rolling friction, a torque up to μ_r N, outlasts the
+    friction's μ N r where μ_r ≥ μ r) slides so; the impact law taken at the plane misses
+    the fall by a length that hangs on v_h / v_z and on the object's size.
 
     At its neutral size (depth_m 0, 1/μ 0) it does nothing; the fall is nil where
     depth_m ≤ r, so a fit without a warm start begins below the objects' half-sizes'
