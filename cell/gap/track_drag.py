@@ -23,8 +23,8 @@ tracker's scatter cancels): β = Σ seen·dev / Σ dev·dev, 1 where the tracks 
 factor does, 0 where they fly as configured. An object whose halves show β above DRAG_Z
 standard errors and above BETA_MIN does show the factor's direction, whatever its ratio.
 BETA_MIN: under a real factor W8's objects showed β 0.39-0.91, `test_gap_track_lift`'s drag
-world's ball 0.93; where the drag is as configured a ball's halves showed 0.036 ± 0.008 (the
-lab's integrator against the model's), and the lift world's balls 0.01-0.03.
+world's ball 0.93; where the drag is as configured a ball's halves showed 0.036 ± 0.008 (a
+bias of the halves' fit or of the lab's integrator), and the lift world's balls 0.01-0.03.
 """
 
 from __future__ import annotations
