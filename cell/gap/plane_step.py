@@ -21,7 +21,9 @@ partial effects, or the baseline where none joined) by a cut whose bootstrap 95 
 lies above zero and h1 is `STEP_Z` standard errors from zero. A verdict that names
 effects is then `unknown`, and the report's `landing_step` says why; for either, the
 proposal (`cell.gap.propose`, whose library then holds the step at the fitted breakpoint,
-`step_term`) says what is left.
+`step_term`) says what is left. A tilted plane is the same rule's second candidate
+(`cell.gap.plane_tilt`, `landing_step.tilt`): where it beats a named verdict, its `why` is
+the step's.
 """
 
 from __future__ import annotations
@@ -91,6 +93,7 @@ def step_check(prob: GapProblem, verdict: list[str], r0: np.ndarray, v_sq: np.nd
     baseline's) with the cut's interval, whether it `beats` the verdict (module docstring;
     the proposal then holds the step), and for a verdict that names effects `why` (one
     sentence) where it does, which makes the verdict `unknown`; {} for `none`."""
+    from cell.gap.plane_tilt import tilt_check
     from cell.gap.stats import bootstrap_cut
 
     if verdict[0] == "none":
@@ -111,6 +114,7 @@ def step_check(prob: GapProblem, verdict: list[str], r0: np.ndarray, v_sq: np.nd
         "cut_m": cut, "cut_ci95_m": [lo, hi], "step_bound_z": STEP_Z,
         "beats": bool(lo > 0 and z > STEP_Z),
     }  # fmt: skip
+    out["tilt"] = tilt = tilt_check(prob, verdict, r, v_sq, per_m)  # `cell.gap.plane_tilt`
     if out["beats"] and verdict[0] != "unknown":
         out["why"] = (
             f"the landing plane {h[1]:+.3f} m beyond x = {xb:.3f} m (z {z:.1f}) predicts the "
@@ -118,6 +122,8 @@ def step_check(prob: GapProblem, verdict: list[str], r0: np.ndarray, v_sq: np.nd
             f"against {out['verdict_heldout_rmse_m']:.4f} m (cut interval "
             f"[{lo:.4f}, {hi:.4f}] m): no effect of the vocabulary is a step in the floor"
         )
+    if "why" in tilt and "why" not in out:
+        out["why"] = tilt["why"]
     return out
 
 

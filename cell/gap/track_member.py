@@ -35,13 +35,14 @@ from cell.model.effect_base import Effect
 from cell.model.effects_apply import flight_accel
 from cell.model.flight3d import sample_path
 
-__all__ = ["member_bend", "bend_refusal"]
+__all__ = ["halves_deviation", "member_bend", "bend_refusal"]
 
 
-def member_bend(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
-                parts: tuple[Any, ...]) -> tuple[float, float, float]:  # fmt: skip
-    """(the effects' own bend² over the tracks (the halves' mean product) [m²], the
-    tracks' mean product [m²] and its standard error [m²])."""
+def halves_deviation(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
+                     parts: tuple[Any, ...]) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:  # fmt: skip
+    """Over the tracked throws (`parts[0]`), each half's flight from its first state with the
+    effects less the nominal one, at the half's end (two arrays (m, 3) [m]); the tracks'
+    halves' ends less the nominal one (two (m, 3) [m]); which throws have both, finite (m,)."""
     idx, hv, kk, has_h, t_span = parts
     sub = prob.batch.take(idx)
     rpm = None if prob.rotor_rpm is None else np.asarray(prob.rotor_rpm)[idx]
@@ -56,6 +57,14 @@ def member_bend(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
         seen.append(pe - nom)
     ok = has_h & np.all(np.isfinite(dev[0]) & np.isfinite(dev[1]), axis=1)
     ok &= np.all(np.isfinite(seen[0]) & np.isfinite(seen[1]), axis=1)
+    return dev, seen, ok
+
+
+def member_bend(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect],
+                parts: tuple[Any, ...]) -> tuple[float, float, float]:  # fmt: skip
+    """(the effects' own bend² over the tracks (the halves' mean product) [m²], the
+    tracks' mean product [m²] and its standard error [m²])."""
+    dev, seen, ok = halves_deviation(prob, effects, parts)
     if ok.sum() < 2:
         return float("nan"), float("nan"), float("nan")
     claim = float(np.mean(np.sum(dev[0][ok] * dev[1][ok], axis=1)))
