@@ -37,7 +37,9 @@ Verdict rules:
   sideways pull growing along the flight (a late gust, `cell.gap.track_gust`); a `none`
   is `unknown` (flight) where the tracks bend off the model's flight (`flight_bends`).
 * a verdict naming effects is `unknown`, those effects partial, where a parameter of theirs
-  drifts over the log's throw order (`cell.gap.param_drift`: a band that tires).
+  drifts over the log's throw order (`cell.gap.param_drift`: a band that tires), or where a
+  law of ≤ 2 terms outside the vocabulary predicts held-out throws better by a margin
+  (`cell.gap.propose_vs`).
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ from cell.gap.one_config import one_configuration
 from cell.gap.param_drift import drift_check
 from cell.gap.plane_step import step_check
 from cell.gap.problem import BandStiffness, GapProblem, rmse
+from cell.gap.propose_vs import versus_check
 from cell.gap.select import (
     ACROSS_Z,
     AGREE_SHARE,
@@ -215,11 +218,9 @@ def _candidate(s: Score, base_sq: np.ndarray, B: float, laws: dict[str, dict[str
         "shrink_ci_pct": [lo, hi],
         "fit_rmse_m": s.full.train_rmse_m,
         "params": eff.params(),
-        "params_ci95": (
-            {k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci, strict=True)}
-            if ci is not None
-            else {}
-        ),
+        "params_ci95": ({k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci,
+                                                                     strict=True)}
+                        if ci is not None else {}),  # fmt: skip
         "laws_heldout_rmse_m": laws.get(eff.name, {}),
         "at_bound": at_bound(eff),
         "implausible": eff.implausible(),
@@ -249,11 +250,8 @@ def _verdict_report(
         "heldout_rmse_m": A_v,
         "shrink_pct": _shrink(B, A_v),
         "shrink_ci_pct": [slo, shi],
-        "params": (
-            {e.name: _law_params(e, ci.get(e.name)) for e in public_effects}
-            if verdict[0] != "none"
-            else {}
-        ),
+        "params": ({e.name: _law_params(e, ci.get(e.name)) for e in public_effects}
+                   if verdict[0] != "none" else {}),  # fmt: skip
         "laws": ({e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}),
         "phases": ({e.name: e.phase for e in public_effects} if verdict[0] != "none" else {}),
         "params_ci95": (ci if verdict[0] != "none" else {}),
@@ -326,6 +324,8 @@ def diagnose(
     drift = drift_check(prob, verdict, chosen, F)  # a named effect's parameter drifting
     step = step_check(prob, verdict, r0, cur_sq if chosen else base_sq)  # a step in the floor
     verdict = ["unknown"] if unsteady or bends or drift.get("why") or step.get("why") else verdict
+    vs = versus_check(prob, verdict, r0, cur_sq, F, identified, tracks)  # a law outside it
+    verdict = ["unknown"] if vs.get("why") else verdict
     named = verdict[0] not in ("none", "unknown")
     v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq
     if chosen and verdict[0] != "none":
@@ -352,6 +352,7 @@ def diagnose(
         **({"flight_bends": bends} if bends else {}),
         **({"parameter_drifts": drift} if drift else {}),
         **({"landing_step": step} if step else {}),
+        **({"proposal_vs_verdict": vs} if vs else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials
