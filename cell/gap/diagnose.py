@@ -218,9 +218,11 @@ def _candidate(s: Score, base_sq: np.ndarray, B: float, laws: dict[str, dict[str
         "shrink_ci_pct": [lo, hi],
         "fit_rmse_m": s.full.train_rmse_m,
         "params": eff.params(),
-        "params_ci95": ({k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci,
-                                                                     strict=True)}
-                        if ci is not None else {}),  # fmt: skip
+        "params_ci95": (
+            {k: [float(a), float(b)] for k, (a, b) in zip(eff.params(), ci, strict=True)}
+            if ci is not None
+            else {}
+        ),
         "laws_heldout_rmse_m": laws.get(eff.name, {}),
         "at_bound": at_bound(eff),
         "implausible": eff.implausible(),
@@ -250,8 +252,11 @@ def _verdict_report(
         "heldout_rmse_m": A_v,
         "shrink_pct": _shrink(B, A_v),
         "shrink_ci_pct": [slo, shi],
-        "params": ({e.name: _law_params(e, ci.get(e.name)) for e in public_effects}
-                   if verdict[0] != "none" else {}),  # fmt: skip
+        "params": (
+            {e.name: _law_params(e, ci.get(e.name)) for e in public_effects}
+            if verdict[0] != "none"
+            else {}
+        ),
         "laws": ({e.name: e.law for e in public_effects if e.law} if verdict[0] != "none" else {}),
         "phases": ({e.name: e.phase for e in public_effects} if verdict[0] != "none" else {}),
         "params_ci95": (ci if verdict[0] != "none" else {}),
@@ -261,16 +266,10 @@ def _verdict_report(
 
 def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
     """The report's account of the noise floor: its method and each estimate [m]."""
-    return {
-        "method": nf.method,
-        "repeats_m": nf.repeats_m,
-        "repeat_dof": nf.repeat_dof,
-        "neighbours_m": nf.neighbours_m,
-        "model_m": nf.model_m,
-        "validated_m": nf.validated_m,
-        "validated_share": nf.validated_share,
-        **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {}),
-    }
+    return {"method": nf.method, "repeats_m": nf.repeats_m, "repeat_dof": nf.repeat_dof,
+            "neighbours_m": nf.neighbours_m, "model_m": nf.model_m,
+            "validated_m": nf.validated_m, "validated_share": nf.validated_share,
+            **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {})}  # fmt: skip
 
 
 def _rules() -> dict[str, float]:

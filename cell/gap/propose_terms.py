@@ -7,8 +7,9 @@ one object, the phases the tracks allow, and flagged rows that are one object's 
   and as a lift coefficient, `lift coefficient C_L [-] = k`, whose acceleration is
   θ · ½ρA/m · |v|² n̂ with A the object's reference area of the drag (`drag_area`): one
   C_L for objects of different A/m. A vertical flight has no such plane: nil there.
-- **Terms of one object**: the library's constant speed error, lift coefficient and
-  landing shift ∝ v acting on one object's throws only (`· [object = X]`). They are tried
+- **Terms of one object**: the library's constant speed error, speed error over the log's
+  order (a drift of one object: a bag that leaks), lift coefficient and landing shift ∝ v
+  acting on one object's throws only (`· [object = X]`). They are tried
   object by object, greedily (`object_law`): the law with the object's terms added is kept
   where its held-out score (`cell.gap.propose.TERM_PENALTY` per term) with one more term's
   penalty for the object chosen is below the law without them; at most MAX_OBJECTS objects;
@@ -54,8 +55,11 @@ LIFT_CL_MAX = 1.5
 MAX_OBJECTS = 3  # objects given terms of their own in one law
 MIN_OBJECT_THROWS = 5  # an object with fewer throws has no terms of its own
 OBJECT_ALPHA = 0.001  # the chance, over the objects, of calling a log's scatter one object's
-# the library's terms that also come for one object (their columns masked to its throws)
-OBJECT_SOURCES = ("speed error [share] = k", LIFT_CL, "landing shift [s] = k · v_h")
+# the library's terms that also come for one object (their columns masked to its throws):
+# a speed error growing over the log on one object's throws is its mass drifting (a bag
+# that leaks, `speed error [share] = k · order · [object = X]`)
+OBJECT_SOURCES = ("speed error [share] = k", "speed error [share] = k · order", LIFT_CL,
+                  "landing shift [s] = k · v_h")  # fmt: skip
 
 
 def up_across(v: np.ndarray) -> np.ndarray:
