@@ -8,7 +8,8 @@ configurations of four objects at five strokes thrown twice in shuffled order, 1
 landing scatter per axis. Its worlds:
 
 - speed: as the item leaves the pads its velocity is scaled by 1 + SPEED_K · stroke (an
-  error outside the vocabulary: the scene's `s:launch-speed-stroke`, named `stroke_offset`);
+  error outside the vocabulary, the scene's `s:launch-speed-stroke`, which is named
+  `stroke_offset` there and `tracking_scale` here without the rule);
 - offset: the band pushes as at the logged stroke plus OFFSET_M (the vocabulary's
   `stroke_offset`);
 - leak: `ballB` is a bag that leaks, its mass falling from the logged 0.045 kg at the
@@ -146,9 +147,9 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 
 def test_a_speed_error_growing_with_the_stroke_is_proposed_as_such(lab: dict[str, Path]) -> None:
-    """The speed world is no `stroke_offset` (main: named so): `unknown`, the law of ≤ 2
-    terms that beat it holds a speed error ∝ stroke of about the world's SPEED_K, and so
-    does the proposal."""
+    """The speed world is no effect of the vocabulary (main: `tracking_scale` at 1.25 F):
+    `unknown`, the law of ≤ 2 terms that beat the named effect holds a speed error ∝ stroke
+    of about the world's SPEED_K, and so does the proposal."""
     d, _ = diagnose_log(read_throws_csv(lab["speed"]), DEFAULT_EE, seed=0)
     rep = d.report
     assert rep["verdict"]["effects"] == ["unknown"]
@@ -162,7 +163,8 @@ def test_a_speed_error_growing_with_the_stroke_is_proposed_as_such(lab: dict[str
 
 def test_a_true_stroke_offset_stays_named(lab: dict[str, Path]) -> None:
     """Control: the offset world is `stroke_offset`, its δ the world's within 30 %; the law
-    outside the vocabulary does not beat it."""
+    outside the vocabulary does not beat it (it fails with the rule's cut dropped, `beats`
+    wherever there is a law)."""
     d, _ = diagnose_log(read_throws_csv(lab["offset"]), DEFAULT_EE, seed=0)
     rep = d.report
     assert rep["verdict"]["effects"] == ["stroke_offset"]
@@ -172,8 +174,8 @@ def test_a_true_stroke_offset_stays_named(lab: dict[str, Path]) -> None:
 
 def test_a_bag_that_leaks_is_proposed_as_its_drift(lab: dict[str, Path]) -> None:
     """The leak world: the proposal holds the bag's speed error growing over the log's
-    order, `· order · [object = ballB]` (main: no such term), its k about the world's
-    0.045 / 0.040 − 1 = 0.125 at the last row."""
+    order, `· order · [object = ballB]` (main: the bag's constant speed error, its mean),
+    its k about the world's 0.045 / 0.040 − 1 = 0.125 at the last row."""
     d, _ = diagnose_log(read_throws_csv(lab["leak"]), DEFAULT_EE, seed=0)
     rep = d.report
     assert rep["verdict"]["effects"] == ["unknown"]
