@@ -7,9 +7,10 @@ one object, the phases the tracks allow, and flagged rows that are one object's 
   and as a lift coefficient, `lift coefficient C_L [-] = k`, whose acceleration is
   θ · ½ρA/m · |v|² n̂ with A the object's reference area of the drag (`drag_area`): one
   C_L for objects of different A/m. A vertical flight has no such plane: nil there.
-- **Terms of one object**: the library's constant speed error, speed error over the log's
-  order (a drift of one object: a bag that leaks), lift coefficient and landing shift ∝ v
-  acting on one object's throws only (`· [object = X]`). They are tried
+- **Terms of one object**: the library's constant speed error, lift coefficient and landing
+  shift ∝ v, and as a second set those with the speed error over the log's order (a drift
+  of one object: a bag that leaks), acting on one object's throws only (`· [object = X]`).
+  They are tried
   object by object, greedily (`object_law`): the law with the object's terms added is kept
   where its held-out score (`cell.gap.propose.TERM_PENALTY` per term) with one more term's
   penalty for the object chosen is below the law without them; at most MAX_OBJECTS objects;
