@@ -345,6 +345,7 @@ def test_the_report_keys_are_the_reports() -> None:
         "flight_bends",
         "parameter_drifts",
         "landing_step",
+        "proposal_vs_verdict",
     }
     for name in ("nominal", "identified"):
         report = json.loads((ROOT / "docs" / "scene_gap" / f"{name}.json").read_text())

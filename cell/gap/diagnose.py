@@ -37,7 +37,9 @@ Verdict rules:
   sideways pull growing along the flight (a late gust, `cell.gap.track_gust`); a `none`
   is `unknown` (flight) where the tracks bend off the model's flight (`flight_bends`).
 * a verdict naming effects is `unknown`, those effects partial, where a parameter of theirs
-  drifts over the log's throw order (`cell.gap.param_drift`: a band that tires).
+  drifts over the log's throw order (`cell.gap.param_drift`: a band that tires), or where a
+  law of ≤ 2 terms outside the vocabulary predicts held-out throws better by a margin
+  (`cell.gap.propose_vs`).
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ from cell.gap.one_config import one_configuration
 from cell.gap.param_drift import drift_check
 from cell.gap.plane_step import step_check
 from cell.gap.problem import BandStiffness, GapProblem, rmse
+from cell.gap.propose_vs import versus_check
 from cell.gap.select import (
     ACROSS_Z,
     AGREE_SHARE,
@@ -263,16 +266,10 @@ def _verdict_report(
 
 def _noise_report(nf: NoiseFloor) -> dict[str, Any]:
     """The report's account of the noise floor: its method and each estimate [m]."""
-    return {
-        "method": nf.method,
-        "repeats_m": nf.repeats_m,
-        "repeat_dof": nf.repeat_dof,
-        "neighbours_m": nf.neighbours_m,
-        "model_m": nf.model_m,
-        "validated_m": nf.validated_m,
-        "validated_share": nf.validated_share,
-        **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {}),
-    }
+    return {"method": nf.method, "repeats_m": nf.repeats_m, "repeat_dof": nf.repeat_dof,
+            "neighbours_m": nf.neighbours_m, "model_m": nf.model_m,
+            "validated_m": nf.validated_m, "validated_share": nf.validated_share,
+            **({"time_sessions": nf.time_sessions} if nf.time_sessions is not None else {})}  # fmt: skip
 
 
 def _rules() -> dict[str, float]:
@@ -326,6 +323,8 @@ def diagnose(
     drift = drift_check(prob, verdict, chosen, F)  # a named effect's parameter drifting
     step = step_check(prob, verdict, r0, cur_sq if chosen else base_sq)  # a step in the floor
     verdict = ["unknown"] if unsteady or bends or drift.get("why") or step.get("why") else verdict
+    vs = versus_check(prob, verdict, r0, cur_sq, F, identified, tracks)  # a law outside it
+    verdict = ["unknown"] if vs.get("why") else verdict
     named = verdict[0] not in ("none", "unknown")
     v_sq = cur_sq if named or (verdict[0] == "unknown" and chosen) else base_sq
     if chosen and verdict[0] != "none":
@@ -352,6 +351,7 @@ def diagnose(
         **({"flight_bends": bends} if bends else {}),
         **({"parameter_drifts": drift} if drift else {}),
         **({"landing_step": step} if step else {}),
+        **({"proposal_vs_verdict": vs} if vs else {}),
     }
     if (v1 := one_configuration(prob, report, verdict, r0)) != verdict:
         verdict = v1  # one configuration: the effects it cannot tell apart as partials

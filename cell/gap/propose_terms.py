@@ -7,8 +7,10 @@ one object, the phases the tracks allow, and flagged rows that are one object's 
   and as a lift coefficient, `lift coefficient C_L [-] = k`, whose acceleration is
   θ · ½ρA/m · |v|² n̂ with A the object's reference area of the drag (`drag_area`): one
   C_L for objects of different A/m. A vertical flight has no such plane: nil there.
-- **Terms of one object**: the library's constant speed error, lift coefficient and
-  landing shift ∝ v acting on one object's throws only (`· [object = X]`). They are tried
+- **Terms of one object**: the library's constant speed error, lift coefficient and landing
+  shift ∝ v, and as a second set those with the speed error over the log's order (a drift
+  of one object: a bag that leaks), acting on one object's throws only (`· [object = X]`).
+  They are tried
   object by object, greedily (`object_law`): the law with the object's terms added is kept
   where its held-out score (`cell.gap.propose.TERM_PENALTY` per term) with one more term's
   penalty for the object chosen is below the law without them; at most MAX_OBJECTS objects;
@@ -54,8 +56,13 @@ LIFT_CL_MAX = 1.5
 MAX_OBJECTS = 3  # objects given terms of their own in one law
 MIN_OBJECT_THROWS = 5  # an object with fewer throws has no terms of its own
 OBJECT_ALPHA = 0.001  # the chance, over the objects, of calling a log's scatter one object's
-# the library's terms that also come for one object (their columns masked to its throws)
+# the library's terms that also come for one object (their columns masked to its throws):
+# a speed error growing over the log on one object's throws is its mass drifting (a bag
+# that leaks, `speed error [share] = k · order · [object = X]`)
 OBJECT_SOURCES = ("speed error [share] = k", LIFT_CL, "landing shift [s] = k · v_h")
+# tried as a second set of the object's terms, with OBJECT_SOURCES (one more column in the
+# same set changes which terms the bounds leave to the first: `s:scale+hop` lost its law)
+OBJECT_DRIFT = "speed error [share] = k · order"
 
 
 def up_across(v: np.ndarray) -> np.ndarray:
@@ -97,11 +104,13 @@ def allowed_phases(tracks: dict[str, Any] | None, floor_m: float) -> set[str] | 
 def object_columns(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
                    ) -> list[tuple[str, list[dict[str, Any]], np.ndarray]]:  # fmt: skip
     """Each object's own terms (its name, the terms, their columns (2n, q)): the library's
-    OBJECT_SOURCES columns (rows throw-major x, y) on that object's throws only. None where
-    the log has one object."""
+    OBJECT_SOURCES columns (rows throw-major x, y) on that object's throws only, and again
+    with OBJECT_DRIFT's (two sets of one object, tried alike). None where the log has one
+    object."""
     oid = np.asarray(prob.table.text("object_id"))
     names = list(dict.fromkeys(oid.tolist()))
     src = [j for j, t in enumerate(terms) if t["term"] in OBJECT_SOURCES]
+    drift = [j for j, t in enumerate(terms) if t["term"] == OBJECT_DRIFT]
     if len(names) < 2 or not src:
         return []
     out = []
@@ -110,9 +119,10 @@ def object_columns(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndar
         if on.sum() < MIN_OBJECT_THROWS:
             continue
         rows = np.repeat(on, 2)[:, None]
-        ts = [{"phase": terms[j]["phase"], "term": f"{terms[j]['term']} · [object = {o}]"}
-              for j in src]  # fmt: skip
-        out.append((o, ts, np.where(rows, a_all[:, src], 0.0)))
+        for js in (src, src + drift) if drift else (src,):
+            ts = [{"phase": terms[j]["phase"], "term": f"{terms[j]['term']} · [object = {o}]"}
+                  for j in js]  # fmt: skip
+            out.append((o, ts, np.where(rows, a_all[:, js], 0.0)))
     return out
 
 
