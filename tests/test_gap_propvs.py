@@ -18,8 +18,7 @@ landing scatter per axis. Its worlds:
 
 from __future__ import annotations
 
-import csv
-import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -28,11 +27,8 @@ import pytest
 from cell.gap.run import diagnose_log
 from cell.log import read_throws_csv
 from cell.model.params import DEFAULT_EE
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, paired_throws, push, write_log
 
-G, RHO, H, PUSH_S, NOISE = 9.81, 1.225, 5e-4, 0.012, 0.010
-R_R, L1, PHI, HOOP, L_T, L0 = 0.010, 0.030, math.pi / 2, 0.020, 0.160, 0.095
-KE3, KE2, KE1 = 400.0, 150.0, 114.6
-CD = {"cube": 1.05, "cuboid": 1.05, "cylinder": 0.82, "sphere": 0.47}
 OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("boxA", "cuboid", 0.035, (0.040, 0.035, 0.050)),
     ("ballB", "sphere", 0.045, (0.055, 0.055, 0.055)),
@@ -44,34 +40,6 @@ OFFSET_M = 0.004  # the offset world's stroke offset [m]
 LEAK, LEAK_TO_KG = "ballB", 0.040  # the leak world's bag and its mass at the last row
 
 
-def _area(shape: str, s: tuple[float, float, float]) -> float:
-    x, y, z = s
-    if shape == "sphere":
-        return math.pi * x * x / 4
-    if shape == "cylinder":
-        return (2 * math.pi * (x / 2) ** 2 + 2 * math.pi * (x / 2) * z) / 4
-    return (x * y + y * z + z * x) / 2
-
-
-def _push(stroke: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """The band's push [N] (MODEL.md's band law, no damping)."""
-    l2 = np.hypot((width - HOOP) / 2, L_T - stroke)
-    dl = np.maximum(L1 + R_R * PHI + HOOP / 2 + l2 - L0, 0.0)
-    fe = KE3 * dl**3 + KE2 * dl**2 + KE1 * dl
-    return 2 * fe * np.cos(np.arctan2(width - HOOP, 2 * (L_T - stroke)))
-
-
-def _throws(rng: np.random.Generator) -> list[dict]:
-    cfgs = [{"obj": OBJECTS[int(rng.integers(len(OBJECTS)))],
-             "stroke": float(rng.choice(np.linspace(0.07, 0.11, 5))),
-             "el": math.radians(float(rng.choice((15.0, 30.0, 45.0, 55.0)))),
-             "az": float(rng.uniform(-0.6, 0.6)),
-             "p0": (float(rng.uniform(-0.1, 0.2)), float(rng.uniform(-0.2, 0.2)),
-                    float(rng.uniform(0.5, 1.0)))} for _ in range(60)]  # fmt: skip
-    rows = cfgs + cfgs
-    return [dict(rows[i]) for i in rng.permutation(len(rows))]
-
-
 def _fly(throws: list[dict], world: str) -> np.ndarray:
     """Every throw's landing xy [m] in the lab's world."""
     n = len(throws)
@@ -79,12 +47,12 @@ def _fly(throws: list[dict], world: str) -> np.ndarray:
     if world == "leak":
         bag = np.array([t["obj"][0] == LEAK for t in throws])
         m = np.where(bag, m + (LEAK_TO_KG - m) * np.arange(n) / (n - 1), m)
-    kd = np.array([0.5 * RHO * CD[t["obj"][1]] * _area(t["obj"][1], t["obj"][3])
+    kd = np.array([0.5 * RHO * CD[t["obj"][1]] * area(t["obj"][1], t["obj"][3])
                    for t in throws]) / m  # fmt: skip
     el, az = np.array([t["el"] for t in throws]), np.array([t["az"] for t in throws])
     u = np.c_[np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]
     stroke = np.array([t["stroke"] for t in throws])
-    fo = _push(stroke + (OFFSET_M if world == "offset" else 0.0),
+    fo = push(stroke + (OFFSET_M if world == "offset" else 0.0),
                np.array([t["obj"][3][0] for t in throws]))  # fmt: skip
 
     def acc(v: np.ndarray, push: bool) -> np.ndarray:
@@ -117,19 +85,7 @@ def _fly(throws: list[dict], world: str) -> np.ndarray:
     return land
 
 
-def _write(path: Path, throws: list[dict], landed: np.ndarray) -> Path:
-    cols = ["throw_id", "object_id", "shape", "mass_kg", "size_x_m", "size_y_m", "size_z_m",
-            "stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad", "roll_rad",
-            "vx_mps", "vy_mps", "vz_mps", "platform", "rotor_rpm", "land_z_m", "landed_x_m",
-            "landed_y_m"]  # fmt: skip
-    with path.open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for i, t in enumerate(throws):
-            oid, shape, mass, size = t["obj"]
-            w.writerow([f"P{i:03d}", oid, shape, mass, *size, t["stroke"], *t["p0"], t["el"],
-                        t["az"], 0, 0, 0, 0, "arm", 0, 0, *landed[i]])  # fmt: skip
-    return path
+_write = partial(write_log, prefix="P")  # the lab's log, its ids `P000`...
 
 
 @pytest.fixture(scope="module")
@@ -138,7 +94,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     offset."""
     d = tmp_path_factory.mktemp("propvs")
     rng = np.random.default_rng(67)
-    throws = _throws(rng)
+    throws = paired_throws(rng, OBJECTS)
     noise = rng.normal(0.0, NOISE, (len(throws), 2))
     return {
         w: _write(d / f"{w}.csv", throws, _fly(throws, w) + noise)

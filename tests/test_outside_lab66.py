@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -33,11 +34,8 @@ from cell.gap.run import diagnose_log
 from cell.log import read_throws_csv
 from cell.log.csvio import read_tracks_csv
 from cell.model.params import DEFAULT_EE
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, paired_throws, push, write_log
 
-G, RHO, H, PUSH_S, NOISE = 9.81, 1.225, 5e-4, 0.012, 0.010
-R_R, L1, PHI, HOOP, L_T, L0 = 0.010, 0.030, math.pi / 2, 0.020, 0.160, 0.095
-KE3, KE2, KE1 = 400.0, 150.0, 114.6
-CD = {"cube": 1.05, "cuboid": 1.05, "cylinder": 0.82, "sphere": 0.47}
 OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("boxA", "cuboid", 0.035, (0.040, 0.035, 0.050)),
     ("ballB", "sphere", 0.045, (0.055, 0.055, 0.055)),
@@ -50,34 +48,6 @@ PITCH_PER_MPS = 0.015  # E3's elevation error per m/s of launch speed
 WINDS = ((0.0, 1.0), (1.0, -1.0))  # E5's morning and afternoon
 
 
-def _area(shape: str, s: tuple[float, float, float]) -> float:
-    x, y, z = s
-    if shape == "sphere":
-        return math.pi * x * x / 4
-    if shape == "cylinder":
-        return (2 * math.pi * (x / 2) ** 2 + 2 * math.pi * (x / 2) * z) / 4
-    return (x * y + y * z + z * x) / 2
-
-
-def _push(stroke: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """The band's push [N] (MODEL.md's band law, C = 0)."""
-    l2 = np.hypot((width - HOOP) / 2, L_T - stroke)
-    dl = np.maximum(L1 + R_R * PHI + HOOP / 2 + l2 - L0, 0.0)
-    fe = KE3 * dl**3 + KE2 * dl**2 + KE1 * dl
-    return 2 * fe * np.cos(np.arctan2(width - HOOP, 2 * (L_T - stroke)))
-
-
-def _throws(rng: np.random.Generator) -> list[dict]:
-    cfgs = [{"obj": OBJECTS[int(rng.integers(len(OBJECTS)))],
-             "stroke": float(rng.choice(np.linspace(0.07, 0.11, 5))),
-             "el": math.radians(float(rng.choice((15.0, 30.0, 45.0, 55.0)))),
-             "az": float(rng.uniform(-0.6, 0.6)),
-             "p0": (float(rng.uniform(-0.1, 0.2)), float(rng.uniform(-0.2, 0.2)),
-                    float(rng.uniform(0.5, 1.0)))} for _ in range(60)]  # fmt: skip
-    rows = cfgs + cfgs
-    return [dict(rows[i]) for i in rng.permutation(len(rows))]
-
-
 def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float,
          tracks: list[list[tuple[float, ...]]] | None = None, step_m: float = STEP_M
          ) -> np.ndarray:  # fmt: skip
@@ -85,11 +55,11 @@ def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float,
     positions at TRACK_HZ from the push's end appended to it as (t [s], x, y, z)."""
     n = len(throws)
     m = np.array([t["obj"][2] for t in throws])
-    kd = np.array([0.5 * RHO * CD[t["obj"][1]] * _area(t["obj"][1], t["obj"][3])
+    kd = np.array([0.5 * RHO * CD[t["obj"][1]] * area(t["obj"][1], t["obj"][3])
                    for t in throws]) / m  # fmt: skip
     el, az = np.array([t["el"] for t in throws]), np.array([t["az"] for t in throws])
     u = np.c_[np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]
-    fo = _push(np.array([t["stroke"] for t in throws]), np.array([t["obj"][3][0] for t in throws]))
+    fo = push(np.array([t["stroke"] for t in throws]), np.array([t["obj"][3][0] for t in throws]))
     wind = np.zeros((n, 3))
     if world == "E5":
         wind[:, :2] = np.where(afternoon[:, None], WINDS[1], WINDS[0])
@@ -136,19 +106,7 @@ def _fly(throws: list[dict], world: str, afternoon: np.ndarray, step_x: float,
     return land
 
 
-def _write(path: Path, throws: list[dict], landed: np.ndarray, times: np.ndarray) -> Path:
-    cols = ["throw_id", "object_id", "shape", "mass_kg", "size_x_m", "size_y_m", "size_z_m",
-            "stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad", "roll_rad",
-            "vx_mps", "vy_mps", "vz_mps", "platform", "rotor_rpm", "land_z_m", "landed_x_m",
-            "landed_y_m", "time_s"]  # fmt: skip
-    with path.open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for i, t in enumerate(throws):
-            oid, shape, mass, size = t["obj"]
-            w.writerow([f"L{i:03d}", oid, shape, mass, *size, t["stroke"], *t["p0"], t["el"],
-                        t["az"], 0, 0, 0, 0, "arm", 0, 0, *landed[i], f"{times[i]:.1f}"])  # fmt: skip
-    return path
+_write = partial(write_log, prefix="L")  # the lab's log, its ids `L000`...
 
 
 @pytest.fixture(scope="module")
@@ -156,7 +114,7 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """The lab's logs: E0, E3, E4, E5 at two sessions of the day; E0 in one session."""
     d = tmp_path_factory.mktemp("lab66")
     rng = np.random.default_rng(66)
-    throws = _throws(rng)
+    throws = paired_throws(rng, OBJECTS)
     n = len(throws)
     times = np.r_[9 * 3600 + np.sort(rng.uniform(0, 3600, n // 2)),
                   14 * 3600 + np.sort(rng.uniform(0, 3600, n - n // 2))]  # fmt: skip

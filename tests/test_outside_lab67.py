@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -34,11 +35,9 @@ from cell.log import read_throws_csv
 from cell.log.csvio import read_tracks_csv
 from cell.model.effects import DragScale
 from cell.model.params import DEFAULT_EE
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, push, write_log
 
-G, RHO, H, PUSH_S, NOISE, HZ = 9.81, 1.225, 5e-4, 0.012, 0.010, 120.0
-R_R, L1, PHI, HOOP, L_T, L0 = 0.010, 0.030, math.pi / 2, 0.020, 0.160, 0.095
-KE3, KE2, KE1 = 400.0, 150.0, 114.6
-CD = {"cube": 1.05, "cuboid": 1.05, "cylinder": 0.82, "sphere": 0.47}
+HZ = 120.0  # the tracks' rate [Hz]
 OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("die", "cube", 0.040, (0.045, 0.045, 0.045)),
     ("foam", "sphere", 0.035, (0.060, 0.060, 0.060)),
@@ -48,23 +47,6 @@ OBJECTS = [  # id, shape, mass [kg], extents [m]
 TILT = 0.08  # the tilt world's surface: z = TILT · x
 SCALE = 0.96  # the scale world's tracker
 DRAG = 1.8  # the steep world's C_d factor
-
-
-def _area(shape: str, s: tuple[float, float, float]) -> float:
-    x, y, z = s
-    if shape == "sphere":
-        return math.pi * x * x / 4
-    if shape == "cylinder":
-        return (2 * math.pi * (x / 2) ** 2 + 2 * math.pi * (x / 2) * z) / 4
-    return (x * y + y * z + z * x) / 2
-
-
-def _push(stroke: np.ndarray, width: np.ndarray) -> np.ndarray:
-    """The band's push [N] (MODEL.md's band law, C = 0)."""
-    l2 = np.hypot((width - HOOP) / 2, L_T - stroke)
-    dl = np.maximum(L1 + R_R * PHI + HOOP / 2 + l2 - L0, 0.0)
-    fe = KE3 * dl**3 + KE2 * dl**2 + KE1 * dl
-    return 2 * fe * np.cos(np.arctan2(width - HOOP, 2 * (L_T - stroke)))
 
 
 def _throws(rng: np.random.Generator, steep: bool) -> list[dict]:
@@ -84,11 +66,11 @@ def _fly(throws: list[dict], drag: float = 1.0, tilt: float = 0.0,
     each flight's positions at HZ from the push's end appended as (t [s], x, y, z)."""
     n = len(throws)
     m = np.array([t["obj"][2] for t in throws])
-    kd = drag * np.array([0.5 * RHO * CD[t["obj"][1]] * _area(t["obj"][1], t["obj"][3])
+    kd = drag * np.array([0.5 * RHO * CD[t["obj"][1]] * area(t["obj"][1], t["obj"][3])
                           for t in throws]) / m  # fmt: skip
     el, az = np.array([t["el"] for t in throws]), np.array([t["az"] for t in throws])
     u = np.c_[np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)]
-    fo = _push(np.array([t["stroke"] for t in throws]), np.array([t["obj"][3][0] for t in throws]))
+    fo = push(np.array([t["stroke"] for t in throws]), np.array([t["obj"][3][0] for t in throws]))
 
     def acc(v: np.ndarray, push: bool) -> np.ndarray:
         a = -kd[:, None] * np.linalg.norm(v, axis=1)[:, None] * v + (fo / m)[:, None] * u * push
@@ -125,19 +107,7 @@ def _fly(throws: list[dict], drag: float = 1.0, tilt: float = 0.0,
     return land
 
 
-def _write(path: Path, throws: list[dict], landed: np.ndarray) -> Path:
-    cols = ["throw_id", "object_id", "shape", "mass_kg", "size_x_m", "size_y_m", "size_z_m",
-            "stroke_m", "x_m", "y_m", "z_m", "elevation_rad", "azimuth_rad", "roll_rad",
-            "vx_mps", "vy_mps", "vz_mps", "platform", "rotor_rpm", "land_z_m", "landed_x_m",
-            "landed_y_m"]  # fmt: skip
-    with path.open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(cols)
-        for i, t in enumerate(throws):
-            oid, shape, mass, size = t["obj"]
-            w.writerow([f"q{i:03d}", oid, shape, mass, *size, t["stroke"], *t["p0"], t["el"],
-                        t["az"], 0, 0, 0, 0, "arm", 0, 0, *landed[i]])  # fmt: skip
-    return path
+_write = partial(write_log, prefix="q")  # the lab's log, its ids `q000`...
 
 
 def _write_tracks(path: Path, samples: list[list[tuple[float, ...]]],
