@@ -202,8 +202,18 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     )
     close(a_log, hard["after_over_floor"], 2)
     was9, now9, of9, d9 = quoted(PAGE, r"(\d+) → (\d+) of (\d+) pass,\s+diagonal (\d+) as before")
-    assert (int(now9), int(of9), int(d9)) == (table["passes"], len(rows), table["diagonal"])
+    assert (now9, of9, d9) == ("39", "45", "39")  # the roll law's depth's table, as told
     assert was9 == now7 == "37" and d9 == d8
+    was10, now10, of10, dw10, d10 = quoted(
+        PAGE, r"(\d+) → (\d+) of (\d+) pass, diagonal (\d+) → (\d+); no other row moved"
+    )
+    assert (was10, dw10) == (now9, d9)  # the air on the slide came after the roll law's depth
+    air5, before_air5 = quoted(
+        PAGE, r"`s:bounce-hop-mu05` `bounce` at ([\d.]+) F \(was `unknown`, ([\d.]+)\)"
+    )
+    close(air5, rows["s:bounce-hop-mu05"]["after_over_floor"], 2)
+    assert before_air5 == "1.35"  # the table before the air on the slide, as the page tells it
+    assert (int(now10), int(of10), int(d10)) == (table["passes"], len(rows), table["diagonal"])
     d_hard, d_one = quoted(
         PAGE,
         r"fails on the floor's depth\s+\((\d+) % off, the depth then fitted.*?its\s+depth, "
@@ -239,9 +249,16 @@ def check_the_edge_and_the_changes(rows: dict[str, dict[str, Any]], ratio: float
     _mm(f, bs["world_floor_kept_m"])
     assert int(kept) == bs["throws"] - len(bs["outlier_rows"]) and len(bs["outlier_rows"]) == 2
     _mm(every, bs["world_floor_m"])
-    (short,) = quoted(PAGE, r"called\s+`stroke_offset` \(a stroke read (−[\d.]+) mm short\)")
-    _mm(
-        short.replace("−", "-"), rows["s:launch-speed-stroke"]["params"]["stroke_offset"]["delta_m"]
+    short, law_k, world_k = quoted(
+        PAGE, r"join `stroke_offset` \(a stroke read (−[\d.]+) mm short:.*?`speed error \[share\] "
+        r"= ([\d.]+) · stroke_m` \(the world's ([\d.]+)\)"
+    )  # fmt: skip
+    assert float(world_k) == _case("s:launch-speed-stroke")[0]["speed_k"]
+    lss = rows["s:launch-speed-stroke"]
+    _mm(short.replace("−", "-"), lss["params"]["stroke_offset"]["delta_m"])
+    assert (
+        lss["verdict"] == "unknown"
+        and lss["proposal"] == f"speed error [share] = {law_k} · stroke_m"
     )
     doc = load_json("docs/figures/gap_check_scene.json")
     old, new, total, s1, s2, m1, m2 = quoted(
@@ -393,11 +410,12 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
     from tests.figure_checks_scene import check_the_edge_and_the_changes
 
     check_the_edge_and_the_changes(rows, float(above))
-    mu5, a5, ratio2, dep, before5 = quoted(
+    mu5, a5, ratio2, without5, dep, before5 = quoted(
         page,
         r"bouncy floor at μ ([\d.]+) \(`s:bounce-hop-mu05`\) the drop law stands for the "
-        r"bounce, A ([\d.]+) F\s+\(still `unknown`: over ([\d.]+) × the tool's floor\), its "
-        r"floor's depth (\d+) % off the world's:.*?which stood for it before, left ([\d.]+) F",
+        r"bounce, A ([\d.]+) F\s+\(`bounce`: within ([\d.]+) × the tool's floor, since the slide "
+        r"is braked by the air as the\s+flight is; it was ([\d.]+) F without\), its floor's depth "
+        r"(\d+) % off the world's:.*?which stood for it before, left ([\d.]+) F",
     )
     hop5 = rows["s:bounce-hop-mu05"]
     assert float(mu5) == _case("s:bounce-hop-mu05")[0]["friction"]
@@ -406,7 +424,8 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         float(ratio2) == load_json("docs/figures/gap_check_scene.json")["criteria"]["floor_ratio"]
     )
     close(dep, 100 * hop5["param_errors"]["bounce.depth_m"], 0)
-    assert hop5["laws"] == {"bounce": "inv_mu_drop = a + k · mass_kg"} and not hop5["passes"]
+    assert hop5["laws"] == {"bounce": "inv_mu_drop = a + k · mass_kg"} and hop5["passes"]
+    assert without5 == "1.35"  # the table before the air on the slide, as the page tells it
     assert before5 == "1.41"  # the table before the drop law, as the page tells it
     was5, now5, dep0, dep1 = quoted(
         page,
@@ -414,9 +433,8 @@ def check_what_does_not(page: str, rows: dict[str, dict[str, Any]], ratios: dict
         r"\(the depth (\d+) → (\d+) %",
     )
     assert (was5, dep0) == ("1.73", "37")  # the drop law's constant, as the page tells it
-    close(now5, hop5["after_over_floor"], 2)
-    close(dep1, 100 * hop5["param_errors"]["bounce.depth_m"], 0)
-    assert hop5["params_ok"]
+    assert (now5, dep1) == ("1.35", "18")  # that change's table (the air's is in the table now)
+    assert now5 == without5 and hop5["params_ok"]
     (cubes,) = quoted(page, r"\(`s:none-cubes`, A ([\d.]+) F\)")
     close(cubes, rows["s:none-cubes"]["after_over_floor"], 2)
     assert rows["s:none-cubes"]["passes"] and rows["s:wind+bounce"]["passes"]
