@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -72,3 +73,15 @@ def write_log(path: Path, throws: list[dict], landed: np.ndarray,
                    t["az"], 0, 0, 0, 0, "arm", 0, 0, *landed[i]]  # fmt: skip
             w.writerow(row + ([] if times is None else [f"{times[i]:.1f}"]))
     return path
+
+
+def rk4(acc: Callable[[np.ndarray, bool], np.ndarray], p: np.ndarray, v: np.ndarray,
+        push: bool) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """One RK4 step of `H` [s] of positions p and velocities v (n, 3) [m, m/s] under the
+    lab's acceleration `acc(v, push)` [m/s²] (drag, gravity, the band while `push`)."""
+    k1 = acc(v, push)
+    k2 = acc(v + 0.5 * H * k1, push)
+    k3 = acc(v + 0.5 * H * k2, push)
+    k4 = acc(v + H * k3, push)
+    dp = H / 6 * (v + 2 * (v + 0.5 * H * k1) + 2 * (v + 0.5 * H * k2) + (v + H * k3))
+    return p + dp, v + H / 6 * (k1 + 2 * k2 + 2 * k3 + k4)

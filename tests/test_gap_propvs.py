@@ -27,7 +27,7 @@ import pytest
 from cell.gap.run import diagnose_log
 from cell.log import read_throws_csv
 from cell.model.params import DEFAULT_EE
-from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, paired_throws, push, write_log
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, paired_throws, push, rk4, write_log
 
 OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("boxA", "cuboid", 0.035, (0.040, 0.035, 0.050)),
@@ -60,23 +60,15 @@ def _fly(throws: list[dict], world: str) -> np.ndarray:
         a[:, 2] -= G
         return a
 
-    def rk4(p: np.ndarray, v: np.ndarray, push: bool) -> tuple[np.ndarray, np.ndarray]:
-        k1 = acc(v, push)
-        k2 = acc(v + 0.5 * H * k1, push)
-        k3 = acc(v + 0.5 * H * k2, push)
-        k4 = acc(v + H * k3, push)
-        dp = H / 6 * (v + 2 * (v + 0.5 * H * k1) + 2 * (v + 0.5 * H * k2) + (v + H * k3))
-        return p + dp, v + H / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-
     p, v = np.array([t["p0"] for t in throws], float), np.zeros((n, 3))
     for _ in range(round(PUSH_S / H)):
-        p, v = rk4(p, v, True)
+        p, v = rk4(acc, p, v, True)
     if world == "speed":
         v = v * (1.0 + SPEED_K * stroke)[:, None]
     land = np.full((n, 2), np.nan)
     live = np.ones(n, bool)
     while live.any():
-        p1, v1 = rk4(p, v, False)
+        p1, v1 = rk4(acc, p, v, False)
         hit = live & (p1[:, 2] <= 0.0) & (v1[:, 2] < 0)
         s = (p[hit, 2] / (p[hit, 2] - p1[hit, 2]))[:, None]
         land[hit] = p[hit, :2] + s * (p1[hit, :2] - p[hit, :2])

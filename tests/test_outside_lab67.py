@@ -35,7 +35,7 @@ from cell.log import read_throws_csv
 from cell.log.csvio import read_tracks_csv
 from cell.model.effects import DragScale
 from cell.model.params import DEFAULT_EE
-from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, push, write_log
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, push, rk4, write_log
 
 HZ = 120.0  # the tracks' rate [Hz]
 OBJECTS = [  # id, shape, mass [kg], extents [m]
@@ -77,17 +77,9 @@ def _fly(throws: list[dict], drag: float = 1.0, tilt: float = 0.0,
         a[:, 2] -= G
         return a
 
-    def rk4(p: np.ndarray, v: np.ndarray, push: bool) -> tuple[np.ndarray, np.ndarray]:
-        k1 = acc(v, push)
-        k2 = acc(v + 0.5 * H * k1, push)
-        k3 = acc(v + 0.5 * H * k2, push)
-        k4 = acc(v + H * k3, push)
-        dp = H / 6 * (v + 2 * (v + 0.5 * H * k1) + 2 * (v + 0.5 * H * k2) + (v + H * k3))
-        return p + dp, v + H / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-
     p, v = np.array([t["p0"] for t in throws], float), np.zeros((n, 3))
     for _ in range(round(PUSH_S / H)):
-        p, v = rk4(p, v, True)
+        p, v = rk4(acc, p, v, True)
     land, live = np.full((n, 2), np.nan), np.ones(n, bool)
     t, every = PUSH_S, round(1 / (HZ * H))
     for k in range(10**6):
@@ -97,7 +89,7 @@ def _fly(throws: list[dict], drag: float = 1.0, tilt: float = 0.0,
             for i in np.flatnonzero(live):
                 tracks[i].append((t, *p[i]))
         t += H
-        p1, v1 = rk4(p, v, False)
+        p1, v1 = rk4(acc, p, v, False)
         above0, above1 = p[:, 2] - tilt * p[:, 0], p1[:, 2] - tilt * p1[:, 0]
         hit = live & (above1 <= 0) & (v1[:, 2] < 0)
         s = (above0[hit] / (above0[hit] - above1[hit]))[:, None]
