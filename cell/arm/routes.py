@@ -62,7 +62,10 @@ class Routes(ArmBase):
         caller takes the route only if `usable(waypoints)` (`_departure`), and neither
         the swing's waypoints nor none (the spline between the ends) are, the swing's
         are returned without weighing the spline between the ends against them
-        (`_direct_is_better`, a sphere's): the caller takes neither."""
+        (`_direct_is_better`, a sphere's): the caller takes neither. Where the first,
+        sparsest swing is not usable either, no denser one is solved: it is returned as it
+        is (a bottle's departure solved 14 waypoints' IK at each lift of the four it tried,
+        none usable)."""
         if (
             self._frame is None
             or self.tuning.swing_waypoints < 1
@@ -75,6 +78,8 @@ class Routes(ArmBase):
             out = self._swing_waypoints(q_lift, q_rel, plan, n)
             if not out:  # none found with more: the sparser one (or none)
                 break
+            if best is None and usable is not None and not usable(out) and not usable([]):
+                return out  # the sparsest passes not, nor the spline between the ends
             if (
                 best is not None
                 and spline_within_limits(self.robot, [q_lift, *out, q_rel], 400) is None
