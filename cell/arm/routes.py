@@ -64,8 +64,8 @@ class Routes(ArmBase):
         are returned without weighing the spline between the ends against them
         (`_direct_is_better`, a sphere's): the caller takes neither. Where the first,
         sparsest swing is not usable either, no denser one is solved: it is returned as it
-        is (a bottle's departure solved 14 waypoints' IK at each lift of the four it tried,
-        none usable)."""
+        is (tune layout 0's 200 mm bottle: its decision's 4 departures asked 16 swings,
+        326 IK solves along their chains, 0.47 s of its 2.1 s of CPU in a profile)."""
         if (
             self._frame is None
             or self.tuning.swing_waypoints < 1
