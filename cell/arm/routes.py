@@ -108,7 +108,7 @@ class Routes(ArmBase):
         more off one rotation (`cell.arm.joints.twist`) than the swing's `route`, and ask
         no more of the grip at rest (than `most`, the route's)? Then it is taken, without
         planning the two carries to weigh which is sooner: over tune layout 0's 80 such
-        comparisons the direct carry was the sooner in 76 (by 0.3-1.9 s; the route by
+        comparisons the direct carry was the sooner in 76 (by 0.19-1.9 s; the route by
         0.03-0.33 s in the other 4), and the two carries planned were 2.2 s of its
         decisions' CPU, the tail of its planning time per item (docs/HISTORY.md,
         2026-12-02, branch plan68)."""
