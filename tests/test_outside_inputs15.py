@@ -102,3 +102,31 @@ def test_a_calibration_campaign_too_small_to_identify_from_is_refused(
     from cell.cli.cmd_identify import MIN_IDENTIFY_THROWS  # the bound `cell identify` keeps
 
     assert MIN_IDENTIFY_THROWS == 10
+
+
+def test_plan_and_throw_say_what_the_run_would_not_throw(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`cell plan` of the 45 g cylinder 30 x 200 mm planned a stroke of 0.0785 m, silently:
+    the pads hold it only to 0.045 m by the model's parameters, and `cell run` does not
+    throw it at all (its swing tips it out). Both are said now, on standard error, the
+    plan still printed; `cell throw --stroke` beyond the grip the same; a cube50 planned
+    within its grip, nothing said."""
+    from cell.arm.grip_limits import grip_stroke_at
+    from cell.model.objects import ObjectParams
+    from cell.params import load_params
+
+    slender = ["--shape", "cylinder", "--mass", "0.045", "--size", "0.03", "0.03", "0.2"]
+    assert cell_exit(["plan", *slender, "--target", "1.6", "0", "0.15"]) == 0
+    out, err = capsys.readouterr()
+    assert "stroke        L_s = 0.078" in out, out
+    s_max = grip_stroke_at(load_params(None), ObjectParams("cylinder", 0.045, (0.03, 0.03, 0.2)))
+    assert s_max is not None and s_max < 0.0785
+    assert "cell: warning: cylinder (45 g, 200 mm tall, 30 mm across the pads) tips out" in err
+    assert "`cell run` does not throw it" in err, err
+    assert f"is longer than the pads hold cylinder (45 g) at across its 30 mm ({s_max:.4f} m" in err
+    assert cell_exit(["throw", *slender, "--stroke", "0.09"]) == 0
+    err = capsys.readouterr().err
+    assert "tips out" in err and "a stroke of 0.0900 m is longer than the pads hold" in err, err
+    assert cell_exit(["plan", "--object", "cube50", "--target", "1.6", "0", "0.15"]) == 0
+    assert capsys.readouterr().err == ""
