@@ -124,7 +124,10 @@ def test_plan_and_throw_say_what_the_run_would_not_throw(
     assert s_max is not None and s_max < 0.0785
     assert "cell: warning: cylinder (45 g, 200 mm tall, 30 mm across the pads) tips out" in err
     assert "`cell run` does not throw it" in err, err
-    assert f"is longer than the pads hold cylinder (45 g) at across its 30 mm ({s_max:.4f} m" in err
+    assert (
+        f"is longer than the pads hold cylinder (45 g) at, gripped across its 30 mm ({s_max:.4f} m"
+        in err
+    )
     assert cell_exit(["throw", *slender, "--stroke", "0.09"]) == 0
     err = capsys.readouterr().err
     assert "tips out" in err and "a stroke of 0.0900 m is longer than the pads hold" in err, err

@@ -98,10 +98,10 @@ def warn_if_stroke_not_held(params: ModelParams, obj: ObjectParams, stroke_m: fl
     if s_max is not None and stroke_m > s_max + 1e-9:
         print(
             f"cell: warning: a stroke of {stroke_m:.4f} m is longer than the pads hold "
-            f"{obj.name or obj.shape} ({obj.mass * 1000:.0f} g) at across its "
+            f"{obj.name or obj.shape} ({obj.mass * 1000:.0f} g) at, gripped across its "
             f"{obj.width * 1000:.0f} mm ({s_max:.4f} m: the band closes them less the longer "
-            "the stroke); `cell run` plans its throws within it, and the figures below are "
-            "the model's, not a throw the cell can make",
+            "the stroke); `cell run` plans no throw at a stroke the pads do not hold, and "
+            "the figures below are the model's, not a throw the cell can make",
             file=sys.stderr,
         )
 
