@@ -161,7 +161,11 @@ def _check_args(args: argparse.Namespace) -> None:
     from cell.errors import InvalidInput
 
     if args.n < 1:
-        raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+        from cell.cli.cmd_identify import MIN_IDENTIFY_THROWS
+
+        raise InvalidInput(
+            f"--n {args.n}: give at least {MIN_IDENTIFY_THROWS} throws (0 only with --snapshot)"
+        )
     if args.validate < 0:
         raise InvalidInput(f"--validate {args.validate}: give 0 (no validation) or more throws")
     if args.params and args.validate < 1:
