@@ -376,7 +376,7 @@ class Orchestrator(
             return Decision(
                 "place", stroke, state=ArmState(target, side=sides[0]), gripped=sides[0].obj
             )
-        side, choice = self._throw_side(throw_sides(sides, obj), target, index)
+        side, choice = self._throw_side(throw_sides(sides, obj, self.params), target, index)
         obj, s_grip = side.obj, side.stroke_max_m  # the item as gripped
         plan, delta = choice.plan, choice.delta
         assert choice.goal is not None

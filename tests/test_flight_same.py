@@ -155,7 +155,9 @@ def test_the_track_fits_flights_are_the_ones_before() -> None:
         axis=-1,
     )
     k = rng.uniform(0.0, 0.2, n)
-    tau = np.sort(rng.uniform(0.0, 0.9, (n, m)), axis=1)
+    # flights that end at different steps: the tracks past their last sample are left out
+    # as the rest go on (`_simulate`'s rows kept)
+    tau = np.sort(rng.uniform(0.0, rng.uniform(0.05, 0.9, (n, 1)), (n, m)), axis=1)
     tau[rng.random((n, m)) < 0.2] = np.nan
     got = _simulate(th, k, tau)
     assert np.isfinite(got).sum() > 0.7 * got.size

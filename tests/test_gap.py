@@ -106,20 +106,21 @@ def test_other_launcher_from_tracks() -> None:
     """No stroke logged: launch from the tracks, the landing effect still found. Five
     landings logged 0.6 m off are outliers, and every throw is still counted as from
     another launcher, the outliers among them said apart (the count was taken after the
-    outliers were left out: 155 of 160)."""
+    outliers were left out: 155 of 160 then). 80 throws (160 before: 7.35 -> 5.71 CPU-s),
+    the same verdict, phase and five rows flagged."""
     from cell.gap.report import format_table
 
-    camp = draw_tracked_campaign((Bounce(0.3),), np.random.default_rng(4), n=160)
+    camp = draw_tracked_campaign((Bounce(0.3),), np.random.default_rng(4), n=80)
     assert np.all(np.isnan(camp.table.num("stroke_m")))
     with pytest.raises(InvalidInput, match="stroke or a track"):
         diagnose_log(camp.table, DEFAULT_EE)  # without tracks nothing can be said
     x = camp.table.num("landed_x_m").copy()
-    moved = [7, 40, 81, 120, 150]
+    moved = [7, 30, 45, 61, 75]
     x[moved] += 0.6
     d, _ = diagnose_log(camp.table.with_columns({"landed_x_m": x}), DEFAULT_EE, tracks=camp.tracks)
     rep = d.report
     assert rep["outliers"]["rows"] == [i + 1 for i in moved]
-    assert rep["other_launcher_throws"] == rep["throws"] == len(camp.table) > 100
+    assert rep["other_launcher_throws"] == rep["throws"] == len(camp.table) == 80
     assert rep["outliers"]["other_launcher"] == len(moved)
     n = rep["throws"]
     assert f"throws           {n} ({n} from another launcher, from tracks, 5 of them outliers)" in (

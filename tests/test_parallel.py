@@ -171,7 +171,7 @@ def test_an_address_where_no_ray_answers_is_refused_at_once(tmp_path, capsys):
     with socket.socket() as s:  # a port nothing listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    argv = ["calibrate", "--n", "2", "--ray-address", f"127.0.0.1:{port}"]
+    argv = ["calibrate", "--n", "10", "--ray-address", f"127.0.0.1:{port}"]
     assert main(argv + ["-o", str(tmp_path / "e.yaml")]) == 2
     err = capsys.readouterr().err
     assert f"--ray-address 127.0.0.1:{port}: no Ray cluster answers there" in err

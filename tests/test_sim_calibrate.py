@@ -84,8 +84,8 @@ def test_scene_commands_keep_stdout_for_their_output(tmp_path, capfd) -> None:
 
     from cell.cli import main
 
-    argv = ["calibrate", "--n", "8", "--adhoc", "6", "--json", "-o", str(tmp_path / "e.yaml")]
+    argv = ["calibrate", "--n", "10", "--adhoc", "6", "--json", "-o", str(tmp_path / "e.yaml")]
     assert main(argv) == 0
     out, err = capfd.readouterr()
-    assert json.loads(out)["throws"] == 8
+    assert json.loads(out)["throws"] == 10
     assert "argv[0]" not in out + err and "pybullet build time" not in out + err

@@ -25,10 +25,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from cell.arm.base import ArmBase
-from cell.arm.grip_limits import BRISK_CARRY_SAFETY, grip_refusal, grip_strokes
+from cell.arm.grip_limits import (
+    BRISK_CARRY_SAFETY,
+    grip_refusal,
+    grip_strokes,
+    release_grip_use,
+)
 from cell.errors import CannotGrip, IKFailed, UnreachableTarget
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
+from cell.robot.grip_hold import TILT_SLOWS_OVER
 
 MESH_SAME_WIDTH_M = 1e-3  # [m] a mesh's two widths within this are one side
 
@@ -37,6 +43,7 @@ __all__ = [
     "GripSideChoice",
     "grip_sides",
     "holding_sides",
+    "level_tip_use",
     "mesh_side_refusal",
     "throw_sides",
 ]
@@ -152,19 +159,28 @@ def holding_sides(params: ModelParams, obj: ObjectParams) -> list[GripSide]:
     return found
 
 
-def throw_sides(sides: list[GripSide], obj: ObjectParams) -> list[GripSide]:
+def throw_sides(
+    sides: list[GripSide], obj: ObjectParams, params: ModelParams | None = None
+) -> list[GripSide]:
     """Of the `sides` that hold (`holding_sides`), those a throw may grip `obj` across:
     the ones held briskly. An item the pads hold only carried slowly is placed, not
     thrown: on tune layout 1 (UR5) the first of four 220 g tetrapacks thrown 1.7 m left
     the pads on its carry, whose route asked 1.23 of the grip held still (more than the
     pads hold at any speed), with the merge of this change and again with it narrowed.
 
+    With `params`, of those, the ones a throw's swing keeps in the pads as well
+    (`level_tip_use`): a throw's twist-free swing from hanging to its release passes
+    the throw axis level, the item's weight on a pad, and a tall narrow light item tips
+    out there (a 45 g cylinder 30 x 200 mm turned 30 deg in the pads as its swing went
+    past level and landed 0.27 m off; 40 g 30 x 250 mm left them: docs/HISTORY.md).
+
     Raises:
-        CannotGrip: none is held briskly; the message says to place it instead.
+        CannotGrip: none is held briskly, or (with `params`) every side held briskly
+            tips out level; the message says to place it instead.
     """
     brisk = [s for s in sides if s.brisk]
+    name = obj.name or obj.shape
     if not brisk:
-        name = obj.name or obj.shape
         widths = " and ".join(f"{s.width_m * 1000:.0f} mm" for s in sides)
         raise CannotGrip(
             f"{name} ({obj.mass * 1000:.0f} g) is held only carried slowly ({widths} across "
@@ -172,7 +188,35 @@ def throw_sides(sides: list[GripSide], obj: ObjectParams) -> list[GripSide]:
             "too heavy for a throw's carry: place it in a bin within place reach, or sort "
             "it by hand"
         )
-    return brisk
+    if params is None:
+        return brisk
+    kept = [s for s in brisk if level_tip_use(params, s.obj) <= TILT_SLOWS_OVER]
+    if not kept:
+        side = brisk[0]
+        use = level_tip_use(params, side.obj)
+        raise CannotGrip(
+            f"{name} ({obj.mass * 1000:.0f} g, {obj.size[2] * 1000:.0f} mm tall, "
+            f"{side.width_m * 1000:.0f} mm across the pads) tips out of them on a throw's "
+            f"swing: held with the throw axis level, its weight on a pad, it asks {use:.2f} "
+            f"of what the pads hold even at the shortest stroke (over {TILT_SLOWS_OVER:g}: "
+            "its centre of mass too high above their short patch for so light a grip); "
+            "place it in a bin within place reach, or sort it by hand"
+        )
+    return kept
+
+
+def level_tip_use(params: ModelParams, obj: ObjectParams) -> float:
+    """What holding `obj` (as gripped) still with the throw axis level and its weight on
+    a pad asks of the pads at the shortest stroke, where they hold hardest
+    (`release_grip_use` at elevation 0, the tilt about y included): a throw's twist-free
+    swing passes there. Over TILT_SLOWS_OVER (what the pads hold at all), no carry keeps
+    it in the pads there. Measured, 30 mm cylinders thrown 1.6 m alone (panda): 30 g
+    250 mm (1.32), 45 g 150 mm (1.18), 45 g 175 mm (1.37), 35 g 250 mm (1.54) stayed
+    within 5-8 deg and landed; 45 g 200 mm (1.57) turned 30 deg and missed by 0.27 m,
+    40 g 250 mm (1.76) left the pads. The scene's pads resist the tilt with 1.27-1.33
+    of the model's T_y for these (`cell.sim.grip_probe`), 1.03-1.05 for the bottle: the
+    bound is the model's own, taken without a margin chosen on these items."""
+    return float(release_grip_use(params, obj, params.ee.stroke_min, [0.0])[0])
 
 
 class GripSideChoice(ArmBase):

@@ -137,7 +137,7 @@ def check_sortable(
         sides = holding_sides(params, obj)
     if places(policy, place_reach_m, bin_spec, thrown_bins):
         return
-    sides = throw_sides(sides, obj)
+    sides = throw_sides(sides, obj, params)
     err: Exception | None = None
     for side in sides:
         e = side_throw_error(params, side, bin_spec, bounds, obj.name or obj.shape)

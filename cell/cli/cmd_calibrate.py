@@ -161,7 +161,11 @@ def _check_args(args: argparse.Namespace) -> None:
     from cell.errors import InvalidInput
 
     if args.n < 1:
-        raise InvalidInput(f"--n {args.n}: give at least 1 throw (0 only with --snapshot)")
+        from cell.cli.cmd_identify import MIN_IDENTIFY_THROWS
+
+        raise InvalidInput(
+            f"--n {args.n}: give at least {MIN_IDENTIFY_THROWS} throws (0 only with --snapshot)"
+        )
     if args.validate < 0:
         raise InvalidInput(f"--validate {args.validate}: give 0 (no validation) or more throws")
     if args.params and args.validate < 1:
@@ -183,6 +187,28 @@ def _check_args(args: argparse.Namespace) -> None:
         from cell.record.stream import import_rerun
 
         import_rerun()
+    _check_enough(args)
+
+
+def _check_enough(args: argparse.Namespace) -> None:
+    """Refuse a campaign too small to identify from (`MIN_IDENTIFY_THROWS`, as `cell
+    identify` refuses such a log), but with --snapshot alone (--n 0).
+
+    Raises:
+        InvalidInput: naming --n, the least and why.
+    """
+    from cell.cli.cmd_identify import MIN_IDENTIFY_THROWS
+    from cell.errors import InvalidInput
+    from cell.identify.problem import EE_NAMES
+
+    if args.n < MIN_IDENTIFY_THROWS and not args.params:  # --params: no campaign
+        raise InvalidInput(
+            f"--n {args.n}: give at least {MIN_IDENTIFY_THROWS} throws: identification "
+            f"fits the end-effector's {len(EE_NAMES)} parameters ({', '.join(EE_NAMES)}) "
+            "and each thrown object's own to 2 landing coordinates a throw, and refuses "
+            f"fewer than {MIN_IDENTIFY_THROWS} (as `cell identify` does a log); "
+            f"{args.n} would leave most of them at their start values"
+        )
 
 
 def _throw_campaign(args: argparse.Namespace, plan: list[dict]) -> ThrowTable:  # type: ignore[type-arg]

@@ -18,6 +18,13 @@ if TYPE_CHECKING:
     from cell.synth import NoiseModel
 
 
+# The fewest distinct throws identification works from (`cell identify`, and the campaign
+# `cell calibrate` throws): stage 1 alone fits the end-effector's 8 parameters
+# (`cell.identify.problem.EE_NAMES`) to landings of 2 coordinates a throw, and each object
+# thrown adds its own
+MIN_IDENTIFY_THROWS = 10
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "identify",
@@ -91,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
             source = str(store.path)
         if len(table) == 0:
             raise InvalidInput(f"{source}: the store holds no throws; give a throws.csv")
-    table.require_varied(10, "identification")
+    table.require_varied(MIN_IDENTIFY_THROWS, "identification")
     if args.max_iter < 1:
         raise InvalidInput(f"--max-iter {args.max_iter} must be ≥ 1")
     start = load_params(args.start)

@@ -17,6 +17,7 @@ from cell.cli.model_checks import (
     refuse_under_floor,
     warn_if_light,
     warn_if_not_held,
+    warn_if_stroke_not_held,
 )
 from cell.errors import InvalidInput, InvalidParameter
 from cell.model.objects import ObjectParams
@@ -126,6 +127,8 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
+    if obj.shape != "mesh":
+        warn_if_stroke_not_held(mp, obj, plan.stroke_m)
     _say_current_moved(args.current, _bounds(args))
     _say_at_the_base(args.target)
     return report(args, plan.as_dict(), _text(plan, obj, said))

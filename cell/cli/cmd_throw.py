@@ -23,6 +23,7 @@ from cell.cli.model_checks import (
     refuse_under_floor,
     warn_if_light,
     warn_if_not_held,
+    warn_if_stroke_not_held,
 )
 from cell.model import ObjectParams, ThrowBatch, band_state, predict_landing
 from cell.params import load_params
@@ -68,6 +69,8 @@ def run(args: argparse.Namespace) -> int:
     refuse_release_under_floor("--at", args.at[2])
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
+    if obj.shape != "mesh":
+        warn_if_stroke_not_held(mp, obj, args.stroke)
     warn_if_light(obj)
     model, said = modelled(mp, obj)
     batch = ThrowBatch.single(

@@ -14,7 +14,14 @@ from cell.errors import InvalidInput
 from cell.model.objects import ObjectParams
 from cell.params import ModelParams
 
-__all__ = ["refuse_release_under_floor", "refuse_under_floor", "warn_if_light", "warn_if_not_held"]
+__all__ = [
+    "refuse_release_under_floor",
+    "refuse_under_floor",
+    "warn_if_light",
+    "warn_if_not_held",
+    "warn_if_not_thrown",
+    "warn_if_stroke_not_held",
+]
 
 
 def refuse_under_floor(flag: str, z_m: float) -> None:
@@ -56,6 +63,45 @@ def warn_if_not_held(params: ModelParams, obj: ObjectParams) -> None:
             f"cell: warning: {name} ({obj.mass * 1000:.0f} g) cannot be held: {why}; "
             "`cell run` refuses it, and the figures below are the model's, not a throw the "
             "cell can make",
+            file=sys.stderr,
+        )
+    elif obj.shape != "mesh":  # a mesh's sides need its rest pose (cell.sim.rest)
+        warn_if_not_thrown(params, obj)
+
+
+def warn_if_not_thrown(params: ModelParams, obj: ObjectParams) -> bool:
+    """A warning on standard error where the pads hold `obj` but `cell run` does not throw
+    it (`cell.arm.grip_side.throw_sides`: held only carried slowly, or tipped out of the
+    pads on a throw's swing), saying why; whether it warned."""
+    from cell.arm.grip_side import holding_sides, throw_sides
+    from cell.errors import CannotGrip
+
+    try:
+        throw_sides(holding_sides(params, obj), obj, params)
+    except CannotGrip as exc:
+        print(
+            f"cell: warning: {exc}; `cell run` does not throw it, and the figures below are "
+            "the model's, not a throw the cell can make",
+            file=sys.stderr,
+        )
+        return True
+    return False
+
+
+def warn_if_stroke_not_held(params: ModelParams, obj: ObjectParams, stroke_m: float) -> None:
+    """A warning on standard error where the pads hold `obj` across its first size only at
+    strokes shorter than `stroke_m` [m] (`grip_stroke_at`): `cell run` plans its throws
+    within that."""
+    from cell.arm.grip_limits import grip_stroke_at
+
+    s_max = grip_stroke_at(params, obj)
+    if s_max is not None and stroke_m > s_max + 1e-9:
+        print(
+            f"cell: warning: a stroke of {stroke_m:.4f} m is longer than the pads hold "
+            f"{obj.name or obj.shape} ({obj.mass * 1000:.0f} g) at, gripped across its "
+            f"{obj.width * 1000:.0f} mm ({s_max:.4f} m: the band closes them less the longer "
+            "the stroke); `cell run` plans no throw at a stroke the pads do not hold, and "
+            "the figures below are the model's, not a throw the cell can make",
             file=sys.stderr,
         )
 

@@ -11,7 +11,7 @@ apparent gravity ratio by more than SCALE_AGREE, or a drag factor the tracks' dr
 object contradicts (`cell.gap.track_drag`), or a flight effect whose own bend over the
 tracks exceeds theirs (`cell.gap.track_member`). A tracking scale beside a landing effect is
 refused, too, where the landing misses across the impact velocity do not show it
-(`across_scale`): a slide moves a landing along the impact velocity only, so across it a
+(`cell.gap.across`): a slide moves a landing along the impact velocity only, so across it a
 scale is all that moves the landings in proportion to their distance from the origin.
 """
 
@@ -24,6 +24,12 @@ from typing import Any
 
 import numpy as np
 
+from cell.gap.across import (
+    ACROSS_Z,
+    across_refusal,
+    across_scale,
+    scale_beside_landing,
+)
 from cell.gap.fit import Score, fit_set, fit_start, score_set
 from cell.gap.problem import BandStiffness, GapProblem
 from cell.gap.stats import bootstrap_cut
@@ -34,7 +40,7 @@ from cell.model.effects import EFFECTS, FAMILIES, DragScale, Effect, TrackingSca
 from cell.model.flight_batch import together
 
 __all__ = ["Selection", "refusal", "across_scale", "across_refusal", "scale_beside_landing",
-           "at_bound", "public", "effect_class", "member_rank_of"]  # fmt: skip
+           "at_bound", "public", "effect_class", "member_rank_of", "ACROSS_Z"]  # fmt: skip
 
 VERDICT_RATIO = 1.30  # A ≤ this × F: explained
 MIN_CUT = 0.10  # an effect must cut this share of what is left
@@ -46,9 +52,6 @@ PAIR_TRIES = (2, 1)
 AGREE_SHARE = 0.35  # a phase the tracks give less than this share of the largest is clean
 SCALE_AGREE = 0.005  # a tracking scale within this of the tracks' apparent gravity ratio
 BOUND_TOL = 2e-3  # a parameter within this share of its range from a bound sits at it
-# a tracking scale beside a landing effect: the scale the misses across the impact velocity
-# show must be off 1 by this many standard errors (the two-sided 95 % level)
-ACROSS_Z = 1.96
 
 
 def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) -> str | None:
@@ -100,63 +103,6 @@ def refusal(eff: Effect, tracks: dict[str, Any] | None, floor_m: float = 0.0) ->
             f"{eff.phase} ({own:.3f} m{over})"
         )
     return None
-
-
-def across_scale(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect]
-                 ) -> tuple[float, float, int]:  # fmt: skip
-    """The tracker scale the landing misses show across the model's horizontal impact
-    velocity, the other effects (all of `effects` but a tracking scale) at their sizes.
-
-    A scale s about the tracker's origin moves a landing at xy by (s − 1) · xy; a slide
-    after the landing (any law of the bounce) moves it along the impact velocity only.
-    Across that velocity (unit vector n per throw) the miss m is (s − 1) · (xy · n) plus
-    scatter, so s − 1 is the least-squares slope of m · n on xy · n.
-
-    Returns:
-        (the scale [-], its standard error [-] from the scatter about the slope, the
-        throws used: those with a finite miss and a horizontal impact velocity).
-    """
-    idx = np.arange(len(prob))
-    others = [e for e in effects if not isinstance(e, TrackingScale)]
-    land = prob.landing(idx, others)
-    miss = prob.observed - land.xy
-    vh = land.impact_velocity[:, :2]
-    speed = np.linalg.norm(vh, axis=1)
-    ok = np.all(np.isfinite(miss), axis=1) & np.all(np.isfinite(land.xy), axis=1) & (speed > 1e-6)
-    if ok.sum() < 3:
-        return float("nan"), float("nan"), int(ok.sum())
-    n = np.c_[-vh[ok, 1], vh[ok, 0]] / speed[ok, None]
-    m = np.sum(miss[ok] * n, axis=1)
-    r = np.sum(land.xy[ok] * n, axis=1)
-    rr = float(np.sum(r * r))
-    if rr <= 0.0:
-        return float("nan"), float("nan"), int(ok.sum())
-    k = float(np.sum(m * r)) / rr
-    se = float(np.sqrt(np.sum((m - k * r) ** 2) / (len(m) - 1) / rr))
-    return 1.0 + k, se, int(ok.sum())
-
-
-def scale_beside_landing(effects: tuple[Effect, ...] | list[Effect]) -> bool:
-    """Whether a set holds a tracking scale beside a landing effect (the sets whose scale
-    the misses across the impact velocity judge, `across_refusal`)."""
-    return any(isinstance(e, TrackingScale) for e in effects) and any(
-        e.phase == "landing" for e in effects
-    )
-
-
-def across_refusal(prob: GapProblem, effects: tuple[Effect, ...] | list[Effect]) -> str | None:
-    """Why a tracking scale in a set beside a landing effect may not join (None: it may, or
-    the set has no such pair): the landing misses across the impact velocity
-    (`across_scale`) show no scale, within ACROSS_Z standard errors of 1."""
-    if not scale_beside_landing(effects):
-        return None
-    s, se, _ = across_scale(prob, effects)
-    if not np.isfinite(s) or not np.isfinite(se) or abs(s - 1.0) >= ACROSS_Z * se:
-        return None
-    return (
-        f"beside a landing effect, the landing misses across the impact velocity show a "
-        f"scale of {s:.4f} ± {se:.4f}: none"
-    )
 
 
 def _partners(prob: GapProblem, first: Score, rest: list[type[Effect]]) -> list[str]:

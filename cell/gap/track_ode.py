@@ -23,7 +23,6 @@ tracks identify it). λ and w carry weak priors (1 cm of misfit per e-fold of dr
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,28 +64,36 @@ class OdeFit:
     converged: np.ndarray
 
 
-def _acc(th: np.ndarray, k: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """v̇ as a function of the states v (n, P, 3) under parameters th (n, P, 12), drag
-    constants k (n,): the wind, drag factor and extra acceleration, the same at every
-    state of the flight, taken from th once."""
+def _acc_terms(th: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The wind w (n, P, 3), drag factor k·e^λ (n, P, 1) and extra acceleration (n, P, 3)
+    under parameters th (n, P, 12), drag constants k (n,): the same at every state of the
+    flight, taken from th once."""
     w = np.zeros(th.shape[:-1] + (3,))
     w[..., :2] = th[..., 10:12]
-    kk = k[:, None, None] * np.exp(th[..., 9:10])
-    extra = th[..., 6:9]
+    return w, k[:, None, None] * np.exp(th[..., 9:10]), th[..., 6:9]
 
-    def acc(v: np.ndarray) -> np.ndarray:
-        rel = v - w
-        # |rel|: np.linalg.norm's arithmetic without its per-call checks
-        out = extra - kk * np.sqrt(np.add.reduce(rel * rel, axis=-1, keepdims=True)) * rel
-        out[..., 2] -= G
-        return out
 
-    return acc
+def _acc(v: np.ndarray, w: np.ndarray, kk: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """v̇ at the states v (n, P, 3) (`_acc_terms`' w, kk, extra of the same rows)."""
+    rel = v - w
+    # |rel|: np.linalg.norm's arithmetic ((x² + y²) + z², as `np.add.reduce` over the
+    # last axis sums three), without its per-call checks, the squares in one call
+    sq = rel * rel
+    out = extra - kk * np.sqrt((sq[..., 0] + sq[..., 1]) + sq[..., 2])[..., None] * rel
+    out[..., 2] -= G
+    return out
+
+
+# Tracks whose samples are all placed stay in the integration (a step of them costs little
+# beside NumPy's per-call overhead) until fewer than this share of the rows integrated
+# still have samples ahead (`cell.model.flight3d._KEEP_SHARE`'s rule)
+_KEEP_SHARE = 0.5
 
 
 def _simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """Positions [m] at times tau (n, m) (NaN: no sample), shape (n, P, m, 3), of the
-    flights with parameters th (n, P, 12)."""
+    flights with parameters th (n, P, 12). Each track is integrated up to its own last
+    sample (the rows are independent: every operation is elementwise per row)."""
     n, n_p, _ = th.shape
     ok = np.isfinite(tau)
     t_end = float(np.nanmax(tau)) if ok.any() else 0.0
@@ -99,35 +106,50 @@ def _simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
     order = np.argsort(node, kind="stable")
     bounds = np.searchsorted(node[order], np.arange(n_steps + 1))
     out = np.full((n, n_p, tau.shape[1], 3), np.nan)
+    # the step of each track's last sample (-1: none); `at` maps a track to its row in the
+    # states integrated (the tracks `rows`)
+    last = np.full(n, -1)
+    np.maximum.at(last, ti, node)
+    rows = np.arange(n)
+    at = np.arange(n)
     p = th[..., 0:3].copy()
     v = th[..., 3:6].copy()
-    acc = _acc(th, k)
+    w, kk, extra = _acc_terms(th, k)
     # each stage's velocity and each sample's s², s³ formed once (they were formed twice
     # and four times), the same numbers (tests/test_flight_same.py)
     half = 0.5 * h
     for i in range(n_steps):
-        k1v = acc(v)
+        k1v = _acc(v, w, kk, extra)
         k2p = v + half * k1v
-        k2v = acc(k2p)
+        k2v = _acc(k2p, w, kk, extra)
         k3p = v + half * k2v
-        k3v = acc(k3p)
+        k3v = _acc(k3p, w, kk, extra)
         k4p = v + h * k3v
-        k4v = acc(k4p)
+        k4v = _acc(k4p, w, kk, extra)
         p1 = p + h / 6 * (v + 2 * k2p + 2 * k3p + k4p)
         v1 = v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
         sel = order[bounds[i] : bounds[i + 1]]
         if sel.size:
             tt, ss, sv = ti[sel], si[sel], s[sel]
+            r = at[tt]
             s2, s3 = sv**2, sv**3
             h00 = 2 * s3 - 3 * s2 + 1
             h10 = s3 - 2 * s2 + sv
             h01 = -2 * s3 + 3 * s2
             h11 = s3 - s2
-            out[tt, :, ss] = h00 * p[tt] + h10 * h * v[tt] + h01 * p1[tt] + h11 * h * v1[tt]
+            out[tt, :, ss] = h00 * p[r] + h10 * h * v[r] + h01 * p1[r] + h11 * h * v1[r]
         p, v = p1, v1
         if not np.all(np.isfinite(p)):
             p = np.where(np.isfinite(p), p, 1e6)
             v = np.where(np.isfinite(v), v, 0.0)
+        ahead = last[rows] > i
+        n_ahead = int(np.count_nonzero(ahead))
+        if not n_ahead:
+            break
+        if n_ahead < _KEEP_SHARE * rows.size:
+            rows, p, v = rows[ahead], p[ahead], v[ahead]
+            w, kk, extra = w[ahead], kk[ahead], extra[ahead]
+            at[rows] = np.arange(rows.size)
     return out
 
 

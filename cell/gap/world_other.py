@@ -273,7 +273,10 @@ def landings(th: Throws, effs: list[dict[str, Any]], rng: np.random.Generator | 
     def rate(t: float, p: np.ndarray, v: np.ndarray) -> np.ndarray:
         rel = v - (air(p, at["idx"]) if reads_p else at["steady"])
         pushed = t < PUSH_S
-        a = at["drag"][pushed] * np.sqrt(np.add.reduce(rel * rel, axis=1))[:, None] * rel
+        # |rel|: ((x² + y²) + z², `np.add.reduce`'s sum over a row of three) from the
+        # squares' columns, one call over the rows each, not a reduction row by row
+        sq = rel * rel
+        a = at["drag"][pushed] * np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])[:, None] * rel
         a[:, 2] -= G
         a += a_side
         if pushed:
