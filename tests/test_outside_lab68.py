@@ -93,7 +93,25 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     rng = np.random.default_rng(68)
     throws = paired_throws(rng, OBJECTS)
     noise = rng.normal(0.0, NOISE, (len(throws), 2))
-    return {w: _write(d / f"{w}.csv", throws, _fly(throws, w) + noise) for w in WORLDS}
+    out = {w: _write(d / f"{w}.csv", throws, _fly(throws, w) + noise) for w in WORLDS}
+    rng = np.random.default_rng(67)
+    wide = _wide_throws(rng)
+    noise = rng.normal(0.0, NOISE, (len(wide), 2))
+    out["azwide"] = _write(d / "azwide.csv", wide, _fly(wide, "azstroke") + noise)
+    return out
+
+
+def _wide_throws(rng: np.random.Generator) -> list[dict]:
+    """60 configurations thrown twice, shuffled: strokes 0.06-0.12 m in seven steps, four
+    elevations from 10° to 55° (the thirteenth round's lab's spread)."""
+    cfgs = [{"obj": OBJECTS[int(rng.integers(len(OBJECTS)))],
+             "stroke": float(rng.choice(np.linspace(0.06, 0.12, 7))),
+             "el": np.radians(float(rng.choice((10.0, 25.0, 40.0, 55.0)))),
+             "az": float(rng.uniform(-0.7, 0.7)),
+             "p0": (float(rng.uniform(-0.1, 0.2)), float(rng.uniform(-0.2, 0.2)),
+                    float(rng.uniform(0.4, 1.1)))} for _ in range(60)]  # fmt: skip
+    rows = cfgs + cfgs
+    return [dict(rows[i]) for i in rng.permutation(len(rows))]
 
 
 def _report(lab: dict[str, Path], world: str) -> dict:
@@ -147,3 +165,19 @@ def test_a_drag_of_one_object_is_proposed_in_the_flight(lab: dict[str, Path]) ->
         k_world, rel=0.2
     ), terms
     assert all("[object = dice]" not in t or "force along" in t for t in terms), terms
+
+
+# --- 3. an azimuth error growing with the stroke (cell.gap.propose_prune) ---
+
+
+def test_an_azimuth_error_in_the_stroke_is_proposed_alone(lab: dict[str, Path]) -> None:
+    """The launch turned by 0.25 rad per m of stroke is `unknown` with that one term, in
+    the launch, its k the world's (main: six terms, an azimuth error constant, in the
+    stroke, the mass and the width, a force across v and a force along y, held out
+    0.0174 m against the one term's 0.0148)."""
+    rep = _report(lab, "azwide")
+    assert rep["verdict"]["effects"] == ["unknown"], rep["verdict"]
+    prop = rep["proposal"]
+    assert [t["term"] for t in prop["terms"]] == ["azimuth error [rad] = k · stroke_m"], prop
+    assert prop["terms"][0]["k"] == pytest.approx(AZ_PER_M, rel=0.15)
+    assert prop["phase"] == "launch" and prop["within_floor"], prop

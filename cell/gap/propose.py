@@ -59,6 +59,7 @@ import numpy as np
 from cell.gap.plane_step import step_term
 from cell.gap.problem import GapProblem
 from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
+from cell.gap.propose_prune import prune
 from cell.gap.propose_radial import radial_term
 from cell.gap.propose_sessions import MAX_SESSIONS, log_covariates, session_winds
 from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
@@ -438,6 +439,9 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
             best = (val, ho, th_all)
     assert best is not None
     score, ho, th = best
+    pruned = prune(a, y, folds, th, score, TERM_PENALTY)  # terms that do not pay
+    if pruned is not None:
+        th, ho, score = pruned
     on = np.flatnonzero(th)
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
