@@ -39,7 +39,8 @@ Each term's landing sensitivity J_j (n, 2) is taken by finite differences of the
 with the effects already joined; the misses they leave, r, are regressed on the
 library by sequentially thresholded least squares (SINDy): fit, zero the terms whose
 contribution (|θ_j|·‖J_j‖/√n) falls below λ, refit on the rest, repeat. λ is chosen on
-held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term.
+held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term;
+terms that do not pay are then pruned from λ's law (`cell.gap.propose_prune`).
 The proposal reports its terms with 95 % intervals, the phase they act in and how far
 the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
 holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
