@@ -21,7 +21,7 @@ landing is linear in its coefficient θ near θ = 0:
 | landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
 | landing | plane height × [x > x_b] | a step in the surface landed on beyond x_b, fitted, where such a step beats the verdict (`cell.gap.plane_step`) |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
-| launch, flight, landing | speed error (× 1, × order), lift coefficient, shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`): × order, one object's drift over the log (a bag that leaks) |
+| launch, flight, landing | speed error (× 1, × order), lift coefficient, along ∝ v², shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`): × order, one object's drift over the log (a bag that leaks); along ∝ v², a drag of its own |
 
 A log's drift (a band wearing, a motor warming) and its sessions (a band changed, a
 launcher set up again) are common on a real cell and outside the vocabulary, so the
@@ -39,7 +39,8 @@ Each term's landing sensitivity J_j (n, 2) is taken by finite differences of the
 with the effects already joined; the misses they leave, r, are regressed on the
 library by sequentially thresholded least squares (SINDy): fit, zero the terms whose
 contribution (|θ_j|·‖J_j‖/√n) falls below λ, refit on the rest, repeat. λ is chosen on
-held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term.
+held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term;
+terms that do not pay are then pruned from λ's law (`cell.gap.propose_prune`).
 The proposal reports its terms with 95 % intervals, the phase they act in and how far
 the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
 holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
@@ -59,6 +60,7 @@ import numpy as np
 from cell.gap.plane_step import step_term
 from cell.gap.problem import GapProblem
 from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
+from cell.gap.propose_prune import prune
 from cell.gap.propose_radial import radial_term
 from cell.gap.propose_sessions import MAX_SESSIONS, log_covariates, session_winds
 from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
@@ -438,6 +440,9 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
             best = (val, ho, th_all)
     assert best is not None
     score, ho, th = best
+    pruned = prune(a, y, folds, th, score, TERM_PENALTY)  # terms that do not pay
+    if pruned is not None:
+        th, ho, score = pruned
     on = np.flatnonzero(th)
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
