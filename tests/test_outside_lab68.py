@@ -26,7 +26,20 @@ import pytest
 from cell.gap.run import diagnose_log
 from cell.log import read_throws_csv
 from cell.model.params import DEFAULT_EE
-from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, paired_throws, push, rk4, write_log
+from tests.band_lab import (
+    CD,
+    NOISE,
+    PUSH_S,
+    RHO,
+    G,
+    H,
+    area,
+    land_step,
+    paired_throws,
+    push,
+    rk4,
+    write_log,
+)
 
 OBJECTS = [  # id, shape, mass [kg], extents [m]
     ("block", "cuboid", 0.045, (0.040, 0.040, 0.060)),
@@ -74,12 +87,7 @@ def _fly(throws: list[dict], world: str) -> np.ndarray:
         if not live.any():
             break
         p1, v1 = rk4(acc, p, v, False)
-        above0, above1 = p[:, 2] - tilt * p[:, 0], p1[:, 2] - tilt * p1[:, 0]
-        hit = live & (above1 <= 0) & (v1[:, 2] < 0)
-        s = (above0[hit] / (above0[hit] - above1[hit]))[:, None]
-        land[hit] = p[hit, :2] + s * (p1[hit, :2] - p[hit, :2])
-        live &= ~hit
-        p, v = np.where(live[:, None], p1, p), np.where(live[:, None], v1, v)
+        p, v = land_step(p, v, p1, v1, live, land, tilt)
     return land
 
 
