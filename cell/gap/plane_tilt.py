@@ -64,10 +64,10 @@ def tilt_heldout(prob: GapProblem, per_m: np.ndarray, xy: np.ndarray, r: np.ndar
 def tilt_check(prob: GapProblem, verdict: list[str], r: np.ndarray, v_sq: np.ndarray,
                per_m: np.ndarray) -> dict[str, Any]:  # fmt: skip
     """The tilted plane's figures (`height_m`, `slope_x`, `slope_y`, `slope_z`, its held-out
-    RMSE against the verdict's, the cut with its interval, `beats`) and, where it beats a
-    verdict that names effects, `why` (one sentence). r: the baseline's misses (n, 2) [m];
-    v_sq: the verdict's squared held-out misses [m²]; per_m: each landing's move per metre
-    of plane height (n, 2) (`cell.gap.plane_step`)."""
+    RMSE against the verdict's, the cut with its interval, `beats`, `ties`) and, where it
+    beats or ties a verdict that names effects, `why` (one sentence). r: the baseline's
+    misses (n, 2) [m]; v_sq: the verdict's squared held-out misses [m²]; per_m: each
+    landing's move per metre of plane height (n, 2) (`cell.gap.plane_step`)."""
     from cell.gap.plane_step import STEP_Z
     from cell.gap.stats import bootstrap_cut
 
@@ -83,19 +83,20 @@ def tilt_check(prob: GapProblem, verdict: list[str], r: np.ndarray, v_sq: np.nda
         "beats": bool(lo > 0 and z > STEP_Z),
         "ties": bool(not (lo > 0) and cut >= 0 and z > STEP_Z),
     }  # fmt: skip
-    if out["ties"] and verdict[0] not in ("none", "unknown"):
-        out["why"] = (
-            f"the landing plane tilted, {h[0]:+.3f} m {h[1]:+.4f} · x {h[2]:+.4f} · y (slope z "
-            f"{z:.1f}), predicts the held-out throws as well as {' + '.join(verdict)}: "
-            f"{out['heldout_rmse_m']:.4f} against {float(np.sqrt(np.mean(v_sq))):.4f} m (cut "
-            f"interval [{lo:.4f}, {hi:.4f}] m): the landings cannot tell a tilted floor, "
-            f"which no effect of the vocabulary is, from the verdict"
+    if (out["ties"] or out["beats"]) and verdict[0] not in ("none", "unknown"):
+        how, why = (
+            ("better than", "no effect of the vocabulary tilts the floor")
+            if out["beats"]
+            else (
+                "as well as",
+                "the landings cannot tell a tilted floor, which no effect of the vocabulary "
+                "is, from the verdict",
+            )
         )
-    if out["beats"] and verdict[0] not in ("none", "unknown"):
         out["why"] = (
             f"the landing plane tilted, {h[0]:+.3f} m {h[1]:+.4f} · x {h[2]:+.4f} · y (slope z "
-            f"{z:.1f}), predicts the held-out throws better than {' + '.join(verdict)}: "
+            f"{z:.1f}), predicts the held-out throws {how} {' + '.join(verdict)}: "
             f"{out['heldout_rmse_m']:.4f} against {float(np.sqrt(np.mean(v_sq))):.4f} m (cut "
-            f"interval [{lo:.4f}, {hi:.4f}] m): no effect of the vocabulary tilts the floor"
+            f"interval [{lo:.4f}, {hi:.4f}] m): {why}"
         )
     return out
