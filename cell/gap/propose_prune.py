@@ -26,12 +26,11 @@ def heldout_rmse(a: np.ndarray, y: np.ndarray, folds: list[tuple[np.ndarray, np.
     """The held-out RMSE [m] per throw of the law on columns `cols` of a (2n, p) (rows
     throw-major x, y) fitted by least squares on each fold's training throws."""
     sq = np.zeros(a.shape[0] // 2)
-    c = np.asarray(cols, int)
     for train, test in folds:
         rows = np.stack([2 * train, 2 * train + 1], 1).ravel()
         rt = np.stack([2 * test, 2 * test + 1], 1).ravel()
-        th = np.linalg.lstsq(a[np.ix_(rows, c)], y[rows], rcond=None)[0]
-        e = y[rt] - a[np.ix_(rt, c)] @ th
+        th = np.linalg.lstsq(a[np.ix_(rows, cols)], y[rows], rcond=None)[0]
+        e = y[rt] - a[np.ix_(rt, cols)] @ th
         sq[test] = np.sum(e.reshape(-1, 2) ** 2, axis=1)
     return float(np.sqrt(sq.mean()))
 
