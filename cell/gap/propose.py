@@ -39,8 +39,7 @@ Each term's landing sensitivity J_j (n, 2) is taken by finite differences of the
 with the effects already joined; the misses they leave, r, are regressed on the
 library by sequentially thresholded least squares (SINDy): fit, zero the terms whose
 contribution (|θ_j|·‖J_j‖/√n) falls below λ, refit on the rest, repeat. λ is chosen on
-held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term;
-terms that do not pay are then pruned from λ's law (`cell.gap.propose_prune`).
+held-out throws (the problem's random folds) with a penalty of TERM_PENALTY per term.
 The proposal reports its terms with 95 % intervals, the phase they act in and how far
 the law shrinks the held-out miss. Where tracks place the gap in a phase, the library
 holds the terms of the phases they measure only (`cell.gap.propose_terms.allowed_phases`).
@@ -60,7 +59,6 @@ import numpy as np
 from cell.gap.plane_step import step_term
 from cell.gap.problem import GapProblem
 from cell.gap.propose_bounds import PLANE_MAX_M, beyond, why_none, within_bounds, written
-from cell.gap.propose_prune import prune
 from cell.gap.propose_radial import radial_term
 from cell.gap.propose_sessions import MAX_SESSIONS, log_covariates, session_winds
 from cell.gap.propose_terms import MAX_OBJECTS, lift_terms, object_columns
@@ -440,9 +438,6 @@ def _sparse_law(prob: GapProblem, terms: list[dict[str, Any]], a_all: np.ndarray
             best = (val, ho, th_all)
     assert best is not None
     score, ho, th = best
-    pruned = prune(a, y, folds, th, score, TERM_PENALTY)  # terms that do not pay
-    if pruned is not None:
-        th, ho, score = pruned
     on = np.flatnonzero(th)
     miss = (y_all - a_all @ th).reshape(-1, 2)
     if on.size == 0:
