@@ -161,9 +161,15 @@ def test_a_steady_wind_keeps_its_level_law(lab: dict[str, Path]) -> None:
     assert v["params"]["wind"]["y_mps"] == pytest.approx(LEVEL_Y, rel=0.1)
 
 
-# --- 2. a drag of one object (cell.gap.propose_terms: a force along v ∝ |v| v of one object) ---
+# --- 2. a drag of one object (a force along v ∝ |v| v of one object: not yet) ---
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="one object's drag term (a force along v ∝ |v| v per object) was taken back: in the "
+    "scene table it turned s:scale+hop's proposal of two terms into nine (docs/HISTORY.md); "
+    "without it the dice's drag is proposed in the launch phase",
+)
 def test_a_drag_of_one_object_is_proposed_in_the_flight(lab: dict[str, Path]) -> None:
     """C_d × 1.9 on the dice (× 0.5 on the ball) is `unknown` with a law in the flight: the
     dice's own force along v ∝ |v| v, its k the extra drag −0.9 · ½ρC_dA/m (main: a dice

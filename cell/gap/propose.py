@@ -21,7 +21,7 @@ landing is linear in its coefficient θ near θ = 0:
 | landing | shift x, shift y | every landing moved by θ [m] along world x or y: a surface that carries it (a conveyor), or the landings measured from an origin off by θ |
 | landing | plane height × [x > x_b] | a step in the surface landed on beyond x_b, fitted, where such a step beats the verdict (`cell.gap.plane_step`) |
 | landing | plane height (× 1, x, y) | the surface landed on is θ·c [m] above the logged `land_z_m`, c = 1 or the landing's x or y [m]: a floor off its logged height, or tilted (the landing moves by θ·c·v_h / v_z) |
-| launch, flight, landing | speed error (× 1, × order), lift coefficient, along ∝ v², shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`): × order, one object's drift over the log (a bag that leaks); along ∝ v², a drag of its own |
+| launch, flight, landing | speed error (× 1, × order), lift coefficient, shift ∝ v × [object = X] | the same on one object's throws only, tried object by object (`cell.gap.propose_terms`): × order, one object's drift over the log (a bag that leaks) |
 
 A log's drift (a band wearing, a motor warming) and its sessions (a band changed, a
 launcher set up again) are common on a real cell and outside the vocabulary, so the

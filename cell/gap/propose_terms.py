@@ -7,14 +7,14 @@ one object, the phases the tracks allow, and flagged rows that are one object's 
   and as a lift coefficient, `lift coefficient C_L [-] = k`, whose acceleration is
   θ · ½ρA/m · |v|² n̂ with A the object's reference area of the drag (`drag_area`): one
   C_L for objects of different A/m. A vertical flight has no such plane: nil there.
-- **Terms of one object**: the library's constant speed error, lift coefficient, force
-  along v ∝ |v| v (a drag of its own) and landing shift ∝ v, and as a second set those
-  with the speed error over the log's order (a drift of one object: a bag that leaks),
-  acting on one object's throws only (`· [object = X]`). They are tried object by object,
-  greedily (`object_law`): the law with the object's terms added is kept where its
-  held-out score (`cell.gap.propose.TERM_PENALTY` per term) with one more term's penalty
-  for the object chosen is below the law without them; at most MAX_OBJECTS objects; a law
-  whose lift coefficient exceeds LIFT_CL_MAX in size is not kept.
+- **Terms of one object**: the library's constant speed error, lift coefficient and landing
+  shift ∝ v, and as a second set those with the speed error over the log's order (a drift
+  of one object: a bag that leaks), acting on one object's throws only (`· [object = X]`).
+  They are tried
+  object by object, greedily (`object_law`): the law with the object's terms added is kept
+  where its held-out score (`cell.gap.propose.TERM_PENALTY` per term) with one more term's
+  penalty for the object chosen is below the law without them; at most MAX_OBJECTS objects;
+  a law whose lift coefficient exceeds LIFT_CL_MAX in size is not kept.
 - **The phases the tracks allow**: where tracks place the gap in a phase (a significant
   share, `cell.gap.tracks.phase_evidence`), the library holds that phase's terms and those
   of the other phases the tracks find significant only; a measurement gap (a tracker's
@@ -59,10 +59,7 @@ OBJECT_ALPHA = 0.001  # the chance, over the objects, of calling a log's scatter
 # the library's terms that also come for one object (their columns masked to its throws):
 # a speed error growing over the log on one object's throws is its mass drifting (a bag
 # that leaks, `speed error [share] = k · order · [object = X]`)
-# a drag of one object (its C_d off by a factor: `force along v [1/m] = k · |v| v · [object =
-# X]`, k = −(factor − 1) · ½ρC_dA/m) is a flight effect its launch speed otherwise stands for
-OBJECT_SOURCES = ("speed error [share] = k", LIFT_CL, "landing shift [s] = k · v_h",
-                  "force along v [1/m] = k · |v| v")  # fmt: skip
+OBJECT_SOURCES = ("speed error [share] = k", LIFT_CL, "landing shift [s] = k · v_h")
 # tried as a second set of the object's terms, with OBJECT_SOURCES (one more column in the
 # same set changes which terms the bounds leave to the first: `s:scale+hop` lost its law)
 OBJECT_DRIFT = "speed error [share] = k · order"
