@@ -136,6 +136,12 @@ def _report(lab: dict[str, Path], world: str) -> dict:
 # --- 1. a wind growing with height (cell.gap.laws: the wind's law in the release height) ---
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="the wind's law in the release height was taken back: on the real Ball Butler "
+    "tracks (docs/figures/real_tracks.json) it gave the wind y = a + k · release_z with a at "
+    "its bound (-10 m/s) and k's interval holding zero (docs/HISTORY.md)",
+)
 def test_a_wind_growing_with_height_is_a_wind_with_its_law(lab: dict[str, Path]) -> None:
     """A boundary layer's wind is `wind` (the air moving is the family) with its law in
     the release height, faster higher up (main: the level wind, one value for every

@@ -28,18 +28,7 @@ def launch_speed(batch: ThrowBatch, ee: Any) -> np.ndarray:
     return np.linalg.norm(v - batch.base_velocity, axis=1)
 
 
-def release_height(batch: ThrowBatch, ee: Any) -> np.ndarray:
-    """The release's height [m] above the floor, per throw (the logged `z_m`)."""
-    return np.asarray(batch.position[:, 2], float)
-
-
 # covariate -> (its reader from a batch and the end-effector, its typical largest value)
-MODEL_COVARIATES: dict[str, tuple[Any, float]] = {
-    "launch_speed_mps": (launch_speed, 6.0),
-    "release_z_m": (release_height, 1.5),
-}
+MODEL_COVARIATES: dict[str, tuple[Any, float]] = {"launch_speed_mps": (launch_speed, 6.0)}
 # the effects whose law may be in a model covariate: effect name -> the covariates
-MODEL_FORMS: dict[str, tuple[str, ...]] = {
-    "release_pitch": ("launch_speed_mps",),
-    "wind": ("release_z_m",),
-}
+MODEL_FORMS: dict[str, tuple[str, ...]] = {"release_pitch": ("launch_speed_mps",)}

@@ -32,11 +32,6 @@ from object to object). A covariate form is tried only where the covariate takes
 MIN_LEVELS distinct values in the log: on two values (a log of two objects, say) a law in
 the mass, one in the size and one per object are the same two numbers, so the difference
 is the per-object form's, which pays for its second term.
-
-The wind (`MODEL_ONLY`) takes laws in the release height alone (`y_mps = a + k ·
-release_z_m`, either of its level parts, the other common): air moving faster higher up
-(a boundary layer over the floor, a draught above a bench) meets throws released higher
-with more wind; a wind does not grow with the stroke or differ by object.
 """
 
 from __future__ import annotations
@@ -65,11 +60,7 @@ COVARIATES: dict[str, tuple[Any, float]] = {
     "mass_kg": (lambda b: b.mass, 0.12),
     "size_x_m": (lambda b: b.size[:, 0], 0.07),
 }
-LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping", "bounce", "wind")
-# effects whose laws are in the model's covariates alone (`cell.gap.law_speed.MODEL_FORMS`):
-# a wind grows with height, not with the stroke or the object's mass, and is the same air
-# whatever the object
-MODEL_ONLY = ("wind",)
+LAW_BASES = ("band_mass", "release_pitch", "drag_scale", "band_damping", "bounce")
 _CACHE: dict[tuple[type[Effect], str, bool, str], type[Effect]] = {}
 
 
@@ -410,10 +401,6 @@ def choose_law(
         n_obj = len(set(_object_keys(prob.batch)))
         forms: list[type[Effect]] = []
         for param in law_params(base):
-            if base.name in MODEL_ONLY:
-                forms += [law_class(base, c, i, param, prob.ee)
-                          for c in MODEL_FORMS[base.name] for i in (False, True)]  # fmt: skip
-                continue
             forms += law_forms(base, prob.batch, param)
             forms += [
                 law_class(base, c, False, param, prob.ee) for c in MODEL_FORMS.get(base.name, ())

@@ -294,16 +294,16 @@ def wind_throw(prob: GapProblem, effects: tuple[Effect, ...]) -> dict[str, Any] 
         effects: the verdict's effects fitted on all throws (one of them the wind).
 
     Returns:
-        None without a wind or with a wind given a law in height; else the form's
-        account: `chosen` (the varying form stands for the wind), `mean_mps` [x, y], `sd_mps`, `noise_sd_m` (σ per axis), their 95 %
+        None without a wind; else the form's account: `chosen` (the varying form stands
+        for the wind), `mean_mps` [x, y], `sd_mps`, `noise_sd_m` (σ per axis), their 95 %
         intervals, the steady fit's level wind, the held-out log density per throw of
         each form [nats], the gain's bootstrap interval and the penalty.
     """
     from cell.gap.stats import N_BOOT, _indices
 
     j = next((i for i, e in enumerate(effects) if e.name == "wind"), None)
-    if j is None or getattr(type(effects[j]), "law_base", None):
-        return None  # no wind, or one whose law in height (`cell.gap.laws`) is no steady air
+    if j is None:
+        return None
     w_steady = np.array(effects[j].vector()[:2], float)  # level: x_mps, y_mps first
     y, jac = _linearised(prob, effects, j, w_steady)
     ll0 = fit_marginal(y, jac, steady=True)[3]

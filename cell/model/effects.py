@@ -238,7 +238,6 @@ class WindLevel(Effect):
     bounds: ClassVar[tuple[tuple[float, float], ...]] = ((-10.0, 10.0),) * 2
     scale: ClassVar[tuple[float, ...]] = (1.0, 1.0)
     law: ClassVar[str] = "level"
-    law_params: ClassVar[tuple[str, ...] | None] = ("x_mps", "y_mps")
     plausible: ClassVar[tuple[tuple[float, float], ...] | None] = (
         (-WIND_ACROSS_MPS, WIND_ACROSS_MPS),
     ) * 2

@@ -134,10 +134,7 @@ def _flight_accel(
 def _params(wind: Any, dw: Any, sp: Any) -> dict[str, Any]:
     """The flight effects' parameters the callback reads: each a scalar, or one value per
     throw (n,) (the air velocity (3,) or (n, 3))."""
-    # a law gives one part per throw and leaves the others one value (`cell.gap.laws`)
-    w = (np.stack(np.broadcast_arrays(*(np.asarray(c, float) for c in
-                                        (wind.x_mps, wind.y_mps, wind.z_mps))), axis=-1)
-         if wind else np.zeros(3))  # fmt: skip
+    w = np.array([wind.x_mps, wind.y_mps, wind.z_mps], float).T if wind else np.zeros(3)
     par: dict[str, Any] = {"w": w}
     if dw is not None:
         par["radius"] = dw.radius_m
