@@ -85,3 +85,18 @@ def rk4(acc: Callable[[np.ndarray, bool], np.ndarray], p: np.ndarray, v: np.ndar
     k4 = acc(v + H * k3, push)
     dp = H / 6 * (v + 2 * (v + 0.5 * H * k1) + 2 * (v + 0.5 * H * k2) + (v + H * k3))
     return p + dp, v + H / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+
+
+def land_step(p: np.ndarray, v: np.ndarray, p1: np.ndarray, v1: np.ndarray, live: np.ndarray,
+              land: np.ndarray, tilt: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """One step from (p, v) to (p1, v1) (n, 3) [m, m/s] of the flights still `live` (n,)
+    bool, across the
+    landing plane z = tilt · x: the crossings' (x, y) [m], interpolated, written into
+    `land` (n, 2) and their rows cleared from `live` (both in place); the positions and
+    velocities each flight has after the step (a landed one keeps its last)."""
+    above0, above1 = p[:, 2] - tilt * p[:, 0], p1[:, 2] - tilt * p1[:, 0]
+    hit = live & (above1 <= 0) & (v1[:, 2] < 0)
+    s = (above0[hit] / (above0[hit] - above1[hit]))[:, None]
+    land[hit] = p[hit, :2] + s * (p1[hit, :2] - p[hit, :2])
+    live &= ~hit
+    return np.where(live[:, None], p1, p), np.where(live[:, None], v1, v)

@@ -35,7 +35,7 @@ from cell.log import read_throws_csv
 from cell.log.csvio import read_tracks_csv
 from cell.model.effects import DragScale
 from cell.model.params import DEFAULT_EE
-from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, push, rk4, write_log
+from tests.band_lab import CD, NOISE, PUSH_S, RHO, G, H, area, land_step, push, rk4, write_log
 
 HZ = 120.0  # the tracks' rate [Hz]
 OBJECTS = [  # id, shape, mass [kg], extents [m]
@@ -90,12 +90,7 @@ def _fly(throws: list[dict], drag: float = 1.0, tilt: float = 0.0,
                 tracks[i].append((t, *p[i]))
         t += H
         p1, v1 = rk4(acc, p, v, False)
-        above0, above1 = p[:, 2] - tilt * p[:, 0], p1[:, 2] - tilt * p1[:, 0]
-        hit = live & (above1 <= 0) & (v1[:, 2] < 0)
-        s = (above0[hit] / (above0[hit] - above1[hit]))[:, None]
-        land[hit] = p[hit, :2] + s * (p1[hit, :2] - p[hit, :2])
-        live &= ~hit
-        p, v = np.where(live[:, None], p1, p), np.where(live[:, None], v1, v)
+        p, v = land_step(p, v, p1, v1, live, land, tilt)
     return land
 
 
