@@ -133,7 +133,7 @@ def _report(lab: dict[str, Path], world: str) -> dict:
     return _REPORTS[lab[world]]
 
 
-# --- 1. a wind growing with height (cell.gap.laws: the wind's law in the release height) ---
+# --- 1. a wind growing with height (a wind law in the release height: not yet) ---
 
 
 @pytest.mark.xfail(

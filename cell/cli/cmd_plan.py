@@ -127,8 +127,7 @@ def run(args: argparse.Namespace) -> int:
         )
     except InvalidParameter as exc:
         raise InvalidInput(str(exc)) from None
-    if obj.shape != "mesh":
-        warn_if_stroke_not_held(mp, obj, plan.stroke_m)
+    warn_if_stroke_not_held(mp, obj, plan.stroke_m)
     _say_current_moved(args.current, _bounds(args))
     _say_at_the_base(args.target)
     return report(args, plan.as_dict(), _text(plan, obj, said))

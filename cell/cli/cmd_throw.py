@@ -69,8 +69,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_release_under_floor("--at", args.at[2])
     mp = load_params(args.params)
     warn_if_not_held(mp, obj)
-    if obj.shape != "mesh":
-        warn_if_stroke_not_held(mp, obj, args.stroke)
+    warn_if_stroke_not_held(mp, obj, args.stroke)
     warn_if_light(obj)
     model, said = modelled(mp, obj)
     batch = ThrowBatch.single(

@@ -69,10 +69,10 @@ def warn_if_not_held(params: ModelParams, obj: ObjectParams) -> None:
         warn_if_not_thrown(params, obj)
 
 
-def warn_if_not_thrown(params: ModelParams, obj: ObjectParams) -> bool:
+def warn_if_not_thrown(params: ModelParams, obj: ObjectParams) -> None:
     """A warning on standard error where the pads hold `obj` but `cell run` does not throw
     it (`cell.arm.grip_side.throw_sides`: held only carried slowly, or tipped out of the
-    pads on a throw's swing), saying why; whether it warned."""
+    pads on a throw's swing), saying why."""
     from cell.arm.grip_side import holding_sides, throw_sides
     from cell.errors import CannotGrip
 
@@ -84,16 +84,16 @@ def warn_if_not_thrown(params: ModelParams, obj: ObjectParams) -> bool:
             "the model's, not a throw the cell can make",
             file=sys.stderr,
         )
-        return True
-    return False
 
 
 def warn_if_stroke_not_held(params: ModelParams, obj: ObjectParams, stroke_m: float) -> None:
     """A warning on standard error where the pads hold `obj` across its first size only at
     strokes shorter than `stroke_m` [m] (`grip_stroke_at`): `cell run` plans its throws
-    within that."""
+    within that. Not for a mesh, whose sides need its rest pose (`cell.sim.rest`)."""
     from cell.arm.grip_limits import grip_stroke_at
 
+    if obj.shape == "mesh":
+        return
     s_max = grip_stroke_at(params, obj)
     if s_max is not None and stroke_m > s_max + 1e-9:
         print(

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cell.model.flight3d import KEEP_SHARE
 from cell.model.params import G
 
 __all__ = ["MODELS", "OdeFit", "fit_ode", "predict_ode"]
@@ -82,12 +83,6 @@ def _acc(v: np.ndarray, w: np.ndarray, kk: np.ndarray, extra: np.ndarray) -> np.
     out = extra - kk * np.sqrt((sq[..., 0] + sq[..., 1]) + sq[..., 2])[..., None] * rel
     out[..., 2] -= G
     return out
-
-
-# Tracks whose samples are all placed stay in the integration (a step of them costs little
-# beside NumPy's per-call overhead) until fewer than this share of the rows integrated
-# still have samples ahead (`cell.model.flight3d._KEEP_SHARE`'s rule)
-_KEEP_SHARE = 0.5
 
 
 def _simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -146,7 +141,7 @@ def _simulate(th: np.ndarray, k: np.ndarray, tau: np.ndarray) -> np.ndarray:
         n_ahead = int(np.count_nonzero(ahead))
         if not n_ahead:
             break
-        if n_ahead < _KEEP_SHARE * rows.size:
+        if n_ahead < KEEP_SHARE * rows.size:  # placed tracks dropped as flight3d drops landed ones
             rows, p, v = rows[ahead], p[ahead], v[ahead]
             w, kk, extra = w[ahead], kk[ahead], extra[ahead]
             at[rows] = np.arange(rows.size)

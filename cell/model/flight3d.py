@@ -157,7 +157,7 @@ def _rk4(
 
 # Rows whose flight is over stay in the batch (their steps cost little beside NumPy's
 # per-call overhead) until fewer than this share of the rows integrated still fly.
-_KEEP_SHARE = 0.5
+KEEP_SHARE = 0.5
 
 
 def _column_major(a: np.ndarray) -> np.ndarray:
@@ -270,7 +270,7 @@ def _fly(
         flying &= ~(cross | (below & (v1[:, 2] < 0)))
         n_flying = int(np.count_nonzero(flying))
         t += step
-        if n_flying < _KEEP_SHARE * idx.size:
+        if n_flying < KEEP_SHARE * idx.size:
             idx, p, v = idx[flying], _keep(p1, flying), _keep(v1, flying)
             neg_k, lz, flying = neg_k[flying], lz[flying], flying[flying]
         else:
@@ -336,7 +336,7 @@ def sample_path(
         t += step
         # rows past their last sample stay until fewer than the share go on
         going = te >= t
-        if np.count_nonzero(going) < _KEEP_SHARE * idx.size:
+        if np.count_nonzero(going) < KEEP_SHARE * idx.size:
             idx, neg_k, tr, te = (a[going] for a in (idx, neg_k, tr, te))
             p, v = _keep(p1, going), _keep(v1, going)
         else:
